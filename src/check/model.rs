@@ -1,0 +1,152 @@
+//! The checked model: the front end's output and the mechanics' input.
+//!
+//! Invariants (established by `check::check`, relied on downstream):
+//! - every name in every expression resolves through [`Model::resolve`], and
+//!   each expression uses only the names its statement allows (a mass law
+//!   only `t`, params and numbers; an initial value or time bound only params
+//!   and numbers; …);
+//! - coordinates have distinct names, at most one constraint each, and all
+//!   constraints share one order `k = constraint_order`;
+//! - no constraint right side holds a dependent coordinate's derivative of
+//!   order ≥ k;
+//! - every param has a finite default value.
+//!
+//! Expressions stay as AST expressions (with their spans, for diagnostics of
+//! later stages); `ir::lower` turns them into symbolic expressions.
+
+use crate::span::Span;
+use crate::syntax::ast::Expr;
+use std::collections::HashMap;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Model {
+    pub params: Vec<Param>,
+    pub coords: Vec<Coord>,
+    pub masses: Vec<MassLaw>,
+    pub lagrangian: Expr,
+    /// The common order `k` of the constraints; `None` for a holonomic model.
+    pub constraint_order: Option<u32>,
+    pub constraints: Vec<Constraint>,
+    pub points: Vec<Point>,
+    pub forces: Vec<Force>,
+    pub initial: Vec<Initial>,
+    pub time: TimeSpan,
+    pub exact: Vec<Exact>,
+    /// Every declared name (params, coordinates, masses, points).
+    pub names: HashMap<String, Name>,
+}
+
+/// What a declared name refers to; indices into the [`Model`] vectors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Name {
+    Param(usize),
+    Coord(usize),
+    Mass(usize),
+    Point(usize),
+}
+
+impl Model {
+    pub fn resolve(&self, name: &str) -> Option<Name> {
+        self.names.get(name).copied()
+    }
+
+    /// The constraint that makes coordinate `coord` dependent, if any.
+    pub fn constraint_on(&self, coord: usize) -> Option<&Constraint> {
+        self.constraints.iter().find(|c| c.coord == coord)
+    }
+
+    /// Indices of the independent coordinates, in declaration order.
+    pub fn independent(&self) -> Vec<usize> {
+        (0..self.coords.len())
+            .filter(|&j| self.constraint_on(j).is_none())
+            .collect()
+    }
+
+    /// Indices of the dependent coordinates, in constraint order.
+    pub fn dependent(&self) -> Vec<usize> {
+        self.constraints.iter().map(|c| c.coord).collect()
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    pub name: String,
+    pub span: Span,
+    pub value: Expr,
+    /// The value with every earlier param at its default.
+    pub default: f64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Coord {
+    pub name: String,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MassLaw {
+    pub name: String,
+    pub span: Span,
+    /// An expression of `t`, params and numbers.
+    pub law: Expr,
+}
+
+/// `q_dep^(order) = rhs`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Constraint {
+    pub coord: usize,
+    pub order: u32,
+    pub rhs: Expr,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    pub name: String,
+    pub span: Span,
+    /// The point's mass: an expression of `t`, params and masses.
+    pub mass: Expr,
+    pub position: Vec<Expr>,
+    pub velocity: EjectaVelocity,
+}
+
+/// The velocity of the separated (or added) particles of a point.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EjectaVelocity {
+    /// The absolute velocity `V`.
+    Absolute(Vec<Expr>),
+    /// The relative velocity `u = V − dr/dt`.
+    Relative(Vec<Expr>),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Force {
+    pub coord: usize,
+    pub value: Expr,
+    pub span: Span,
+}
+
+/// `coord^(order)(t0) = value`; `value` holds only params and numbers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Initial {
+    pub coord: usize,
+    pub order: u32,
+    pub value: Expr,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeSpan {
+    pub start: Expr,
+    pub end: Expr,
+    pub span: Span,
+}
+
+/// `exact coord^(order) = value`: a known solution, an expression of `t` and params.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Exact {
+    pub coord: usize,
+    pub order: u32,
+    pub value: Expr,
+    pub span: Span,
+}

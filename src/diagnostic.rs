@@ -1,0 +1,181 @@
+//! The one diagnostic type of lagc, and its rendering at the edge.
+//!
+//! Every stage reports problems as [`Diagnostic`] values; nothing in the
+//! pipeline prints. [`render`] turns them into rustc-style text with
+//! codespan-reporting, and `main.rs` writes that text to stderr.
+
+use crate::span::Span;
+use codespan_reporting::diagnostic as cs;
+use codespan_reporting::files::SimpleFile;
+use codespan_reporting::term::{self, termcolor};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Severity {
+    Error,
+    Warning,
+    Note,
+}
+
+/// A source location with a message; the primary label marks the mistake itself.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Label {
+    pub span: Span,
+    pub message: String,
+    pub primary: bool,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostic {
+    pub severity: Severity,
+    /// A stable code such as `E0002`; see [`codes`].
+    pub code: &'static str,
+    pub message: String,
+    pub labels: Vec<Label>,
+    pub notes: Vec<String>,
+    pub help: Option<String>,
+}
+
+impl Diagnostic {
+    pub fn error(code: &'static str, message: impl Into<String>) -> Self {
+        Diagnostic {
+            severity: Severity::Error,
+            code,
+            message: message.into(),
+            labels: Vec::new(),
+            notes: Vec::new(),
+            help: None,
+        }
+    }
+
+    pub fn warning(code: &'static str, message: impl Into<String>) -> Self {
+        Diagnostic {
+            severity: Severity::Warning,
+            ..Diagnostic::error(code, message)
+        }
+    }
+
+    pub fn note_diagnostic(code: &'static str, message: impl Into<String>) -> Self {
+        Diagnostic {
+            severity: Severity::Note,
+            ..Diagnostic::error(code, message)
+        }
+    }
+
+    pub fn with_primary(mut self, span: Span, message: impl Into<String>) -> Self {
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: true,
+        });
+        self
+    }
+
+    pub fn with_secondary(mut self, span: Span, message: impl Into<String>) -> Self {
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: false,
+        });
+        self
+    }
+
+    pub fn with_note(mut self, note: impl Into<String>) -> Self {
+        self.notes.push(note.into());
+        self
+    }
+
+    pub fn with_help(mut self, help: impl Into<String>) -> Self {
+        self.help = Some(help.into());
+        self
+    }
+
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+
+    /// The position used to sort diagnostics: the start of the primary label.
+    pub fn position(&self) -> usize {
+        self.labels
+            .iter()
+            .find(|l| l.primary)
+            .or(self.labels.first())
+            .map_or(usize::MAX, |l| l.span.start)
+    }
+}
+
+/// Sorts diagnostics by source position (stable, so equal positions keep
+/// the order in which the checks found them).
+pub fn sort(diagnostics: &mut [Diagnostic]) {
+    diagnostics.sort_by_key(Diagnostic::position);
+}
+
+/// Renders diagnostics as rustc-style text (`file:line:col`, code, labels,
+/// notes, help). `color` selects ANSI colours; tests render without.
+pub fn render(diagnostics: &[Diagnostic], file_name: &str, source: &str, color: bool) -> String {
+    let file = SimpleFile::new(file_name, source);
+    let mut buffer = if color {
+        termcolor::Buffer::ansi()
+    } else {
+        termcolor::Buffer::no_color()
+    };
+    let config = term::Config::default();
+    for diagnostic in diagnostics {
+        let cs_diagnostic = to_codespan(diagnostic, source.len());
+        // Writing into an in-memory buffer cannot fail for I/O reasons; a
+        // failure here would be a span outside the file, which to_codespan clamps.
+        let _ = term::emit_to_write_style(&mut buffer, &config, &file, &cs_diagnostic);
+    }
+    String::from_utf8_lossy(buffer.as_slice()).into_owned()
+}
+
+fn to_codespan(diagnostic: &Diagnostic, source_len: usize) -> cs::Diagnostic<()> {
+    let severity = match diagnostic.severity {
+        Severity::Error => cs::Severity::Error,
+        Severity::Warning => cs::Severity::Warning,
+        Severity::Note => cs::Severity::Note,
+    };
+    let labels = diagnostic
+        .labels
+        .iter()
+        .map(|label| {
+            let start = label.span.start.min(source_len);
+            let end = label.span.end.clamp(start, source_len);
+            let style = if label.primary {
+                cs::LabelStyle::Primary
+            } else {
+                cs::LabelStyle::Secondary
+            };
+            cs::Label::new(style, (), start..end).with_message(label.message.clone())
+        })
+        .collect();
+    let mut notes = diagnostic.notes.clone();
+    if let Some(help) = &diagnostic.help {
+        notes.push(format!("help: {help}"));
+    }
+    cs::Diagnostic::new(severity)
+        .with_code(diagnostic.code)
+        .with_message(diagnostic.message.clone())
+        .with_labels(labels)
+        .with_notes(notes)
+}
+
+/// The error codes of lagc. One code per class of mistake; the files under
+/// `tests/data/errors/` show each one.
+pub mod codes {
+    pub const SYNTAX: &str = "E0001";
+    pub const UNKNOWN_NAME: &str = "E0002";
+    pub const DUPLICATE_NAME: &str = "E0003";
+    pub const RESERVED_TIME: &str = "E0004";
+    pub const MASS_DEPENDS_ON_STATE: &str = "E0005";
+    pub const CONSTRAINT_LHS: &str = "E0006";
+    pub const DOUBLE_CONSTRAINT: &str = "E0007";
+    pub const MIXED_CONSTRAINT_ORDERS: &str = "E0008";
+    pub const DEPENDENT_DERIVATIVE_IN_RHS: &str = "E0009";
+    pub const MISSING_LAGRANGIAN: &str = "E0010";
+    pub const MISSING_INITIAL: &str = "E0011";
+    pub const MISSING_TIME: &str = "E0012";
+    pub const INCONSISTENT_INITIAL: &str = "E0013";
+    pub const BAD_TIME_SPAN: &str = "E0014";
+    pub const SINGULAR_MASS_MATRIX: &str = "E0015";
+    pub const INVALID_UTF8: &str = "E0016";
+}

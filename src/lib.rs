@@ -1,0 +1,17 @@
+//! lagc — a compiler for mechanics.
+//!
+//! The pipeline, one module per stage:
+//!
+//! ```text
+//! .lag text ──syntax::parse──▶ ast::Model ──check::check──▶ check::Model
+//!   ──ir::lower──▶ symbolic IR ──mechanics──▶ equations (4), reduced system (7)
+//!   ──field──▶ basic equation (9), coefficient system ──emit──▶ Rust crate
+//! ```
+//!
+//! No stage does IO: problems come back as [`diagnostic::Diagnostic`]s and
+//! `main.rs` renders them.
+
+pub mod check;
+pub mod diagnostic;
+pub mod span;
+pub mod syntax;
