@@ -13,5 +13,6 @@
 
 pub mod check;
 pub mod diagnostic;
+pub mod ir;
 pub mod span;
 pub mod syntax;

@@ -1,0 +1,392 @@
+//! The canonicalising constructors: every expression is built through them,
+//! so equal expressions (up to the rules below) share one node.
+//!
+//! Rules: constant folding when the result is finite; flat sums and
+//! products, sorted by a structural order that does not depend on
+//! construction history; like terms and like powers collected;
+//! `exp(a)·exp(b) → exp(a+b)`, `(e^a)^b → e^(ab)`; `(a·b)^n → a^n·b^n` and
+//! `(x^a)^n → x^(an)` for integer `n`; `sqrt(x) → x^(1/2)`. Products of sums
+//! are never expanded: that keeps the DAG small.
+
+use super::expr::{Arena, ExprId, FxMap, Node, Symbol};
+use crate::syntax::ast::Func;
+use std::cmp::Ordering;
+
+/// How many times `mul` may re-run on its own output when collecting powers
+/// produced a new product (e.g. `(a·b)^(1/2)·(a·b)^(1/2) → a·b`).
+const MUL_RENORMALISE_DEPTH: u32 = 3;
+
+/// The value of a function at a number (shared by folding and `eval`).
+pub fn apply_func(f: Func, x: f64) -> f64 {
+    match f {
+        Func::Sin => x.sin(),
+        Func::Cos => x.cos(),
+        Func::Tan => x.tan(),
+        Func::Asin => x.asin(),
+        Func::Acos => x.acos(),
+        Func::Atan => x.atan(),
+        Func::Sinh => x.sinh(),
+        Func::Cosh => x.cosh(),
+        Func::Tanh => x.tanh(),
+        Func::Exp => x.exp(),
+        Func::Ln => x.ln(),
+        Func::Sqrt => x.sqrt(),
+    }
+}
+
+/// `base^exp` as numbers, with `powi`/`sqrt` where they are exact.
+pub fn pow_value(base: f64, exp: f64) -> f64 {
+    if exp == 0.5 {
+        base.sqrt()
+    } else if exp.fract() == 0.0 && exp.abs() <= f64::from(i32::MAX) {
+        base.powi(exp as i32)
+    } else {
+        base.powf(exp)
+    }
+}
+
+fn is_integer(v: f64) -> bool {
+    v.is_finite() && v.fract() == 0.0
+}
+
+impl Arena {
+    pub fn add(&mut self, terms: &[ExprId]) -> ExprId {
+        // (rest, coefficient): a term is `coefficient · rest`; a constant has
+        // rest = 1. `index` maps a rest to its entry while merging is finite.
+        let mut entries: Vec<(ExprId, f64)> = Vec::new();
+        let mut index: FxMap<ExprId, usize> = FxMap::default();
+        let mut flat = Vec::with_capacity(terms.len());
+        for &t in terms {
+            match self.node(t) {
+                Node::Add(ts) => flat.extend_from_slice(ts),
+                _ => flat.push(t),
+            }
+        }
+        for t in flat {
+            let (c, rest) = self.split_coefficient(t);
+            match index.get(&rest) {
+                Some(&i) if (entries[i].1 + c).is_finite() => entries[i].1 += c,
+                _ => {
+                    index.insert(rest, entries.len());
+                    entries.push((rest, c));
+                }
+            }
+        }
+        entries.retain(|&(_, c)| c != 0.0);
+        entries.sort_by(|a, b| self.cmp(a.0, b.0).then(a.1.total_cmp(&b.1)));
+        let built: Vec<ExprId> = entries
+            .into_iter()
+            .map(|(rest, c)| self.scaled(c, rest))
+            .collect();
+        match built.len() {
+            0 => self.zero(),
+            1 => built[0],
+            _ => self.intern(Node::Add(built.into_boxed_slice())),
+        }
+    }
+
+    /// `t = c · rest` with `rest` free of a numeric coefficient.
+    fn split_coefficient(&mut self, t: ExprId) -> (f64, ExprId) {
+        match self.node(t) {
+            Node::Const(v) => (*v, self.one()),
+            Node::Mul(fs) => match self.node(fs[0]) {
+                Node::Const(c) => {
+                    let c = *c;
+                    let rest = if fs.len() == 2 {
+                        fs[1]
+                    } else {
+                        let rest: Box<[ExprId]> = fs[1..].into();
+                        self.intern(Node::Mul(rest))
+                    };
+                    (c, rest)
+                }
+                _ => (1.0, t),
+            },
+            _ => (1.0, t),
+        }
+    }
+
+    /// `c · rest` for a canonical coefficient-free `rest`.
+    fn scaled(&mut self, c: f64, rest: ExprId) -> ExprId {
+        if c == 1.0 {
+            return rest;
+        }
+        if self.is_one(rest) {
+            return self.constant(c);
+        }
+        let k = self.constant(c);
+        let factors: Box<[ExprId]> = match self.node(rest) {
+            Node::Mul(fs) => std::iter::once(k).chain(fs.iter().copied()).collect(),
+            _ => Box::new([k, rest]),
+        };
+        self.intern(Node::Mul(factors))
+    }
+
+    pub fn mul(&mut self, factors: &[ExprId]) -> ExprId {
+        self.mul_depth(factors, 0)
+    }
+
+    fn mul_depth(&mut self, factors: &[ExprId], depth: u32) -> ExprId {
+        let mut coefficient = 1.0;
+        // Constants whose product with `coefficient` would overflow.
+        let mut loose: Vec<f64> = Vec::new();
+        let mut bases: Vec<(ExprId, Vec<ExprId>)> = Vec::new();
+        let mut index: FxMap<ExprId, usize> = FxMap::default();
+        let mut exp_args: Vec<ExprId> = Vec::new();
+        let mut flat = Vec::with_capacity(factors.len());
+        for &f in factors {
+            match self.node(f) {
+                Node::Mul(fs) => flat.extend_from_slice(fs),
+                _ => flat.push(f),
+            }
+        }
+        for f in flat {
+            let (base, exp) = match self.node(f) {
+                Node::Const(c) => {
+                    let c = *c;
+                    if c == 0.0 {
+                        return self.zero();
+                    }
+                    if (coefficient * c).is_finite() {
+                        coefficient *= c;
+                    } else {
+                        loose.push(c);
+                    }
+                    continue;
+                }
+                Node::Func(Func::Exp, a) => {
+                    exp_args.push(*a);
+                    continue;
+                }
+                Node::Pow(b, e) => (*b, *e),
+                _ => (f, self.one()),
+            };
+            match index.get(&base) {
+                Some(&i) => bases[i].1.push(exp),
+                None => {
+                    index.insert(base, bases.len());
+                    bases.push((base, vec![exp]));
+                }
+            }
+        }
+        let mut out: Vec<ExprId> = Vec::with_capacity(bases.len() + 1);
+        let mut renormalise = false;
+        for (base, exps) in bases {
+            let exp = if exps.len() == 1 {
+                exps[0]
+            } else {
+                self.add(&exps)
+            };
+            let p = self.pow(base, exp);
+            renormalise |= match self.node(p) {
+                Node::Const(_) | Node::Mul(_) | Node::Func(Func::Exp, _) => true,
+                Node::Pow(b, _) => *b != base,
+                _ => p != base,
+            };
+            out.push(p);
+        }
+        if !exp_args.is_empty() {
+            let sum = self.add(&exp_args);
+            let e = self.func(Func::Exp, sum);
+            renormalise |= !matches!(self.node(e), Node::Func(Func::Exp, _));
+            out.push(e);
+        }
+        if renormalise && depth < MUL_RENORMALISE_DEPTH {
+            let c = self.constant(coefficient);
+            out.push(c);
+            for v in loose {
+                let k = self.constant(v);
+                out.push(k);
+            }
+            return self.mul_depth(&out, depth + 1);
+        }
+        out.retain(|&p| !self.is_one(p));
+        out.sort_by(|&a, &b| self.cmp(a, b));
+        if loose.is_empty() && out.is_empty() {
+            return self.constant(coefficient);
+        }
+        if loose.is_empty() && coefficient == 1.0 && out.len() == 1 {
+            return out[0];
+        }
+        let mut all: Vec<ExprId> = Vec::with_capacity(out.len() + 1 + loose.len());
+        if coefficient != 1.0 {
+            all.push(self.constant(coefficient));
+        }
+        for v in loose {
+            all.push(self.constant(v));
+        }
+        all.extend(out);
+        if all.len() == 1 {
+            return all[0];
+        }
+        self.intern(Node::Mul(all.into_boxed_slice()))
+    }
+
+    pub fn pow(&mut self, base: ExprId, exp: ExprId) -> ExprId {
+        let (b, e) = (self.as_const(base), self.as_const(exp));
+        if e == Some(0.0) {
+            return self.one();
+        }
+        if e == Some(1.0) {
+            return base;
+        }
+        if let (Some(b), Some(e)) = (b, e) {
+            let v = pow_value(b, e);
+            if v.is_finite() {
+                return self.constant(v);
+            }
+        }
+        if b == Some(1.0) {
+            return self.one();
+        }
+        let integer_exp = e.filter(|&n| is_integer(n));
+        match (self.node(base).clone(), integer_exp) {
+            (Node::Func(Func::Exp, a), _) => {
+                let arg = self.mul(&[a, exp]);
+                self.func(Func::Exp, arg)
+            }
+            (Node::Pow(b0, e0), Some(_)) => {
+                let e = self.mul(&[e0, exp]);
+                self.pow(b0, e)
+            }
+            (Node::Mul(fs), Some(_)) => {
+                let powered: Vec<ExprId> = fs.iter().map(|&f| self.pow(f, exp)).collect();
+                self.mul(&powered)
+            }
+            _ => self.intern(Node::Pow(base, exp)),
+        }
+    }
+
+    pub fn powi(&mut self, base: ExprId, n: i32) -> ExprId {
+        let e = self.constant(f64::from(n));
+        self.pow(base, e)
+    }
+
+    pub fn func(&mut self, f: Func, arg: ExprId) -> ExprId {
+        if f == Func::Sqrt {
+            let half = self.constant(0.5);
+            return self.pow(arg, half);
+        }
+        if let Some(x) = self.as_const(arg) {
+            let v = apply_func(f, x);
+            if v.is_finite() {
+                return self.constant(v);
+            }
+        }
+        match (f, self.node(arg)) {
+            (Func::Exp, Node::Func(Func::Ln, x)) | (Func::Ln, Node::Func(Func::Exp, x)) => *x,
+            _ => self.intern(Node::Func(f, arg)),
+        }
+    }
+
+    pub fn neg(&mut self, a: ExprId) -> ExprId {
+        let m = self.constant(-1.0);
+        self.mul(&[m, a])
+    }
+
+    pub fn sub(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        let nb = self.neg(b);
+        self.add(&[a, nb])
+    }
+
+    pub fn div(&mut self, a: ExprId, b: ExprId) -> ExprId {
+        let inv = self.powi(b, -1);
+        self.mul(&[a, inv])
+    }
+
+    /// The canonical order of sibling terms and factors: structural, so it
+    /// never depends on the order in which nodes were built. A factor is
+    /// ordered by its base first (`x` next to `x^2`), then its exponent.
+    pub(crate) fn cmp(&self, a: ExprId, b: ExprId) -> Ordering {
+        if a == b {
+            return Ordering::Equal;
+        }
+        let (ba, ea) = self.base_exp(a);
+        let (bb, eb) = self.base_exp(b);
+        if ba != bb {
+            return self.cmp_base(ba, bb);
+        }
+        match (ea, eb) {
+            (Some(x), Some(y)) => self.cmp(x, y),
+            (None, Some(y)) => self.cmp_with_one(y).reverse(),
+            (Some(x), None) => self.cmp_with_one(x),
+            (None, None) => Ordering::Equal,
+        }
+    }
+
+    fn base_exp(&self, e: ExprId) -> (ExprId, Option<ExprId>) {
+        match self.node(e) {
+            Node::Pow(b, x) => (*b, Some(*x)),
+            _ => (e, None),
+        }
+    }
+
+    /// `e` compared with the constant 1 (an implied exponent).
+    fn cmp_with_one(&self, e: ExprId) -> Ordering {
+        match self.node(e) {
+            Node::Const(v) => v.total_cmp(&1.0),
+            _ => Ordering::Greater,
+        }
+    }
+
+    fn cmp_base(&self, a: ExprId, b: ExprId) -> Ordering {
+        if a == b {
+            return Ordering::Equal;
+        }
+        let rank = self.rank(a).cmp(&self.rank(b));
+        if rank != Ordering::Equal {
+            return rank;
+        }
+        match (self.node(a), self.node(b)) {
+            (Node::Const(x), Node::Const(y)) => x.total_cmp(y),
+            (Node::Sym(s), Node::Sym(t)) => self.cmp_symbol(*s, *t),
+            (Node::Func(f, x), Node::Func(g, y)) => f.cmp(g).then_with(|| self.cmp(*x, *y)),
+            (Node::Pow(b1, e1), Node::Pow(b2, e2)) => {
+                self.cmp(*b1, *b2).then_with(|| self.cmp(*e1, *e2))
+            }
+            (Node::Add(xs), Node::Add(ys)) | (Node::Mul(xs), Node::Mul(ys)) => xs
+                .iter()
+                .zip(ys.iter())
+                .map(|(&x, &y)| self.cmp(x, y))
+                .find(|o| *o != Ordering::Equal)
+                .unwrap_or_else(|| xs.len().cmp(&ys.len())),
+            _ => Ordering::Equal,
+        }
+    }
+
+    /// Kind order for display: numbers, params/masses, `t`, composite
+    /// expressions, and the jet variables last (`M*t*q1'`).
+    fn rank(&self, e: ExprId) -> u8 {
+        match self.node(e) {
+            Node::Const(_) => 0,
+            Node::Sym(Symbol::Jet { .. }) => 7,
+            Node::Sym(Symbol::Time) => 2,
+            Node::Sym(_) => 1,
+            Node::Func(..) => 3,
+            Node::Pow(..) => 4,
+            Node::Mul(_) => 5,
+            Node::Add(_) => 6,
+        }
+    }
+}
+
+/// Symbols by kind, then index; auxiliary symbols by name, because their
+/// indices follow the order in which they were registered.
+fn symbol_key(s: Symbol) -> (u8, u32, u32) {
+    match s {
+        Symbol::Param(i) => (0, i, 0),
+        Symbol::Mass(i) => (1, i, 0),
+        Symbol::Aux(i) => (2, i, 0),
+        Symbol::Time => (3, 0, 0),
+        Symbol::Jet { coord, order } => (4, coord, order),
+    }
+}
+
+impl Arena {
+    fn cmp_symbol(&self, s: Symbol, t: Symbol) -> Ordering {
+        match (s, t) {
+            (Symbol::Aux(i), Symbol::Aux(j)) => self.aux_name(i).cmp(&self.aux_name(j)),
+            _ => symbol_key(s).cmp(&symbol_key(t)),
+        }
+    }
+}

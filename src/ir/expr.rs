@@ -1,0 +1,407 @@
+//! The hash-consed expression DAG: ids, symbols, nodes and the arena that
+//! owns them.
+//!
+//! Every node is stored once: building the same canonical expression twice
+//! gives the same [`ExprId`], so equality is id equality and derivatives can
+//! be cached per node. The canonicalising constructors live in `canon.rs`;
+//! this file only interns nodes that are already canonical.
+
+use crate::syntax::ast::Func;
+use std::collections::{BTreeSet, HashMap};
+use std::hash::{BuildHasherDefault, Hash, Hasher};
+
+/// An expression: an index into its [`Arena`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ExprId(pub(crate) u32);
+
+impl ExprId {
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// The leaves of an expression.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Symbol {
+    Time,
+    /// A model param: runtime-overridable, so its value is never substituted.
+    Param(u32),
+    /// The value of mass law `i`: frozen (constant) under the total derivative.
+    Mass(u32),
+    /// `q_coord^(order)`; order 0 is the coordinate itself.
+    Jet {
+        coord: u32,
+        order: u32,
+    },
+    /// A named auxiliary symbol (field coefficients, …), see [`Arena::aux`].
+    Aux(u32),
+}
+
+/// One node of the DAG. Canonical invariants (kept by the constructors):
+/// `Add`/`Mul` are flat, have ≥ 2 children in canonical order, and a `Mul`'s
+/// numeric coefficient (≠ 1) is its first child; constants are never `-0.0`.
+#[derive(Debug, Clone)]
+pub enum Node {
+    Const(f64),
+    Sym(Symbol),
+    Add(Box<[ExprId]>),
+    Mul(Box<[ExprId]>),
+    Pow(ExprId, ExprId),
+    Func(Func, ExprId),
+}
+
+// Constants compare by bits so that nodes can be hash-consed (the
+// constructors never produce `-0.0` and use one NaN bit pattern).
+impl PartialEq for Node {
+    fn eq(&self, other: &Node) -> bool {
+        match (self, other) {
+            (Node::Const(a), Node::Const(b)) => a.to_bits() == b.to_bits(),
+            (Node::Sym(a), Node::Sym(b)) => a == b,
+            (Node::Add(a), Node::Add(b)) | (Node::Mul(a), Node::Mul(b)) => a == b,
+            (Node::Pow(a, b), Node::Pow(c, d)) => a == c && b == d,
+            (Node::Func(f, a), Node::Func(g, b)) => f == g && a == b,
+            _ => false,
+        }
+    }
+}
+
+impl Eq for Node {}
+
+impl Hash for Node {
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        std::mem::discriminant(self).hash(state);
+        match self {
+            Node::Const(v) => v.to_bits().hash(state),
+            Node::Sym(s) => s.hash(state),
+            Node::Add(ts) | Node::Mul(ts) => ts.hash(state),
+            Node::Pow(a, b) => (a, b).hash(state),
+            Node::Func(f, a) => (f, a).hash(state),
+        }
+    }
+}
+
+/// Display names of the model's symbols, by index.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Names {
+    pub params: Vec<String>,
+    pub coords: Vec<String>,
+    pub masses: Vec<String>,
+}
+
+/// A small, fast, deterministic hasher (FxHash): the arena hashes millions of
+/// small keys and needs no protection against adversarial collisions.
+#[derive(Default, Clone, Copy)]
+pub(crate) struct FxHasher {
+    hash: u64,
+}
+
+impl FxHasher {
+    fn mix(&mut self, word: u64) {
+        self.hash = (self.hash.rotate_left(5) ^ word).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+impl Hasher for FxHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.mix(u64::from_le_bytes(word));
+        }
+    }
+    fn write_u8(&mut self, i: u8) {
+        self.mix(u64::from(i));
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.mix(u64::from(i));
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.mix(i);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.mix(i as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.hash
+    }
+}
+
+pub(crate) type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<FxHasher>>;
+
+/// Which derivation a cached derivative belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum Derivation {
+    Partial(Symbol),
+    Total,
+}
+
+/// Per-node facts computed once when the node is interned.
+#[derive(Debug, Clone)]
+pub(crate) struct Meta {
+    /// Free symbols as sorted indices into `Arena::symbols`.
+    pub(crate) free: Box<[u32]>,
+    /// Depends on `t` or on some jet: moves under the total derivative.
+    pub(crate) varies: bool,
+}
+
+/// The hash-consed DAG of expressions, with its caches.
+#[derive(Debug, Clone)]
+pub struct Arena {
+    pub(crate) names: Names,
+    pub(crate) aux_names: Vec<String>,
+    aux_index: HashMap<String, u32>,
+    pub(crate) nodes: Vec<Node>,
+    pub(crate) meta: Vec<Meta>,
+    interned: FxMap<Node, ExprId>,
+    pub(crate) symbols: Vec<Symbol>,
+    symbol_index: FxMap<Symbol, u32>,
+    pub(crate) derivatives: FxMap<(ExprId, Derivation), ExprId>,
+    zero: ExprId,
+    one: ExprId,
+}
+
+impl Arena {
+    pub fn new(names: Names) -> Arena {
+        let mut arena = Arena {
+            names,
+            aux_names: Vec::new(),
+            aux_index: HashMap::new(),
+            nodes: Vec::new(),
+            meta: Vec::new(),
+            interned: FxMap::default(),
+            symbols: Vec::new(),
+            symbol_index: FxMap::default(),
+            derivatives: FxMap::default(),
+            zero: ExprId(0),
+            one: ExprId(0),
+        };
+        arena.zero = arena.intern(Node::Const(0.0));
+        arena.one = arena.intern(Node::Const(1.0));
+        arena
+    }
+
+    pub fn names(&self) -> &Names {
+        &self.names
+    }
+
+    pub fn node(&self, e: ExprId) -> &Node {
+        &self.nodes[e.index()]
+    }
+
+    /// The number of distinct nodes ever built in this arena.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    pub fn zero(&mut self) -> ExprId {
+        self.zero
+    }
+
+    pub fn one(&mut self) -> ExprId {
+        self.one
+    }
+
+    /// A numeric constant. `-0.0` becomes `0.0` and every NaN the same NaN, so
+    /// that equal values share one node. Callers should not pass NaN; `lower`
+    /// does so only for a name that does not resolve.
+    pub fn constant(&mut self, v: f64) -> ExprId {
+        let v = if v == 0.0 {
+            0.0
+        } else if v.is_nan() {
+            f64::NAN
+        } else {
+            v
+        };
+        self.intern(Node::Const(v))
+    }
+
+    pub fn symbol(&mut self, s: Symbol) -> ExprId {
+        self.intern(Node::Sym(s))
+    }
+
+    /// `q_coord^(order)` as an expression.
+    pub fn jet(&mut self, coord: u32, order: u32) -> ExprId {
+        self.symbol(Symbol::Jet { coord, order })
+    }
+
+    /// Registers a named auxiliary symbol; the same name gives the same symbol.
+    pub fn aux(&mut self, name: &str) -> Symbol {
+        if let Some(&i) = self.aux_index.get(name) {
+            return Symbol::Aux(i);
+        }
+        let i = self.aux_names.len() as u32;
+        self.aux_names.push(name.to_string());
+        self.aux_index.insert(name.to_string(), i);
+        Symbol::Aux(i)
+    }
+
+    pub fn aux_name(&self, i: u32) -> Option<&str> {
+        self.aux_names.get(i as usize).map(String::as_str)
+    }
+
+    pub fn as_const(&self, e: ExprId) -> Option<f64> {
+        match self.node(e) {
+            Node::Const(v) => Some(*v),
+            _ => None,
+        }
+    }
+
+    pub fn is_zero(&self, e: ExprId) -> bool {
+        e == self.zero
+    }
+
+    pub fn is_one(&self, e: ExprId) -> bool {
+        e == self.one
+    }
+
+    pub fn free_symbols(&self, e: ExprId) -> BTreeSet<Symbol> {
+        self.meta[e.index()]
+            .free
+            .iter()
+            .map(|&i| self.symbols[i as usize])
+            .collect()
+    }
+
+    pub fn depends_on(&self, e: ExprId, s: Symbol) -> bool {
+        match self.symbol_index.get(&s) {
+            Some(i) => self.meta[e.index()].free.binary_search(i).is_ok(),
+            None => false,
+        }
+    }
+
+    /// The highest derivative order of coordinate `coord` in `e`, if any.
+    pub fn max_jet_order(&self, e: ExprId, coord: u32) -> Option<u32> {
+        self.meta[e.index()]
+            .free
+            .iter()
+            .filter_map(|&i| match self.symbols[i as usize] {
+                Symbol::Jet { coord: c, order } if c == coord => Some(order),
+                _ => None,
+            })
+            .max()
+    }
+
+    /// Depends on `t` or on a jet variable.
+    pub fn varies_in_time(&self, e: ExprId) -> bool {
+        self.meta[e.index()].varies
+    }
+
+    pub(crate) fn symbol_slot(&self, s: Symbol) -> Option<u32> {
+        self.symbol_index.get(&s).copied()
+    }
+
+    /// The children of a node, in order.
+    pub fn children(&self, e: ExprId) -> Vec<ExprId> {
+        match self.node(e) {
+            Node::Const(_) | Node::Sym(_) => Vec::new(),
+            Node::Add(ts) | Node::Mul(ts) => ts.to_vec(),
+            Node::Pow(a, b) => vec![*a, *b],
+            Node::Func(_, a) => vec![*a],
+        }
+    }
+
+    /// Distinct nodes reachable from `roots`, each once (post-order).
+    pub fn reachable(&self, roots: &[ExprId]) -> Vec<ExprId> {
+        let mut seen = vec![false; self.nodes.len()];
+        let mut order = Vec::new();
+        let mut stack: Vec<(ExprId, bool)> = roots.iter().rev().map(|&r| (r, false)).collect();
+        while let Some((e, expanded)) = stack.pop() {
+            if expanded {
+                order.push(e);
+                continue;
+            }
+            if seen[e.index()] {
+                continue;
+            }
+            seen[e.index()] = true;
+            stack.push((e, true));
+            for c in self.children(e).into_iter().rev() {
+                if !seen[c.index()] {
+                    stack.push((c, false));
+                }
+            }
+        }
+        order
+    }
+
+    /// Distinct nodes reachable from `roots`.
+    pub fn dag_size(&self, roots: &[ExprId]) -> usize {
+        self.reachable(roots).len()
+    }
+
+    /// Arithmetic operations to evaluate `roots` with every shared node
+    /// computed once: an n-ary sum or product costs n − 1, a power or a
+    /// function call 1, a leaf 0.
+    pub fn op_count(&self, roots: &[ExprId]) -> usize {
+        self.reachable(roots)
+            .into_iter()
+            .map(|e| match self.node(e) {
+                Node::Const(_) | Node::Sym(_) => 0,
+                Node::Add(ts) | Node::Mul(ts) => ts.len() - 1,
+                Node::Pow(..) | Node::Func(..) => 1,
+            })
+            .sum()
+    }
+
+    /// Stores `node` (which must already be canonical) once, and returns its id.
+    pub(crate) fn intern(&mut self, node: Node) -> ExprId {
+        if let Some(&id) = self.interned.get(&node) {
+            return id;
+        }
+        let meta = self.meta_of(&node);
+        let id = ExprId(self.nodes.len() as u32);
+        self.nodes.push(node.clone());
+        self.meta.push(meta);
+        self.interned.insert(node, id);
+        id
+    }
+
+    fn meta_of(&mut self, node: &Node) -> Meta {
+        match node {
+            Node::Const(_) => Meta {
+                free: Box::new([]),
+                varies: false,
+            },
+            Node::Sym(s) => {
+                let slot = self.slot_for(*s);
+                Meta {
+                    free: Box::new([slot]),
+                    varies: matches!(s, Symbol::Time | Symbol::Jet { .. }),
+                }
+            }
+            Node::Add(ts) | Node::Mul(ts) => self.union_meta(ts),
+            Node::Pow(a, b) => self.union_meta(&[*a, *b]),
+            Node::Func(_, a) => self.meta[a.index()].clone(),
+        }
+    }
+
+    fn union_meta(&self, children: &[ExprId]) -> Meta {
+        let mut free: Vec<u32> = Vec::new();
+        let mut varies = false;
+        for c in children {
+            let m = &self.meta[c.index()];
+            free.extend_from_slice(&m.free);
+            varies |= m.varies;
+        }
+        free.sort_unstable();
+        free.dedup();
+        Meta {
+            free: free.into_boxed_slice(),
+            varies,
+        }
+    }
+
+    fn slot_for(&mut self, s: Symbol) -> u32 {
+        if let Some(&i) = self.symbol_index.get(&s) {
+            return i;
+        }
+        let i = self.symbols.len() as u32;
+        self.symbols.push(s);
+        self.symbol_index.insert(s, i);
+        i
+    }
+}

@@ -1,0 +1,34 @@
+//! The symbolic core: a hash-consed DAG of canonical expressions with exact
+//! partial and total derivatives, substitution, evaluation and text forms.
+//!
+//! Invariants: every [`ExprId`] names a canonical node (built only through
+//! the constructors of `canon.rs`), so two ids are equal iff the expressions
+//! are equal up to canonicalisation; the canonical order of terms depends on
+//! structure only, never on the order in which things were built; products
+//! of sums are never expanded.
+//!
+//! | file | what |
+//! |---|---|
+//! | `expr.rs` | ids, symbols, nodes, the arena, free-symbol facts, sizes |
+//! | `canon.rs` | canonicalising constructors and the canonical order |
+//! | `diff.rs` | `∂/∂symbol` (and the walk shared with `D`) |
+//! | `jet.rs` | the total time derivative `D` |
+//! | `subst.rs` | simultaneous substitution |
+//! | `eval.rs` | numbers |
+//! | `display.rs` | text and LaTeX |
+//! | `lower.rs` | AST → IR |
+
+mod canon;
+mod diff;
+mod display;
+mod eval;
+mod expr;
+mod jet;
+mod lower;
+mod subst;
+
+pub use crate::syntax::ast::Func;
+pub use canon::{apply_func, pow_value};
+pub use display::ExprDisplay;
+pub use expr::{Arena, ExprId, Names, Node, Symbol};
+pub use lower::{lower, names_of, try_lower, LowerError};

@@ -1,0 +1,72 @@
+//! Simultaneous substitution of symbols by expressions.
+
+use super::expr::{Arena, ExprId, FxMap, Node, Symbol};
+use std::collections::HashMap;
+
+impl Arena {
+    /// Replaces every symbol in `map` by its image, all at once (an image is
+    /// not substituted again), and re-canonicalises. Sub-expressions free of
+    /// the mapped symbols are kept as they are; shared nodes are rebuilt once.
+    pub fn subst(&mut self, e: ExprId, map: &HashMap<Symbol, ExprId>) -> ExprId {
+        let mut slots: Vec<u32> = map.keys().filter_map(|&s| self.symbol_slot(s)).collect();
+        if slots.is_empty() {
+            return e;
+        }
+        slots.sort_unstable();
+        let mut memo = FxMap::default();
+        self.subst_rec(e, map, &slots, &mut memo)
+    }
+
+    fn touches(&self, e: ExprId, slots: &[u32]) -> bool {
+        let free = &self.meta[e.index()].free;
+        if free.len() < slots.len() {
+            free.iter().any(|s| slots.binary_search(s).is_ok())
+        } else {
+            slots.iter().any(|s| free.binary_search(s).is_ok())
+        }
+    }
+
+    fn subst_rec(
+        &mut self,
+        e: ExprId,
+        map: &HashMap<Symbol, ExprId>,
+        slots: &[u32],
+        memo: &mut FxMap<ExprId, ExprId>,
+    ) -> ExprId {
+        if !self.touches(e, slots) {
+            return e;
+        }
+        if let Some(&r) = memo.get(&e) {
+            return r;
+        }
+        let r = match self.node(e).clone() {
+            Node::Const(_) => e,
+            Node::Sym(s) => map.get(&s).copied().unwrap_or(e),
+            Node::Add(ts) => {
+                let ts: Vec<ExprId> = ts
+                    .iter()
+                    .map(|&t| self.subst_rec(t, map, slots, memo))
+                    .collect();
+                self.add(&ts)
+            }
+            Node::Mul(fs) => {
+                let fs: Vec<ExprId> = fs
+                    .iter()
+                    .map(|&f| self.subst_rec(f, map, slots, memo))
+                    .collect();
+                self.mul(&fs)
+            }
+            Node::Pow(a, b) => {
+                let a = self.subst_rec(a, map, slots, memo);
+                let b = self.subst_rec(b, map, slots, memo);
+                self.pow(a, b)
+            }
+            Node::Func(f, a) => {
+                let a = self.subst_rec(a, map, slots, memo);
+                self.func(f, a)
+            }
+        };
+        memo.insert(e, r);
+        r
+    }
+}
