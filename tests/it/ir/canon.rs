@@ -1,0 +1,190 @@
+//! Canonical forms built by the constructors.
+
+use super::{arena, num, q, sym, ALPHA, M0};
+use lagc::ir::{Func, Node, Symbol};
+
+#[test]
+fn like_terms_collect_and_order_does_not_matter() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let y = sym(&mut a, ALPHA);
+    let two = num(&mut a, 2.0);
+    let x_plus_x = a.add(&[x, x]);
+    let two_x = a.mul(&[two, x]);
+    assert_eq!(x_plus_x, two_x);
+    assert_eq!(a.add(&[x, y]), a.add(&[y, x]));
+    assert_eq!(a.mul(&[x, y]), a.mul(&[y, x]));
+    let three = num(&mut a, 3.0);
+    let three_x = a.mul(&[x, three]);
+    let five = num(&mut a, 5.0);
+    let five_x = a.mul(&[five, x]);
+    assert_eq!(a.add(&[two_x, three_x]), five_x);
+    let minus = a.neg(five_x);
+    let zero = a.zero();
+    assert_eq!(a.add(&[five_x, minus]), zero);
+}
+
+#[test]
+fn like_powers_collect() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 1));
+    let inv = a.powi(x, -1);
+    let one = a.one();
+    assert_eq!(a.mul(&[x, inv]), one);
+    let x2 = a.powi(x, 2);
+    let x3 = a.powi(x, 3);
+    assert_eq!(a.mul(&[x, x2]), x3);
+    assert_eq!(a.mul(&[x, x, x]), x3);
+    let x6 = a.powi(x, 6);
+    assert_eq!(a.powi(x2, 3), x6);
+    let r = a.func(Func::Sqrt, x);
+    assert_eq!(a.mul(&[r, r]), x);
+    assert_eq!(a.powi(r, 2), x);
+    // Symbolic exponents add: x^t · x^alpha = x^(t + alpha).
+    let t = sym(&mut a, Symbol::Time);
+    let al = sym(&mut a, ALPHA);
+    let xt = a.pow(x, t);
+    let xa = a.pow(x, al);
+    let sum = a.add(&[t, al]);
+    let expected = a.pow(x, sum);
+    assert_eq!(a.mul(&[xt, xa]), expected);
+}
+
+#[test]
+fn integer_powers_distribute_over_products() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let y = sym(&mut a, q(1, 0));
+    let three = num(&mut a, 3.0);
+    let xy = a.mul(&[three, x, y]);
+    let sq = a.powi(xy, 2);
+    let nine = num(&mut a, 9.0);
+    let x2 = a.powi(x, 2);
+    let y2 = a.powi(y, 2);
+    assert_eq!(sq, a.mul(&[nine, x2, y2]));
+    // A half power does not distribute (it is not valid for negative factors).
+    let half = num(&mut a, 0.5);
+    let root = a.pow(xy, half);
+    assert!(matches!(a.node(root), Node::Pow(..)));
+}
+
+/// The paper's law `M0·exp(−αt)` divides out, and so does its rate.
+#[test]
+fn exponential_mass_law_cancels() {
+    let mut a = arena();
+    let m0 = sym(&mut a, M0);
+    let al = sym(&mut a, ALPHA);
+    let t = sym(&mut a, Symbol::Time);
+    let at = a.mul(&[al, t]);
+    let minus_at = a.neg(at);
+    let e = a.func(Func::Exp, minus_at);
+    let law = a.mul(&[m0, e]);
+    let one = a.one();
+    assert_eq!(a.div(law, law), one);
+    let inv = a.powi(law, -1);
+    assert_eq!(a.mul(&[law, inv]), one);
+    let rate = a.diff(law, Symbol::Time);
+    let minus_alpha = a.neg(al);
+    assert_eq!(a.div(rate, law), minus_alpha);
+
+    // A law that would overflow numerically: M0·exp(1000 t).
+    let k = num(&mut a, 1000.0);
+    let kt = a.mul(&[k, t]);
+    let e = a.func(Func::Exp, kt);
+    let law = a.mul(&[m0, e]);
+    let rate = a.diff(law, Symbol::Time);
+    assert_eq!(a.div(rate, law), k);
+    let at_big_t = a.eval(law, &|s| if s == Symbol::Time { 1.0 } else { 1.0 });
+    assert!(at_big_t.is_infinite(), "the law itself overflows at t = 1");
+}
+
+#[test]
+fn exp_and_ln() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let y = sym(&mut a, q(1, 0));
+    let ex = a.func(Func::Exp, x);
+    let ey = a.func(Func::Exp, y);
+    let xy = a.add(&[x, y]);
+    let exy = a.func(Func::Exp, xy);
+    assert_eq!(a.mul(&[ex, ey]), exy);
+    assert_eq!(a.func(Func::Ln, ex), x);
+    let lx = a.func(Func::Ln, x);
+    assert_eq!(a.func(Func::Exp, lx), x);
+    let minus_x = a.neg(x);
+    let emx = a.func(Func::Exp, minus_x);
+    let one = a.one();
+    assert_eq!(a.mul(&[ex, emx]), one);
+    // (e^x)^3 = e^(3x)
+    let three = num(&mut a, 3.0);
+    let x3 = a.mul(&[three, x]);
+    let e3 = a.func(Func::Exp, x3);
+    assert_eq!(a.powi(ex, 3), e3);
+}
+
+#[test]
+fn identities() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let (zero, one) = (a.zero(), a.one());
+    assert_eq!(a.add(&[x, zero]), x);
+    assert_eq!(a.mul(&[x, one]), x);
+    assert_eq!(a.mul(&[x, zero]), zero);
+    assert_eq!(a.pow(x, one), x);
+    assert_eq!(a.pow(x, zero), one);
+    assert_eq!(a.add(&[]), zero);
+    assert_eq!(a.mul(&[]), one);
+    assert_eq!(a.sub(x, x), zero);
+}
+
+#[test]
+fn constants_fold_only_to_finite_values() {
+    let mut a = arena();
+    let two = num(&mut a, 2.0);
+    let three = num(&mut a, 3.0);
+    let five = a.add(&[two, three]);
+    assert_eq!(a.as_const(five), Some(5.0));
+    let p = a.pow(two, three);
+    assert_eq!(a.as_const(p), Some(8.0));
+    let zero = a.zero();
+    let s = a.func(Func::Sin, zero);
+    assert_eq!(a.as_const(s), Some(0.0));
+    // 1/0 stays symbolic instead of becoming inf.
+    let one = a.one();
+    let inv0 = a.div(one, zero);
+    assert_eq!(a.as_const(inv0), None);
+    // 0/0 never becomes a NaN constant.
+    let zz = a.div(zero, zero);
+    assert!(a.as_const(zz).is_none_or(|v| !v.is_nan()));
+    // ln 0, sqrt(−1), asin 2 stay symbolic.
+    let ln0 = a.func(Func::Ln, zero);
+    assert_eq!(a.as_const(ln0), None);
+    let m1 = num(&mut a, -1.0);
+    let r = a.func(Func::Sqrt, m1);
+    assert_eq!(a.as_const(r), None);
+    let asin2 = a.func(Func::Asin, two);
+    assert_eq!(a.as_const(asin2), None);
+    // Overflowing products stay unfolded.
+    let big = num(&mut a, 1e200);
+    let prod = a.mul(&[big, big]);
+    assert!(a.as_const(prod).is_none_or(|v| v.is_finite()));
+    let e = a.func(Func::Exp, big);
+    assert_eq!(a.as_const(e), None);
+    // −0 is 0.
+    assert_eq!(num(&mut a, -0.0), zero);
+}
+
+/// Sums of products of sums stay factored.
+#[test]
+fn products_of_sums_are_not_expanded() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let y = sym(&mut a, q(1, 0));
+    let s = a.add(&[x, y]);
+    let d = a.sub(x, y);
+    let p = a.mul(&[s, d]);
+    match a.node(p) {
+        Node::Mul(fs) => assert_eq!(fs.len(), 2),
+        other => panic!("expected a product, got {other:?}"),
+    }
+}
