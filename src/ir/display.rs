@@ -302,8 +302,8 @@ impl<'a> Writer<'a> {
     /// `base^exp` with a non-negative or symbolic exponent.
     fn power(&self, base: ExprId, exp: Exponent, ctx: Prec, out: &mut String) {
         match exp {
-            Exponent::Number(k) if k == 1.0 => self.expr(base, ctx, out),
-            Exponent::Number(k) if k == 0.5 => {
+            Exponent::Number(1.0) => self.expr(base, ctx, out),
+            Exponent::Number(0.5) => {
                 match self.style {
                     Style::Text => out.push_str("sqrt("),
                     Style::Latex => out.push_str("\\sqrt{"),

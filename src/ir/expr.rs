@@ -341,7 +341,7 @@ impl Arena {
             .into_iter()
             .map(|e| match self.node(e) {
                 Node::Const(_) | Node::Sym(_) => 0,
-                Node::Add(ts) | Node::Mul(ts) => ts.len() - 1,
+                Node::Add(ts) | Node::Mul(ts) => ts.len().saturating_sub(1),
                 Node::Pow(..) | Node::Func(..) => 1,
             })
             .sum()

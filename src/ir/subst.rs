@@ -70,3 +70,27 @@ impl Arena {
         r
     }
 }
+
+impl Arena {
+    /// For `e` affine in `vars`, `e = free + Σ_A coeffs[A]·vars[A]`: returns
+    /// `(coeffs, free)` (each coefficient `∂e/∂x_A`, the free term `e` at
+    /// `x = 0`). When `e` is not affine the coefficients still hold `x`; check
+    /// with [`Arena::is_affine_in`] first where that matters.
+    pub fn affine_parts(&mut self, e: ExprId, vars: &[Symbol]) -> (Vec<ExprId>, ExprId) {
+        let coeffs = vars.iter().map(|&x| self.diff(e, x)).collect();
+        let zero = self.zero();
+        let at_zero: HashMap<Symbol, ExprId> = vars.iter().map(|&x| (x, zero)).collect();
+        let free = self.subst(e, &at_zero);
+        (coeffs, free)
+    }
+
+    /// Whether `e` is affine in `vars` as written: no coefficient `∂e/∂x_A`
+    /// depends on any `x_B`. Canonical forms do not expand, so an expression
+    /// affine only after cancellation (`(x+1)^2 − x^2`) reports `false`.
+    pub fn is_affine_in(&mut self, e: ExprId, vars: &[Symbol]) -> bool {
+        vars.iter().all(|&x| {
+            let c = self.diff(e, x);
+            vars.iter().all(|&y| !self.depends_on(c, y))
+        })
+    }
+}

@@ -328,3 +328,24 @@ fn evaluation_and_symbol_facts() {
     assert_eq!(a.dag_size(&[e]), 5);
     assert_eq!(a.op_count(&[e]), 3);
 }
+
+#[test]
+fn affine_parts_and_affinity() {
+    let mut a = arena();
+    let (x, y, t) = (
+        sym(&mut a, q(0, 0)),
+        sym(&mut a, q(1, 0)),
+        sym(&mut a, Symbol::Time),
+    );
+    let sin_t = a.func(Func::Sin, t);
+    let xs = a.mul(&[sin_t, x]);
+    let three = num(&mut a, 3.0);
+    let y3 = a.mul(&[three, y]);
+    let e = a.add(&[xs, y3, t]);
+    let vars = [q(0, 0), q(1, 0)];
+    assert!(a.is_affine_in(e, &vars));
+    assert_eq!(a.affine_parts(e, &vars), (vec![sin_t, three], t));
+    let xy = a.mul(&[x, y]);
+    let bilinear = a.add(&[e, xy]);
+    assert!(!a.is_affine_in(bilinear, &vars));
+}
