@@ -1,0 +1,233 @@
+//! The numeric runtime of generated crates, checked on hand-written systems
+//! against exact motions.
+
+#[path = "../../src/emit/runtime/mod.rs"]
+mod rt;
+
+mod systems;
+
+use rt::direct::solve_direct;
+use rt::error::{Failure, FailureKind};
+use rt::field::{solve_field, Anchor, FieldOptions, FieldReport};
+use rt::method::Integrator;
+use rt::output::sample_times;
+use rt::stepper::{Stats, Tolerance};
+use rt::system::{CoefficientSystem, Motion};
+use systems::*;
+
+const TOL: Tolerance = Tolerance {
+    rtol: 1e-10,
+    atol: 1e-12,
+};
+
+type Trajectory = Vec<(f64, Vec<f64>)>;
+
+fn direct(
+    motion: &dyn Motion,
+    integrator: Integrator,
+    times: &[f64],
+    x0: &[f64],
+) -> Result<(Trajectory, Stats), Failure> {
+    let mut samples = Vec::new();
+    let stats = solve_direct(motion, integrator, TOL, times, x0, |t, x| {
+        samples.push((t, x.to_vec()))
+    })?;
+    Ok((samples, stats))
+}
+
+fn field(
+    coefficients: &dyn CoefficientSystem,
+    options: &FieldOptions,
+    times: &[f64],
+    x0: &[f64],
+) -> Result<(Trajectory, FieldReport), Failure> {
+    let mut samples = Vec::new();
+    let report = solve_field(coefficients, options, times, x0, |t, x| {
+        samples.push((t, x.to_vec()))
+    })?;
+    Ok((samples, report))
+}
+
+fn field_options() -> FieldOptions {
+    FieldOptions {
+        tol: TOL,
+        ..FieldOptions::default()
+    }
+}
+
+/// The largest error relative to `max(|exact|, 1)` over all samples.
+fn largest_error(samples: &Trajectory, exact: impl Fn(f64) -> Vec<f64>) -> f64 {
+    let mut largest = 0.0_f64;
+    for (t, x) in samples {
+        for (value, truth) in x.iter().zip(exact(*t)) {
+            largest = largest.max((value - truth).abs() / truth.abs().max(1.0));
+        }
+    }
+    largest
+}
+
+#[test]
+fn paper_example_by_field_and_direct_matches_exact_motion() {
+    let system = PaperExample { alpha: 0.5 };
+    let x0 = [0.0, 0.0, 1.0, 0.0];
+    let times = sample_times(0.0, 5.0, 51);
+    let exact = |t| system.exact(t, &x0);
+    let (by_field, report) = field(&system, &field_options(), &times, &x0).unwrap();
+    assert_eq!(by_field.len(), 51);
+    assert_eq!(by_field[50].0, 5.0);
+    let field_error = largest_error(&by_field, exact);
+    assert!(field_error <= 1e-8, "field error {field_error:e}");
+    assert!(report.largest_condition >= 1.0);
+    for integrator in [Integrator::Explicit, Integrator::Stiff] {
+        let (by_direct, _) = direct(&system, integrator, &times, &x0).unwrap();
+        let error = largest_error(&by_direct, exact);
+        assert!(error <= 1e-8, "{integrator:?} error {error:e}");
+    }
+}
+
+#[test]
+fn paper_example_field_does_not_depend_on_the_anchor() {
+    let system = PaperExample { alpha: 0.5 };
+    let x0 = [0.3, -0.2, 1.0, 0.0];
+    let times = sample_times(0.0, 5.0, 26);
+    let (zero, _) = field(&system, &field_options(), &times, &x0).unwrap();
+    let other = FieldOptions {
+        anchor: Anchor::Given(vec![0.3, -0.7, 1.1]),
+        ..field_options()
+    };
+    let (given, _) = field(&system, &other, &times, &x0).unwrap();
+    let difference = largest_error(&given, |t| {
+        zero.iter().find(|(s, _)| *s == t).unwrap().1.clone()
+    });
+    assert!(difference <= 1e-9, "anchors differ by {difference:e}");
+    let error = largest_error(&given, |t| system.exact(t, &x0));
+    assert!(error <= 1e-8, "error {error:e}");
+}
+
+#[test]
+fn oscillator_field_reanchors_before_the_riccati_blow_up() {
+    let system = Oscillator { omega: 1.0 };
+    let x0 = [1.0, 0.5];
+    let times = sample_times(0.0, 100.0, 401);
+    let exact = |t| system.exact(t, &x0);
+    let (by_field, report) = field(&system, &field_options(), &times, &x0).unwrap();
+    // f_2 = tan(t)/ω from c_2 = 0: at least one pole every π.
+    assert!(report.reanchorings >= 31, "{report:?}");
+    let error = largest_error(&by_field, exact);
+    assert!(error <= 1e-8, "field error {error:e}");
+    for integrator in [Integrator::Explicit, Integrator::Stiff] {
+        let (by_direct, _) = direct(&system, integrator, &times, &x0).unwrap();
+        let error = largest_error(&by_direct, exact);
+        assert!(error <= 1e-8, "{integrator:?} error {error:e}");
+    }
+}
+
+#[test]
+fn damped_oscillator_by_field_and_direct_matches_exact_motion() {
+    let system = DampedOscillator {
+        omega: 2.0,
+        zeta: 0.1,
+    };
+    let x0 = [1.0, -0.5];
+    let times = sample_times(0.0, 20.0, 201);
+    let exact = |t| system.exact(t, &x0);
+    let (by_field, _) = field(&system, &field_options(), &times, &x0).unwrap();
+    let error = largest_error(&by_field, exact);
+    assert!(error <= 1e-8, "field error {error:e}");
+    for integrator in [Integrator::Explicit, Integrator::Stiff] {
+        let (by_direct, _) = direct(&system, integrator, &times, &x0).unwrap();
+        let error = largest_error(&by_direct, exact);
+        assert!(error <= 1e-8, "{integrator:?} error {error:e}");
+    }
+}
+
+#[test]
+fn stiff_system_field_reanchors_and_rosenbrock_takes_fewer_steps() {
+    let system = StiffPair { rate: 1000.0 };
+    let x0 = [1.0, 2.0];
+    let times = sample_times(0.0, 2.0, 21);
+    let exact = |t| system.exact(t, &x0);
+    for integrator in [Integrator::Explicit, Integrator::Stiff] {
+        let options = FieldOptions {
+            integrator,
+            ..field_options()
+        };
+        let (by_field, report) = field(&system, &options, &times, &x0).unwrap();
+        // f_2 grows like e^{999 t}: without re-anchoring S overflows by t = 0.8.
+        assert!(report.reanchorings > 0, "{report:?}");
+        let error = largest_error(&by_field, exact);
+        assert!(error <= 1e-8, "field {integrator:?} error {error:e}");
+    }
+    let (explicit, explicit_stats) = direct(&system, Integrator::Explicit, &times, &x0).unwrap();
+    let (stiff, stiff_stats) = direct(&system, Integrator::Stiff, &times, &x0).unwrap();
+    for samples in [&explicit, &stiff] {
+        let error = largest_error(samples, exact);
+        assert!(error <= 1e-8, "direct error {error:e}");
+    }
+    assert!(
+        stiff_stats.accepted_steps < explicit_stats.accepted_steps,
+        "RODAS4 {stiff_stats:?} vs DOP853 {explicit_stats:?}"
+    );
+}
+
+#[test]
+fn overflowing_blow_up_is_a_non_finite_state_at_t_1() {
+    // x' = (1e-150 x)², x(0) = 1e300: x = 1e300/(1 − t) and
+    // x' = 1e300/(1 − t)² pass 1e306 at 1 − t ≈ 1e-3, where the stage sums
+    // of a step overflow whatever its length.
+    let system = Quadratic { scale: 1e-150 };
+    for integrator in [Integrator::Explicit, Integrator::Stiff] {
+        let failure = direct(&system, integrator, &[0.0, 2.0], &[1e300]).unwrap_err();
+        assert!(
+            matches!(&failure.kind, FailureKind::NonFiniteState { component } if component.starts_with("x1")),
+            "{integrator:?}: {failure}"
+        );
+        assert!((failure.time - 1.0).abs() < 2e-3, "{integrator:?}: {failure}");
+        assert!(failure.to_string().contains("x1"), "{failure}");
+    }
+}
+
+#[test]
+fn representable_blow_up_is_a_step_size_underflow_at_t_1() {
+    // x' = x², x(0) = 1: x = 1/(1 − t) stays finite at every representable
+    // t < 1, so the step size underflows first.
+    let system = Quadratic { scale: 1.0 };
+    for integrator in [Integrator::Explicit, Integrator::Stiff] {
+        let failure = direct(&system, integrator, &[0.0, 2.0], &[1.0]).unwrap_err();
+        assert!(
+            matches!(failure.kind, FailureKind::StepSizeUnderflow { step } if step < 1e-12),
+            "{integrator:?}: {failure}"
+        );
+        assert!((failure.time - 1.0).abs() < 1e-6, "{integrator:?}: {failure}");
+        assert!(failure.to_string().contains("step size"), "{failure}");
+    }
+}
+
+#[test]
+fn vanishing_condition_without_reanchoring_is_a_singular_condition_matrix() {
+    // x' = diag(0, 50, 0) x: the condition matrix is diag(e^{-50t}, 1), whose
+    // condition number e^{50t} passes 1e4 at t = ln(1e4)/50.
+    let system = Diverging { rate: 50.0 };
+    let x0 = [1.0, 1.0, 2.0];
+    let times = sample_times(0.0, 0.5, 501);
+    let options = FieldOptions {
+        reanchor: false,
+        ..field_options()
+    };
+    let failure = field(&system, &options, &times, &x0).unwrap_err();
+    let onset = 1e4_f64.ln() / 50.0;
+    match failure.kind {
+        FailureKind::SingularConditionMatrix { condition } => assert!(condition > 1e4),
+        _ => panic!("{failure}"),
+    }
+    assert!(
+        failure.time >= onset && failure.time <= onset + 1e-3,
+        "{failure}"
+    );
+    assert!(failure.to_string().contains("condition"), "{failure}");
+    // Re-anchoring restores the conditioning; the motion is x2 = e^{50t}.
+    let (samples, report) = field(&system, &field_options(), &times, &x0).unwrap();
+    assert!(report.reanchorings > 0);
+    let error = largest_error(&samples, |t| system.exact(t, &x0));
+    assert!(error <= 1e-8, "error {error:e}");
+}
