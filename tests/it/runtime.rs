@@ -194,7 +194,10 @@ fn overflowing_blow_up_is_a_non_finite_state_at_t_1() {
             matches!(&failure.kind, FailureKind::NonFiniteState { component } if component.starts_with("x1")),
             "{integrator:?}: {failure}"
         );
-        assert!((failure.time - 1.0).abs() < 2e-3, "{integrator:?}: {failure}");
+        assert!(
+            (failure.time - 1.0).abs() < 2e-3,
+            "{integrator:?}: {failure}"
+        );
         assert!(failure.to_string().contains("x1"), "{failure}");
     }
 }
@@ -210,7 +213,10 @@ fn representable_blow_up_is_a_step_size_underflow_at_t_1() {
             matches!(failure.kind, FailureKind::StepSizeUnderflow { step } if step < 1e-12),
             "{integrator:?}: {failure}"
         );
-        assert!((failure.time - 1.0).abs() < 1e-6, "{integrator:?}: {failure}");
+        assert!(
+            (failure.time - 1.0).abs() < 1e-6,
+            "{integrator:?}: {failure}"
+        );
         assert!(failure.to_string().contains("step size"), "{failure}");
     }
 }
@@ -242,4 +248,213 @@ fn vanishing_condition_without_reanchoring_is_a_singular_condition_matrix() {
     assert!(report.reanchorings > 0);
     let error = largest_error(&samples, |t| system.exact(t, &x0));
     assert!(error <= 1e-8, "error {error:e}");
+}
+
+/// `AffineCoefficients` (SPEC's formulas, used by the local field method)
+/// agrees with the hand-derived coefficient systems.
+#[test]
+fn affine_coefficients_match_the_hand_derived_ones() {
+    use nalgebra::{DMatrix, DVector};
+    use rt::local_field::AffineCoefficients;
+    fn compare(hand: &dyn CoefficientSystem, motion: &dyn Motion, t: f64, f: &[f64]) {
+        let n = f.len();
+        let mut a = DMatrix::zeros(n, n);
+        motion.jacobian(t, &vec![0.0; n], &mut a).unwrap();
+        let mut b0 = vec![0.0; n];
+        motion.rhs(t, &vec![0.0; n], &mut b0).unwrap();
+        let mut b_slope = vec![0.0; n];
+        motion.time_partial(t, &vec![0.0; n], &mut b_slope).unwrap();
+        let general = AffineCoefficients {
+            a,
+            b0: DVector::from_vec(b0),
+            b_slope: DVector::from_vec(b_slope),
+            t_r: t,
+        };
+        assert_eq!(general.is_linear(), hand.is_linear());
+        let (mut df_hand, mut df_general) = (vec![0.0; n], vec![0.0; n]);
+        hand.rhs(t, f, &mut df_hand).unwrap();
+        general.rhs(t, f, &mut df_general).unwrap();
+        let (mut j_hand, mut j_general) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+        hand.jacobian(t, f, &mut j_hand).unwrap();
+        general.jacobian(t, f, &mut j_general).unwrap();
+        for i in 0..n {
+            assert!(
+                (df_hand[i] - df_general[i]).abs() < 1e-14,
+                "{df_hand:?} {df_general:?}"
+            );
+        }
+        assert!((j_hand - j_general).abs().max() < 1e-14);
+    }
+    let f4 = [0.3, -1.2, 0.7, 2.5];
+    compare(
+        &PaperExample { alpha: 0.5 },
+        &PaperExample { alpha: 0.5 },
+        1.7,
+        &f4,
+    );
+    compare(
+        &Oscillator { omega: 1.3 },
+        &Oscillator { omega: 1.3 },
+        0.4,
+        &f4[..2],
+    );
+    let damped = DampedOscillator {
+        omega: 2.0,
+        zeta: 0.1,
+    };
+    compare(&damped, &damped, 0.0, &f4[1..3]);
+    compare(
+        &StiffPair { rate: 1e3 },
+        &StiffPair { rate: 1e3 },
+        0.0,
+        &f4[2..],
+    );
+}
+
+#[test]
+fn local_field_follows_a_non_affine_motion() {
+    use rt::local_field::solve_local_field;
+    let system = Cubic;
+    let x0 = [0.5, 0.25];
+    let times = sample_times(0.0, 1.0, 11);
+    let options = FieldOptions {
+        tol: Tolerance {
+            rtol: 1e-9,
+            atol: 1e-11,
+        },
+        ..field_options()
+    };
+    let mut samples = Vec::new();
+    let report = solve_local_field(&system, &options, &times, &x0, |t, x| {
+        samples.push((t, x.to_vec()))
+    })
+    .unwrap();
+    let error = largest_error(&samples, |t| system.exact(t, &x0));
+    assert!(error <= 1e-8, "error {error:e}, {report:?}");
+    // The affine paper example goes through the same windows.
+    let paper = PaperExample { alpha: 0.5 };
+    let x0 = [0.0, 0.0, 1.0, 0.0];
+    let times = sample_times(0.0, 5.0, 11);
+    let mut samples = Vec::new();
+    solve_local_field(&paper, &options, &times, &x0, |t, x| {
+        samples.push((t, x.to_vec()))
+    })
+    .unwrap();
+    let error = largest_error(&samples, |t| paper.exact(t, &x0));
+    assert!(error <= 1e-8, "paper error {error:e}");
+}
+
+#[test]
+fn samples_and_csv_follow_the_spec() {
+    use rt::output::{write_header, write_row, Summary};
+    let times = sample_times(0.0, 5.0, 4);
+    assert_eq!(times.len(), 4);
+    assert_eq!((times[0], times[3]), (0.0, 5.0));
+    for (i, t) in times.iter().enumerate() {
+        assert!((t - 5.0 * i as f64 / 3.0).abs() <= 1e-15 * 5.0);
+    }
+    let mut csv = Vec::new();
+    write_header(&mut csv, &["q1", "q2", "q1'", "q2'"]).unwrap();
+    write_row(&mut csv, 0.1, &[1.0, -2.5e-300, 0.1 + 0.2, 3e20]).unwrap();
+    let text = String::from_utf8(csv).unwrap();
+    assert_eq!(
+        text,
+        "t,q1,q2,q1',q2'\n0.1,1,-2.5e-300,0.30000000000000004,3e20\n"
+    );
+    let summary = Summary {
+        method: "field (DOP853)".into(),
+        steps: 10,
+        rejected_steps: 1,
+        rhs_evaluations: 130,
+        largest_condition: Some(12.5),
+        reanchorings: Some(2),
+        wall_time: std::time::Duration::from_micros(1500),
+    };
+    assert_eq!(
+        summary.to_string(),
+        "method: field (DOP853); steps: 10 (+1 rejected); right-side evaluations: 130; \
+         largest condition number: 1.250e1; re-anchorings: 2; wall time: 1.500 ms"
+    );
+}
+
+/// Work of field vs direct at rtol 1e-10 (run by hand, in release:
+/// `cargo test --release --test it measure_ -- --ignored --nocapture`).
+#[test]
+#[ignore = "a measurement: run by hand in release"]
+fn measure_field_against_direct() {
+    use rt::output::Summary;
+    use std::time::Instant;
+    fn field_summary(
+        c: &dyn CoefficientSystem,
+        times: &[f64],
+        x0: &[f64],
+        reps: u32,
+    ) -> (Summary, Trajectory) {
+        let start = Instant::now();
+        let mut run = None;
+        for _ in 0..reps {
+            run = Some(field(c, &field_options(), times, x0).unwrap());
+        }
+        let (samples, report) = run.unwrap();
+        let summary = Summary {
+            method: "field (DOP853)".into(),
+            steps: report.stats.accepted_steps,
+            rejected_steps: report.stats.rejected_steps,
+            rhs_evaluations: report.stats.rhs_evaluations,
+            largest_condition: Some(report.largest_condition),
+            reanchorings: Some(report.reanchorings),
+            wall_time: start.elapsed() / reps,
+        };
+        (summary, samples)
+    }
+    fn direct_summary(
+        m: &dyn Motion,
+        integrator: Integrator,
+        times: &[f64],
+        x0: &[f64],
+        reps: u32,
+    ) -> (Summary, Trajectory) {
+        let start = Instant::now();
+        let mut run = None;
+        for _ in 0..reps {
+            run = Some(direct(m, integrator, times, x0).unwrap());
+        }
+        let (samples, stats) = run.unwrap();
+        let summary = Summary {
+            method: format!("direct ({})", integrator.name()),
+            steps: stats.accepted_steps,
+            rejected_steps: stats.rejected_steps,
+            rhs_evaluations: stats.rhs_evaluations,
+            largest_condition: None,
+            reanchorings: None,
+            wall_time: start.elapsed() / reps,
+        };
+        (summary, samples)
+    }
+    let paper = PaperExample { alpha: 0.5 };
+    let x0 = [0.0, 0.0, 1.0, 0.0];
+    let times = sample_times(0.0, 5.0, 101);
+    let runs = [
+        field_summary(&paper, &times, &x0, 20),
+        direct_summary(&paper, Integrator::Explicit, &times, &x0, 20),
+        direct_summary(&paper, Integrator::Stiff, &times, &x0, 20),
+    ];
+    for (summary, samples) in &runs {
+        let error = largest_error(samples, |t| paper.exact(t, &x0));
+        println!("paper example t∈[0,5], 101 samples: {summary}; error {error:.2e}");
+        assert!(error <= 1e-8);
+    }
+    let oscillator = Oscillator { omega: 1.0 };
+    let x0 = [1.0, 0.5];
+    let times = sample_times(0.0, 100.0, 101);
+    let runs = [
+        field_summary(&oscillator, &times, &x0, 20),
+        direct_summary(&oscillator, Integrator::Explicit, &times, &x0, 20),
+        direct_summary(&oscillator, Integrator::Stiff, &times, &x0, 20),
+    ];
+    for (summary, samples) in &runs {
+        let error = largest_error(samples, |t| oscillator.exact(t, &x0));
+        println!("oscillator t∈[0,100], 101 samples: {summary}; error {error:.2e}");
+        assert!(error <= 1e-8);
+    }
 }

@@ -30,7 +30,8 @@ pub fn solve_conditions(
 ) -> Result<Conditioned, Failure> {
     let n = f.len();
     let growth = s.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    let singular = |condition: f64| Failure::new(t, FailureKind::SingularConditionMatrix { condition });
+    let singular =
+        |condition: f64| Failure::new(t, FailureKind::SingularConditionMatrix { condition });
     if n == 1 {
         return Ok(Conditioned {
             state: vec![f[0]],

@@ -216,7 +216,9 @@ impl Dop853 {
         } else {
             1.0
         };
-        Ok(Some(h.abs() * err5 * (1.0 / (n as f64 * denominator)).sqrt()))
+        Ok(Some(
+            h.abs() * err5 * (1.0 / (n as f64 * denominator)).sqrt(),
+        ))
     }
 }
 
@@ -233,12 +235,26 @@ impl Stepper for Dop853 {
         self.stats
     }
 
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn propose_step(&mut self, h: f64) {
+        if h.is_finite() && h > 0.0 {
+            self.h = h;
+        }
+    }
+
     fn step<M: Motion + ?Sized>(&mut self, system: &M, t_limit: f64) -> Result<(), Failure> {
         let mut last_rejected = false;
         let mut last_non_finite = false;
         loop {
             let reaches_limit = self.t + self.h >= t_limit;
-            let h = if reaches_limit { t_limit - self.t } else { self.h };
+            let h = if reaches_limit {
+                t_limit - self.t
+            } else {
+                self.h
+            };
             if underflows(self.t, h) && !reaches_limit {
                 return Err(if last_non_finite {
                     let i = first_non_finite(&self.y_trial).unwrap_or(0);
@@ -271,7 +287,11 @@ impl Stepper for Dop853 {
                     self.t = if reaches_limit { t_limit } else { self.t + h };
                     // A step cut short to hit `t_limit` says nothing
                     // against the longer step proposed before.
-                    self.h = if reaches_limit { h_next.max(self.h) } else { h_next };
+                    self.h = if reaches_limit {
+                        h_next.max(self.h)
+                    } else {
+                        h_next
+                    };
                     system.rhs(self.t, &self.y, &mut self.k[0])?;
                     self.stats.rhs_evaluations += 1;
                     self.stats.accepted_steps += 1;

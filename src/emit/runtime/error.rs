@@ -58,7 +58,10 @@ impl fmt::Display for Failure {
                 "at t = {t:e}: the mass matrix is singular (condition number {condition:e})"
             ),
             FailureKind::NonFiniteState { component } => {
-                write!(f, "at t = {t:e}: `{component}` is not finite (NaN or infinite)")
+                write!(
+                    f,
+                    "at t = {t:e}: `{component}` is not finite (NaN or infinite)"
+                )
             }
             FailureKind::StepSizeUnderflow { step } => write!(
                 f,

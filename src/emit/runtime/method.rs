@@ -67,6 +67,20 @@ impl Stepper for AnyStepper {
         }
     }
 
+    fn proposed_step(&self) -> f64 {
+        match self {
+            AnyStepper::Explicit(s) => s.proposed_step(),
+            AnyStepper::Stiff(s) => s.proposed_step(),
+        }
+    }
+
+    fn propose_step(&mut self, h: f64) {
+        match self {
+            AnyStepper::Explicit(s) => s.propose_step(h),
+            AnyStepper::Stiff(s) => s.propose_step(h),
+        }
+    }
+
     fn step<M: Motion + ?Sized>(&mut self, system: &M, t_limit: f64) -> Result<(), Failure> {
         match self {
             AnyStepper::Explicit(s) => s.step(system, t_limit),

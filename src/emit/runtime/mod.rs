@@ -16,6 +16,7 @@
 //! | `sensitivity` | the coefficient system augmented by `S = ∂f/∂c` |
 //! | `conditioned` | the conditions (13): `x_B(t)` from `f`, `S` |
 //! | `field` | the field method with re-anchoring |
+//! | `local_field` | the local field method for non-affine systems |
 //! | `method` | the choice of integrator at run time |
 //! | `direct` | direct integration of (7) at the sample times |
 //! | `output` | sample times, CSV, the run summary |
@@ -29,6 +30,7 @@ pub mod direct;
 pub mod dop853;
 pub mod error;
 pub mod field;
+pub mod local_field;
 pub mod method;
 pub mod output;
 pub mod rosenbrock;

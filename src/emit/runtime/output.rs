@@ -36,14 +36,26 @@ pub fn write_header(out: &mut impl Write, state_names: &[&str]) -> io::Result<()
     writeln!(out)
 }
 
-/// One CSV row; `{}` prints the shortest decimal that reads back to the
+/// One CSV row. Each number is the shortest decimal that reads back to the
 /// same `f64`, so no digit is lost.
 pub fn write_row(out: &mut impl Write, t: f64, state: &[f64]) -> io::Result<()> {
-    write!(out, "{t}")?;
-    for value in state {
-        write!(out, ",{value}")?;
+    write_number(out, t)?;
+    for &value in state {
+        write!(out, ",")?;
+        write_number(out, value)?;
     }
     writeln!(out)
+}
+
+/// Plain notation for moderate magnitudes, scientific otherwise (Rust's
+/// `{}` would print 1e-300 with 300 zeros).
+fn write_number(out: &mut impl Write, value: f64) -> io::Result<()> {
+    let magnitude = value.abs();
+    if value == 0.0 || !value.is_finite() || (1e-4..1e15).contains(&magnitude) {
+        write!(out, "{value}")
+    } else {
+        write!(out, "{value:e}")
+    }
 }
 
 /// The work of one run, printed to stderr.
@@ -74,6 +86,10 @@ impl fmt::Display for Summary {
         if let Some(count) = self.reanchorings {
             write!(f, "; re-anchorings: {count}")?;
         }
-        write!(f, "; wall time: {:.3} ms", self.wall_time.as_secs_f64() * 1e3)
+        write!(
+            f,
+            "; wall time: {:.3} ms",
+            self.wall_time.as_secs_f64() * 1e3
+        )
     }
 }

@@ -22,7 +22,13 @@ const GAMMA_T: [f64; 6] = [0.25, -0.1043, 0.1035, -0.3620000000000023e-01, 0.0, 
 const A: [[f64; 5]; 6] = [
     [0.0; 5],
     [0.1544000000000000e+01, 0.0, 0.0, 0.0, 0.0],
-    [0.9466785280815826e+00, 0.2557011698983284e+00, 0.0, 0.0, 0.0],
+    [
+        0.9466785280815826e+00,
+        0.2557011698983284e+00,
+        0.0,
+        0.0,
+        0.0,
+    ],
     [
         0.3314825187068521e+01,
         0.2896124015972201e+01,
@@ -49,7 +55,13 @@ const A: [[f64; 5]; 6] = [
 const CC: [[f64; 5]; 6] = [
     [0.0; 5],
     [-0.5668800000000000e+01, 0.0, 0.0, 0.0, 0.0],
-    [-0.2430093356833875e+01, -0.2063599157091915e+00, 0.0, 0.0, 0.0],
+    [
+        -0.2430093356833875e+01,
+        -0.2063599157091915e+00,
+        0.0,
+        0.0,
+        0.0,
+    ],
     [
         -0.1073529058151375e+00,
         -0.9594562251023355e+01,
@@ -89,9 +101,14 @@ pub struct Rodas4 {
 }
 
 enum Attempt {
-    Done { y_new: Vec<f64>, error: f64 },
+    Done {
+        y_new: Vec<f64>,
+        error: f64,
+    },
     /// A stage was not finite or the iteration matrix was singular.
-    Broken { component: usize },
+    Broken {
+        component: usize,
+    },
 }
 
 impl Rodas4 {
@@ -195,6 +212,16 @@ impl Stepper for Rodas4 {
         self.stats
     }
 
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn propose_step(&mut self, h: f64) {
+        if h.is_finite() && h > 0.0 {
+            self.h = h;
+        }
+    }
+
     fn step<M: Motion + ?Sized>(&mut self, system: &M, t_limit: f64) -> Result<(), Failure> {
         let n = self.y.len();
         let mut jacobian = DMatrix::zeros(n, n);
@@ -206,7 +233,11 @@ impl Stepper for Rodas4 {
         let mut broken: Option<usize> = None;
         loop {
             let reaches_limit = self.t + self.h >= t_limit;
-            let h = if reaches_limit { t_limit - self.t } else { self.h };
+            let h = if reaches_limit {
+                t_limit - self.t
+            } else {
+                self.h
+            };
             if underflows(self.t, h) && !reaches_limit {
                 return Err(match broken {
                     Some(i) => Failure::non_finite(self.t, system.component_name(i)),
@@ -233,7 +264,11 @@ impl Stepper for Rodas4 {
                     };
                     self.y = y_new;
                     self.t = if reaches_limit { t_limit } else { self.t + h };
-                    self.h = if reaches_limit { h_next.max(self.h) } else { h_next };
+                    self.h = if reaches_limit {
+                        h_next.max(self.h)
+                    } else {
+                        h_next
+                    };
                     system.rhs(self.t, &self.y, &mut self.slope)?;
                     self.stats.rhs_evaluations += 1;
                     self.stats.accepted_steps += 1;

@@ -69,12 +69,14 @@ impl<C: CoefficientSystem + ?Sized> Motion for Sensitized<'_, C> {
         let n = self.coefficients.dim();
         self.coefficients.time_partial(t, &y[..n], &mut dydt[..n])?;
         let mut free = vec![0.0; n];
-        self.coefficients.time_partial(t, &vec![0.0; n], &mut free)?;
+        self.coefficients
+            .time_partial(t, &vec![0.0; n], &mut free)?;
         let mut column = vec![0.0; n];
         for j in 0..n {
             let s_j = DVectorView::from_slice(&y[n + j * n..n + (j + 1) * n], n);
             column.iter_mut().for_each(|v| *v = 0.0);
-            self.coefficients.time_partial(t, s_j.as_slice(), &mut column)?;
+            self.coefficients
+                .time_partial(t, s_j.as_slice(), &mut column)?;
             for i in 0..n {
                 dydt[n + j * n + i] = column[i] - free[i];
             }

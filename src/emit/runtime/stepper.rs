@@ -46,6 +46,11 @@ pub trait Stepper {
     fn time(&self) -> f64;
     fn state(&self) -> &[f64];
     fn stats(&self) -> Stats;
+    /// The length the next step will try.
+    fn proposed_step(&self) -> f64;
+    /// Replaces the next step's length, e.g. by the one that worked before
+    /// a restart (a restarted field otherwise guesses it anew).
+    fn propose_step(&mut self, h: f64);
     /// Takes one accepted step that does not pass `t_limit`; when the step
     /// is cut to reach `t_limit`, the time is set to `t_limit` exactly.
     fn step<M: Motion + ?Sized>(&mut self, system: &M, t_limit: f64) -> Result<(), Failure>;

@@ -106,10 +106,7 @@ impl Oscillator {
     pub fn exact(&self, t: f64, x0: &[f64]) -> Vec<f64> {
         let w = self.omega;
         let (s, c) = (w * t).sin_cos();
-        vec![
-            x0[0] * c + x0[1] / w * s,
-            -x0[0] * w * s + x0[1] * c,
-        ]
+        vec![x0[0] * c + x0[1] / w * s, -x0[0] * w * s + x0[1] * c]
     }
 }
 
@@ -374,4 +371,33 @@ fn simpson(
     }
     simpson(g, a, m, ga, glm, gm, left, tol / 2.0, depth - 1)
         + simpson(g, m, b, gm, grm, gb, right, tol / 2.0, depth - 1)
+}
+
+/// `q'' = 2 q³` (not affine): `q = 1/(c − t)` when `q0 = 1/c`, `q0' = 1/c²`.
+pub struct Cubic;
+
+impl Cubic {
+    pub fn exact(&self, t: f64, x0: &[f64]) -> Vec<f64> {
+        let c = 1.0 / x0[0];
+        vec![1.0 / (c - t), 1.0 / (c - t).powi(2)]
+    }
+}
+
+impl Motion for Cubic {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        dx[0] = x[1];
+        dx[1] = 2.0 * x[0].powi(3);
+        Ok(())
+    }
+    fn jacobian(&self, _t: f64, x: &[f64], jac: &mut DMatrix<f64>) -> Result<(), Failure> {
+        jac[(0, 1)] = 1.0;
+        jac[(1, 0)] = 6.0 * x[0] * x[0];
+        Ok(())
+    }
+    fn time_partial(&self, _t: f64, _x: &[f64], _dxdt: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
 }
