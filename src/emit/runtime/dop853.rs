@@ -2,6 +2,9 @@
 //! with Hairer's combined 5th/3rd-order error estimate (HNW I, II.10).
 //! Coefficients as in Hairer's `dop853.f`.
 
+// The coefficients are kept to the digits Hairer published them with.
+#![allow(clippy::excessive_precision)]
+
 use super::error::Failure;
 use super::stepper::{
     first_non_finite, initial_step, underflow_failure, underflows, Stats, Stepper, Tolerance,

@@ -180,8 +180,8 @@ pub fn anchor_values(anchor: &Anchor, x: &[f64]) -> Vec<f64> {
     let n = x.len();
     let mut c = vec![0.0; n];
     if let Anchor::Given(values) = anchor {
-        for a in 1..n {
-            c[a] = values.get(a - 1).copied().unwrap_or(0.0);
+        for (c_a, value) in c.iter_mut().skip(1).zip(values) {
+            *c_a = *value;
         }
     }
     c[0] = x[0] - (1..n).map(|a| c[a] * x[a]).sum::<f64>();

@@ -5,6 +5,9 @@
 //! formulation without the Jacobian in the right sides:
 //! `(I/(γh) − J) k_i = X(t + α_i h, y + Σ a_ij k_j) + Σ c_ij k_j / h + γ_i h X_t`.
 
+// The coefficients are kept as Hairer printed them (trailing zeros included).
+#![allow(clippy::excessive_precision)]
+
 use super::error::Failure;
 use super::stepper::{
     first_non_finite, initial_step, rms_norm, underflow_failure, underflows, Stats, Stepper,
