@@ -25,7 +25,10 @@ pub enum ExprKind {
     /// A numeric literal, already converted (`1e999` is rejected by the parser).
     Number(f64),
     /// A name with `primes` derivative marks: `M` (0), `q1'` (1), `q1''` (2).
-    Var { name: Ident, primes: u32 },
+    Var {
+        name: Ident,
+        primes: u32,
+    },
     Neg(Box<Expr>),
     Binary {
         op: BinOp,
@@ -129,7 +132,10 @@ pub enum ItemKind {
     /// `constraint lhs = rhs;` — `check` requires `lhs` to be `q'`, `q''`, …
     Constraint { lhs: Expr, rhs: Expr },
     /// `point NAME { field; … }`
-    Point { name: Ident, fields: Vec<PointField> },
+    Point {
+        name: Ident,
+        fields: Vec<PointField>,
+    },
     /// `force q = expr;` — a generalized force on coordinate `q`.
     Force { coord: Ident, value: Expr },
     /// `initial q1 = 0, q1' = 1;` — each target is a `Var` with primes.
