@@ -18,10 +18,12 @@ impl Checker<'_> {
             let ItemKind::Constraint { lhs, rhs } = item else {
                 continue;
             };
-            right_sides.push((rhs, span));
             let Some((coord, order)) = self.constraint_lhs(lhs) else {
+                self.constraints_incomplete = true;
+                right_sides.push((rhs, span, None));
                 continue;
             };
+            right_sides.push((rhs, span, Some(order)));
             if let Some(first) = constraints.iter().find(|c| c.coord == coord) {
                 let name = &self.coords[coord].name;
                 let diagnostic = Diagnostic::error(
@@ -34,6 +36,7 @@ impl Checker<'_> {
                     "each constraint makes one coordinate dependent; constrain another coordinate",
                 );
                 self.report(diagnostic);
+                self.constraints_incomplete = true;
                 continue;
             }
             if let Some(first) = constraints.first() {
@@ -46,6 +49,7 @@ impl Checker<'_> {
                     .with_secondary(first.span, format!("the first constraint has order {}", first.order))
                     .with_help("all constraints of a model share one order k; differentiate the lower-order ones");
                     self.report(diagnostic);
+                    self.constraints_incomplete = true;
                     continue;
                 }
             }
@@ -58,8 +62,10 @@ impl Checker<'_> {
         }
         let order = constraints.first().map(|c| c.order);
         if let Some(k) = order {
-            for (rhs, span) in right_sides {
-                self.constraint_rhs(rhs, span, k, &constraints);
+            // A right side is checked against its own constraint's order, so
+            // that a constraint of the wrong order gets one error, not two.
+            for (rhs, span, own_order) in right_sides {
+                self.constraint_rhs(rhs, span, own_order.unwrap_or(k), &constraints);
             }
         }
         if !self.coords.is_empty() && constraints.len() >= self.coords.len() {

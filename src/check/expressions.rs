@@ -94,7 +94,11 @@ impl Checker<'_> {
             return None;
         }
         let Some(declared) = self.names.get(name).copied() else {
-            self.report(self.unknown_name(name, span));
+            // One report per unknown name, at its first use: a misspelt
+            // name used often would otherwise bury every other error.
+            if self.unknown_reported.insert(name.to_string()) {
+                self.report(self.unknown_name(name, span));
+            }
             return None;
         };
         let not_allowed = |kind: &str| {

@@ -72,6 +72,20 @@ impl Checker<'_> {
                 });
             }
         }
+        if !self.constraints_incomplete {
+            self.missing_initial(k, constraints, &initial, first_statement);
+        }
+        initial
+    }
+
+    /// Reports each coordinate whose required initial values are missing.
+    fn missing_initial(
+        &mut self,
+        k: u32,
+        constraints: &[Constraint],
+        initial: &[Initial],
+        first_statement: Option<crate::span::Span>,
+    ) {
         for coord in 0..self.coords.len() {
             let dependent = constraints.iter().any(|c| c.coord == coord);
             let required_below = if dependent { k } else { 2 };
@@ -107,7 +121,6 @@ impl Checker<'_> {
             }
             self.report(diagnostic);
         }
-        initial
     }
 
     /// Checks an initial value's expression; true if it is clean.

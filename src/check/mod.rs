@@ -18,7 +18,7 @@ use crate::diagnostic::{self, Diagnostic};
 use crate::span::Span;
 use crate::syntax::ast;
 use declarations::Declared;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The highest derivative order accepted anywhere (`q` followed by 16
 /// primes). Far above any mechanics lagc can derive; it keeps order
@@ -82,6 +82,11 @@ struct Checker<'a> {
     coords: Vec<model::Coord>,
     /// Every param's default, once computed (`None` if it could not be).
     param_defaults: Vec<Option<f64>>,
+    /// Some constraint was rejected: its coordinate now looks independent,
+    /// so "missing initial value" errors would be noise.
+    constraints_incomplete: bool,
+    /// Unknown names already reported (each is reported once).
+    unknown_reported: HashSet<String>,
     /// A zero-width span just after the last statement, where "missing …"
     /// diagnostics point.
     end_of_file: Span,
@@ -96,6 +101,8 @@ impl<'a> Checker<'a> {
             names: HashMap::new(),
             coords: Vec::new(),
             param_defaults: Vec::new(),
+            constraints_incomplete: false,
+            unknown_reported: HashSet::new(),
             end_of_file: Span::new(end, end),
         }
     }

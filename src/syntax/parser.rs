@@ -58,7 +58,7 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
         },
         Rule::coords => {
             let mut names = Vec::new();
-            while let Some(name) = children.next() {
+            for name in children.by_ref() {
                 names.push(ident(name));
             }
             ItemKind::Coords(names)
@@ -79,7 +79,7 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
         },
         Rule::initial => {
             let mut values = Vec::new();
-            while let Some(value) = children.next() {
+            for value in children.by_ref() {
                 values.push(initial_value(value)?);
             }
             ItemKind::Initial(values)
@@ -100,7 +100,7 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
 fn point(mut children: Children) -> Converted<ItemKind> {
     let name = ident(children.expect(Rule::ident)?);
     let mut fields = Vec::new();
-    while let Some(field) = children.next() {
+    for field in children {
         fields.push(point_field(field)?);
     }
     Ok(ItemKind::Point { name, fields })
