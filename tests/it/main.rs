@@ -1,4 +1,27 @@
 //! The one integration-test binary.
 
+mod cli;
+mod errors;
+mod examples;
 mod ir;
+mod parser;
+mod robustness;
 mod runtime;
+
+use lagc::diagnostic::{self, Diagnostic};
+
+/// Runs the front end on a file's bytes exactly as `lagc check` does, and
+/// renders its diagnostics without colour under `file_name`.
+pub fn check_bytes(bytes: &[u8], file_name: &str) -> Result<lagc::check::model::Model, String> {
+    lagc::on_big_stack(|| {
+        let (source, result) = lagc::frontend_bytes(bytes);
+        result.map_err(|diagnostics: Vec<Diagnostic>| {
+            diagnostic::render(&diagnostics, file_name, &source, false)
+        })
+    })
+}
+
+/// The repository root, for reading examples and test data.
+pub fn root() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
