@@ -464,6 +464,7 @@ def integrate(mod, eqs, cons, k, u, report):
         r = int(r)
         if s in jets:
             f = sp.lambdify(T, jets[s], "mpmath")
+            mpmath.mp.dps = 40  # the reference must not inherit a lower precision
             ex = np.array([float(f(mpmath.mpf(tv))) for tv in ts])
             how = "exact"
         elif jet(c, r + 1) in jets:
