@@ -178,4 +178,29 @@ pub mod codes {
     pub const BAD_TIME_SPAN: &str = "E0014";
     pub const SINGULAR_MASS_MATRIX: &str = "E0015";
     pub const INVALID_UTF8: &str = "E0016";
+    // Added by the front end (additive):
+    pub const UNKNOWN_FUNCTION: &str = "E0017";
+    /// A statement given twice: two `lagrangian`s, two `time`s, two forces
+    /// on one coordinate, two initial values for one derivative, …
+    pub const DUPLICATE_STATEMENT: &str = "E0018";
+    /// A name of a kind the statement does not allow (`t` in a param, a
+    /// coordinate in an initial value, a point in any expression, …).
+    pub const NAME_NOT_ALLOWED: &str = "E0019";
+    pub const PARAM_USED_BEFORE_DECLARATION: &str = "E0020";
+    pub const PRIMES_ON_NON_COORDINATE: &str = "E0021";
+    /// A derivative of an order the statement does not allow (`q''` in the
+    /// Lagrangian, `q'` in a position, an order beyond the state, …).
+    pub const DERIVATIVE_ORDER_NOT_ALLOWED: &str = "E0022";
+    pub const MISSING_POINT_FIELD: &str = "E0023";
+    pub const DUPLICATE_POINT_FIELD: &str = "E0024";
+    pub const DIMENSION_MISMATCH: &str = "E0025";
+    /// A `force`, `initial` or `exact` target that is not a coordinate.
+    pub const NOT_A_COORDINATE: &str = "E0026";
+    pub const MISSING_COORDINATES: &str = "E0027";
+    /// A param default, time bound or initial value that evaluates to
+    /// infinity or NaN.
+    pub const NON_FINITE_VALUE: &str = "E0028";
+    pub const NUMBER_TOO_LARGE: &str = "E0029";
+    pub const NESTING_TOO_DEEP: &str = "E0030";
+    pub const NO_INDEPENDENT_COORDINATE: &str = "E0031";
 }

@@ -13,6 +13,10 @@
 
 pub mod check;
 pub mod diagnostic;
+pub mod frontend;
 pub mod ir;
 pub mod span;
+mod suggest;
 pub mod syntax;
+
+pub use frontend::{frontend, frontend_bytes, on_big_stack};

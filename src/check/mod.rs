@@ -1,3 +1,110 @@
 //! Stage 2: AST → checked model, collecting every problem.
+//!
+//! [`check`] never stops at the first mistake: each concern (declarations,
+//! params, constraints, initial values, points, the remaining statements)
+//! adds its diagnostics, and they come back sorted by position. The checked
+//! [`model::Model`] is returned only when there are none.
 
+mod constraints;
+mod declarations;
+mod eval;
+mod expressions;
+mod initial;
 pub mod model;
+mod points;
+mod statements;
+
+use crate::diagnostic::{self, Diagnostic};
+use crate::span::Span;
+use crate::syntax::ast;
+use declarations::Declared;
+use std::collections::HashMap;
+
+/// The highest derivative order accepted anywhere (`q` followed by 16
+/// primes). Far above any mechanics lagc can derive; it keeps order
+/// arithmetic downstream far from overflow.
+pub const MAX_DERIVATIVE_ORDER: u32 = 16;
+
+/// Checks a parsed model: names, statement rules, constraints, initial
+/// values, time span. Returns every problem found, sorted by position.
+pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
+    let mut checker = Checker::new(ast);
+    checker.declare();
+    let params = checker.params();
+    let masses = checker.masses();
+    let (constraint_order, constraints) = checker.constraints();
+    let lagrangian = checker.lagrangian();
+    let forces = checker.forces();
+    let points = checker.points();
+    let initial = checker.initial(constraint_order, &constraints);
+    let exact = checker.exact();
+    let time = checker.time();
+
+    let mut diagnostics = checker.diagnostics;
+    let (Some(lagrangian), Some(time), true) = (lagrangian, time, diagnostics.is_empty()) else {
+        if diagnostics.is_empty() {
+            // Every None above comes with a diagnostic; keep the promise
+            // "Err is never empty" even if that ever changes.
+            diagnostics.push(Diagnostic::error(
+                crate::diagnostic::codes::MISSING_LAGRANGIAN,
+                "internal error: the model is incomplete",
+            ));
+        }
+        diagnostic::sort(&mut diagnostics);
+        return Err(diagnostics);
+    };
+    Ok(model::Model {
+        params,
+        coords: checker.coords,
+        masses,
+        lagrangian,
+        constraint_order,
+        constraints,
+        points,
+        forces,
+        initial,
+        time,
+        exact,
+        names: checker
+            .names
+            .iter()
+            .map(|(k, v)| (k.clone(), v.name))
+            .collect(),
+    })
+}
+
+/// The state shared by the checks: the declared names and the diagnostics
+/// found so far. Each concern lives in its own file as an `impl Checker`.
+struct Checker<'a> {
+    ast: &'a ast::Model,
+    diagnostics: Vec<Diagnostic>,
+    names: HashMap<String, Declared>,
+    coords: Vec<model::Coord>,
+    /// Every param's default, once computed (`None` if it could not be).
+    param_defaults: Vec<Option<f64>>,
+    /// A zero-width span just after the last statement, where "missing …"
+    /// diagnostics point.
+    end_of_file: Span,
+}
+
+impl<'a> Checker<'a> {
+    fn new(ast: &'a ast::Model) -> Self {
+        let end = ast.items.last().map_or(0, |item| item.span.end);
+        Checker {
+            ast,
+            diagnostics: Vec::new(),
+            names: HashMap::new(),
+            coords: Vec::new(),
+            param_defaults: Vec::new(),
+            end_of_file: Span::new(end, end),
+        }
+    }
+
+    fn report(&mut self, diagnostic: Diagnostic) {
+        self.diagnostics.push(diagnostic);
+    }
+
+    fn items(&self) -> impl Iterator<Item = (&'a ast::ItemKind, Span)> {
+        self.ast.items.iter().map(|item| (&item.kind, item.span))
+    }
+}

@@ -1,0 +1,220 @@
+//! Resolving the names of one expression against what its statement allows.
+
+use super::declarations::kind_name;
+use super::model::Name;
+use super::{Checker, MAX_DERIVATIVE_ORDER};
+use crate::diagnostic::{codes, Diagnostic};
+use crate::span::Span;
+use crate::syntax::ast::{Expr, ExprKind, Func};
+
+/// What an expression of one kind of statement may refer to.
+#[derive(Debug, Clone, Copy)]
+pub struct Allowed {
+    /// The statement, for messages: "a mass law", "the Lagrangian", …
+    pub what: &'static str,
+    pub time: bool,
+    /// Params with an index below this may be used (a param may use only
+    /// earlier ones); `usize::MAX` for all.
+    pub params_before: usize,
+    pub masses: bool,
+    /// The highest derivative order of a coordinate allowed; `None` when no
+    /// coordinate may appear.
+    pub coord_order: Option<u32>,
+    /// The code for a coordinate where none may appear.
+    pub coord_code: &'static str,
+}
+
+impl Allowed {
+    /// Numbers and params only: param values, initial values, time bounds.
+    pub const fn constants(what: &'static str) -> Allowed {
+        Allowed {
+            what,
+            time: false,
+            params_before: usize::MAX,
+            masses: false,
+            coord_order: None,
+            coord_code: codes::NAME_NOT_ALLOWED,
+        }
+    }
+}
+
+/// A coordinate's derivative found in an expression.
+#[derive(Debug, Clone, Copy)]
+pub struct CoordUse {
+    pub coord: usize,
+    pub order: u32,
+    pub span: Span,
+}
+
+impl Checker<'_> {
+    /// Reports every name in `expr` that `allowed` forbids or that is not
+    /// declared; returns the coordinate derivatives it holds. Walks with an
+    /// explicit stack: no recursion, whatever the expression's depth.
+    pub(super) fn check_expr(&mut self, expr: &Expr, allowed: Allowed) -> Vec<CoordUse> {
+        let mut uses = Vec::new();
+        let mut stack = vec![expr];
+        while let Some(expr) = stack.pop() {
+            match &expr.kind {
+                ExprKind::Number(_) => {}
+                ExprKind::Neg(inner) => stack.push(inner),
+                ExprKind::Call { arg, .. } => stack.push(arg),
+                ExprKind::Binary { lhs, rhs, .. } => {
+                    stack.push(rhs);
+                    stack.push(lhs);
+                }
+                ExprKind::Var { name, primes } => {
+                    if let Some(found) = self.check_var(&name.name, *primes, expr.span, allowed) {
+                        uses.push(found);
+                    }
+                }
+            }
+        }
+        uses
+    }
+
+    fn check_var(
+        &mut self,
+        name: &str,
+        primes: u32,
+        span: Span,
+        allowed: Allowed,
+    ) -> Option<CoordUse> {
+        if name == "t" {
+            if primes > 0 {
+                self.report(primes_on_time(span));
+            } else if !allowed.time {
+                self.report(
+                    Diagnostic::error(
+                        codes::NAME_NOT_ALLOWED,
+                        format!("{} cannot depend on time", allowed.what),
+                    )
+                    .with_primary(span, "time `t` used here"),
+                );
+            }
+            return None;
+        }
+        let Some(declared) = self.names.get(name).copied() else {
+            self.report(self.unknown_name(name, span));
+            return None;
+        };
+        let not_allowed = |kind: &str| {
+            Diagnostic::error(
+                codes::NAME_NOT_ALLOWED,
+                format!("{} cannot use {kind} `{name}`", allowed.what),
+            )
+            .with_primary(span, format!("{kind} used here"))
+            .with_secondary(declared.span, format!("`{name}` declared here"))
+        };
+        match declared.name {
+            Name::Coord(coord) => {
+                let Some(max_order) = allowed.coord_order else {
+                    let diagnostic = Diagnostic::error(
+                        allowed.coord_code,
+                        format!("{} cannot depend on the coordinate `{name}`", allowed.what),
+                    )
+                    .with_primary(span, "coordinate used here")
+                    .with_secondary(declared.span, "declared as a coordinate here");
+                    self.report(diagnostic);
+                    return None;
+                };
+                let max_order = max_order.min(MAX_DERIVATIVE_ORDER);
+                if primes > max_order {
+                    self.report(order_not_allowed(
+                        allowed.what,
+                        name,
+                        primes,
+                        max_order,
+                        span,
+                    ));
+                    return None;
+                }
+                Some(CoordUse {
+                    coord,
+                    order: primes,
+                    span,
+                })
+            }
+            _ if primes > 0 => {
+                self.report(primes_on_non_coordinate(
+                    name,
+                    declared.name,
+                    span,
+                    declared.span,
+                ));
+                None
+            }
+            Name::Param(index) if index >= allowed.params_before => {
+                let diagnostic = Diagnostic::error(
+                    codes::PARAM_USED_BEFORE_DECLARATION,
+                    format!("param `{name}` is used before its declaration"),
+                )
+                .with_primary(span, "used here")
+                .with_secondary(declared.span, "declared later here")
+                .with_help("a param may use only params declared before it; move this one down");
+                self.report(diagnostic);
+                None
+            }
+            Name::Param(_) => None,
+            Name::Mass(_) if allowed.masses => None,
+            Name::Mass(_) => {
+                self.report(not_allowed("the mass law"));
+                None
+            }
+            Name::Point(_) => {
+                let diagnostic = not_allowed("the point")
+                    .with_note("a point names a body for the reactive forces; it has no value");
+                self.report(diagnostic);
+                None
+            }
+        }
+    }
+
+    pub(super) fn unknown_name(&self, name: &str, span: Span) -> Diagnostic {
+        let diagnostic = Diagnostic::error(codes::UNKNOWN_NAME, format!("unknown name `{name}`"))
+            .with_primary(span, "not declared");
+        if Func::from_name(name).is_some() {
+            return diagnostic.with_help(format!("`{name}` is a function: write `{name}(…)`"));
+        }
+        match crate::suggest::closest(name, self.known_names()) {
+            Some(close) => diagnostic.with_help(format!("did you mean `{close}`?")),
+            None => diagnostic.with_help("declare it with `param`, `coord`, `mass` or `point`"),
+        }
+    }
+}
+
+fn primes_on_time(span: Span) -> Diagnostic {
+    Diagnostic::error(
+        codes::PRIMES_ON_NON_COORDINATE,
+        "time `t` cannot be differentiated",
+    )
+    .with_primary(span, "primes on `t`")
+    .with_help("primes mark derivatives of coordinates; the derivative of `t` is 1")
+}
+
+fn primes_on_non_coordinate(name: &str, kind: Name, span: Span, declared: Span) -> Diagnostic {
+    let diagnostic = Diagnostic::error(
+        codes::PRIMES_ON_NON_COORDINATE,
+        format!("`{name}` is {} and cannot carry primes", kind_name(kind)),
+    )
+    .with_primary(span, "primes mark derivatives of coordinates only")
+    .with_secondary(declared, format!("`{name}` declared here"));
+    match kind {
+        Name::Mass(_) => diagnostic.with_note(
+            "a mass law's rate of change enters only through the reactive forces of its points",
+        ),
+        _ => diagnostic,
+    }
+}
+
+fn order_not_allowed(what: &str, name: &str, order: u32, max: u32, span: Span) -> Diagnostic {
+    let allowed = match max {
+        0 => "no derivatives are allowed here".to_string(),
+        1 => "only first derivatives are allowed here".to_string(),
+        _ => format!("derivatives up to order {max} are allowed here"),
+    };
+    Diagnostic::error(
+        codes::DERIVATIVE_ORDER_NOT_ALLOWED,
+        format!("{what} cannot hold a derivative of `{name}` of order {order}"),
+    )
+    .with_primary(span, allowed)
+}

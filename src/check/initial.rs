@@ -1,0 +1,119 @@
+//! Initial values: which derivatives the state needs at t0, and which the
+//! constraints fix.
+//!
+//! With constraints of order k (none: k = 0) the state holds every
+//! coordinate's derivatives of order < u = max(2, k). Required: every
+//! coordinate's position, every independent coordinate's first derivative,
+//! and every dependent coordinate's derivatives of order < k. Dependent
+//! derivatives of order ≥ k follow from the constraints; independent ones of
+//! order 2..k−1 follow from the equations of motion (SPEC §1.4).
+
+use super::expressions::Allowed;
+use super::model::{Constraint, Initial};
+use super::Checker;
+use crate::diagnostic::{codes, Diagnostic};
+use crate::syntax::ast::ItemKind;
+
+impl Checker<'_> {
+    pub(super) fn initial(
+        &mut self,
+        order: Option<u32>,
+        constraints: &[Constraint],
+    ) -> Vec<Initial> {
+        let k = order.unwrap_or(0);
+        let state_order = k.max(2);
+        let mut initial: Vec<Initial> = Vec::new();
+        let mut first_statement = None;
+        for (item, statement_span) in self.items() {
+            let ItemKind::Initial(values) = item else {
+                continue;
+            };
+            first_statement.get_or_insert(statement_span);
+            for value in values {
+                if self.check_value(&value.value) {
+                    self.evaluate_finite(&value.value, "an initial value");
+                }
+                let Some((coord, order)) =
+                    self.derivative_target(&value.target, "an initial value")
+                else {
+                    continue;
+                };
+                if order >= state_order {
+                    let diagnostic = Diagnostic::error(
+                        codes::DERIVATIVE_ORDER_NOT_ALLOWED,
+                        format!("an initial value of order {order} is not part of the state"),
+                    )
+                    .with_primary(
+                        value.target.span,
+                        format!("the state holds derivatives of order below {state_order}"),
+                    )
+                    .with_help("remove it: the equations of motion determine it");
+                    self.report(diagnostic);
+                    continue;
+                }
+                if let Some(first) = initial
+                    .iter()
+                    .find(|i| (i.coord, i.order) == (coord, order))
+                {
+                    let diagnostic = Diagnostic::error(
+                        codes::DUPLICATE_STATEMENT,
+                        "an initial value is given twice",
+                    )
+                    .with_primary(value.target.span, "given again here")
+                    .with_secondary(first.span, "first given here");
+                    self.report(diagnostic);
+                    continue;
+                }
+                initial.push(Initial {
+                    coord,
+                    order,
+                    value: value.value.clone(),
+                    span: value.span,
+                });
+            }
+        }
+        for coord in 0..self.coords.len() {
+            let dependent = constraints.iter().any(|c| c.coord == coord);
+            let required_below = if dependent { k } else { 2 };
+            let missing: Vec<String> = (0..required_below)
+                .filter(|&order| !initial.iter().any(|i| (i.coord, i.order) == (coord, order)))
+                .map(|order| {
+                    format!(
+                        "`{}{}`",
+                        self.coords[coord].name,
+                        "'".repeat(order as usize)
+                    )
+                })
+                .collect();
+            if missing.is_empty() {
+                continue;
+            }
+            let coordinate = &self.coords[coord];
+            let list = missing.join(", ");
+            let mut diagnostic = Diagnostic::error(
+                codes::MISSING_INITIAL,
+                format!("missing initial value for {list}"),
+            )
+            .with_primary(
+                coordinate.span,
+                format!("`{}` needs an initial value for {list}", coordinate.name),
+            )
+            .with_help(format!(
+                "add `{} = …` to the `initial` statement",
+                missing[0].trim_matches('`')
+            ));
+            if let Some(statement) = first_statement {
+                diagnostic = diagnostic.with_secondary(statement, "initial values are given here");
+            }
+            self.report(diagnostic);
+        }
+        initial
+    }
+
+    /// Checks an initial value's expression; true if it is clean.
+    fn check_value(&mut self, value: &crate::syntax::ast::Expr) -> bool {
+        let errors_before = self.diagnostics.len();
+        self.check_expr(value, Allowed::constants("an initial value"));
+        self.diagnostics.len() == errors_before
+    }
+}

@@ -1,0 +1,283 @@
+//! Params, mass laws, the Lagrangian, forces, exact solutions and the time
+//! span: the statements checked one by one.
+
+use super::expressions::Allowed;
+use super::model::{Exact, Force, MassLaw, Name, Param, TimeSpan};
+use super::Checker;
+use crate::diagnostic::{codes, Diagnostic};
+use crate::span::Span;
+use crate::syntax::ast::{Expr, ExprKind, Ident, ItemKind};
+
+impl<'a> Checker<'a> {
+    /// Checks each param against the params before it and computes its default.
+    pub(super) fn params(&mut self) -> Vec<Param> {
+        let mut params = Vec::new();
+        for (item, _) in self.items() {
+            let ItemKind::Param { name, value } = item else {
+                continue;
+            };
+            let allowed = Allowed {
+                params_before: params.len(),
+                ..Allowed::constants("a param")
+            };
+            let errors_before = self.diagnostics.len();
+            self.check_expr(value, allowed);
+            let default = if self.diagnostics.len() == errors_before {
+                self.evaluate_finite(value, &format!("the default of param `{}`", name.name))
+            } else {
+                None
+            };
+            self.param_defaults.push(default);
+            params.push(Param {
+                name: name.name.clone(),
+                span: name.span,
+                value: value.clone(),
+                default: default.unwrap_or(f64::NAN),
+            });
+        }
+        params
+    }
+
+    pub(super) fn masses(&mut self) -> Vec<MassLaw> {
+        let allowed = Allowed {
+            time: true,
+            coord_code: codes::MASS_DEPENDS_ON_STATE,
+            ..Allowed::constants("a mass law")
+        };
+        let mut masses = Vec::new();
+        for (item, _) in self.items() {
+            if let ItemKind::Mass { name, law } = item {
+                self.check_expr(law, allowed);
+                masses.push(MassLaw {
+                    name: name.name.clone(),
+                    span: name.span,
+                    law: law.clone(),
+                });
+            }
+        }
+        masses
+    }
+
+    pub(super) fn lagrangian(&mut self) -> Option<Expr> {
+        let allowed = Allowed {
+            time: true,
+            masses: true,
+            coord_order: Some(1),
+            ..Allowed::constants("the Lagrangian")
+        };
+        let lagrangian = self.single("lagrangian", |item| match item {
+            ItemKind::Lagrangian(expr) => Some(expr),
+            _ => None,
+        });
+        let Some((expr, _)) = lagrangian else {
+            let diagnostic = Diagnostic::error(codes::MISSING_LAGRANGIAN, "missing lagrangian")
+                .with_primary(
+                    self.end_of_file,
+                    "the model ends here without a `lagrangian`",
+                )
+                .with_help("add `lagrangian = …;`, e.g. `lagrangian = m / 2 * q1'^2;`");
+            self.report(diagnostic);
+            return None;
+        };
+        self.check_expr(expr, allowed);
+        Some(expr.clone())
+    }
+
+    pub(super) fn time(&mut self) -> Option<TimeSpan> {
+        let time = self.single("time", |item| match item {
+            ItemKind::Time { start, end } => Some((start, end)),
+            _ => None,
+        });
+        let Some(((start, end), span)) = time else {
+            let diagnostic = Diagnostic::error(codes::MISSING_TIME, "missing time span")
+                .with_primary(
+                    self.end_of_file,
+                    "the model ends here without a `time` statement",
+                )
+                .with_help("add the span to integrate over, e.g. `time 0 .. 10;`");
+            self.report(diagnostic);
+            return None;
+        };
+        let errors_before = self.diagnostics.len();
+        self.check_expr(start, Allowed::constants("a time bound"));
+        self.check_expr(end, Allowed::constants("a time bound"));
+        if self.diagnostics.len() == errors_before {
+            let t0 = self.evaluate_finite(start, "the start time");
+            let t1 = self.evaluate_finite(end, "the end time");
+            if let (Some(t0), Some(t1)) = (t0, t1) {
+                if t1 <= t0 {
+                    let what = if t1 == t0 { "empty" } else { "reversed" };
+                    let diagnostic =
+                        Diagnostic::error(codes::BAD_TIME_SPAN, format!("the time span is {what}"))
+                            .with_primary(span, format!("from {t0} to {t1}"))
+                            .with_help("the end time must be greater than the start time");
+                    self.report(diagnostic);
+                }
+            }
+        }
+        Some(TimeSpan {
+            start: start.clone(),
+            end: end.clone(),
+            span,
+        })
+    }
+
+    pub(super) fn forces(&mut self) -> Vec<Force> {
+        let allowed = Allowed {
+            time: true,
+            masses: true,
+            coord_order: Some(1),
+            ..Allowed::constants("a generalized force")
+        };
+        let mut forces: Vec<Force> = Vec::new();
+        for (item, span) in self.items() {
+            let ItemKind::Force { coord, value } = item else {
+                continue;
+            };
+            self.check_expr(value, allowed);
+            let Some(coord) = self.coordinate(coord, "a force") else {
+                continue;
+            };
+            if let Some(first) = forces.iter().find(|f| f.coord == coord) {
+                let name = &self.coords[coord].name;
+                let diagnostic = Diagnostic::error(
+                    codes::DUPLICATE_STATEMENT,
+                    format!("two forces on coordinate `{name}`"),
+                )
+                .with_primary(span, "second force here")
+                .with_secondary(first.span, "first force here")
+                .with_help("add them in one `force` statement");
+                self.report(diagnostic);
+                continue;
+            }
+            forces.push(Force {
+                coord,
+                value: value.clone(),
+                span,
+            });
+        }
+        forces
+    }
+
+    pub(super) fn exact(&mut self) -> Vec<Exact> {
+        let allowed = Allowed {
+            time: true,
+            ..Allowed::constants("an exact solution")
+        };
+        let mut exact: Vec<Exact> = Vec::new();
+        for (item, span) in self.items() {
+            let ItemKind::Exact { target, value } = item else {
+                continue;
+            };
+            self.check_expr(value, allowed);
+            let Some((coord, order)) = self.derivative_target(target, "an exact solution") else {
+                continue;
+            };
+            if let Some(first) = exact.iter().find(|e| (e.coord, e.order) == (coord, order)) {
+                let diagnostic = Diagnostic::error(
+                    codes::DUPLICATE_STATEMENT,
+                    "two exact solutions for one quantity",
+                )
+                .with_primary(target.span, "second exact solution here")
+                .with_secondary(first.span, "first one here");
+                self.report(diagnostic);
+                continue;
+            }
+            exact.push(Exact {
+                coord,
+                order,
+                value: value.clone(),
+                span,
+            });
+        }
+        exact
+    }
+
+    /// The only statement that `pick` selects, reporting any repeat.
+    fn single<T>(
+        &mut self,
+        keyword: &str,
+        pick: impl Fn(&'a ItemKind) -> Option<T>,
+    ) -> Option<(T, Span)> {
+        let mut found: Option<(T, Span)> = None;
+        let mut repeats = Vec::new();
+        for (item, span) in self.items() {
+            if let Some(value) = pick(item) {
+                match &found {
+                    None => found = Some((value, span)),
+                    Some((_, first)) => repeats.push((span, *first)),
+                }
+            }
+        }
+        for (span, first) in repeats {
+            let diagnostic = Diagnostic::error(
+                codes::DUPLICATE_STATEMENT,
+                format!("more than one `{keyword}` statement"),
+            )
+            .with_primary(span, "repeated here")
+            .with_secondary(first, "first given here")
+            .with_help(format!("a model has exactly one `{keyword}` statement"));
+            self.report(diagnostic);
+        }
+        found
+    }
+
+    /// The coordinate `ident` names, or a diagnostic naming `what` uses it.
+    pub(super) fn coordinate(&mut self, ident: &Ident, what: &str) -> Option<usize> {
+        match self.names.get(&ident.name).copied() {
+            Some(declared) => match declared.name {
+                Name::Coord(index) => Some(index),
+                other => {
+                    let diagnostic = not_a_coordinate(what, &ident.name, ident.span)
+                        .with_secondary(
+                            declared.span,
+                            format!("declared here as {}", super::declarations::kind_name(other)),
+                        );
+                    self.report(diagnostic);
+                    None
+                }
+            },
+            None => {
+                let diagnostic = self.unknown_name(&ident.name, ident.span);
+                self.report(diagnostic);
+                None
+            }
+        }
+    }
+
+    /// The coordinate and derivative order of a target such as `q1'`.
+    pub(super) fn derivative_target(&mut self, target: &Expr, what: &str) -> Option<(usize, u32)> {
+        let ExprKind::Var { name, primes } = &target.kind else {
+            let diagnostic = Diagnostic::error(
+                codes::NOT_A_COORDINATE,
+                format!("the target of {what} must be a coordinate or its derivative"),
+            )
+            .with_primary(target.span, "not a coordinate")
+            .with_help("write a coordinate with primes for a derivative, like `q1` or `q1'`");
+            self.report(diagnostic);
+            return None;
+        };
+        let coord = self.coordinate(name, what)?;
+        if *primes > super::MAX_DERIVATIVE_ORDER {
+            let diagnostic = Diagnostic::error(
+                codes::DERIVATIVE_ORDER_NOT_ALLOWED,
+                format!("derivative of order {primes} is too high"),
+            )
+            .with_primary(
+                target.span,
+                format!("lagc accepts orders up to {}", super::MAX_DERIVATIVE_ORDER),
+            );
+            self.report(diagnostic);
+            return None;
+        }
+        Some((coord, *primes))
+    }
+}
+
+fn not_a_coordinate(what: &str, name: &str, span: Span) -> Diagnostic {
+    Diagnostic::error(
+        codes::NOT_A_COORDINATE,
+        format!("`{name}` is not a coordinate, but {what} needs one"),
+    )
+    .with_primary(span, "not a coordinate")
+}

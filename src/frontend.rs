@@ -1,0 +1,75 @@
+//! The front end as one call: source → checked model or diagnostics.
+//!
+//! `main.rs` and the tests call these same functions, so the tests exercise
+//! exactly what the CLI does.
+
+use crate::check::{self, model::Model};
+use crate::diagnostic::{codes, Diagnostic};
+use crate::span::Span;
+use crate::syntax;
+use std::borrow::Cow;
+use std::sync::Mutex;
+
+/// The stack the front end (and later recursive stages) runs on. Expression
+/// depth is bounded by [`syntax::MAX_EXPR_DEPTH`]; this leaves a wide margin
+/// for unoptimised builds. Only touched pages are committed.
+pub const STACK_SIZE: usize = 256 * 1024 * 1024;
+
+/// Parses and checks a `.lag` source text.
+pub fn frontend(source: &str) -> Result<Model, Vec<Diagnostic>> {
+    let ast = syntax::parse(source)?;
+    check::check(&ast)
+}
+
+/// Decodes a file's bytes and runs [`frontend`]. Also returns the text to
+/// render diagnostics against: the source itself, or for invalid UTF-8 a
+/// lossy copy (each invalid sequence replaced by U+FFFD) in which the
+/// diagnostic's span marks the first replacement character.
+pub fn frontend_bytes(bytes: &[u8]) -> (Cow<'_, str>, Result<Model, Vec<Diagnostic>>) {
+    match std::str::from_utf8(bytes) {
+        Ok(source) => (Cow::Borrowed(source), frontend(source)),
+        Err(error) => {
+            let offset = error.valid_up_to();
+            let replacement = char::REPLACEMENT_CHARACTER.len_utf8();
+            let diagnostic = Diagnostic::error(
+                codes::INVALID_UTF8,
+                format!("the file is not valid UTF-8: invalid byte at offset {offset}"),
+            )
+            .with_primary(
+                Span::new(offset, offset + replacement),
+                format!("byte {offset} is not UTF-8 (shown as \u{FFFD})"),
+            )
+            .with_help("save the file as UTF-8 text");
+            (String::from_utf8_lossy(bytes), Err(vec![diagnostic]))
+        }
+    }
+}
+
+/// Runs `job` on a thread with a [`STACK_SIZE`] stack, and returns its
+/// result. A panic in `job` is resumed in the caller. Should the thread not
+/// start (no resources), `job` runs on the current thread instead.
+pub fn on_big_stack<T: Send>(job: impl FnOnce() -> T + Send) -> T {
+    let slot = Mutex::new(Some(job));
+    let take = || slot.lock().ok().and_then(|mut job| job.take());
+    let spawned = std::thread::scope(|scope| {
+        let handle = std::thread::Builder::new()
+            .name("lagc-frontend".into())
+            .stack_size(STACK_SIZE)
+            .spawn_scoped(scope, || take().map(|job| job()));
+        match handle {
+            Ok(handle) => match handle.join() {
+                Ok(result) => result,
+                Err(panic) => std::panic::resume_unwind(panic),
+            },
+            Err(_) => None,
+        }
+    });
+    match spawned {
+        Some(result) => result,
+        None => match take() {
+            Some(job) => job(),
+            // Unreachable: the job ran exactly when the thread returned Some.
+            None => unreachable!("the front-end job ran but returned nothing"),
+        },
+    }
+}

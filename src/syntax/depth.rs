@@ -1,0 +1,63 @@
+//! Nesting limits that keep parsing and every recursive pass bounded.
+
+use crate::diagnostic::{codes, Diagnostic};
+use crate::span::Span;
+
+/// The deepest parenthesis nesting accepted. pest recurses once per level
+/// (through several rules), so deeper input is rejected before parsing.
+pub const MAX_PAREN_DEPTH: usize = 256;
+
+/// The deepest expression tree accepted (a chain `a+b+…` of n terms is n−1
+/// deep). Later stages recurse over expressions; this bounds their depth.
+pub const MAX_EXPR_DEPTH: usize = 1000;
+
+/// Finds the first `(` nested deeper than [`MAX_PAREN_DEPTH`], skipping
+/// `//` comments, and reports it.
+pub fn check_paren_depth(source: &str) -> Result<(), Diagnostic> {
+    let bytes = source.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'(' => {
+                depth += 1;
+                if depth > MAX_PAREN_DEPTH {
+                    return Err(too_deep_parens(Span::new(i, i + 1)));
+                }
+            }
+            b')' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        i += 1;
+    }
+    Ok(())
+}
+
+fn too_deep_parens(span: Span) -> Diagnostic {
+    Diagnostic::error(
+        codes::NESTING_TOO_DEEP,
+        format!("parentheses are nested more than {MAX_PAREN_DEPTH} levels deep"),
+    )
+    .with_primary(span, format!("this is level {}", MAX_PAREN_DEPTH + 1))
+    .with_help(
+        "simplify the expression; lagc limits nesting so that no input can exhaust its stack",
+    )
+}
+
+/// The diagnostic for an expression tree deeper than [`MAX_EXPR_DEPTH`];
+/// `span` is the operator or call at which the limit was crossed.
+pub fn too_deep_expr(span: Span) -> Diagnostic {
+    Diagnostic::error(
+        codes::NESTING_TOO_DEEP,
+        format!("expression is nested more than {MAX_EXPR_DEPTH} levels deep"),
+    )
+    .with_primary(span, "the limit is crossed here")
+    .with_note("a chain of n operators nests n levels deep")
+    .with_help("split the expression; lagc limits nesting so that no input can exhaust its stack")
+}

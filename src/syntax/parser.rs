@@ -1,0 +1,419 @@
+//! pest parse tree → AST: one converter per grammar rule, every node spanned.
+//!
+//! Operator chains arrive as flat lists (see `grammar/lag.pest`) and are
+//! folded here without recursion; each fold step checks the tree depth
+//! against [`MAX_EXPR_DEPTH`], so no AST deeper than the limit is ever built.
+
+use super::ast::*;
+use super::depth::{check_paren_depth, too_deep_expr, MAX_EXPR_DEPTH};
+use super::grammar::{LagParser, Rule};
+use super::syntax_error;
+use crate::diagnostic::{codes, Diagnostic};
+use crate::span::Span;
+use pest::iterators::{Pair, Pairs};
+use pest::Parser;
+
+type Converted<T> = Result<T, Diagnostic>;
+
+/// Parses a whole `.lag` file. Every syntax error, number too large or
+/// nesting too deep comes back as a [`Diagnostic`], sorted by position.
+pub fn parse(source: &str) -> Result<Model, Vec<Diagnostic>> {
+    check_paren_depth(source).map_err(|d| vec![d])?;
+    let mut pairs = LagParser::parse(Rule::model, source)
+        .map_err(|error| vec![syntax_error::from_pest(&error, source)])?;
+    match pairs.next() {
+        Some(pair) => model(pair),
+        None => Ok(Model::default()),
+    }
+}
+
+fn model(pair: Pair<Rule>) -> Result<Model, Vec<Diagnostic>> {
+    let mut items = Vec::new();
+    let mut errors = Vec::new();
+    for statement_pair in pair.into_inner() {
+        if statement_pair.as_rule() == Rule::EOI {
+            continue;
+        }
+        match statement(statement_pair) {
+            Ok(item) => items.push(item),
+            Err(error) => errors.push(error),
+        }
+    }
+    if errors.is_empty() {
+        Ok(Model { items })
+    } else {
+        crate::diagnostic::sort(&mut errors);
+        Err(errors)
+    }
+}
+
+fn statement(pair: Pair<Rule>) -> Converted<Item> {
+    let span = Span::from(pair.as_span());
+    let rule = pair.as_rule();
+    let mut children = Children::of(pair);
+    let kind = match rule {
+        Rule::param => ItemKind::Param {
+            name: ident(children.expect(Rule::ident)?),
+            value: expr(children.expect(Rule::expr)?)?,
+        },
+        Rule::coords => {
+            let mut names = Vec::new();
+            while let Some(name) = children.next() {
+                names.push(ident(name));
+            }
+            ItemKind::Coords(names)
+        }
+        Rule::mass => ItemKind::Mass {
+            name: ident(children.expect(Rule::ident)?),
+            law: expr(children.expect(Rule::expr)?)?,
+        },
+        Rule::lagrangian => ItemKind::Lagrangian(expr(children.expect(Rule::expr)?)?),
+        Rule::constraint => ItemKind::Constraint {
+            lhs: expr(children.expect(Rule::expr)?)?,
+            rhs: expr(children.expect(Rule::expr)?)?,
+        },
+        Rule::point => point(children)?,
+        Rule::force => ItemKind::Force {
+            coord: ident(children.expect(Rule::ident)?),
+            value: expr(children.expect(Rule::expr)?)?,
+        },
+        Rule::initial => {
+            let mut values = Vec::new();
+            while let Some(value) = children.next() {
+                values.push(initial_value(value)?);
+            }
+            ItemKind::Initial(values)
+        }
+        Rule::time => ItemKind::Time {
+            start: expr(children.expect(Rule::expr)?)?,
+            end: expr(children.expect(Rule::expr)?)?,
+        },
+        Rule::exact => ItemKind::Exact {
+            target: expr(children.expect(Rule::expr)?)?,
+            value: expr(children.expect(Rule::expr)?)?,
+        },
+        _ => return Err(unexpected_tree(span)),
+    };
+    Ok(Item { kind, span })
+}
+
+fn point(mut children: Children) -> Converted<ItemKind> {
+    let name = ident(children.expect(Rule::ident)?);
+    let mut fields = Vec::new();
+    while let Some(field) = children.next() {
+        fields.push(point_field(field)?);
+    }
+    Ok(ItemKind::Point { name, fields })
+}
+
+fn point_field(pair: Pair<Rule>) -> Converted<PointField> {
+    let span = Span::from(pair.as_span());
+    let rule = pair.as_rule();
+    let mut children = Children::of(pair);
+    let kind = match rule {
+        Rule::point_mass => PointFieldKind::Mass(expr(children.expect(Rule::expr)?)?),
+        Rule::point_position => PointFieldKind::Position(vector(children.expect(Rule::vector)?)?),
+        Rule::absolute_velocity => {
+            PointFieldKind::AbsoluteVelocity(vector(children.expect(Rule::vector)?)?)
+        }
+        Rule::relative_velocity => {
+            PointFieldKind::RelativeVelocity(vector(children.expect(Rule::vector)?)?)
+        }
+        _ => return Err(unexpected_tree(span)),
+    };
+    Ok(PointField { kind, span })
+}
+
+fn vector(pair: Pair<Rule>) -> Converted<Vec<Expr>> {
+    Children::of(pair).map(expr).collect()
+}
+
+fn initial_value(pair: Pair<Rule>) -> Converted<InitialValue> {
+    let span = Span::from(pair.as_span());
+    let mut children = Children::of(pair);
+    Ok(InitialValue {
+        target: expr(children.expect(Rule::expr)?)?,
+        value: expr(children.expect(Rule::expr)?)?,
+        span,
+    })
+}
+
+fn ident(pair: Pair<Rule>) -> Ident {
+    Ident {
+        name: pair.as_str().to_string(),
+        span: pair.as_span().into(),
+    }
+}
+
+/// An expression with the depth of its tree, for the nesting limit.
+struct Node {
+    expr: Expr,
+    depth: usize,
+}
+
+impl Node {
+    fn leaf(kind: ExprKind, span: Span) -> Node {
+        Node {
+            expr: Expr { kind, span },
+            depth: 1,
+        }
+    }
+}
+
+fn expr(pair: Pair<Rule>) -> Converted<Expr> {
+    sum(pair).map(|node| node.expr)
+}
+
+/// `product (add_op product)*`, folded to the left.
+fn sum(pair: Pair<Rule>) -> Converted<Node> {
+    let mut children = Children::of(pair);
+    let mut acc = product(children.expect(Rule::product)?)?;
+    while let Some(op) = children.next() {
+        let op_span = Span::from(op.as_span());
+        let op = if op.as_str() == "+" {
+            BinOp::Add
+        } else {
+            BinOp::Sub
+        };
+        let rhs = product(children.expect(Rule::product)?)?;
+        acc = binary(op, op_span, acc, rhs)?;
+    }
+    Ok(acc)
+}
+
+/// `unary (mul_op unary)*`, folded to the left.
+fn product(pair: Pair<Rule>) -> Converted<Node> {
+    let mut children = Children::of(pair);
+    let mut acc = unary(children.expect(Rule::unary)?)?;
+    while let Some(op) = children.next() {
+        let op_span = Span::from(op.as_span());
+        let op = if op.as_str() == "*" {
+            BinOp::Mul
+        } else {
+            BinOp::Div
+        };
+        let rhs = unary(children.expect(Rule::unary)?)?;
+        acc = binary(op, op_span, acc, rhs)?;
+    }
+    Ok(acc)
+}
+
+/// `neg* power`: the minus signs wrap the whole power, `-x^2` = `-(x^2)`.
+fn unary(pair: Pair<Rule>) -> Converted<Node> {
+    let mut negs = Vec::new();
+    for child in Children::of(pair) {
+        if child.as_rule() == Rule::neg {
+            negs.push(Span::from(child.as_span()));
+        } else {
+            return negate(negs, power(child)?);
+        }
+    }
+    Err(unexpected_tree(negs.last().copied().unwrap_or_default()))
+}
+
+/// `primary (pow_op neg* primary)*`, folded to the right: `a^b^c` =
+/// `a^(b^c)` and `a^-b^c` = `a^(-(b^c))`.
+fn power(pair: Pair<Rule>) -> Converted<Node> {
+    let span = Span::from(pair.as_span());
+    // bases[0] ^ (negs[0] bases[1] ^ (negs[1] bases[2] ^ …))
+    let mut bases = Vec::new();
+    let mut operators: Vec<(Span, Vec<Span>)> = Vec::new();
+    for child in Children::of(pair) {
+        match child.as_rule() {
+            Rule::pow_op => operators.push((child.as_span().into(), Vec::new())),
+            Rule::neg => match operators.last_mut() {
+                Some((_, negs)) => negs.push(child.as_span().into()),
+                None => return Err(unexpected_tree(span)),
+            },
+            _ => bases.push(primary(child)?),
+        }
+    }
+    let Some(mut acc) = bases.pop() else {
+        return Err(unexpected_tree(span));
+    };
+    while let (Some(base), Some((op_span, negs))) = (bases.pop(), operators.pop()) {
+        let exponent = negate(negs, acc)?;
+        acc = binary(BinOp::Pow, op_span, base, exponent)?;
+    }
+    Ok(acc)
+}
+
+fn primary(pair: Pair<Rule>) -> Converted<Node> {
+    let span = Span::from(pair.as_span());
+    match pair.as_rule() {
+        Rule::number => number(pair),
+        Rule::var => Ok(var(pair)),
+        Rule::call => call(pair),
+        Rule::paren => {
+            let mut node = sum(Children::of(pair).expect(Rule::expr)?)?;
+            node.expr.span = span;
+            Ok(node)
+        }
+        _ => Err(unexpected_tree(span)),
+    }
+}
+
+fn number(pair: Pair<Rule>) -> Converted<Node> {
+    let span = Span::from(pair.as_span());
+    match pair.as_str().parse::<f64>() {
+        Ok(value) if value.is_finite() => Ok(Node::leaf(ExprKind::Number(value), span)),
+        _ => Err(
+            Diagnostic::error(codes::NUMBER_TOO_LARGE, "number too large")
+                .with_primary(span, "this does not fit in a 64-bit float")
+                .with_note(format!("the largest finite value is about {:e}", f64::MAX)),
+        ),
+    }
+}
+
+/// `ident prime*`: a name and its number of derivative marks.
+fn var(pair: Pair<Rule>) -> Node {
+    let span = Span::from(pair.as_span());
+    let mut children = pair.into_inner();
+    let name = match children.next() {
+        Some(name) => ident(name),
+        None => Ident {
+            name: String::new(),
+            span,
+        },
+    };
+    // Saturates: `check` rejects orders far below u32::MAX anyway.
+    let primes = u32::try_from(children.count()).unwrap_or(u32::MAX);
+    Node::leaf(ExprKind::Var { name, primes }, span)
+}
+
+fn call(pair: Pair<Rule>) -> Converted<Node> {
+    let span = Span::from(pair.as_span());
+    let mut children = Children::of(pair);
+    let name = ident(children.expect(Rule::ident)?);
+    let Some(func) = Func::from_name(&name.name) else {
+        return Err(unknown_function(&name));
+    };
+    let arg = sum(children.expect(Rule::expr)?)?;
+    let kind = ExprKind::Call {
+        func,
+        func_span: name.span,
+        arg: Box::new(arg.expr),
+    };
+    deeper(kind, span, arg.depth, name.span)
+}
+
+fn unknown_function(name: &Ident) -> Diagnostic {
+    let diagnostic = Diagnostic::error(
+        codes::UNKNOWN_FUNCTION,
+        format!("unknown function `{}`", name.name),
+    )
+    .with_primary(name.span, "not a function of the language");
+    let names = Func::ALL.map(Func::name);
+    match crate::suggest::closest(&name.name, names.iter().copied()) {
+        Some(close) => diagnostic.with_help(format!("did you mean `{close}`?")),
+        None => diagnostic.with_help(format!("the functions are {}", names.join(", "))),
+    }
+}
+
+/// Wraps `node` in the minus signs `negs` (innermost last).
+fn negate(negs: Vec<Span>, mut node: Node) -> Converted<Node> {
+    for neg_span in negs.into_iter().rev() {
+        let span = neg_span.to(node.expr.span);
+        node = deeper(
+            ExprKind::Neg(Box::new(node.expr)),
+            span,
+            node.depth,
+            neg_span,
+        )?;
+    }
+    Ok(node)
+}
+
+fn binary(op: BinOp, op_span: Span, lhs: Node, rhs: Node) -> Converted<Node> {
+    let span = lhs.expr.span.to(rhs.expr.span);
+    let depth = lhs.depth.max(rhs.depth);
+    let kind = ExprKind::Binary {
+        op,
+        lhs: Box::new(lhs.expr),
+        rhs: Box::new(rhs.expr),
+    };
+    deeper(kind, span, depth, op_span)
+}
+
+/// A node one level above children of depth `child_depth`, unless that
+/// crosses [`MAX_EXPR_DEPTH`] (reported at `at`).
+fn deeper(kind: ExprKind, span: Span, child_depth: usize, at: Span) -> Converted<Node> {
+    let depth = child_depth + 1;
+    if depth > MAX_EXPR_DEPTH {
+        return Err(too_deep_expr(at));
+    }
+    Ok(Node {
+        expr: Expr { kind, span },
+        depth,
+    })
+}
+
+/// The grammar guarantees the tree's shape; should it ever differ, this
+/// reports it instead of panicking.
+fn unexpected_tree(span: Span) -> Diagnostic {
+    Diagnostic::error(codes::SYNTAX, "internal error: unexpected parse tree")
+        .with_primary(span, "the parser could not convert this")
+        .with_note("this is a bug in lagc; please report it with this file")
+}
+
+/// The children of a pair that carry meaning: punctuation and keywords,
+/// which are named rules only for syntax error messages, are skipped.
+struct Children<'i> {
+    pairs: Pairs<'i, Rule>,
+    parent_span: Span,
+}
+
+impl<'i> Children<'i> {
+    fn of(pair: Pair<'i, Rule>) -> Self {
+        Children {
+            parent_span: pair.as_span().into(),
+            pairs: pair.into_inner(),
+        }
+    }
+
+    fn expect(&mut self, rule: Rule) -> Converted<Pair<'i, Rule>> {
+        match self.next() {
+            Some(pair) if pair.as_rule() == rule => Ok(pair),
+            Some(pair) => Err(unexpected_tree(pair.as_span().into())),
+            None => Err(unexpected_tree(self.parent_span)),
+        }
+    }
+}
+
+impl<'i> Iterator for Children<'i> {
+    type Item = Pair<'i, Rule>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.pairs
+            .by_ref()
+            .find(|pair| !is_punctuation(pair.as_rule()))
+    }
+}
+
+fn is_punctuation(rule: Rule) -> bool {
+    matches!(
+        rule,
+        Rule::semi
+            | Rule::eq
+            | Rule::comma
+            | Rule::range
+            | Rule::lparen
+            | Rule::rparen
+            | Rule::lbrace
+            | Rule::rbrace
+            | Rule::kw_param
+            | Rule::kw_coord
+            | Rule::kw_mass
+            | Rule::kw_lagrangian
+            | Rule::kw_constraint
+            | Rule::kw_point
+            | Rule::kw_force
+            | Rule::kw_initial
+            | Rule::kw_time
+            | Rule::kw_exact
+            | Rule::kw_position
+            | Rule::kw_absolute
+            | Rule::kw_relative
+            | Rule::kw_velocity
+    )
+}
