@@ -45,3 +45,15 @@ fn inconsistent_solved_initial_value() {
     let model = lagc::frontend(&consistent).unwrap();
     assert!(lagc::mechanics::derive(&model).is_ok());
 }
+
+/// The checker rejects `q''` in a Lagrangian; the mechanics also refuses it
+/// on its own (a model built by hand).
+#[test]
+fn a_second_order_lagrangian_is_refused() {
+    let source = include_str!("../../../examples/second_order_constraint.lag");
+    let mut model = lagc::frontend(source).unwrap();
+    model.lagrangian = model.constraints[0].rhs.clone(); // t * x''
+    let d = lagc::mechanics::derive(&model).unwrap_err();
+    assert_eq!(d[0].code, codes::DERIVATIVE_ORDER_NOT_ALLOWED);
+    assert!(d[0].message.contains("x''"), "{}", d[0].message);
+}
