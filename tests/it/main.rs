@@ -4,6 +4,7 @@ mod cli;
 mod errors;
 mod examples;
 mod ir;
+mod mechanics;
 mod parser;
 mod robustness;
 mod runtime;

@@ -1,0 +1,80 @@
+//! The reduced first-order system (7), the mechanics stage's output and the
+//! field method's and code emitter's input (CONTRACT: extend additively).
+
+use crate::ir::{ExprId, Symbol};
+
+/// `x' = X(t, x)` with the state (6) `x = (q, q', …, q^(u−1))`.
+#[derive(Debug, Clone)]
+pub struct ReducedSystem {
+    /// `u = max(2, k)`: the order of the highest derivatives.
+    pub order: u32,
+    /// The state (6): `Symbol::Jet { coord, order }` for order `0..u`,
+    /// coordinates in declaration order within each order.
+    pub state: Vec<Symbol>,
+    /// How the highest derivatives `q_j^(u)` are obtained.
+    pub highest: Highest,
+    /// Mass laws still present in `highest` after the masses that factor out
+    /// were divided out: `(i, law)` with `law` an expression of `t` and params
+    /// standing for `Symbol::Mass(i)`.
+    pub mass_laws: Vec<(u32, ExprId)>,
+    /// Initial values of every state component, in state order.
+    pub initial: Vec<InitialValue>,
+    /// For k ≥ 3: how the independent `q_i^(2..k−1)` at `t0` follow from
+    /// (4) and its derivatives, one stage per order (2, 3, …, k−1), solved
+    /// in order (stage r may use the values of stages before it). Empty
+    /// for k ≤ 2. (Added by the mechanics.)
+    pub consistency: Vec<Consistency>,
+}
+
+/// `residual(t, x, z) = 0` for `z = unknowns = (q_i^(r))_i`, one order `r`.
+/// The residual holds `t`, params, masses, the `Given` and `Constraint`
+/// state components and the unknowns of earlier stages.
+#[derive(Debug, Clone)]
+pub struct Consistency {
+    pub unknowns: Vec<Symbol>,
+    pub residual: Vec<ExprId>,
+    /// `∂residual_r/∂z_c`, row-major.
+    pub jacobian: Vec<Vec<ExprId>>,
+    /// `true`: affine in `z` (one linear solve, or `explicit`).
+    pub linear: bool,
+    /// The symbolic solution, one expression per unknown, when found.
+    pub explicit: Option<Vec<ExprId>>,
+}
+
+/// The highest derivatives `q^(u)`.
+#[derive(Debug, Clone)]
+pub enum Highest {
+    /// `q_j^(u) = expr_j` for every coordinate `j` (declaration order);
+    /// expressions of `t`, params, masses and the state only.
+    Explicit(Vec<ExprId>),
+    /// Solve `residual(t, x, z) = 0` for the independent highest derivatives
+    /// `z = unknowns` (`Symbol::Jet { coord: i, order: u }`), then the
+    /// dependent ones follow from `dependent` (expressions that may hold `z`).
+    Implicit {
+        unknowns: Vec<Symbol>,
+        residual: Vec<ExprId>,
+        /// `∂residual_r/∂z_c`, row-major.
+        jacobian: Vec<Vec<ExprId>>,
+        /// `true`: the residual is affine in `z` (`A z = b`, one linear
+        /// solve); `false`: Newton with `jacobian`.
+        linear: bool,
+        /// `(coord, expr)` for every dependent coordinate.
+        dependent: Vec<(u32, ExprId)>,
+    },
+}
+
+/// How one state component's initial value is found at `t0`.
+#[derive(Debug, Clone)]
+pub enum InitialValue {
+    /// Given by the user: an expression of params.
+    Given(ExprId),
+    /// Fixed by a constraint (or its derivatives): an expression of `t`,
+    /// params, masses and state components that are `Given` (never of
+    /// other `Constraint` or `Solved` ones — a dependent velocity may depend
+    /// on an independent velocity declared after it, so "earlier in state
+    /// order" would not hold).
+    Constraint(ExprId),
+    /// An independent derivative of order 2..k−1 (k ≥ 3): solved from (4)
+    /// and its derivatives at `t0`; see `ReducedSystem::consistency`.
+    Solved,
+}
