@@ -5,6 +5,7 @@
 
 use crate::check::{self, model::Model};
 use crate::diagnostic::{codes, Diagnostic};
+use crate::mechanics::Derivation;
 use crate::span::Span;
 use crate::syntax;
 use std::borrow::Cow;
@@ -21,13 +22,37 @@ pub fn frontend(source: &str) -> Result<Model, Vec<Diagnostic>> {
     check::check(&ast)
 }
 
+/// The front end and the derivation: every diagnostic a model can have
+/// before code generation (`lagc check` reports exactly these). Some checks
+/// need the symbolic stage: an initial value that violates a constraint, an
+/// identically singular mass matrix.
+pub fn check_and_derive(source: &str) -> Result<(Model, Derivation), Vec<Diagnostic>> {
+    let model = frontend(source)?;
+    let derivation = crate::mechanics::derive(&model)?;
+    Ok((model, derivation))
+}
+
 /// Decodes a file's bytes and runs [`frontend`]. Also returns the text to
 /// render diagnostics against: the source itself, or for invalid UTF-8 a
 /// lossy copy (each invalid sequence replaced by U+FFFD) in which the
 /// diagnostic's span marks the first replacement character.
 pub fn frontend_bytes(bytes: &[u8]) -> (Cow<'_, str>, Result<Model, Vec<Diagnostic>>) {
+    decode_then(bytes, frontend)
+}
+
+/// Decodes a file's bytes and runs [`check_and_derive`]; see [`frontend_bytes`].
+pub fn check_and_derive_bytes(
+    bytes: &[u8],
+) -> (Cow<'_, str>, Result<(Model, Derivation), Vec<Diagnostic>>) {
+    decode_then(bytes, check_and_derive)
+}
+
+fn decode_then<T>(
+    bytes: &[u8],
+    stage: impl FnOnce(&str) -> Result<T, Vec<Diagnostic>>,
+) -> (Cow<'_, str>, Result<T, Vec<Diagnostic>>) {
     match std::str::from_utf8(bytes) {
-        Ok(source) => (Cow::Borrowed(source), frontend(source)),
+        Ok(source) => (Cow::Borrowed(source), stage(source)),
         Err(error) => {
             let offset = error.valid_up_to();
             let replacement = char::REPLACEMENT_CHARACTER.len_utf8();

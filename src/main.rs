@@ -23,6 +23,10 @@ struct Cli {
 enum Command {
     /// Check a model and report every problem; prints nothing else.
     ///
+    /// Runs the front end and the derivation, so that mistakes only the
+    /// symbolic stage can see (an initial value that violates a constraint,
+    /// an identically singular mass matrix) are reported too.
+    ///
     /// Exit status: 0 when the model is clean, 1 when it has errors, 2 when
     /// FILE cannot be read.
     Check(CheckArgs),
@@ -81,9 +85,9 @@ fn check(args: &CheckArgs) -> ExitCode {
     };
     let color = std::io::stderr().is_terminal();
     lagc::on_big_stack(|| {
-        let (source, result) = lagc::frontend_bytes(&bytes);
+        let (source, result) = lagc::check_and_derive_bytes(&bytes);
         match result {
-            Ok(model) => {
+            Ok((model, _)) => {
                 let constraints = match model.constraint_order {
                     Some(k) => format!(
                         "{} of order {k}",

@@ -11,12 +11,13 @@ mod runtime;
 
 use lagc::diagnostic::{self, Diagnostic};
 
-/// Runs the front end on a file's bytes exactly as `lagc check` does, and
-/// renders its diagnostics without colour under `file_name`.
+/// Runs the front end and the derivation on a file's bytes exactly as
+/// `lagc check` does, and renders its diagnostics without colour under
+/// `file_name`.
 pub fn check_bytes(bytes: &[u8], file_name: &str) -> Result<lagc::check::model::Model, String> {
     lagc::on_big_stack(|| {
-        let (source, result) = lagc::frontend_bytes(bytes);
-        result.map_err(|diagnostics: Vec<Diagnostic>| {
+        let (source, result) = lagc::check_and_derive_bytes(bytes);
+        result.map(|(model, _)| model).map_err(|diagnostics: Vec<Diagnostic>| {
             diagnostic::render(&diagnostics, file_name, &source, false)
         })
     })

@@ -1,4 +1,4 @@
-//! No input makes the front end panic or overflow its stack.
+//! No input makes the front end or the derivation panic or overflow its stack.
 //!
 //! A deterministic mutation test: 12,000 inputs per run, made by mutating
 //! the examples and error files (byte flips, deletions, token insertions,
@@ -224,7 +224,7 @@ fn generated(rng: &mut Rng) -> Vec<u8> {
 
 /// Diagnostics must point inside the text they are rendered against.
 fn assert_well_formed(input: &[u8]) {
-    let (source, result) = lagc::frontend_bytes(input);
+    let (source, result) = lagc::check_and_derive_bytes(input);
     let Err(diagnostics) = result else {
         return;
     };

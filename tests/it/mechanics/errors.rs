@@ -1,33 +1,7 @@
-//! The mechanics' diagnostics, rendered through the full pipeline (front end
-//! and derive) as snapshots: one mistake per file under `tests/data/errors/`.
+//! The mechanics' diagnostics beyond the error files (whose rendered
+//! snapshots `tests/it/errors.rs` takes through the same pipeline as `lagc check`).
 
-use lagc::diagnostic::{codes, render, Diagnostic};
-
-fn diagnostics(name: &str) -> (String, Vec<Diagnostic>) {
-    let path = format!("{}/tests/data/errors/{name}", env!("CARGO_MANIFEST_DIR"));
-    let source = std::fs::read_to_string(&path).unwrap();
-    let result = lagc::frontend(&source).and_then(|model| lagc::mechanics::derive(&model));
-    match result {
-        Ok(_) => panic!("{name}: derived without an error"),
-        Err(d) => (source, d),
-    }
-}
-
-#[test]
-fn inconsistent_initial_value() {
-    let (source, d) = diagnostics("inconsistent_initial.lag");
-    assert_eq!(d.len(), 1, "{d:#?}");
-    assert_eq!(d[0].code, codes::INCONSISTENT_INITIAL);
-    insta::assert_snapshot!(render(&d, "inconsistent_initial.lag", &source, false));
-}
-
-#[test]
-fn singular_mass_matrix() {
-    let (source, d) = diagnostics("singular_mass_matrix.lag");
-    assert_eq!(d.len(), 1, "{d:#?}");
-    assert_eq!(d[0].code, codes::SINGULAR_MASS_MATRIX);
-    insta::assert_snapshot!(render(&d, "singular_mass_matrix.lag", &source, false));
-}
+use lagc::diagnostic::codes;
 
 /// k ≥ 3: a given `x''` that contradicts (4) at t0.
 #[test]
