@@ -1,0 +1,90 @@
+//! The integrator chosen at run time (`--method`, stiffness).
+
+use super::dop853::Dop853;
+use super::error::Failure;
+use super::rosenbrock::Rodas4;
+use super::stepper::{Stats, Stepper, Tolerance};
+use super::system::Motion;
+
+/// Which one-step method integrates a system.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// DOP853, explicit, order 8.
+    Explicit,
+    /// RODAS4, linearly implicit, order 4, for stiff systems.
+    Stiff,
+}
+
+impl Integrator {
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Explicit => "DOP853",
+            Integrator::Stiff => "RODAS4",
+        }
+    }
+}
+
+pub enum AnyStepper {
+    Explicit(Dop853),
+    Stiff(Rodas4),
+}
+
+impl AnyStepper {
+    pub fn new<M: Motion + ?Sized>(
+        integrator: Integrator,
+        system: &M,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+    ) -> Result<Self, Failure> {
+        Ok(match integrator {
+            Integrator::Explicit => AnyStepper::Explicit(Dop853::new(system, t0, y0, tol, h_max)?),
+            Integrator::Stiff => AnyStepper::Stiff(Rodas4::new(system, t0, y0, tol, h_max)?),
+        })
+    }
+}
+
+impl Stepper for AnyStepper {
+    fn time(&self) -> f64 {
+        match self {
+            AnyStepper::Explicit(s) => s.time(),
+            AnyStepper::Stiff(s) => s.time(),
+        }
+    }
+
+    fn state(&self) -> &[f64] {
+        match self {
+            AnyStepper::Explicit(s) => s.state(),
+            AnyStepper::Stiff(s) => s.state(),
+        }
+    }
+
+    fn stats(&self) -> Stats {
+        match self {
+            AnyStepper::Explicit(s) => s.stats(),
+            AnyStepper::Stiff(s) => s.stats(),
+        }
+    }
+
+    fn proposed_step(&self) -> f64 {
+        match self {
+            AnyStepper::Explicit(s) => s.proposed_step(),
+            AnyStepper::Stiff(s) => s.proposed_step(),
+        }
+    }
+
+    fn propose_step(&mut self, h: f64) {
+        match self {
+            AnyStepper::Explicit(s) => s.propose_step(h),
+            AnyStepper::Stiff(s) => s.propose_step(h),
+        }
+    }
+
+    fn step<M: Motion + ?Sized>(&mut self, system: &M, t_limit: f64) -> Result<(), Failure> {
+        match self {
+            AnyStepper::Explicit(s) => s.step(system, t_limit),
+            AnyStepper::Stiff(s) => s.step(system, t_limit),
+        }
+    }
+}
