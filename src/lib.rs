@@ -15,6 +15,7 @@ pub mod check;
 pub mod diagnostic;
 pub mod frontend;
 pub mod ir;
+pub mod mechanics;
 pub mod span;
 mod suggest;
 pub mod syntax;

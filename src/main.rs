@@ -26,6 +26,30 @@ enum Command {
     /// Exit status: 0 when the model is clean, 1 when it has errors, 2 when
     /// FILE cannot be read.
     Check(CheckArgs),
+    /// Derive equations (4) and the reduced first-order system (7).
+    ///
+    /// Prints the equations, the reduced system, the state and its initial
+    /// values, and the result of the cross-check of (4) against the
+    /// multiplier route. Exit status: 0 on success, 1 when the model has
+    /// errors, 2 when FILE cannot be read.
+    Derive(DeriveArgs),
+}
+
+#[derive(Debug, Args)]
+struct DeriveArgs {
+    /// The `.lag` model.
+    file: PathBuf,
+    /// The output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum Format {
+    /// Plain text.
+    Text,
+    /// A LaTeX `align*` block.
+    Latex,
 }
 
 #[derive(Debug, Args)]
@@ -42,6 +66,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check(args) => check(&args),
+        Command::Derive(args) => derive(&args),
     }
 }
 
@@ -68,6 +93,50 @@ fn check(args: &CheckArgs) -> ExitCode {
                 };
                 let coords = count(model.coords.len(), "coordinate");
                 eprintln!("{file_name}: ok ({coords}, {constraints})");
+                ExitCode::SUCCESS
+            }
+            Err(diagnostics) => {
+                eprint!(
+                    "{}",
+                    lagc::diagnostic::render(&diagnostics, &file_name, &source, color)
+                );
+                let errors = diagnostics.iter().filter(|d| d.is_error()).count();
+                eprintln!("error: `{file_name}` has {}", count(errors, "error"));
+                ExitCode::from(EXIT_MODEL_ERRORS)
+            }
+        }
+    })
+}
+
+fn derive(args: &DeriveArgs) -> ExitCode {
+    let file_name = args.file.display().to_string();
+    let bytes = match std::fs::read(&args.file) {
+        Ok(bytes) => bytes,
+        Err(error) => {
+            eprintln!("error: cannot read `{file_name}`: {error}");
+            return ExitCode::from(EXIT_USAGE);
+        }
+    };
+    let color = std::io::stderr().is_terminal();
+    lagc::on_big_stack(|| {
+        let (source, result) = lagc::frontend_bytes(&bytes);
+        let derived = result.and_then(|model| lagc::mechanics::derive(&model));
+        match derived {
+            Ok(mut derivation) => {
+                match args.format {
+                    Format::Text => print!("{}", derivation.text()),
+                    Format::Latex => print!("{}", derivation.latex()),
+                }
+                match lagc::mechanics::cross_check(&mut derivation) {
+                    Ok(check) => eprintln!(
+                        "cross-check of (4) against the multiplier route: passed at {} points",
+                        check.points
+                    ),
+                    Err(failure) => {
+                        eprintln!("error: cross-check failed: {failure}");
+                        return ExitCode::from(EXIT_MODEL_ERRORS);
+                    }
+                }
                 ExitCode::SUCCESS
             }
             Err(diagnostics) => {

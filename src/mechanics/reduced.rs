@@ -19,6 +19,26 @@ pub struct ReducedSystem {
     pub mass_laws: Vec<(u32, ExprId)>,
     /// Initial values of every state component, in state order.
     pub initial: Vec<InitialValue>,
+    /// For k ≥ 3: how the independent `q_i^(2..k−1)` at `t0` follow from
+    /// (4) and its derivatives, one stage per order (2, 3, …, k−1), solved
+    /// in order (stage r may use the values of stages before it). Empty
+    /// for k ≤ 2. (Added by the mechanics.)
+    pub consistency: Vec<Consistency>,
+}
+
+/// `residual(t, x, z) = 0` for `z = unknowns = (q_i^(r))_i`, one order `r`.
+/// The residual holds `t`, params, masses, the `Given` and `Constraint`
+/// state components and the unknowns of earlier stages.
+#[derive(Debug, Clone)]
+pub struct Consistency {
+    pub unknowns: Vec<Symbol>,
+    pub residual: Vec<ExprId>,
+    /// `∂residual_r/∂z_c`, row-major.
+    pub jacobian: Vec<Vec<ExprId>>,
+    /// `true`: affine in `z` (one linear solve, or `explicit`).
+    pub linear: bool,
+    /// The symbolic solution, one expression per unknown, when found.
+    pub explicit: Option<Vec<ExprId>>,
 }
 
 /// The highest derivatives `q^(u)`.
@@ -49,8 +69,10 @@ pub enum InitialValue {
     /// Given by the user: an expression of params.
     Given(ExprId),
     /// Fixed by a constraint (or its derivatives): an expression of `t`,
-    /// params, masses and EARLIER state components (so it can be evaluated
-    /// in state order).
+    /// params, masses and state components that are `Given` (never of
+    /// other `Constraint` or `Solved` ones — a dependent velocity may depend
+    /// on an independent velocity declared after it, so "earlier in state
+    /// order" would not hold).
     Constraint(ExprId),
     /// An independent derivative of order 2..k−1 (k ≥ 3): solved from (4)
     /// and its derivatives at `t0`; see `ReducedSystem::consistency`.

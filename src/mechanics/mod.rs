@@ -1,0 +1,187 @@
+//! Stage 4: the checked model → equations (4) and the reduced first-order
+//! system (7) (SPEC §1.2–§1.4).
+//!
+//! | file | what |
+//! |---|---|
+//! | `symbols.rs` | the model lowered: L, mass laws, constraints φ |
+//! | `star.rs` | the order-matched star; eliminating dependent derivatives |
+//! | `reactive_forces.rs` | `R_j` of the variable-mass points |
+//! | `generalized_forces.rs` | the declared `Q_j` |
+//! | `equations.rs` | equations (4) |
+//! | `multiplier_route.rs` | the independent cross-check through `E_j` |
+//! | `mass_factor.rs` | dividing mass laws out of the equations |
+//! | `solve.rs` | solving for the highest derivatives |
+//! | `singular.rs` | the identically singular mass matrix (E0015) |
+//! | `reduce.rs` | the reduced system (7) |
+//! | `initial.rs` | the initial values of the state (6) |
+//! | `reduced.rs` | the output contract for the field method and emitter |
+//! | `tidy.rs`, `text.rs` | readable text and LaTeX |
+//! | `sample.rs` | random points and rounding scales for numeric checks |
+
+mod equations;
+mod generalized_forces;
+mod initial;
+mod mass_factor;
+mod multiplier_route;
+mod reactive_forces;
+mod reduce;
+pub mod reduced;
+mod sample;
+mod singular;
+mod solve;
+mod star;
+mod symbols;
+mod text;
+mod tidy;
+
+pub use equations::Equation4;
+pub use multiplier_route::{cross_check, CrossCheck, CrossCheckFailure};
+pub use reduced::{Consistency, Highest, InitialValue, ReducedSystem};
+
+use crate::check::model::Model;
+use crate::diagnostic::Diagnostic;
+use crate::ir::{names_of, Arena, ExprId, Symbol};
+use star::Elimination;
+use symbols::Symbolic;
+
+/// Everything the mechanics derived from one model.
+#[derive(Debug, Clone)]
+pub struct Derivation {
+    /// The arena every `ExprId` below points into.
+    pub arena: Arena,
+    /// n: the number of coordinates.
+    pub coordinates: usize,
+    /// The independent coordinates (s of them), declaration order.
+    pub independent: Vec<u32>,
+    /// The model's constraint order; `None` for a holonomic model.
+    pub constraint_order: Option<u32>,
+    /// The order `k` used in (4): the constraint order, or 1 when holonomic.
+    pub k: u32,
+    /// The Lagrangian `L(t, q, q')`, masses as `Symbol::Mass`.
+    pub lagrangian: ExprId,
+    /// `(d, φ_d)`: `q_d^(k) = φ_d` (mass symbols replaced by their laws).
+    pub constraints: Vec<(u32, ExprId)>,
+    /// `R_j + Q_j` for every coordinate, before projection and star.
+    pub forces: Vec<ExprId>,
+    /// Equations (4), one per independent coordinate.
+    pub equations: Vec<Equation4>,
+    /// For each equation: the mass divided out of it in the reduced system.
+    pub divided_out: Vec<Option<u32>>,
+    /// The reduced system (7).
+    pub reduced: ReducedSystem,
+    /// Param defaults, for numeric checks.
+    pub param_defaults: Vec<f64>,
+}
+
+impl Derivation {
+    /// The dependent coordinates, in constraint order.
+    pub fn dependent(&self) -> Vec<u32> {
+        self.constraints.iter().map(|&(d, _)| d).collect()
+    }
+}
+
+/// Derives equations (4) and the reduced system (7) of a checked model.
+pub fn derive(model: &Model) -> Result<Derivation, Vec<Diagnostic>> {
+    let mut arena = Arena::new(names_of(model));
+    let symbolic = Symbolic::lower(&mut arena, model)?;
+    let mut elimination = Elimination::new(symbolic.k, &symbolic.constraints);
+    let reactive = reactive_forces::reactive_forces(&mut arena, model, &symbolic.laws)?;
+    let generalized = generalized_forces::generalized_forces(&mut arena, model)?;
+    let forces: Vec<ExprId> = reactive
+        .iter()
+        .zip(&generalized)
+        .map(|(&r, &q)| arena.add(&[r, q]))
+        .collect();
+    let equations = equations::equations(&mut arena, &symbolic, &mut elimination, &forces);
+    let rows: Vec<ExprId> = equations.iter().map(|e| arena.sub(e.lhs, e.rhs)).collect();
+    let divided =
+        mass_factor::divide_out_masses(&mut arena, &rows, &symbolic.laws, &symbolic.param_defaults);
+    let rows: Vec<ExprId> = divided.iter().map(|d| d.row).collect();
+    let reduction = reduce::reduce(
+        &mut arena,
+        &symbolic,
+        &mut elimination,
+        &rows,
+        model.lagrangian.span,
+    )
+    .map_err(|d| vec![d])?;
+    let u = symbolic.u();
+    let state: Vec<Symbol> = (0..u)
+        .flat_map(|order| {
+            (0..model.coords.len() as u32).map(move |coord| Symbol::Jet { coord, order })
+        })
+        .collect();
+    let initial = initial::initial_values(
+        &mut arena,
+        model,
+        &symbolic,
+        &mut elimination,
+        &state,
+        &reduction.consistency,
+    )?;
+    let mut reduced = ReducedSystem {
+        order: u,
+        state,
+        highest: reduction.highest,
+        mass_laws: Vec::new(),
+        initial,
+        consistency: reduction.consistency,
+    };
+    reduced.mass_laws = remaining_masses(&arena, &reduced)
+        .into_iter()
+        .filter_map(|i| symbolic.laws.get(i as usize).map(|&law| (i, law)))
+        .collect();
+    Ok(Derivation {
+        arena,
+        coordinates: model.coords.len(),
+        independent: symbolic.independent.clone(),
+        constraint_order: model.constraint_order,
+        k: symbolic.k,
+        lagrangian: symbolic.lagrangian,
+        constraints: symbolic.constraints.clone(),
+        forces,
+        equations,
+        divided_out: divided.iter().map(|d| d.mass).collect(),
+        reduced,
+        param_defaults: symbolic.param_defaults,
+    })
+}
+
+/// The mass symbols the reduced system still holds.
+fn remaining_masses(arena: &Arena, reduced: &ReducedSystem) -> Vec<u32> {
+    let mut roots: Vec<ExprId> = Vec::new();
+    match &reduced.highest {
+        Highest::Explicit(exprs) => roots.extend(exprs),
+        Highest::Implicit {
+            residual,
+            jacobian,
+            dependent,
+            ..
+        } => {
+            roots.extend(residual);
+            roots.extend(jacobian.iter().flatten());
+            roots.extend(dependent.iter().map(|&(_, e)| e));
+        }
+    }
+    for stage in &reduced.consistency {
+        roots.extend(&stage.residual);
+        roots.extend(stage.jacobian.iter().flatten());
+        roots.extend(stage.explicit.iter().flatten());
+    }
+    for value in &reduced.initial {
+        if let InitialValue::Given(e) | InitialValue::Constraint(e) = value {
+            roots.push(*e);
+        }
+    }
+    let mut masses: Vec<u32> = roots
+        .iter()
+        .flat_map(|&r| arena.free_symbols(r))
+        .filter_map(|s| match s {
+            Symbol::Mass(i) => Some(i),
+            _ => None,
+        })
+        .collect();
+    masses.sort_unstable();
+    masses.dedup();
+    masses
+}

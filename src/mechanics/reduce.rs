@@ -1,0 +1,139 @@
+//! The reduced system (7) (SPEC §1.4): `q^(u) = X(t, q, …, q^(u−1))`,
+//! `u = max(2, k)`.
+//!
+//! - k ≤ 2: (4) holds the independent `q_i''`; the dependent `q_d''` follow
+//!   from the constraints (`Dφ_d` for k = 1, `φ_d` for k = 2).
+//! - k ≥ 3: (4) is differentiated k−2 times (true time derivative: masses
+//!   replaced by their laws first) to reach `q_i^(k)`; the dependent
+//!   `q_d^(k) = φ_d`. The lower derivatives of (4) fix the independent
+//!   `q_i^(2..k−1)` at `t0` (the consistency stages).
+
+use super::reduced::{Consistency, Highest};
+use super::singular::check_mass_matrix;
+use super::solve::System;
+use super::star::Elimination;
+use super::symbols::Symbolic;
+use super::tidy::tidy;
+use crate::diagnostic::Diagnostic;
+use crate::ir::{Arena, ExprId, Symbol};
+use crate::span::Span;
+use std::collections::HashMap;
+
+#[derive(Debug, Clone)]
+pub struct Reduction {
+    pub highest: Highest,
+    pub consistency: Vec<Consistency>,
+}
+
+/// Reduces the rows of (4) (`lhs − rhs`, masses divided out where they
+/// factor) to the highest derivatives.
+pub fn reduce(
+    arena: &mut Arena,
+    model: &Symbolic,
+    elimination: &mut Elimination,
+    rows: &[ExprId],
+    lagrangian: Span,
+) -> Result<Reduction, Diagnostic> {
+    let (k, u) = (model.k, model.u());
+    let masses = model.laws.len();
+    let defaults = &model.param_defaults;
+    // For k ≥ 3 the rows are differentiated in time: D must see the masses
+    // vary, so they become their laws.
+    let rows: Vec<ExprId> = if k >= 3 {
+        let laws: HashMap<Symbol, ExprId> = model
+            .laws
+            .iter()
+            .enumerate()
+            .map(|(i, &law)| (Symbol::Mass(i as u32), law))
+            .collect();
+        rows.iter().map(|&r| arena.subst(r, &laws)).collect()
+    } else {
+        rows.to_vec()
+    };
+    let top_rows: Vec<ExprId> = rows
+        .iter()
+        .map(|&r| {
+            let d = arena.total_derivative_n(r, u - 2);
+            elimination.eliminate(arena, d)
+        })
+        .collect();
+    let mut system = System::new(arena, top_rows, model.independent_jets(u), defaults, masses);
+    check_mass_matrix(
+        arena,
+        &system.jacobian,
+        &system.unknowns,
+        defaults,
+        masses,
+        lagrangian,
+    )?;
+    system.solve_symbolically(arena);
+    let dependent: Vec<(u32, ExprId)> = model
+        .dependent()
+        .into_iter()
+        .map(|d| (d, elimination.image(arena, d, u)))
+        .collect();
+    let highest = match &system.explicit {
+        Some(solution) => {
+            let by_unknown: HashMap<Symbol, ExprId> = system
+                .unknowns
+                .iter()
+                .copied()
+                .zip(solution.iter().copied())
+                .collect();
+            let n = model.independent.len() + dependent.len();
+            let mut exprs = Vec::with_capacity(n);
+            for coord in 0..n as u32 {
+                let z = Symbol::Jet { coord, order: u };
+                let e = match by_unknown.get(&z) {
+                    Some(&e) => e,
+                    None => match dependent.iter().find(|&&(d, _)| d == coord) {
+                        Some(&(_, image)) => arena.subst(image, &by_unknown),
+                        None => arena.constant(f64::NAN),
+                    },
+                };
+                exprs.push(tidy(arena, e));
+            }
+            Highest::Explicit(exprs)
+        }
+        None => Highest::Implicit {
+            unknowns: system.unknowns.clone(),
+            residual: system.rows.clone(),
+            jacobian: system.jacobian.clone(),
+            linear: system.linear,
+            dependent,
+        },
+    };
+    let consistency = (2..k)
+        .map(|order| {
+            let stage_rows: Vec<ExprId> = rows
+                .iter()
+                .map(|&r| {
+                    let d = arena.total_derivative_n(r, order - 2);
+                    elimination.eliminate(arena, d)
+                })
+                .collect();
+            let mut stage = System::new(
+                arena,
+                stage_rows,
+                model.independent_jets(order),
+                defaults,
+                masses,
+            );
+            stage.solve_symbolically(arena);
+            let explicit = stage
+                .explicit
+                .map(|sol| sol.into_iter().map(|e| tidy(arena, e)).collect());
+            Consistency {
+                unknowns: stage.unknowns,
+                residual: stage.rows,
+                jacobian: stage.jacobian,
+                linear: stage.linear,
+                explicit,
+            }
+        })
+        .collect();
+    Ok(Reduction {
+        highest,
+        consistency,
+    })
+}

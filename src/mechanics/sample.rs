@@ -1,0 +1,213 @@
+//! Random points of the jet space and evaluation with a rounding scale:
+//! the numeric checks of the mechanics (cross-check, homogeneity in the
+//! masses, affinity, singular mass matrix) all compare values at such points.
+
+use crate::ir::{apply_func, pow_value, Arena, ExprId, Func, Node, Symbol};
+use std::collections::HashMap;
+
+/// A small deterministic PRNG (SplitMix64): the checks must give the same
+/// verdict on every run.
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Rng {
+        Rng(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Values for every symbol: `t`, params near their defaults, positive
+/// masses, jets in a moderate range.
+#[derive(Debug, Clone)]
+pub struct SamplePoint {
+    pub t: f64,
+    pub params: Vec<f64>,
+    pub masses: Vec<f64>,
+    jets: HashMap<(u32, u32), f64>,
+    jet_seed: u64,
+}
+
+impl SamplePoint {
+    /// A random point. Params vary by ±25 % around their defaults (a zero
+    /// default by ±0.25), so that a formula that only works for the
+    /// defaults is not mistaken for an identity.
+    pub fn random(rng: &mut Rng, defaults: &[f64], masses: usize) -> SamplePoint {
+        let t = rng.range(0.0, 2.0);
+        let params = defaults
+            .iter()
+            .map(|&d| {
+                let u = rng.range(-0.25, 0.25);
+                if d == 0.0 {
+                    u
+                } else {
+                    d * (1.0 + u)
+                }
+            })
+            .collect();
+        let masses = (0..masses).map(|_| rng.range(0.5, 2.0)).collect();
+        SamplePoint {
+            t,
+            params,
+            masses,
+            jets: HashMap::new(),
+            jet_seed: rng.next_u64(),
+        }
+    }
+
+    /// Overrides the value of one jet variable.
+    pub fn set_jet(&mut self, coord: u32, order: u32, value: f64) {
+        self.jets.insert((coord, order), value);
+    }
+
+    /// The value of a symbol. Jets not set explicitly get a value in
+    /// `[-1, 1)` that depends only on the point and the jet.
+    pub fn value(&self, s: Symbol) -> f64 {
+        match s {
+            Symbol::Time => self.t,
+            Symbol::Param(i) => self.params.get(i as usize).copied().unwrap_or(f64::NAN),
+            Symbol::Mass(i) => self.masses.get(i as usize).copied().unwrap_or(f64::NAN),
+            Symbol::Jet { coord, order } => match self.jets.get(&(coord, order)) {
+                Some(&v) => v,
+                None => {
+                    let key = (u64::from(coord) << 32) | u64::from(order);
+                    let mut rng = Rng::new(self.jet_seed ^ key.wrapping_mul(0x2545_f491_4f6c_dd1d));
+                    rng.range(-1.0, 1.0)
+                }
+            },
+            Symbol::Aux(_) => f64::NAN,
+        }
+    }
+
+    /// The same point with every mass multiplied by `factor`.
+    pub fn masses_scaled(&self, factor: f64) -> SamplePoint {
+        let mut p = self.clone();
+        for m in &mut p.masses {
+            *m *= factor;
+        }
+        p
+    }
+}
+
+/// A value and its rounding scale: `|error| ≲ ε · scale · (a few)` when the
+/// expression is evaluated in floating point. Sums add the scales of their
+/// terms, so a value that cancels keeps the scale of what cancelled.
+#[derive(Debug, Clone, Copy)]
+pub struct Scaled {
+    pub value: f64,
+    pub scale: f64,
+}
+
+impl Scaled {
+    /// Whether two values agree to `tol` relative to their rounding scales.
+    pub fn agrees(self, other: Scaled, tol: f64) -> bool {
+        (self.value - other.value).abs() <= tol * (self.scale + other.scale)
+    }
+
+    pub fn is_finite(self) -> bool {
+        self.value.is_finite() && self.scale.is_finite()
+    }
+}
+
+/// Evaluates `roots` with their rounding scales (first-order propagation:
+/// `|f'(a)| · scale(a)` through functions and powers).
+pub fn eval_scaled(arena: &Arena, roots: &[ExprId], env: &dyn Fn(Symbol) -> f64) -> Vec<Scaled> {
+    let mut memo: HashMap<ExprId, Scaled> = HashMap::new();
+    for e in arena.reachable(roots) {
+        let get = |memo: &HashMap<ExprId, Scaled>, c: &ExprId| memo[c];
+        let s = match arena.node(e) {
+            Node::Const(v) => Scaled {
+                value: *v,
+                scale: v.abs(),
+            },
+            Node::Sym(s) => {
+                let v = env(*s);
+                Scaled {
+                    value: v,
+                    scale: v.abs(),
+                }
+            }
+            Node::Add(ts) => ts.iter().fold(
+                Scaled {
+                    value: 0.0,
+                    scale: 0.0,
+                },
+                |acc, t| {
+                    let x = get(&memo, t);
+                    Scaled {
+                        value: acc.value + x.value,
+                        scale: acc.scale + x.scale,
+                    }
+                },
+            ),
+            Node::Mul(fs) => fs.iter().fold(
+                Scaled {
+                    value: 1.0,
+                    scale: 1.0,
+                },
+                |acc, f| {
+                    let x = get(&memo, f);
+                    Scaled {
+                        value: acc.value * x.value,
+                        scale: acc.scale * x.scale,
+                    }
+                },
+            ),
+            Node::Pow(a, b) => {
+                let (a, b) = (get(&memo, a), get(&memo, b));
+                let value = pow_value(a.value, b.value);
+                // d(a^b) = b a^(b-1) da + a^b ln|a| db
+                let through_base = (b.value * pow_value(a.value, b.value - 1.0)).abs() * a.scale;
+                let through_exp = if b.scale == 0.0 {
+                    0.0
+                } else {
+                    (value * a.value.abs().ln()).abs() * b.scale
+                };
+                Scaled {
+                    value,
+                    scale: value.abs() + through_base + through_exp,
+                }
+            }
+            Node::Func(f, a) => {
+                let a = get(&memo, a);
+                let value = apply_func(*f, a.value);
+                Scaled {
+                    value,
+                    scale: value.abs() + slope(*f, a.value).abs() * a.scale,
+                }
+            }
+        };
+        memo.insert(e, s);
+    }
+    roots.iter().map(|r| memo[r]).collect()
+}
+
+/// `f'(x)`.
+fn slope(f: Func, x: f64) -> f64 {
+    match f {
+        Func::Sin => x.cos(),
+        Func::Cos => -x.sin(),
+        Func::Tan => 1.0 + x.tan().powi(2),
+        Func::Asin => 1.0 / (1.0 - x * x).sqrt(),
+        Func::Acos => -1.0 / (1.0 - x * x).sqrt(),
+        Func::Atan => 1.0 / (1.0 + x * x),
+        Func::Sinh => x.cosh(),
+        Func::Cosh => x.sinh(),
+        Func::Tanh => 1.0 - x.tanh().powi(2),
+        Func::Exp => x.exp(),
+        Func::Ln => 1.0 / x,
+        Func::Sqrt => 0.5 / x.sqrt(),
+    }
+}

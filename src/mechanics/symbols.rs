@@ -1,0 +1,120 @@
+//! The checked model in symbols: the Lagrangian, the mass laws and the
+//! constraints lowered into one arena, with the coordinates split into
+//! independent and dependent ones.
+
+use crate::check::model::Model;
+use crate::diagnostic::{codes, Diagnostic};
+use crate::ir::{try_lower, Arena, ExprId, Symbol};
+use crate::syntax::ast::Expr;
+use std::collections::HashMap;
+
+/// The model's symbolic pieces.
+#[derive(Debug, Clone)]
+pub struct Symbolic {
+    pub lagrangian: ExprId,
+    /// Mass law `i` as an expression of `t` and params.
+    pub laws: Vec<ExprId>,
+    /// The constraint order used by equation (4): the model's `k`, or 1 for
+    /// a holonomic model (then every coordinate is independent, s = n).
+    pub k: u32,
+    pub independent: Vec<u32>,
+    /// `(d, φ_d)`: `q_d^(k) = φ_d`, with every mass symbol replaced by its
+    /// law, because constraints are differentiated with the true time
+    /// derivative (only the Lagrangian freezes masses).
+    pub constraints: Vec<(u32, ExprId)>,
+    pub param_defaults: Vec<f64>,
+}
+
+/// Lowers a checked expression; a name that does not lower is an internal
+/// error (the checker rules it out), reported rather than panicked on.
+pub fn lower_checked(arena: &mut Arena, expr: &Expr, model: &Model) -> Result<ExprId, Diagnostic> {
+    try_lower(arena, expr, model).map_err(|error| {
+        Diagnostic::error(
+            codes::NAME_NOT_ALLOWED,
+            format!(
+                "internal error: `{}{}` cannot be used in the mechanics",
+                error.name,
+                "'".repeat(error.primes as usize)
+            ),
+        )
+        .with_primary(error.span, "this name")
+    })
+}
+
+impl Symbolic {
+    pub fn lower(arena: &mut Arena, model: &Model) -> Result<Symbolic, Vec<Diagnostic>> {
+        let mut errors = Vec::new();
+        let mut lower = |arena: &mut Arena, expr: &Expr| match lower_checked(arena, expr, model) {
+            Ok(e) => e,
+            Err(d) => {
+                errors.push(d);
+                arena.zero()
+            }
+        };
+        let lagrangian = lower(arena, &model.lagrangian);
+        let laws: Vec<ExprId> = model.masses.iter().map(|m| lower(arena, &m.law)).collect();
+        let masses_to_laws: HashMap<Symbol, ExprId> = laws
+            .iter()
+            .enumerate()
+            .map(|(i, &law)| (Symbol::Mass(i as u32), law))
+            .collect();
+        let constraints = model
+            .constraints
+            .iter()
+            .map(|c| {
+                let phi = lower(arena, &c.rhs);
+                (c.coord as u32, arena.subst(phi, &masses_to_laws))
+            })
+            .collect();
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        if let Some(d) = lagrangian_order(arena, model, lagrangian) {
+            return Err(vec![d]);
+        }
+        Ok(Symbolic {
+            lagrangian,
+            laws,
+            k: model.constraint_order.unwrap_or(1),
+            independent: model.independent().iter().map(|&i| i as u32).collect(),
+            constraints,
+            param_defaults: model.params.iter().map(|p| p.default).collect(),
+        })
+    }
+
+    pub fn dependent(&self) -> Vec<u32> {
+        self.constraints.iter().map(|&(d, _)| d).collect()
+    }
+
+    /// `u = max(2, k)`: the order of the reduced system.
+    pub fn u(&self) -> u32 {
+        self.k.max(2)
+    }
+
+    /// `q_j^(order)` for every independent `j`.
+    pub fn independent_jets(&self, order: u32) -> Vec<Symbol> {
+        self.independent
+            .iter()
+            .map(|&coord| Symbol::Jet { coord, order })
+            .collect()
+    }
+}
+
+/// Equation (4) is derived for Lagrangians of the first order only: a
+/// derivative of order ≥ 2 would need the higher-order Euler operator. The
+/// checker already rejects it; this keeps the mechanics honest on its own.
+fn lagrangian_order(arena: &Arena, model: &Model, lagrangian: ExprId) -> Option<Diagnostic> {
+    let (coord, order) = (0..model.coords.len() as u32)
+        .filter_map(|j| arena.max_jet_order(lagrangian, j).map(|r| (j, r)))
+        .find(|&(_, r)| r >= 2)?;
+    let name = arena.symbol_name(Symbol::Jet { coord, order });
+    Some(
+        Diagnostic::error(
+            codes::DERIVATIVE_ORDER_NOT_ALLOWED,
+            format!("the Lagrangian holds `{name}`, a derivative of order {order}"),
+        )
+        .with_primary(model.lagrangian.span, "this Lagrangian")
+        .with_note("equations (4) are derived for Lagrangians of coordinates and velocities")
+        .with_help("write the Lagrangian with first derivatives only"),
+    )
+}

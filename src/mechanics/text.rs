@@ -1,0 +1,259 @@
+//! The derivation as text a mechanician reads (`lagc derive`) and as a LaTeX
+//! `align*` block: the model's sizes, the constraints, equations (4), the
+//! masses divided out, the reduced system (7), the state and its initial
+//! values.
+
+use super::reduced::{Highest, InitialValue};
+use super::tidy::tidy_terms;
+use super::Derivation;
+use crate::ir::{Arena, ExprId, Symbol};
+use std::fmt::Write;
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Style {
+    Text,
+    Latex,
+}
+
+/// `e` written as its collected terms, highest derivatives first.
+fn sum(arena: &mut Arena, e: ExprId, style: Style) -> String {
+    let terms = tidy_terms(arena, e);
+    let mut out = String::new();
+    for (i, &t) in terms.iter().enumerate() {
+        let s = match style {
+            Style::Text => arena.display(t).to_string(),
+            Style::Latex => arena.latex(t),
+        };
+        match (i, s.strip_prefix('-')) {
+            (0, _) => out.push_str(&s),
+            (_, Some(rest)) => {
+                out.push_str(" - ");
+                out.push_str(rest);
+            }
+            (_, None) => {
+                out.push_str(" + ");
+                out.push_str(&s);
+            }
+        }
+    }
+    out
+}
+
+fn name(arena: &Arena, s: Symbol, style: Style) -> String {
+    match style {
+        Style::Text => arena.symbol_name(s),
+        Style::Latex => {
+            let e = arena_symbol_latex(arena, s);
+            e.unwrap_or_else(|| arena.symbol_name(s))
+        }
+    }
+}
+
+/// The LaTeX name of a symbol, through a throwaway copy of the arena.
+fn arena_symbol_latex(arena: &Arena, s: Symbol) -> Option<String> {
+    let mut copy = Arena::new(arena.names().clone());
+    let e = copy.symbol(s);
+    Some(copy.latex(e))
+}
+
+fn jet(coord: u32, order: u32) -> Symbol {
+    Symbol::Jet { coord, order }
+}
+
+impl Derivation {
+    /// The derivation as plain text.
+    pub fn text(&self) -> String {
+        let mut arena = self.arena.clone();
+        let a = &mut arena;
+        let mut out = String::new();
+        let coords: Vec<String> = (0..self.coordinates as u32)
+            .map(|j| a.symbol_name(jet(j, 0)))
+            .collect();
+        let independent: Vec<String> = self
+            .independent
+            .iter()
+            .map(|&i| coords[i as usize].clone())
+            .collect();
+        let order = match self.constraint_order {
+            Some(k) => format!("constraint order k = {k}"),
+            None => "no constraints (holonomic, (4) with k = 1)".to_string(),
+        };
+        let _ = writeln!(
+            out,
+            "n = {} ({}), s = {} independent ({}), {order}, u = {}",
+            self.coordinates,
+            coords.join(", "),
+            self.independent.len(),
+            independent.join(", "),
+            self.reduced.order
+        );
+        if !self.constraints.is_empty() {
+            out.push_str("\nconstraints:\n");
+            for &(d, phi) in &self.constraints {
+                let lhs = a.symbol_name(jet(d, self.k));
+                let rhs = sum(a, phi, Style::Text);
+                let _ = writeln!(out, "  {lhs} = {rhs}");
+            }
+        }
+        out.push_str("\nequations (4):\n");
+        for eq in &self.equations {
+            let lhs = sum(a, eq.lhs, Style::Text);
+            let rhs = sum(a, eq.rhs, Style::Text);
+            let _ = writeln!(out, "  {}: {lhs} = {rhs}", coords[eq.coord as usize]);
+        }
+        let divided: Vec<String> = self
+            .equations
+            .iter()
+            .zip(&self.divided_out)
+            .filter_map(|(eq, m)| {
+                m.map(|m| {
+                    format!(
+                        "{} from the equation of {}",
+                        a.symbol_name(Symbol::Mass(m)),
+                        coords[eq.coord as usize]
+                    )
+                })
+            })
+            .collect();
+        if !divided.is_empty() {
+            let _ = writeln!(out, "\nmasses divided out: {}", divided.join("; "));
+        }
+        self.write_reduced(a, &mut out, Style::Text);
+        let state: Vec<String> = self
+            .reduced
+            .state
+            .iter()
+            .map(|&s| a.symbol_name(s))
+            .collect();
+        let _ = writeln!(out, "\nstate x = ({})", state.join(", "));
+        if !self.reduced.mass_laws.is_empty() {
+            out.push_str("mass laws still in the system:\n");
+            for &(i, law) in &self.reduced.mass_laws {
+                let _ = writeln!(
+                    out,
+                    "  {} = {}",
+                    a.symbol_name(Symbol::Mass(i)),
+                    a.display(law)
+                );
+            }
+        }
+        out.push_str("initial values at t0:\n");
+        for (&s, value) in self.reduced.state.iter().zip(&self.reduced.initial) {
+            let what = match value {
+                InitialValue::Given(e) => format!("{}", a.display(*e)),
+                InitialValue::Constraint(e) => {
+                    format!("{}  (fixed by the constraints)", sum(a, *e, Style::Text))
+                }
+                InitialValue::Solved => "solved from (4) at t0".to_string(),
+            };
+            let _ = writeln!(out, "  {} = {what}", a.symbol_name(s));
+        }
+        for stage in &self.reduced.consistency {
+            let names: Vec<String> = stage.unknowns.iter().map(|&z| a.symbol_name(z)).collect();
+            let _ = writeln!(out, "consistency at t0 for {}:", names.join(", "));
+            match &stage.explicit {
+                Some(solution) => {
+                    for (&z, &e) in stage.unknowns.iter().zip(solution) {
+                        let rhs = sum(a, e, Style::Text);
+                        let _ = writeln!(out, "  {} = {rhs}", a.symbol_name(z));
+                    }
+                }
+                None => {
+                    for &r in &stage.residual {
+                        let rhs = sum(a, r, Style::Text);
+                        let _ = writeln!(out, "  0 = {rhs}");
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The equations as a LaTeX `align*` block.
+    pub fn latex(&self) -> String {
+        let mut arena = self.arena.clone();
+        let a = &mut arena;
+        let mut out = String::from("\\begin{align*}\n");
+        for &(d, phi) in &self.constraints {
+            let lhs = name(a, jet(d, self.k), Style::Latex);
+            let rhs = sum(a, phi, Style::Latex);
+            let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{constraint}} \\\\");
+        }
+        for eq in &self.equations {
+            let lhs = sum(a, eq.lhs, Style::Latex);
+            let rhs = sum(a, eq.rhs, Style::Latex);
+            let q = name(a, jet(eq.coord, 0), Style::Latex);
+            let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{(4) for }} {q} \\\\");
+        }
+        self.write_reduced(a, &mut out, Style::Latex);
+        out.push_str("\\end{align*}\n");
+        out
+    }
+
+    fn write_reduced(&self, a: &mut Arena, out: &mut String, style: Style) {
+        let u = self.reduced.order;
+        match (&self.reduced.highest, style) {
+            (Highest::Explicit(exprs), Style::Text) => {
+                out.push_str("\nreduced system (7), explicit:\n");
+                for (j, &e) in exprs.iter().enumerate() {
+                    let rhs = sum(a, e, style);
+                    let _ = writeln!(out, "  {} = {rhs}", a.symbol_name(jet(j as u32, u)));
+                }
+            }
+            (Highest::Explicit(exprs), Style::Latex) => {
+                for (j, &e) in exprs.iter().enumerate() {
+                    let rhs = sum(a, e, style);
+                    let lhs = name(a, jet(j as u32, u), style);
+                    let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{(7)}} \\\\");
+                }
+            }
+            (
+                Highest::Implicit {
+                    unknowns,
+                    residual,
+                    linear,
+                    dependent,
+                    ..
+                },
+                _,
+            ) => {
+                let names: Vec<String> = unknowns.iter().map(|&z| name(a, z, style)).collect();
+                let how = if *linear {
+                    "one linear solve"
+                } else {
+                    "Newton with the symbolic Jacobian"
+                };
+                if style == Style::Text {
+                    let _ = writeln!(
+                        out,
+                        "\nreduced system (7), implicit in {} ({how}):",
+                        names.join(", ")
+                    );
+                }
+                for &r in residual {
+                    let rhs = sum(a, r, style);
+                    match style {
+                        Style::Text => {
+                            let _ = writeln!(out, "  0 = {rhs}");
+                        }
+                        Style::Latex => {
+                            let _ = writeln!(out, "  0 &= {rhs} && \\text{{(7), {how}}} \\\\");
+                        }
+                    }
+                }
+                for &(d, e) in dependent {
+                    let rhs = sum(a, e, style);
+                    let lhs = name(a, jet(d, u), style);
+                    match style {
+                        Style::Text => {
+                            let _ = writeln!(out, "  {lhs} = {rhs}");
+                        }
+                        Style::Latex => {
+                            let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{(7)}} \\\\");
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

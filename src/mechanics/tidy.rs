@@ -1,0 +1,255 @@
+//! Readable forms of equations: collect the jets (`c₁·q1'' + c₂·q1' + …`)
+//! and write each coefficient in the smallest of a few equal forms
+//! (distributed, with common factors pulled out, with fractions over a
+//! common denominator). Every rewrite is an algebraic identity; the
+//! canonical constructors do the cancelling.
+
+use crate::ir::{Arena, ExprId, Node, Symbol};
+use std::collections::{BTreeSet, HashMap};
+
+/// Sums with more terms than this are left alone by the fraction merging
+/// (it tries pairs of terms).
+const MERGE_MAX_TERMS: usize = 12;
+/// How deep `distribute` multiplies out nested products of sums.
+const DISTRIBUTE_DEPTH: u32 = 2;
+
+/// `e` as a sum of collected terms, the highest derivatives first and the
+/// jet-free term last. Their sum equals `e`.
+pub fn tidy_terms(arena: &mut Arena, e: ExprId) -> Vec<ExprId> {
+    let vars = affine_jets(arena, e);
+    let zero = arena.zero();
+    let at_zero: HashMap<Symbol, ExprId> = vars.iter().map(|&v| (v, zero)).collect();
+    let mut terms = Vec::new();
+    for &v in &vars {
+        let c = arena.diff(e, v);
+        if arena.is_zero(c) {
+            continue;
+        }
+        let c = simplify(arena, c);
+        let x = arena.symbol(v);
+        terms.push(arena.mul(&[c, x]));
+    }
+    let free = arena.subst(e, &at_zero);
+    if !arena.is_zero(free) || terms.is_empty() {
+        terms.push(simplify(arena, free));
+    }
+    terms
+}
+
+/// `e` rewritten as the sum of [`tidy_terms`].
+pub fn tidy(arena: &mut Arena, e: ExprId) -> ExprId {
+    let terms = tidy_terms(arena, e);
+    arena.add(&terms)
+}
+
+/// The jets of `e` in which `e` is affine (no coefficient depends on any of
+/// them), preferring the highest derivatives; ordered by order descending,
+/// then coordinate.
+fn affine_jets(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
+    let mut vars: Vec<Symbol> = arena
+        .free_symbols(e)
+        .into_iter()
+        .filter(|s| matches!(s, Symbol::Jet { .. }))
+        .collect();
+    vars.sort_by_key(|s| match *s {
+        Symbol::Jet { coord, order } => (std::cmp::Reverse(order), coord),
+        _ => (std::cmp::Reverse(0), 0),
+    });
+    loop {
+        // (position of a var to drop): a var whose coefficient depends on
+        // itself, else the lower-priority end of a cross dependence.
+        let mut drop: Option<usize> = None;
+        for (a, &v) in vars.iter().enumerate() {
+            let c = arena.diff(e, v);
+            for (b, &w) in vars.iter().enumerate() {
+                if arena.depends_on(c, w) {
+                    let candidate = a.max(b);
+                    drop = Some(drop.map_or(candidate, |d: usize| d.max(candidate)));
+                }
+            }
+        }
+        match drop {
+            Some(i) => {
+                vars.remove(i);
+            }
+            None => return vars,
+        }
+    }
+}
+
+/// The smallest (by operation count) of a few equal forms of `e`; on a tie
+/// the form with common factors pulled out wins (`M*(1 + t^2)`).
+pub fn simplify(arena: &mut Arena, e: ExprId) -> ExprId {
+    let distributed = distribute(arena, e, DISTRIBUTE_DEPTH);
+    let merged = merge_fractions(arena, distributed);
+    let candidates = [
+        factor_common(arena, merged),
+        factor_common(arena, e),
+        merged,
+        distributed,
+        merge_fractions(arena, e),
+        e,
+    ];
+    let mut best = e;
+    let mut best_cost = usize::MAX;
+    for c in candidates {
+        let cost = arena.op_count(&[c]);
+        if cost < best_cost {
+            best = c;
+            best_cost = cost;
+        }
+    }
+    best
+}
+
+/// Multiplies out products of sums, `depth` levels deep.
+fn distribute(arena: &mut Arena, e: ExprId, depth: u32) -> ExprId {
+    if depth == 0 {
+        return e;
+    }
+    match arena.node(e).clone() {
+        Node::Add(ts) => {
+            let ts: Vec<ExprId> = ts.iter().map(|&t| distribute(arena, t, depth)).collect();
+            arena.add(&ts)
+        }
+        Node::Mul(fs) => {
+            let Some(at) = fs
+                .iter()
+                .position(|&f| matches!(arena.node(f), Node::Add(_)))
+            else {
+                return e;
+            };
+            let rest: Vec<ExprId> = fs
+                .iter()
+                .enumerate()
+                .filter(|&(i, _)| i != at)
+                .map(|(_, &f)| f)
+                .collect();
+            let sum = arena.children(fs[at]);
+            let terms: Vec<ExprId> = sum
+                .into_iter()
+                .map(|t| {
+                    let mut factors = rest.clone();
+                    factors.push(t);
+                    let product = arena.mul(&factors);
+                    distribute(arena, product, depth - 1)
+                })
+                .collect();
+            arena.add(&terms)
+        }
+        _ => e,
+    }
+}
+
+/// `(base, exponent)` factors of a term with numeric exponents.
+fn factors(arena: &Arena, term: ExprId) -> Vec<(ExprId, f64)> {
+    let as_factor = |f: ExprId| match arena.node(f) {
+        Node::Pow(b, x) => arena.as_const(*x).map(|x| (*b, x)),
+        Node::Const(_) => None,
+        _ => Some((f, 1.0)),
+    };
+    match arena.node(term) {
+        Node::Mul(fs) => fs.iter().filter_map(|&f| as_factor(f)).collect(),
+        _ => as_factor(term).into_iter().collect(),
+    }
+}
+
+/// Pulls the factors common to every term of a sum out of it:
+/// `M + M*t^2 → M*(1 + t^2)`.
+fn factor_common(arena: &mut Arena, e: ExprId) -> ExprId {
+    let Node::Add(ts) = arena.node(e).clone() else {
+        return e;
+    };
+    let lists: Vec<Vec<(ExprId, f64)>> = ts.iter().map(|&t| factors(arena, t)).collect();
+    let mut common: Vec<(ExprId, f64)> = Vec::new();
+    let bases: BTreeSet<ExprId> = lists[0].iter().map(|&(b, _)| b).collect();
+    for base in bases {
+        let exps: Option<Vec<f64>> = lists
+            .iter()
+            .map(|l| l.iter().find(|&&(b, _)| b == base).map(|&(_, x)| x))
+            .collect();
+        let Some(exps) = exps else { continue };
+        if exps.iter().all(|&x| x > 0.0) {
+            common.push((base, exps.iter().copied().fold(f64::INFINITY, f64::min)));
+        } else if exps.iter().all(|&x| x < 0.0) {
+            common.push((base, exps.iter().copied().fold(f64::NEG_INFINITY, f64::max)));
+        }
+    }
+    if common.is_empty() {
+        return e;
+    }
+    let mut outside = Vec::new();
+    let mut inverse = Vec::new();
+    for (b, x) in common {
+        let xe = arena.constant(x);
+        outside.push(arena.pow(b, xe));
+        let nx = arena.constant(-x);
+        inverse.push(arena.pow(b, nx));
+    }
+    let inner: Vec<ExprId> = ts
+        .iter()
+        .map(|&t| {
+            let mut fs = inverse.clone();
+            fs.push(t);
+            arena.mul(&fs)
+        })
+        .collect();
+    let inner = arena.add(&inner);
+    outside.push(inner);
+    arena.mul(&outside)
+}
+
+/// Brings pairs of terms over a common denominator when that makes the sum
+/// smaller: `1 − t^2/(1 + t^2) → 1/(1 + t^2)`.
+fn merge_fractions(arena: &mut Arena, e: ExprId) -> ExprId {
+    let Node::Add(ts) = arena.node(e).clone() else {
+        return e;
+    };
+    if ts.len() > MERGE_MAX_TERMS {
+        return e;
+    }
+    let mut terms: Vec<ExprId> = ts.to_vec();
+    let mut cost = arena.op_count(&[e]);
+    'improve: loop {
+        for a in 0..terms.len() {
+            for denominator in denominators(arena, terms[a]) {
+                for b in 0..terms.len() {
+                    if a == b {
+                        continue;
+                    }
+                    let cleared_a = arena.mul(&[terms[a], denominator]);
+                    let cleared_b = arena.mul(&[terms[b], denominator]);
+                    let cleared_b = distribute(arena, cleared_b, 1);
+                    let numerator = arena.add(&[cleared_a, cleared_b]);
+                    let numerator = factor_common(arena, numerator);
+                    let inverse = arena.powi(denominator, -1);
+                    let merged = arena.mul(&[numerator, inverse]);
+                    let mut next: Vec<ExprId> = terms
+                        .iter()
+                        .enumerate()
+                        .filter(|&(i, _)| i != a && i != b)
+                        .map(|(_, &t)| t)
+                        .collect();
+                    next.push(merged);
+                    let sum = arena.add(&next);
+                    let next_cost = arena.op_count(&[sum]);
+                    if next_cost < cost {
+                        cost = next_cost;
+                        terms = next;
+                        continue 'improve;
+                    }
+                }
+            }
+        }
+        return arena.add(&terms);
+    }
+}
+
+/// The sums a term divides by (`x` for a factor `x^-1`, `x` a sum).
+fn denominators(arena: &Arena, term: ExprId) -> Vec<ExprId> {
+    factors(arena, term)
+        .into_iter()
+        .filter(|&(b, x)| x == -1.0 && matches!(arena.node(b), Node::Add(_)))
+        .map(|(b, _)| b)
+        .collect()
+}
