@@ -13,6 +13,7 @@
 
 pub mod check;
 pub mod diagnostic;
+pub mod field;
 pub mod frontend;
 pub mod ir;
 pub mod mechanics;

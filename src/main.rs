@@ -124,7 +124,13 @@ fn derive(args: &DeriveArgs) -> ExitCode {
         match derived {
             Ok(mut derivation) => {
                 match args.format {
-                    Format::Text => print!("{}", derivation.text()),
+                    Format::Text => {
+                        print!("{}", derivation.text());
+                        let reduced = derivation.reduced.clone();
+                        let mut arena = derivation.arena.clone();
+                        let field = lagc::field::field_system(&mut arena, &reduced);
+                        print!("{}", field.text(&arena, &reduced.state));
+                    }
                     Format::Latex => print!("{}", derivation.latex()),
                 }
                 match lagc::mechanics::cross_check(&mut derivation) {

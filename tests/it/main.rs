@@ -1,4 +1,5 @@
 //! The one integration-test binary.
 
+mod field;
 mod ir;
 mod runtime;
