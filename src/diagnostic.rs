@@ -208,4 +208,6 @@ pub mod codes {
     /// linear ansatz (10) is not a complete solution, and the generated
     /// crate uses the local field method.
     pub const LOCAL_FIELD_METHOD: &str = "N0001";
+    /// An internal error of the code generator (a bug, never the model's).
+    pub const CODE_GENERATION: &str = "E0900";
 }
