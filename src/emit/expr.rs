@@ -131,7 +131,7 @@ impl Writer<'_> {
         }
         let receiver = wrap(self.expr(base), Prec::Postfix);
         match self.arena.as_const(exp) {
-            Some(v) if v == 0.5 => (quote! { #receiver.sqrt() }, Prec::Postfix),
+            Some(0.5) => (quote! { #receiver.sqrt() }, Prec::Postfix),
             Some(v) if v.fract() == 0.0 && v.abs() <= f64::from(i32::MAX) => {
                 let n = proc_macro2::Literal::i32_unsuffixed((v.abs()) as i32);
                 if v < 0.0 {

@@ -48,7 +48,9 @@ pub fn newton() -> TokenStream {
                 if !z.iter().all(|v| v.is_finite()) {
                     break;
                 }
-                if step.norm() <= 4.0 * f64::EPSILON * z.norm().max(1.0) || (iteration > 0 && norm == 0.0) {
+                // Quadratic convergence: after a step of 1e-12 (relative)
+                // the error left is at rounding level.
+                if step.norm() <= 1e-12 * z.norm().max(1.0) || (iteration > 0 && norm == 0.0) {
                     return Ok(z);
                 }
             }

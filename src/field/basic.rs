@@ -118,9 +118,9 @@ pub fn field_system(arena: &mut Arena, reduced: &ReducedSystem) -> FieldSystem {
     let g = arena.add(&g_terms);
     // (9): ∂Φ/∂t + G with ∂Φ/∂t = f_1' + Σ_A f_A' x_A.
     let mut lhs_terms = vec![arena.symbol(field.coefficient_rates[0])];
-    for a in 1..n {
-        let rate = arena.symbol(field.coefficient_rates[a]);
-        let x_a = arena.symbol(state[a]);
+    for (&rate, &x_a) in field.coefficient_rates.iter().zip(state).skip(1) {
+        let rate = arena.symbol(rate);
+        let x_a = arena.symbol(x_a);
         lhs_terms.push(arena.mul(&[rate, x_a]));
     }
     lhs_terms.push(g);

@@ -1,5 +1,6 @@
 //! The one integration-test binary.
 
 mod field;
+mod generated;
 mod ir;
 mod runtime;
