@@ -156,6 +156,14 @@ impl Code {
         if self.prelude.is_empty() && self.lets.is_empty() && !self.uses_params {
             return root.clone();
         }
+        // A lone param: `params.x0`, not a block binding and returning it
+        // (clippy's `let_and_return`).
+        if self.lets.is_empty() && self.prelude.len() == 1 && !self.uses_time {
+            let binding = self.prelude[0].to_string();
+            if binding == format!("let {root} = p . {root} ;") {
+                return quote! { #params.#root };
+            }
+        }
         let statements = self.statements(params);
         quote! { { #statements #root } }
     }

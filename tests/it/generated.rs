@@ -227,3 +227,34 @@ fn generated_code_holds_only_what_the_system_needs() {
 fn paper_lib_rs_snapshot() {
     insta::assert_snapshot!(lib_rs("paper"));
 }
+
+#[test]
+fn generated_crates_pass_clippy() {
+    // Contrasting systems: affine/linear, Riccati with a mass law, local
+    // field, Newton, k = 3 consistency.
+    for name in [
+        "paper",
+        "mass_loss_stiff_spring",
+        "knife_edge",
+        "nonlinear_second_order",
+        "third_order_constraint",
+    ] {
+        let generated = generate(name);
+        let base = root().join("target/generated-crates");
+        let dir = base.join("crates").join(&generated.package);
+        write(&generated, &dir);
+        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+        let output = Command::new(&cargo)
+            .args(["clippy", "--release", "--quiet", "--manifest-path"])
+            .arg(dir.join("Cargo.toml"))
+            .env("CARGO_TARGET_DIR", base.join("target"))
+            .env("RUSTFLAGS", "-D warnings")
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{name}: clippy:\n{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+}
