@@ -79,7 +79,8 @@ pub fn check_mass_matrix(
     )
     .with_note(format!(
         "the equations of motion cannot be solved for {names}: the mass matrix \
-         ∂(4)/∂q'' is singular at every one of {singular_points} sample points"
+         (the derivatives of (4) with respect to the highest derivatives) is \
+         singular at every one of {singular_points} sample points"
     ))
     .with_help("give every independent coordinate a kinetic energy term (e.g. `m/2*q'^2`)"))
 }

@@ -3,4 +3,5 @@
 mod field;
 mod generated;
 mod ir;
+mod mechanics;
 mod runtime;
