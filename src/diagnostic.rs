@@ -203,4 +203,11 @@ pub mod codes {
     pub const NUMBER_TOO_LARGE: &str = "E0029";
     pub const NESTING_TOO_DEEP: &str = "E0030";
     pub const NO_INDEPENDENT_COORDINATE: &str = "E0031";
+    // Added by the field method (additive); notes get their own series.
+    /// The reduced system is not affine in the state (or is implicit): the
+    /// linear ansatz (10) is not a complete solution, and the generated
+    /// crate uses the local field method.
+    pub const LOCAL_FIELD_METHOD: &str = "N0001";
+    /// An internal error of the code generator (a bug, never the model's).
+    pub const CODE_GENERATION: &str = "E0900";
 }

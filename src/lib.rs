@@ -13,9 +13,12 @@
 
 pub mod check;
 pub mod diagnostic;
+pub mod emit;
+pub mod field;
 pub mod frontend;
 pub mod ir;
 pub mod mechanics;
+pub mod pipeline;
 pub mod span;
 mod suggest;
 pub mod syntax;

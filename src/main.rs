@@ -4,6 +4,8 @@
 //! including a FILE that cannot be read, since that is a wrong argument
 //! rather than a wrong model.
 
+mod cli;
+
 use clap::{Args, Parser, Subcommand};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -37,6 +39,66 @@ enum Command {
     /// multiplier route. Exit status: 0 on success, 1 when the model has
     /// errors, 2 when FILE cannot be read.
     Derive(DeriveArgs),
+    /// Write the generated crate that integrates the model.
+    ///
+    /// The crate builds with `cargo build --release` alone and holds only
+    /// what this system needs. Exit status: 0 on success, 1 when the model
+    /// has errors, 2 when FILE cannot be read or DIR cannot be written.
+    Build(BuildArgs),
+    /// Build the generated crate (cached) and run it.
+    ///
+    /// The crate is kept under `$LAGC_CACHE_DIR` (or `$XDG_CACHE_HOME/lagc`,
+    /// or `~/.cache/lagc`), one directory per model and one shared cargo
+    /// target directory, so an unchanged model is not rebuilt. The
+    /// trajectory goes to stdout as CSV (`t,q1,…,q1',…`), cargo's progress
+    /// and the run summary to stderr. Exit status: that of the model's
+    /// binary (3 on a numerical failure), or 1/2 as for `build`.
+    Run(RunArgs),
+}
+
+#[derive(Debug, Args)]
+struct BuildArgs {
+    /// The `.lag` model.
+    file: PathBuf,
+    /// The directory to write the crate into (created when missing).
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    output: PathBuf,
+}
+
+#[derive(Debug, Args)]
+struct RunArgs {
+    /// The `.lag` model.
+    file: PathBuf,
+    /// Override a param: `--param NAME=VALUE` (repeatable); params
+    /// computed from it are recomputed.
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    params: Vec<String>,
+    /// The field method or direct integration of (7).
+    #[arg(long, value_enum, default_value_t = Method::Field)]
+    method: Method,
+    /// Use the stiff integrator RODAS4.
+    #[arg(long)]
+    stiff: bool,
+    /// Relative tolerance.
+    #[arg(long, value_name = "R")]
+    rtol: Option<f64>,
+    /// Absolute tolerance.
+    #[arg(long, value_name = "A")]
+    atol: Option<f64>,
+    /// Number of evenly spaced sample times.
+    #[arg(long, value_name = "N")]
+    samples: Option<usize>,
+    /// Every free anchor value c_A of the field method (default 0).
+    #[arg(long, value_name = "VALUE", allow_hyphen_values = true)]
+    anchor: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Method {
+    /// Vujanović's field method.
+    Field,
+    /// Direct integration of the reduced system (7).
+    Direct,
 }
 
 #[derive(Debug, Args)]
@@ -71,6 +133,8 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Check(args) => check(&args),
         Command::Derive(args) => derive(&args),
+        Command::Build(args) => build(&args),
+        Command::Run(args) => run(&args),
     }
 }
 
@@ -128,7 +192,13 @@ fn derive(args: &DeriveArgs) -> ExitCode {
         match derived {
             Ok(mut derivation) => {
                 match args.format {
-                    Format::Text => print!("{}", derivation.text()),
+                    Format::Text => {
+                        print!("{}", derivation.text());
+                        let reduced = derivation.reduced.clone();
+                        let mut arena = derivation.arena.clone();
+                        let field = lagc::field::field_system(&mut arena, &reduced);
+                        print!("{}", field.text(&arena, &reduced.state));
+                    }
                     Format::Latex => print!("{}", derivation.latex()),
                 }
                 match lagc::mechanics::cross_check(&mut derivation) {
@@ -160,4 +230,134 @@ fn derive(args: &DeriveArgs) -> ExitCode {
 fn count(n: usize, noun: &str) -> String {
     let plural = if n == 1 { "" } else { "s" };
     format!("{n} {noun}{plural}")
+}
+
+/// Reads, checks and generates the crate of `file`, printing diagnostics
+/// and notes; `Err(status)` when that fails.
+fn generate(file: &std::path::Path) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
+    let file_name = file.display().to_string();
+    let bytes = match std::fs::read(file) {
+        Ok(bytes) => bytes,
+        Err(error) => {
+            eprintln!("error: cannot read `{file_name}`: {error}");
+            return Err(ExitCode::from(EXIT_USAGE));
+        }
+    };
+    let model_name = file
+        .file_stem()
+        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
+    let color = std::io::stderr().is_terminal();
+    lagc::on_big_stack(|| {
+        let (source, result) = lagc::frontend_bytes(&bytes);
+        match result.and_then(|model| lagc::pipeline::generate_crate(&model, &model_name)) {
+            Ok((generated, notes)) => {
+                eprint!(
+                    "{}",
+                    lagc::diagnostic::render(&notes, &file_name, &source, color)
+                );
+                Ok(generated)
+            }
+            Err(diagnostics) => {
+                eprint!(
+                    "{}",
+                    lagc::diagnostic::render(&diagnostics, &file_name, &source, color)
+                );
+                let errors = diagnostics.iter().filter(|d| d.is_error()).count();
+                eprintln!("error: `{file_name}` has {}", count(errors, "error"));
+                Err(ExitCode::from(EXIT_MODEL_ERRORS))
+            }
+        }
+    })
+}
+
+fn build(args: &BuildArgs) -> ExitCode {
+    let generated = match generate(&args.file) {
+        Ok(generated) => generated,
+        Err(status) => return status,
+    };
+    match cli::write_crate(&generated, &args.output) {
+        Ok(()) => {
+            eprintln!(
+                "wrote crate `{}` to {}",
+                generated.package,
+                args.output.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!(
+                "error: cannot write to `{}`: {error}",
+                args.output.display()
+            );
+            ExitCode::from(EXIT_USAGE)
+        }
+    }
+}
+
+fn run(args: &RunArgs) -> ExitCode {
+    let generated = match generate(&args.file) {
+        Ok(generated) => generated,
+        Err(status) => return status,
+    };
+    let Some(cache) = cli::cache_dir() else {
+        eprintln!("error: no cache directory: set LAGC_CACHE_DIR (or XDG_CACHE_HOME or HOME)");
+        return ExitCode::from(EXIT_USAGE);
+    };
+    let crate_dir = cache.join("crates").join(&generated.package);
+    let target_dir = cache.join("target");
+    if let Err(error) = cli::write_crate(&generated, &crate_dir) {
+        eprintln!("error: cannot write to `{}`: {error}", crate_dir.display());
+        return ExitCode::from(EXIT_USAGE);
+    }
+    match cli::cargo_build(&crate_dir, &target_dir) {
+        Ok(status) if status.success() => {}
+        Ok(status) => {
+            eprintln!("error: building the generated crate failed ({status})");
+            return ExitCode::FAILURE;
+        }
+        Err(error) => {
+            eprintln!("error: cannot run cargo: {error}");
+            return ExitCode::FAILURE;
+        }
+    }
+    let mut passed: Vec<String> = Vec::new();
+    for param in &args.params {
+        passed.extend(["--param".to_string(), param.clone()]);
+    }
+    let method = match args.method {
+        Method::Field => "field",
+        Method::Direct => "direct",
+    };
+    passed.extend(["--method".to_string(), method.to_string()]);
+    if args.stiff {
+        passed.push("--stiff".to_string());
+    }
+    let numbers = [
+        ("--rtol", args.rtol),
+        ("--atol", args.atol),
+        ("--anchor", args.anchor),
+    ];
+    for (flag, value) in numbers {
+        if let Some(v) = value {
+            passed.extend([flag.to_string(), format!("{v:?}")]);
+        }
+    }
+    if let Some(n) = args.samples {
+        passed.extend(["--samples".to_string(), n.to_string()]);
+    }
+    let binary = target_dir.join("release").join(format!(
+        "{}{}",
+        generated.package,
+        std::env::consts::EXE_SUFFIX
+    ));
+    match cli::run_binary(&binary, &passed) {
+        Ok(status) => match status.code() {
+            Some(code) => ExitCode::from(u8::try_from(code).unwrap_or(1)),
+            None => ExitCode::FAILURE,
+        },
+        Err(error) => {
+            eprintln!("error: cannot run `{}`: {error}", binary.display());
+            ExitCode::FAILURE
+        }
+    }
 }

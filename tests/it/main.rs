@@ -3,6 +3,8 @@
 mod cli;
 mod errors;
 mod examples;
+mod field;
+mod generated;
 mod ir;
 mod mechanics;
 mod parser;

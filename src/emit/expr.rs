@@ -1,0 +1,287 @@
+//! IR expressions → Rust expressions (token trees), with every node used
+//! more than once bound to a `let` first.
+//!
+//! Numbers are exact (`{:?}` is the shortest decimal that reads back to the
+//! same `f64`) with an `_f64` suffix; integer powers become `powi`, `^0.5`
+//! `sqrt`, other powers `powf` — the same choices as `ir::pow_value`, so the
+//! generated code computes what `Arena::eval` computes. Parentheses are
+//! written only where precedence needs them (rustc warns on the others).
+
+use super::namer::Namer;
+use crate::ir::{Arena, ExprId, Func, Node, Symbol};
+use proc_macro2::{Ident, Span, TokenStream};
+use quote::quote;
+use std::collections::HashMap;
+
+/// Binding strength of a generated expression.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Prec {
+    Sum,
+    Product,
+    Unary,
+    Postfix,
+}
+
+/// Straight-line code for several roots: `lets`, then one expression each.
+pub struct Lowered {
+    pub lets: Vec<TokenStream>,
+    pub roots: Vec<TokenStream>,
+}
+
+/// Lowers `roots`; `symbol` names every free symbol's local variable.
+pub fn lower_exprs(
+    arena: &Arena,
+    roots: &[ExprId],
+    symbol: &dyn Fn(Symbol) -> TokenStream,
+    namer: &mut Namer,
+) -> Lowered {
+    let order = arena.reachable(roots);
+    let mut uses: HashMap<ExprId, usize> = HashMap::new();
+    for &e in &order {
+        for c in arena.children(e) {
+            *uses.entry(c).or_default() += 1;
+        }
+    }
+    for &r in roots {
+        *uses.entry(r).or_default() += 1;
+    }
+    let mut writer = Writer {
+        arena,
+        symbol,
+        bound: HashMap::new(),
+    };
+    let mut lets = Vec::new();
+    for &e in &order {
+        let shared = uses.get(&e).copied().unwrap_or(0) > 1;
+        if shared
+            && matches!(
+                arena.node(e),
+                Node::Add(_) | Node::Mul(_) | Node::Pow(..) | Node::Func(..)
+            )
+        {
+            let (code, _) = writer.expr(e);
+            let name = namer.fresh("e");
+            lets.push(quote! { let #name = #code; });
+            writer.bound.insert(e, name);
+        }
+    }
+    let roots = roots.iter().map(|&r| writer.expr(r).0).collect();
+    Lowered { lets, roots }
+}
+
+struct Writer<'a> {
+    arena: &'a Arena,
+    symbol: &'a dyn Fn(Symbol) -> TokenStream,
+    bound: HashMap<ExprId, Ident>,
+}
+
+/// A float literal: `1.5_f64`, `1e-9_f64` (non-negative `v`).
+fn literal(v: f64) -> TokenStream {
+    if v.is_nan() {
+        return quote! { f64::NAN };
+    }
+    if v.is_infinite() {
+        return quote! { f64::INFINITY };
+    }
+    let lit = syn::LitFloat::new(&format!("{v:?}_f64"), Span::call_site());
+    quote! { #lit }
+}
+
+fn constant(v: f64) -> (TokenStream, Prec) {
+    if v < 0.0 {
+        let lit = literal(-v);
+        (quote! { -#lit }, Prec::Unary)
+    } else {
+        (literal(v), Prec::Postfix)
+    }
+}
+
+fn wrap((code, prec): (TokenStream, Prec), at_least: Prec) -> TokenStream {
+    if prec < at_least {
+        quote! { (#code) }
+    } else {
+        code
+    }
+}
+
+impl Writer<'_> {
+    fn expr(&self, e: ExprId) -> (TokenStream, Prec) {
+        if let Some(name) = self.bound.get(&e) {
+            return (quote! { #name }, Prec::Postfix);
+        }
+        match self.arena.node(e) {
+            Node::Const(v) => constant(*v),
+            Node::Sym(s) => ((self.symbol)(*s), Prec::Postfix),
+            Node::Func(f, a) => {
+                let receiver = wrap(self.expr(*a), Prec::Postfix);
+                let method = Ident::new(func_method(*f), Span::call_site());
+                (quote! { #receiver.#method() }, Prec::Postfix)
+            }
+            Node::Pow(b, x) => self.pow(*b, *x),
+            Node::Mul(fs) => self.product(fs, false),
+            Node::Add(ts) => self.sum(ts),
+        }
+    }
+
+    fn pow(&self, base: ExprId, exp: ExprId) -> (TokenStream, Prec) {
+        if self.arena.as_const(exp) == Some(-1.0) {
+            let below = wrap(self.expr(base), Prec::Unary);
+            let one = literal(1.0);
+            return (quote! { #one / #below }, Prec::Product);
+        }
+        let receiver = wrap(self.expr(base), Prec::Postfix);
+        match self.arena.as_const(exp) {
+            Some(0.5) => (quote! { #receiver.sqrt() }, Prec::Postfix),
+            Some(v) if v.fract() == 0.0 && v.abs() <= f64::from(i32::MAX) => {
+                let n = proc_macro2::Literal::i32_unsuffixed((v.abs()) as i32);
+                if v < 0.0 {
+                    (quote! { #receiver.powi(-#n) }, Prec::Postfix)
+                } else {
+                    (quote! { #receiver.powi(#n) }, Prec::Postfix)
+                }
+            }
+            _ => {
+                let exponent = self.expr(exp).0;
+                (quote! { #receiver.powf(#exponent) }, Prec::Postfix)
+            }
+        }
+    }
+
+    /// The numeric coefficient of a product or constant, if it is negative.
+    fn is_negative(&self, e: ExprId) -> bool {
+        if self.bound.contains_key(&e) {
+            return false;
+        }
+        match self.arena.node(e) {
+            Node::Const(v) => *v < 0.0,
+            Node::Mul(fs) => self.arena.as_const(fs[0]).is_some_and(|c| c < 0.0),
+            _ => false,
+        }
+    }
+
+    /// `−e` for a term with `is_negative(e)`.
+    fn negated(&self, e: ExprId) -> (TokenStream, Prec) {
+        match self.arena.node(e) {
+            Node::Const(v) => constant(-v),
+            Node::Mul(fs) => self.product(fs, true),
+            _ => self.expr(e),
+        }
+    }
+
+    fn sum(&self, terms: &[ExprId]) -> (TokenStream, Prec) {
+        let mut code = TokenStream::new();
+        for (i, &t) in terms.iter().enumerate() {
+            if i == 0 {
+                code = wrap(self.expr(t), Prec::Sum);
+            } else if self.is_negative(t) {
+                let term = wrap(self.negated(t), Prec::Product);
+                code = quote! { #code - #term };
+            } else {
+                let term = wrap(self.expr(t), Prec::Product);
+                code = quote! { #code + #term };
+            }
+        }
+        (code, Prec::Sum)
+    }
+
+    /// A product written as numerator / denominator; `flip` negates the
+    /// numeric coefficient.
+    fn product(&self, factors: &[ExprId], flip: bool) -> (TokenStream, Prec) {
+        let (mut coefficient, rest) = match self.arena.as_const(factors[0]) {
+            Some(c) => (c, &factors[1..]),
+            None => (1.0, factors),
+        };
+        if flip {
+            coefficient = -coefficient;
+        }
+        let mut numerator: Vec<(TokenStream, Prec)> = Vec::new();
+        let mut denominator: Vec<(TokenStream, Prec)> = Vec::new();
+        for &f in rest {
+            match self.reciprocal(f) {
+                Some(d) => denominator.push(d),
+                None => numerator.push(self.expr(f)),
+            }
+        }
+        let negative = coefficient < 0.0;
+        let magnitude = coefficient.abs();
+        if magnitude != 1.0 || numerator.is_empty() {
+            numerator.insert(0, (literal(magnitude), Prec::Postfix));
+        }
+        let mut code = TokenStream::new();
+        for (i, factor) in numerator.into_iter().enumerate() {
+            if i == 0 {
+                if negative {
+                    let first = wrap(factor, Prec::Unary);
+                    code = quote! { -#first };
+                } else {
+                    code = wrap(factor, Prec::Product);
+                }
+            } else {
+                let factor = wrap(factor, Prec::Unary);
+                code = quote! { #code * #factor };
+            }
+        }
+        let single = denominator.len() == 1;
+        let mut below = TokenStream::new();
+        for (i, factor) in denominator.into_iter().enumerate() {
+            if i == 0 {
+                below = wrap(factor, if single { Prec::Unary } else { Prec::Product });
+            } else {
+                let factor = wrap(factor, Prec::Unary);
+                below = quote! { #below * #factor };
+            }
+        }
+        if !below.is_empty() {
+            if single {
+                code = quote! { #code / #below };
+            } else {
+                code = quote! { #code / (#below) };
+            }
+        }
+        (code, Prec::Product)
+    }
+
+    /// For a factor `b^(−k)` (k = 1, 1/2 or an integer), `b^k` to divide by.
+    fn reciprocal(&self, factor: ExprId) -> Option<(TokenStream, Prec)> {
+        if self.bound.contains_key(&factor) {
+            return None;
+        }
+        let Node::Pow(base, exp) = self.arena.node(factor) else {
+            return None;
+        };
+        let v = self.arena.as_const(*exp)?;
+        if v >= 0.0 {
+            return None;
+        }
+        let receiver = || wrap(self.expr(*base), Prec::Postfix);
+        if v == -1.0 {
+            Some(self.expr(*base))
+        } else if v == -0.5 {
+            let r = receiver();
+            Some((quote! { #r.sqrt() }, Prec::Postfix))
+        } else if v.fract() == 0.0 && v.abs() <= f64::from(i32::MAX) {
+            let r = receiver();
+            let n = proc_macro2::Literal::i32_unsuffixed((-v) as i32);
+            Some((quote! { #r.powi(#n) }, Prec::Postfix))
+        } else {
+            None
+        }
+    }
+}
+
+fn func_method(f: Func) -> &'static str {
+    match f {
+        Func::Sin => "sin",
+        Func::Cos => "cos",
+        Func::Tan => "tan",
+        Func::Asin => "asin",
+        Func::Acos => "acos",
+        Func::Atan => "atan",
+        Func::Sinh => "sinh",
+        Func::Cosh => "cosh",
+        Func::Tanh => "tanh",
+        Func::Exp => "exp",
+        Func::Ln => "ln",
+        Func::Sqrt => "sqrt",
+    }
+}

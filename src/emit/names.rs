@@ -1,0 +1,179 @@
+//! The generated code's names for the model's symbols, and the `let`
+//! bindings that bring the symbols a function uses into scope.
+
+use super::expr::{lower_exprs, Lowered};
+use super::namer::Namer;
+use crate::ir::{Arena, ExprId, Symbol};
+use proc_macro2::{Ident, TokenStream};
+use quote::quote;
+use std::collections::{BTreeSet, HashMap};
+
+/// Where a function finds the state-like symbols it reads.
+pub type Source<'a> = &'a dyn Fn(Symbol) -> Option<TokenStream>;
+
+pub struct SymbolNames {
+    pub params: Vec<Ident>,
+    pub masses: Vec<Ident>,
+    pub mass_fns: Vec<Ident>,
+    symbols: HashMap<Symbol, Ident>,
+    pub namer: Namer,
+}
+
+impl SymbolNames {
+    pub fn new(arena: &Arena, extra: &[Symbol]) -> SymbolNames {
+        let mut namer = Namer::default();
+        let names = arena.names().clone();
+        let params = names.params.iter().map(|n| namer.fresh(n)).collect();
+        let masses = names.masses.iter().map(|n| namer.fresh(n)).collect();
+        let mass_fns = names
+            .masses
+            .iter()
+            .map(|n| namer.fresh(&format!("mass_{n}")))
+            .collect();
+        let mut symbols = HashMap::new();
+        for &s in extra {
+            if let std::collections::hash_map::Entry::Vacant(v) = symbols.entry(s) {
+                v.insert(namer.fresh(&arena.symbol_name(s)));
+            }
+        }
+        SymbolNames {
+            params,
+            masses,
+            mass_fns,
+            symbols,
+            namer,
+        }
+    }
+
+    /// The local variable of a symbol.
+    pub fn ident(&mut self, arena: &Arena, s: Symbol) -> TokenStream {
+        match s {
+            Symbol::Time => quote! { t },
+            Symbol::Param(i) => ident_tokens(self.params.get(i as usize)),
+            Symbol::Mass(i) => ident_tokens(self.masses.get(i as usize)),
+            _ => {
+                if !self.symbols.contains_key(&s) {
+                    let name = self.namer.fresh(&arena.symbol_name(s));
+                    self.symbols.insert(s, name);
+                }
+                ident_tokens(self.symbols.get(&s))
+            }
+        }
+    }
+
+    /// Straight-line code for `roots`: the bindings of the symbols they use
+    /// (params from `p`, mass laws by their functions, state-like symbols
+    /// from `source`), the shared sub-expressions, the root expressions.
+    pub fn code(&mut self, arena: &Arena, roots: &[ExprId], source: Source) -> Code {
+        let mut free: BTreeSet<Symbol> = BTreeSet::new();
+        for &r in roots {
+            free.extend(arena.free_symbols(r));
+        }
+        let mut prelude = Vec::new();
+        let mut uses_params = false;
+        let mut uses_time = false;
+        let mut uses_source = false;
+        let mut idents: HashMap<Symbol, TokenStream> = HashMap::new();
+        for &s in &free {
+            let name = self.ident(arena, s);
+            idents.insert(s, name.clone());
+            match s {
+                Symbol::Time => uses_time = true,
+                Symbol::Param(_) => {
+                    uses_params = true;
+                    prelude.push(quote! { let #name = p.#name; });
+                }
+                Symbol::Mass(i) => {
+                    uses_params = true;
+                    uses_time = true;
+                    let f = ident_tokens(self.mass_fns.get(i as usize));
+                    prelude.push(quote! { let #name = #f(p, t); });
+                }
+                _ => {
+                    uses_source = true;
+                    let value = source(s).unwrap_or_else(|| quote! { f64::NAN });
+                    // A source that is already this local needs no binding.
+                    if value.to_string() != name.to_string() {
+                        prelude.push(quote! { let #name = #value; });
+                    }
+                }
+            }
+        }
+        let lookup = |s: Symbol| {
+            idents
+                .get(&s)
+                .cloned()
+                .unwrap_or_else(|| quote! { f64::NAN })
+        };
+        let Lowered { lets, roots } = lower_exprs(arena, roots, &lookup, &mut self.namer);
+        Code {
+            prelude,
+            lets,
+            roots,
+            uses_params,
+            uses_time,
+            uses_source,
+        }
+    }
+}
+
+fn ident_tokens(ident: Option<&Ident>) -> TokenStream {
+    match ident {
+        Some(i) => quote! { #i },
+        None => quote! { f64::NAN },
+    }
+}
+
+pub struct Code {
+    pub prelude: Vec<TokenStream>,
+    pub lets: Vec<TokenStream>,
+    pub roots: Vec<TokenStream>,
+    pub uses_params: bool,
+    pub uses_time: bool,
+    /// Reads a symbol from the function's `source` (the state, `f`, …).
+    pub uses_source: bool,
+}
+
+impl Code {
+    /// The statements before the roots are used: `let p = &self.params;`
+    /// when needed (`params` is how the function reaches the params), the
+    /// bindings and the shared sub-expressions.
+    pub fn statements(&self, params: TokenStream) -> TokenStream {
+        let prelude = &self.prelude;
+        let lets = &self.lets;
+        let p = if self.uses_params {
+            quote! { let p = #params; }
+        } else {
+            TokenStream::new()
+        };
+        quote! { #p #(#prelude)* #(#lets)* }
+    }
+
+    /// The statements and the first root as one expression: a block only
+    /// when there are statements (rustc warns on needless braces).
+    pub fn single(&self, params: TokenStream) -> TokenStream {
+        let root = &self.roots[0];
+        if self.prelude.is_empty() && self.lets.is_empty() && !self.uses_params {
+            return root.clone();
+        }
+        // A lone param: `params.x0`, not a block binding and returning it
+        // (clippy's `let_and_return`).
+        if self.lets.is_empty() && self.prelude.len() == 1 && !self.uses_time {
+            let binding = self.prelude[0].to_string();
+            if binding == format!("let {root} = p . {root} ;") {
+                return quote! { #params.#root };
+            }
+        }
+        let statements = self.statements(params);
+        quote! { { #statements #root } }
+    }
+
+    /// The time argument's name: `_t` when unused (no warning).
+    pub fn time_arg(&self) -> TokenStream {
+        if self.uses_time {
+            quote! { t }
+        } else {
+            quote! { _t }
+        }
+    }
+}

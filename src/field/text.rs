@@ -1,0 +1,68 @@
+//! The text form of the field method for `lagc derive`: the basic
+//! equation (9) with the ansatz inserted, and the coefficient system.
+
+use super::basic::FieldSystem;
+use crate::ir::{Arena, Symbol};
+use std::fmt::Write;
+
+impl FieldSystem {
+    /// A section to print after the mechanics' derivation text.
+    pub fn text(&self, arena: &Arena, state: &[Symbol]) -> String {
+        let mut out = String::from("\nfield method:\n");
+        let Some(basic) = self.basic_equation else {
+            out.push_str(
+                "  the highest derivatives are implicit: the linear ansatz is not a complete \
+                 solution; the local field method is used\n",
+            );
+            return out;
+        };
+        let Some(&x1) = state.first() else {
+            return out;
+        };
+        let ansatz: Vec<String> = std::iter::once(arena.symbol_name(self.coefficients[0]))
+            .chain(
+                state
+                    .iter()
+                    .zip(&self.coefficients)
+                    .skip(1)
+                    .map(|(&x, &f)| format!("{}*{}", arena.symbol_name(f), arena.symbol_name(x))),
+            )
+            .collect();
+        let _ = writeln!(
+            out,
+            "  ansatz (10): {} = {}",
+            arena.symbol_name(x1),
+            ansatz.join(" + ")
+        );
+        let _ = writeln!(
+            out,
+            "  basic equation (9):\n    {} = 0",
+            arena.display(basic)
+        );
+        match &self.coefficient_system {
+            None => out.push_str(
+                "  not affine in the state: the linear ansatz is not a complete solution; \
+                 the local field method is used\n",
+            ),
+            Some(system) => {
+                let kind = if system.linear { "linear" } else { "Riccati" };
+                let _ = writeln!(out, "  coefficient system ({kind}):");
+                for ((&rate, &rhs), &constant) in self
+                    .coefficient_rates
+                    .iter()
+                    .zip(&system.rhs)
+                    .zip(&system.constant)
+                {
+                    let note = if constant { "  (constant: f = c)" } else { "" };
+                    let _ = writeln!(
+                        out,
+                        "    {} = {}{note}",
+                        arena.symbol_name(rate),
+                        arena.display(rhs)
+                    );
+                }
+            }
+        }
+        out
+    }
+}

