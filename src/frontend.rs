@@ -26,7 +26,7 @@ pub fn frontend(source: &str) -> Result<Model, Vec<Diagnostic>> {
 /// before code generation (`lagc check` reports exactly these). Some checks
 /// need the symbolic stage: an initial value that violates a constraint, an
 /// identically singular mass matrix.
-pub fn check_and_derive(source: &str) -> Result<(Model, Derivation), Vec<Diagnostic>> {
+pub fn check_and_derive(source: &str) -> Checked {
     let model = frontend(source)?;
     let derivation = crate::mechanics::derive(&model)?;
     Ok((model, derivation))
@@ -40,10 +40,11 @@ pub fn frontend_bytes(bytes: &[u8]) -> (Cow<'_, str>, Result<Model, Vec<Diagnost
     decode_then(bytes, frontend)
 }
 
+/// The checked model and its derivation, or every diagnostic.
+pub type Checked = Result<(Model, Derivation), Vec<Diagnostic>>;
+
 /// Decodes a file's bytes and runs [`check_and_derive`]; see [`frontend_bytes`].
-pub fn check_and_derive_bytes(
-    bytes: &[u8],
-) -> (Cow<'_, str>, Result<(Model, Derivation), Vec<Diagnostic>>) {
+pub fn check_and_derive_bytes(bytes: &[u8]) -> (Cow<'_, str>, Checked) {
     decode_then(bytes, check_and_derive)
 }
 
