@@ -4,7 +4,7 @@
 use super::model::Name;
 use super::Checker;
 use crate::diagnostic::{codes, Diagnostic};
-use crate::syntax::ast::{BinOp, Expr, ExprKind, Func};
+use crate::syntax::ast::{BinOp, Expr, ExprKind};
 
 impl Checker<'_> {
     /// The value of a constant expression with every param at its default;
@@ -30,7 +30,7 @@ impl Checker<'_> {
                     BinOp::Pow => lhs.powf(rhs),
                 }
             }
-            ExprKind::Call { func, arg, .. } => apply(*func, self.evaluate(arg)?),
+            ExprKind::Call { func, arg, .. } => func.apply(self.evaluate(arg)?),
         })
     }
 
@@ -48,22 +48,5 @@ impl Checker<'_> {
         .with_note("params are evaluated at their defaults");
         self.report(diagnostic);
         None
-    }
-}
-
-pub fn apply(func: Func, x: f64) -> f64 {
-    match func {
-        Func::Sin => x.sin(),
-        Func::Cos => x.cos(),
-        Func::Tan => x.tan(),
-        Func::Asin => x.asin(),
-        Func::Acos => x.acos(),
-        Func::Atan => x.atan(),
-        Func::Sinh => x.sinh(),
-        Func::Cosh => x.cosh(),
-        Func::Tanh => x.tanh(),
-        Func::Exp => x.exp(),
-        Func::Ln => x.ln(),
-        Func::Sqrt => x.sqrt(),
     }
 }

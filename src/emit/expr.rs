@@ -8,7 +8,7 @@
 //! written only where precedence needs them (rustc warns on the others).
 
 use super::namer::Namer;
-use crate::ir::{Arena, ExprId, Func, Node, Symbol};
+use crate::ir::{Arena, ExprId, Node, Symbol};
 use proc_macro2::{Ident, Span, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
@@ -114,7 +114,7 @@ impl Writer<'_> {
             Node::Sym(s) => ((self.symbol)(*s), Prec::Postfix),
             Node::Func(f, a) => {
                 let receiver = wrap(self.expr(*a), Prec::Postfix);
-                let method = Ident::new(func_method(*f), Span::call_site());
+                let method = Ident::new(f.name(), Span::call_site());
                 (quote! { #receiver.#method() }, Prec::Postfix)
             }
             Node::Pow(b, x) => self.pow(*b, *x),
@@ -266,22 +266,5 @@ impl Writer<'_> {
         } else {
             None
         }
-    }
-}
-
-fn func_method(f: Func) -> &'static str {
-    match f {
-        Func::Sin => "sin",
-        Func::Cos => "cos",
-        Func::Tan => "tan",
-        Func::Asin => "asin",
-        Func::Acos => "acos",
-        Func::Atan => "atan",
-        Func::Sinh => "sinh",
-        Func::Cosh => "cosh",
-        Func::Tanh => "tanh",
-        Func::Exp => "exp",
-        Func::Ln => "ln",
-        Func::Sqrt => "sqrt",
     }
 }

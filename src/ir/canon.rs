@@ -18,20 +18,7 @@ const MUL_RENORMALISE_DEPTH: u32 = 3;
 
 /// The value of a function at a number (shared by folding and `eval`).
 pub fn apply_func(f: Func, x: f64) -> f64 {
-    match f {
-        Func::Sin => x.sin(),
-        Func::Cos => x.cos(),
-        Func::Tan => x.tan(),
-        Func::Asin => x.asin(),
-        Func::Acos => x.acos(),
-        Func::Atan => x.atan(),
-        Func::Sinh => x.sinh(),
-        Func::Cosh => x.cosh(),
-        Func::Tanh => x.tanh(),
-        Func::Exp => x.exp(),
-        Func::Ln => x.ln(),
-        Func::Sqrt => x.sqrt(),
-    }
+    f.apply(x)
 }
 
 /// `base^exp` as numbers, with `powi`/`sqrt` where they are exact.
