@@ -19,8 +19,11 @@ pub mod frontend;
 pub mod ir;
 pub mod mechanics;
 pub mod pipeline;
+pub mod report;
 pub mod span;
 mod suggest;
 pub mod syntax;
 
-pub use frontend::{check_and_derive, check_and_derive_bytes, frontend, frontend_bytes, on_big_stack};
+pub use frontend::{
+    check_and_derive, check_and_derive_bytes, frontend, frontend_bytes, on_big_stack,
+};
