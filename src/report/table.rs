@@ -25,8 +25,8 @@ pub fn table(report: &Report) -> String {
     );
     let _ = writeln!(
         out,
-        "{:<15} {:>6} {:>6} {:>11} {:>10} {:>9} {:>7}  {}",
-        "method", "rtol", "atol", "time [ms]", "error", "RHS evals", "steps", "notes"
+        "{:<15} {:>6} {:>6} {:>11} {:>10} {:>9} {:>7}  notes",
+        "method", "rtol", "atol", "time [ms]", "error", "RHS evals", "steps"
     );
     for m in &report.measurements {
         let head = format!(
