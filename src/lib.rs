@@ -19,6 +19,7 @@ pub mod frontend;
 pub mod ir;
 pub mod mechanics;
 pub mod pipeline;
+pub mod report;
 pub mod span;
 mod suggest;
 pub mod syntax;

@@ -54,6 +54,45 @@ enum Command {
     /// and the run summary to stderr. Exit status: that of the model's
     /// binary (3 on a numerical failure), or 1/2 as for `build`.
     Run(RunArgs),
+    /// Error against run time: every method at a ladder of tolerances.
+    ///
+    /// Builds the model's crate (cached, as `run`) and runs it for the
+    /// field method, direct DOP853 and direct RODAS4 at each tolerance
+    /// (rtol 1e-3 … 1e-12 by default, atol = rtol·1e-2); the time of a run
+    /// is the smallest of --runs solves after a warm-up, measured inside
+    /// the binary. The error is the largest over the samples against the
+    /// model's `exact` lines, or, without them, against a run at rtol 1e-13
+    /// by another method (direct DOP853; for direct DOP853 the field).
+    /// Prints a table on stdout and writes a work-precision plot (SVG) and
+    /// the data (CSV) into DIR. Runs that fail appear in the table as
+    /// failed. Exit status: 0 on success, 1 when the model has errors or
+    /// its crate does not build, 2 on bad usage.
+    Report(ReportArgs),
+}
+
+#[derive(Debug, Args)]
+struct ReportArgs {
+    /// The `.lag` model.
+    file: PathBuf,
+    /// Where to write `<model>.work-precision.svg` and `.csv`.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    out: PathBuf,
+    /// Timed solves per measurement (after one warm-up); the time is their
+    /// minimum.
+    #[arg(long, value_name = "N", default_value_t = 5)]
+    runs: usize,
+    /// Comma-separated relative tolerances (default 1e-3,1e-4,…,1e-12).
+    #[arg(long, value_name = "LIST")]
+    tolerances: Option<String>,
+    /// Number of evenly spaced sample times; the error is the largest
+    /// over them. The runtime steps onto every sample time (it has no
+    /// dense output), so many samples cap the step and hide the
+    /// difference between tolerances: the default is 11.
+    #[arg(long, value_name = "N", default_value_t = 11)]
+    samples: usize,
+    /// Override a param: `--param NAME=VALUE` (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    params: Vec<String>,
 }
 
 #[derive(Debug, Args)]
@@ -91,6 +130,26 @@ struct RunArgs {
     /// Every free anchor value c_A of the field method (default 0).
     #[arg(long, value_name = "VALUE", allow_hyphen_values = true)]
     anchor: Option<f64>,
+    /// Solve N times (after one warm-up solve when N > 1) and report the
+    /// smallest wall time.
+    #[arg(long, value_name = "N")]
+    repeat: Option<usize>,
+    /// No CSV on stdout.
+    #[arg(long)]
+    quiet: bool,
+    /// The summary on stderr as text or as one JSON object line.
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    summary: Option<SummaryFormat>,
+    /// K initial states around the model's through one field, against K
+    /// direct integrations (affine systems): times and largest difference.
+    #[arg(long, value_name = "K")]
+    ensemble: Option<usize>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum SummaryFormat {
+    Text,
+    Json,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -135,6 +194,7 @@ fn main() -> ExitCode {
         Command::Derive(args) => derive(&args),
         Command::Build(args) => build(&args),
         Command::Run(args) => run(&args),
+        Command::Report(args) => report(&args),
     }
 }
 
@@ -299,27 +359,10 @@ fn run(args: &RunArgs) -> ExitCode {
         Ok(generated) => generated,
         Err(status) => return status,
     };
-    let Some(cache) = cli::cache_dir() else {
-        eprintln!("error: no cache directory: set LAGC_CACHE_DIR (or XDG_CACHE_HOME or HOME)");
-        return ExitCode::from(EXIT_USAGE);
+    let binary = match build_cached(&generated) {
+        Ok(binary) => binary,
+        Err(status) => return status,
     };
-    let crate_dir = cache.join("crates").join(&generated.package);
-    let target_dir = cache.join("target");
-    if let Err(error) = cli::write_crate(&generated, &crate_dir) {
-        eprintln!("error: cannot write to `{}`: {error}", crate_dir.display());
-        return ExitCode::from(EXIT_USAGE);
-    }
-    match cli::cargo_build(&crate_dir, &target_dir) {
-        Ok(status) if status.success() => {}
-        Ok(status) => {
-            eprintln!("error: building the generated crate failed ({status})");
-            return ExitCode::FAILURE;
-        }
-        Err(error) => {
-            eprintln!("error: cannot run cargo: {error}");
-            return ExitCode::FAILURE;
-        }
-    }
     let mut passed: Vec<String> = Vec::new();
     for param in &args.params {
         passed.extend(["--param".to_string(), param.clone()]);
@@ -342,14 +385,26 @@ fn run(args: &RunArgs) -> ExitCode {
             passed.extend([flag.to_string(), format!("{v:?}")]);
         }
     }
-    if let Some(n) = args.samples {
-        passed.extend(["--samples".to_string(), n.to_string()]);
+    let counts = [
+        ("--samples", args.samples),
+        ("--repeat", args.repeat),
+        ("--ensemble", args.ensemble),
+    ];
+    for (flag, value) in counts {
+        if let Some(n) = value {
+            passed.extend([flag.to_string(), n.to_string()]);
+        }
     }
-    let binary = target_dir.join("release").join(format!(
-        "{}{}",
-        generated.package,
-        std::env::consts::EXE_SUFFIX
-    ));
+    if args.quiet {
+        passed.push("--quiet".to_string());
+    }
+    if let Some(format) = args.summary {
+        let format = match format {
+            SummaryFormat::Text => "text",
+            SummaryFormat::Json => "json",
+        };
+        passed.extend(["--summary".to_string(), format.to_string()]);
+    }
     match cli::run_binary(&binary, &passed) {
         Ok(status) => match status.code() {
             Some(code) => ExitCode::from(u8::try_from(code).unwrap_or(1)),
@@ -360,4 +415,106 @@ fn run(args: &RunArgs) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Writes the crate into the cache and builds it there; the binary's path.
+fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitCode> {
+    let Some(cache) = cli::cache_dir() else {
+        eprintln!("error: no cache directory: set LAGC_CACHE_DIR (or XDG_CACHE_HOME or HOME)");
+        return Err(ExitCode::from(EXIT_USAGE));
+    };
+    let crate_dir = cache.join("crates").join(&generated.package);
+    let target_dir = cache.join("target");
+    if let Err(error) = cli::write_crate(generated, &crate_dir) {
+        eprintln!("error: cannot write to `{}`: {error}", crate_dir.display());
+        return Err(ExitCode::from(EXIT_USAGE));
+    }
+    match cli::cargo_build(&crate_dir, &target_dir) {
+        Ok(status) if status.success() => {}
+        Ok(status) => {
+            eprintln!("error: building the generated crate failed ({status})");
+            return Err(ExitCode::FAILURE);
+        }
+        Err(error) => {
+            eprintln!("error: cannot run cargo: {error}");
+            return Err(ExitCode::FAILURE);
+        }
+    }
+    Ok(target_dir.join("release").join(format!(
+        "{}{}",
+        generated.package,
+        std::env::consts::EXE_SUFFIX
+    )))
+}
+
+fn report(args: &ReportArgs) -> ExitCode {
+    let tolerances = match &args.tolerances {
+        None => lagc::report::default_tolerances(),
+        Some(text) => match lagc::report::parse_tolerances(text) {
+            Ok(tolerances) => tolerances,
+            Err(message) => {
+                eprintln!("error: `--tolerances`: {message}");
+                return ExitCode::from(EXIT_USAGE);
+            }
+        },
+    };
+    if args.runs == 0 {
+        eprintln!("error: `--runs` must be at least 1");
+        return ExitCode::from(EXIT_USAGE);
+    }
+    let generated = match generate(&args.file) {
+        Ok(generated) => generated,
+        Err(status) => return status,
+    };
+    let binary = match build_cached(&generated) {
+        Ok(binary) => binary,
+        Err(status) => return status,
+    };
+    let mut common_args = Vec::new();
+    for param in &args.params {
+        common_args.extend(["--param".to_string(), param.clone()]);
+    }
+    common_args.extend(["--samples".to_string(), args.samples.to_string()]);
+    let model = args
+        .file
+        .file_name()
+        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
+    let plan = cli::report::Plan {
+        binary: &binary,
+        model: model.clone(),
+        tolerances,
+        runs: args.runs,
+        common_args,
+    };
+    let measured = match cli::report::measure(&plan, std::io::stderr().is_terminal()) {
+        Ok(measured) => measured,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return ExitCode::from(EXIT_USAGE);
+        }
+    };
+    let svg = match lagc::report::work_precision_svg(&measured) {
+        Ok(svg) => svg,
+        Err(message) => {
+            eprintln!("error: cannot draw the plot: {message}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let stem = args
+        .file
+        .file_stem()
+        .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
+    let svg_path = args.out.join(format!("{stem}.work-precision.svg"));
+    let csv_path = args.out.join(format!("{stem}.work-precision.csv"));
+    let written = std::fs::create_dir_all(&args.out)
+        .and_then(|()| std::fs::write(&svg_path, svg))
+        .and_then(|()| std::fs::write(&csv_path, lagc::report::data_csv(&measured)));
+    if let Err(error) = written {
+        eprintln!("error: cannot write to `{}`: {error}", args.out.display());
+        return ExitCode::from(EXIT_USAGE);
+    }
+    print!("{}", lagc::report::table(&measured));
+    println!("work-precision plot: {}", svg_path.display());
+    println!("data: {}", csv_path.display());
+    ExitCode::SUCCESS
 }

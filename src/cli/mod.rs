@@ -2,6 +2,9 @@
 //! the build cache, running cargo and the model's binary. Used only by
 //! `main.rs` (the library does no IO).
 
+pub mod progress;
+pub mod report;
+
 use lagc::emit::GeneratedCrate;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus};

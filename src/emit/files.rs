@@ -6,6 +6,7 @@ const RUNTIME: &[(&str, &str)] = &[
     ("conditioned", include_str!("runtime/conditioned.rs")),
     ("direct", include_str!("runtime/direct.rs")),
     ("dop853", include_str!("runtime/dop853.rs")),
+    ("ensemble", include_str!("runtime/ensemble.rs")),
     ("error", include_str!("runtime/error.rs")),
     ("field", include_str!("runtime/field.rs")),
     ("local_field", include_str!("runtime/local_field.rs")),
@@ -66,10 +67,13 @@ pub fn cargo_toml(package: &str) -> String {
 }
 
 /// The runtime modules the system needs: everything the solver entry
-/// points use, with `local_field` only for non-affine systems.
+/// points use, with `local_field` only for non-affine systems and
+/// `ensemble` (one field for many initial states) only for affine ones.
 pub fn runtime_files(affine: bool) -> Vec<(String, String)> {
     let mut wanted: Vec<&str> = vec!["direct", "field", "output", "system", "error", "method"];
-    if !affine {
+    if affine {
+        wanted.push("ensemble");
+    } else {
         wanted.push("local_field");
     }
     // Close over `use super::<module>` lines.

@@ -6,11 +6,13 @@
 
 use model::runtime::error::FAILURE_EXIT_STATUS;
 use model::{
-    initial_state, largest_exact_error, sample_times, solve, time_span, write_header, write_row,
-    Anchor, Options, Params, Tolerance, PARAM_NAMES, STATE_NAMES,
+    initial_state, largest_exact_error, sample_times, solve, solve_ensemble, time_span,
+    write_header, write_row, Anchor, Options, Params, Summary, Tolerance, PARAM_NAMES,
+    STATE_NAMES,
 };
 use std::io::Write;
 use std::process::ExitCode;
+use std::time::Duration;
 
 const USAGE: &str = "\
 usage: MODEL [--method field|direct] [--stiff] [--param NAME=VALUE]...
@@ -23,6 +25,15 @@ usage: MODEL [--method field|direct] [--stiff] [--param NAME=VALUE]...
   --rtol R, --atol A     tolerances (default 1e-10, 1e-12)
   --samples N            evenly spaced sample times (default 101)
   --anchor VALUE         every free anchor value c_A = VALUE (default 0)
+  --repeat N             solve N times (after one warm-up solve when N > 1)
+                         and report the smallest wall time (default 1)
+  --quiet                no CSV on stdout
+  --summary text|json    the summary on stderr as text (default) or as one
+                         JSON object line
+  --ensemble K           K initial states around the model's (the model's
+                         first): one field for all of them against K direct
+                         integrations; prints times and their largest
+                         difference (affine systems only)
   --help                 this text";
 
 const EXIT_USAGE: u8 = 2;
@@ -31,6 +42,19 @@ struct Run {
     options: Options,
     overrides: Vec<Option<f64>>,
     samples: usize,
+    repeat: usize,
+    quiet: bool,
+    json: bool,
+    ensemble: Option<usize>,
+}
+
+/// A count ≥ 1.
+fn count(flag: &str, value: Option<String>) -> Result<usize, String> {
+    let value = value.ok_or_else(|| format!("`{flag}` needs a value"))?;
+    match value.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!("`{flag}`: `{value}` is not a count ≥ 1")),
+    }
 }
 
 fn number(flag: &str, value: Option<String>) -> Result<f64, String> {
@@ -53,6 +77,10 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
         },
         overrides: vec![None; PARAM_NAMES.len()],
         samples: 101,
+        repeat: 1,
+        quiet: false,
+        json: false,
+        ensemble: None,
     };
     while let Some(arg) = args.next() {
         match arg.as_str() {
@@ -76,6 +104,14 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
                     _ => return Err(format!("`--samples`: `{value}` is not a count ≥ 1")),
                 };
             }
+            "--repeat" => run.repeat = count("--repeat", args.next())?,
+            "--quiet" => run.quiet = true,
+            "--summary" => match args.next().as_deref() {
+                Some("text") => run.json = false,
+                Some("json") => run.json = true,
+                other => return Err(format!("`--summary` takes `text` or `json`, not {other:?}")),
+            },
+            "--ensemble" => run.ensemble = Some(count("--ensemble", args.next())?),
             "--param" => {
                 let value = args.next().ok_or("`--param` needs NAME=VALUE")?;
                 let (name, v) = value
@@ -120,30 +156,236 @@ fn main() -> ExitCode {
     let (t0, t1) = time_span(&params);
     let times = sample_times(t0, t1, run.samples);
     let x0 = initial_state(&params);
+    if let Some(members) = run.ensemble {
+        return ensemble(&run, &params, &times, &x0, members);
+    }
     let mut samples: Vec<(f64, Vec<f64>)> = Vec::with_capacity(times.len());
-    let result = solve(&params, &run.options, &times, &x0, |t, x| {
-        samples.push((t, x.to_vec()))
-    });
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
-    let written = write_header(&mut out, &STATE_NAMES)
-        .and_then(|()| samples.iter().try_for_each(|(t, x)| write_row(&mut out, *t, x)))
-        .and_then(|()| out.flush());
-    if let Err(error) = written {
-        eprintln!("error: cannot write the trajectory: {error}");
-        return ExitCode::FAILURE;
+    let mut result = Err(None);
+    // One warm-up solve first when timing several (caches, page faults).
+    let solves = if run.repeat > 1 { run.repeat + 1 } else { 1 };
+    let mut fastest: Option<Duration> = None;
+    for i in 0..solves {
+        samples.clear();
+        let solved = solve(&params, &run.options, &times, &x0, |t, x| {
+            samples.push((t, x.to_vec()))
+        });
+        match solved {
+            Ok(summary) => {
+                let counted = solves == 1 || i > 0;
+                if counted {
+                    fastest = Some(fastest.map_or(summary.wall_time, |f| f.min(summary.wall_time)));
+                }
+                result = Ok(summary);
+            }
+            Err(failure) => {
+                result = Err(Some(failure));
+                break;
+            }
+        }
+    }
+    if !run.quiet {
+        let stdout = std::io::stdout();
+        let mut out = std::io::BufWriter::new(stdout.lock());
+        let written = write_header(&mut out, &STATE_NAMES)
+            .and_then(|()| samples.iter().try_for_each(|(t, x)| write_row(&mut out, *t, x)))
+            .and_then(|()| out.flush());
+        if let Err(error) = written {
+            eprintln!("error: cannot write the trajectory: {error}");
+            return ExitCode::FAILURE;
+        }
     }
     match result {
-        Ok(summary) => {
-            eprintln!("{summary}");
-            if let Some(error) = largest_exact_error(&params, &samples) {
-                eprintln!("largest error against the exact solution: {error:.3e}");
+        Ok(mut summary) => {
+            summary.wall_time = fastest.unwrap_or(summary.wall_time);
+            let exact_error = largest_exact_error(&params, &samples);
+            if run.json {
+                eprintln!("{}", summary_json(&summary, run.repeat, exact_error));
+            } else {
+                eprintln!("{summary}");
+                if let Some(error) = exact_error {
+                    eprintln!("largest error against the exact solution: {error:.3e}");
+                }
             }
             ExitCode::SUCCESS
         }
         Err(failure) => {
-            eprintln!("error: {failure}");
+            let message = failure.map_or_else(|| "no solve ran".to_string(), |f| f.to_string());
+            if run.json {
+                eprintln!("{{\"failed\":true,\"message\":{}}}", json_string(&message));
+            }
+            eprintln!("error: {message}");
             ExitCode::from(FAILURE_EXIT_STATUS as u8)
         }
     }
+}
+
+/// The summary as one JSON object (written by hand: the crate's only
+/// dependency is nalgebra). `wall_time_s` is the smallest of `runs` solves.
+fn summary_json(summary: &Summary, runs: usize, exact_error: Option<f64>) -> String {
+    format!(
+        "{{\"method\":{},\"steps\":{},\"rejected_steps\":{},\"rhs_evaluations\":{},\
+         \"largest_condition\":{},\"reanchorings\":{},\"wall_time_s\":{},\"runs\":{},\
+         \"exact_error\":{}}}",
+        json_string(&summary.method),
+        summary.steps,
+        summary.rejected_steps,
+        summary.rhs_evaluations,
+        json_number(summary.largest_condition),
+        summary.reanchorings.map_or("null".to_string(), |r| r.to_string()),
+        json_number(Some(summary.wall_time.as_secs_f64())),
+        runs,
+        json_number(exact_error),
+    )
+}
+
+/// A JSON number (`{:e}` reads back exactly), `null` when absent or not
+/// finite (JSON has no NaN).
+fn json_number(value: Option<f64>) -> String {
+    match value {
+        Some(v) if v.is_finite() => format!("{v:e}"),
+        _ => "null".to_string(),
+    }
+}
+
+fn json_string(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 2);
+    out.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// Member `k` of the ensemble: the model's initial state for `k = 0`,
+/// otherwise each component moved by up to 10 % of `max(|x0_i|, 1)` along a
+/// Weyl sequence (deterministic, well spread). The moved states are states
+/// of the reduced system (7); they need not satisfy the constraints, which
+/// does not matter for comparing two ways of integrating (7).
+fn member(x0: &[f64], k: usize) -> Vec<f64> {
+    x0.iter()
+        .enumerate()
+        .map(|(i, &x)| {
+            if k == 0 {
+                return x;
+            }
+            // Square roots of primes: rationally independent increments.
+            let step = [2.0_f64, 3.0, 5.0, 7.0, 11.0, 13.0, 17.0, 19.0][i % 8].sqrt();
+            let u = (k as f64 * step + i as f64 / 8.0).fract() * 2.0 - 1.0;
+            x + 0.1 * x.abs().max(1.0) * u
+        })
+        .collect()
+}
+
+/// `--ensemble K`: the field integrated once for K initial states against
+/// K direct integrations, each timed as the smallest of `--repeat` runs.
+fn ensemble(run: &Run, params: &Params, times: &[f64], x0: &[f64], count: usize) -> ExitCode {
+    let members: Vec<Vec<f64>> = (0..count).map(|k| member(x0, k)).collect();
+    let n = x0.len();
+    let solves = if run.repeat > 1 { run.repeat + 1 } else { 1 };
+    let mut field_states = vec![0.0; count * n * times.len()];
+    let mut direct_states = vec![0.0; count * n * times.len()];
+    let mut field_time: Option<Duration> = None;
+    let mut direct_time: Option<Duration> = None;
+    let mut one_field_time: Option<Duration> = None;
+    let mut field_summary = None;
+    let direct_options = Options {
+        field: false,
+        ..run.options.clone()
+    };
+    let field_options = Options {
+        field: true,
+        ..run.options.clone()
+    };
+    let fastest = |best: &mut Option<Duration>, time: Duration, i: usize| {
+        if solves == 1 || i > 0 {
+            *best = Some(best.map_or(time, |b: Duration| b.min(time)));
+        }
+    };
+    for i in 0..solves {
+        // One field for every member.
+        let mut sample = 0;
+        let solved = solve_ensemble(params, &field_options, times, &members, |_t, states| {
+            let at = sample * count * n;
+            field_states[at..at + count * n].copy_from_slice(states);
+            sample += 1;
+        });
+        let summary = match solved {
+            None => {
+                eprintln!("error: `--ensemble` needs an affine system (the field method proper)");
+                return ExitCode::from(EXIT_USAGE);
+            }
+            Some(Err(failure)) => return failed(run, &failure.to_string()),
+            Some(Ok(summary)) => summary,
+        };
+        fastest(&mut field_time, summary.wall_time, i);
+        field_summary = Some(summary);
+        // The plain field for the first member alone: the cost of one.
+        match solve(params, &field_options, times, x0, |_, _| {}) {
+            Ok(one) => fastest(&mut one_field_time, one.wall_time, i),
+            Err(failure) => return failed(run, &failure.to_string()),
+        }
+        // K direct integrations.
+        let start = std::time::Instant::now();
+        for (k, x) in members.iter().enumerate() {
+            let mut sample = 0;
+            let solved = solve(params, &direct_options, times, x, |_t, state| {
+                let at = (sample * count + k) * n;
+                direct_states[at..at + n].copy_from_slice(state);
+                sample += 1;
+            });
+            if let Err(failure) = solved {
+                return failed(run, &format!("direct integration of member {k}: {failure}"));
+            }
+        }
+        fastest(&mut direct_time, start.elapsed(), i);
+    }
+    // Relative to max(|direct|, 1), as the exact-solution error.
+    let difference = field_states
+        .iter()
+        .zip(&direct_states)
+        .fold(0.0_f64, |m, (f, d)| m.max((f - d).abs() / d.abs().max(1.0)));
+    let seconds = |d: Option<Duration>| d.map_or(f64::NAN, |d| d.as_secs_f64());
+    let (field_s, direct_s, one_s) = (
+        seconds(field_time),
+        seconds(direct_time),
+        seconds(one_field_time),
+    );
+    let method = field_summary.map_or_else(String::new, |s| s.method);
+    if run.json {
+        eprintln!(
+            "{{\"ensemble\":{count},\"method\":{},\"ensemble_field_s\":{},\
+             \"one_field_s\":{},\"direct_s\":{},\"largest_difference\":{},\"runs\":{}}}",
+            json_string(&method),
+            json_number(Some(field_s)),
+            json_number(Some(one_s)),
+            json_number(Some(direct_s)),
+            json_number(Some(difference)),
+            run.repeat,
+        );
+    } else {
+        eprintln!(
+            "ensemble of {count} initial states, {} samples: one field ({method}) for all: \
+             {:.3} ms; the field for one: {:.3} ms; {count} direct integrations: {:.3} ms; \
+             largest difference: {difference:.3e}",
+            times.len(),
+            field_s * 1e3,
+            one_s * 1e3,
+            direct_s * 1e3,
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+fn failed(run: &Run, message: &str) -> ExitCode {
+    if run.json {
+        eprintln!("{{\"failed\":true,\"message\":{}}}", json_string(message));
+    }
+    eprintln!("error: {message}");
+    ExitCode::from(FAILURE_EXIT_STATUS as u8)
 }

@@ -89,7 +89,11 @@ pub fn emit_crate(
     let solve = support::solve(affine);
     let motion_items = motion.items;
     let coefficient_import = if affine {
-        quote! { use runtime::field::solve_field; use runtime::system::CoefficientSystem; }
+        quote! {
+            use runtime::ensemble::solve_ensemble as solve_field_ensemble;
+            use runtime::field::solve_field;
+            use runtime::system::CoefficientSystem;
+        }
     } else {
         quote! { use runtime::local_field::solve_local_field; }
     };

@@ -126,7 +126,57 @@ pub fn solve(affine: bool) -> TokenStream {
             })
         }
     };
+    let ensemble = if affine {
+        quote! {
+            /// One field for every initial state of `members` (affine
+            /// systems), calling `on_sample(t, states)` with member `k` at
+            /// `states[k·N..(k+1)·N]`; `None` when the system is not affine.
+            pub fn solve_ensemble(
+                params: &Params,
+                options: &Options,
+                times: &[f64],
+                members: &[Vec<f64>],
+                on_sample: impl FnMut(f64, &[f64]),
+            ) -> Option<Result<Summary, Failure>> {
+                let start = std::time::Instant::now();
+                let coefficients = Coefficients { params: params.clone() };
+                let integrator = if options.stiff && coefficients.is_linear() { Integrator::Stiff } else { Integrator::Explicit };
+                let field_options = FieldOptions {
+                    tol: options.tol,
+                    integrator,
+                    anchor: options.anchor.clone(),
+                    ..FieldOptions::default()
+                };
+                let solved = solve_field_ensemble(&coefficients, &field_options, times, members, on_sample);
+                Some(solved.map(|report| Summary {
+                    method: format!("field ensemble ({}, {} cop{})", integrator.name(), report.copies, if report.copies == 1 { "y" } else { "ies" }),
+                    steps: report.stats.accepted_steps,
+                    rejected_steps: report.stats.rejected_steps,
+                    rhs_evaluations: report.stats.rhs_evaluations,
+                    largest_condition: Some(report.largest_condition),
+                    reanchorings: Some(report.reanchorings),
+                    wall_time: start.elapsed(),
+                }))
+            }
+        }
+    } else {
+        quote! {
+            /// The ensemble mode needs the field method proper (an affine
+            /// system): always `None` here.
+            pub fn solve_ensemble(
+                _params: &Params,
+                _options: &Options,
+                _times: &[f64],
+                _members: &[Vec<f64>],
+                _on_sample: impl FnMut(f64, &[f64]),
+            ) -> Option<Result<Summary, Failure>> {
+                None
+            }
+        }
+    };
     quote! {
+        #ensemble
+
         /// How to integrate (the generated binary's options).
         #[derive(Clone, Debug, PartialEq)]
         pub struct Options {

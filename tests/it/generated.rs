@@ -258,3 +258,35 @@ fn generated_crates_pass_clippy() {
         );
     }
 }
+
+/// `--ensemble K`: one field for K initial states agrees with K direct
+/// integrations (a linear and a Riccati coefficient system); a non-affine
+/// system has no ensemble mode (usage error).
+#[test]
+fn ensemble_mode_agrees_with_direct_integrations() {
+    for name in ["paper", "damped_oscillator"] {
+        let binary = build(name);
+        for k in ["1", "3", "20"] {
+            let output = Command::new(&binary)
+                .args(["--ensemble", k, "--summary", "json", "--samples", "21"])
+                .output()
+                .unwrap();
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert!(output.status.success(), "{name}: {stderr}");
+            assert!(output.stdout.is_empty());
+            let difference: f64 = stderr
+                .split("\"largest_difference\":")
+                .nth(1)
+                .and_then(|rest| rest.split([',', '}']).next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or_else(|| panic!("{name}: {stderr}"));
+            assert!(difference <= 1e-8, "{name} K = {k}: {difference:e}");
+            assert!(stderr.contains(&format!("\"ensemble\":{k},")), "{stderr}");
+        }
+    }
+    let output = Command::new(build("nonlinear_second_order"))
+        .args(["--ensemble", "2"])
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2));
+}

@@ -8,6 +8,7 @@ mod generated;
 mod ir;
 mod mechanics;
 mod parser;
+mod report;
 mod robustness;
 mod runtime;
 

@@ -4,6 +4,7 @@
 #[path = "../../src/emit/runtime/mod.rs"]
 mod rt;
 
+mod ensemble;
 mod systems;
 
 use rt::direct::solve_direct;

@@ -16,6 +16,7 @@
 //! | `sensitivity` | the coefficient system augmented by `S = ∂f/∂c` |
 //! | `conditioned` | the conditions (13): `x_B(t)` from `f`, `S` |
 //! | `field` | the field method with re-anchoring |
+//! | `ensemble` | one field for many initial states (affine systems) |
 //! | `local_field` | the local field method for non-affine systems |
 //! | `method` | the choice of integrator at run time |
 //! | `direct` | direct integration of (7) at the sample times |
@@ -28,6 +29,7 @@
 pub mod conditioned;
 pub mod direct;
 pub mod dop853;
+pub mod ensemble;
 pub mod error;
 pub mod field;
 pub mod local_field;
