@@ -400,7 +400,7 @@ fn measure_field_against_direct() {
         }
         let (samples, report) = run.unwrap();
         let summary = Summary {
-            method: "field (DOP853)".into(),
+            method: format!("field ({})", report.integrator),
             steps: report.stats.accepted_steps,
             rejected_steps: report.stats.rejected_steps,
             rhs_evaluations: report.stats.rhs_evaluations,

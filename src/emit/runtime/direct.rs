@@ -78,7 +78,8 @@ impl DirectReport {
 /// `Auto` starts with DOP853 and, when Hairer's stiffness test fires,
 /// continues from the current state with RODAS4 (with the last step length
 /// as its first guess); `Explicit` keeps DOP853 and only reports the
-/// detection; `Stiff` is RODAS4 throughout.
+/// detection; `Stiff` is RODAS4 throughout; `Magnus` (a field-only choice)
+/// acts as `Auto`.
 pub fn solve_direct_choice<M: Motion + ?Sized>(
     motion: &M,
     choice: IntegratorChoice,
@@ -89,7 +90,9 @@ pub fn solve_direct_choice<M: Motion + ?Sized>(
 ) -> Result<DirectReport, Failure> {
     let first = match choice {
         IntegratorChoice::Stiff => Integrator::Stiff,
-        IntegratorChoice::Auto | IntegratorChoice::Explicit => Integrator::Explicit,
+        IntegratorChoice::Auto | IntegratorChoice::Explicit | IntegratorChoice::Magnus => {
+            Integrator::Explicit
+        }
     };
     let mut report = DirectReport {
         stats: Stats::default(),
@@ -109,7 +112,8 @@ pub fn solve_direct_choice<M: Motion + ?Sized>(
             stepper.step(motion, t)?;
             if report.stiffness_detected_at.is_none() {
                 report.stiffness_detected_at = stepper.stiffness_detected();
-                if report.stiffness_detected_at.is_some() && choice == IntegratorChoice::Auto {
+                let switches = matches!(choice, IntegratorChoice::Auto | IntegratorChoice::Magnus);
+                if report.stiffness_detected_at.is_some() && switches {
                     let (now, h) = (stepper.time(), stepper.proposed_step());
                     report.stats += stepper.stats();
                     let state = stepper.state().to_vec();

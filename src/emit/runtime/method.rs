@@ -51,17 +51,20 @@ impl Method {
     }
 }
 
-/// The user's choice of integrator (`--integrator auto|explicit|stiff`).
+/// The user's choice of integrator (`--integrator auto|explicit|stiff|magnus`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum IntegratorChoice {
     /// Direct: DOP853, switching to RODAS4 when it detects stiffness.
-    /// Field: Magnus for linear coefficient systems, DOP853 otherwise.
+    /// Field: DOP853 (see `FieldOptions::magnus` for why).
     #[default]
     Auto,
     /// DOP853 throughout (stiffness is only reported).
     Explicit,
     /// RODAS4 throughout (field: linear coefficient systems only).
     Stiff,
+    /// Field: the Magnus integrator for linear coefficient systems (DOP853
+    /// otherwise). Direct: the same as `Auto` (no exponential integrator).
+    Magnus,
 }
 
 impl IntegratorChoice {
@@ -70,6 +73,7 @@ impl IntegratorChoice {
             "auto" => Some(IntegratorChoice::Auto),
             "explicit" => Some(IntegratorChoice::Explicit),
             "stiff" => Some(IntegratorChoice::Stiff),
+            "magnus" => Some(IntegratorChoice::Magnus),
             _ => None,
         }
     }
@@ -79,6 +83,7 @@ impl IntegratorChoice {
             IntegratorChoice::Auto => "auto",
             IntegratorChoice::Explicit => "explicit",
             IntegratorChoice::Stiff => "stiff",
+            IntegratorChoice::Magnus => "magnus",
         }
     }
 }

@@ -25,13 +25,19 @@ fn direct_choice(
     (samples, report)
 }
 
+fn magnus_options() -> FieldOptions {
+    FieldOptions {
+        magnus: true,
+        ..field_options()
+    }
+}
+
 #[test]
 fn magnus_field_follows_the_paper_example() {
     let system = PaperExample { alpha: 0.5 };
     let x0 = [0.3, -0.2, 1.0, 0.0];
     let times = sample_times(0.0, 5.0, 26);
-    let options = field_options();
-    assert!(options.magnus, "Magnus is the default for linear systems");
+    let options = magnus_options();
     let (samples, report) = field(&system, &options, &times, &x0).unwrap();
     assert_eq!(report.integrator, "Magnus-4");
     assert!(report.stats.matrix_exponentials >= 3 * report.stats.accepted_steps);
@@ -44,7 +50,7 @@ fn magnus_field_follows_the_paper_example() {
             rtol: 1e-6,
             atol: 1e-8,
         },
-        ..field_options()
+        ..magnus_options()
     };
     let (samples, loose_report) = field(&system, &loose, &times, &x0).unwrap();
     let error = largest_error(&samples, |t| system.exact(t, &x0));
@@ -61,7 +67,7 @@ fn magnus_field_survives_stiff_decaying_modes() {
         let system = StiffPair { rate };
         let x0 = [1.0, 2.0];
         let times = sample_times(0.0, t1, 21);
-        let (samples, report) = field(&system, &field_options(), &times, &x0).unwrap();
+        let (samples, report) = field(&system, &magnus_options(), &times, &x0).unwrap();
         assert_eq!(report.integrator, "Magnus-4");
         assert!(report.reanchorings > 0, "{report:?}");
         let error = largest_error(&samples, |t| system.exact(t, &x0));
@@ -175,6 +181,7 @@ fn methods_and_choices_parse_from_the_command_line_words() {
         IntegratorChoice::Auto,
         IntegratorChoice::Explicit,
         IntegratorChoice::Stiff,
+        IntegratorChoice::Magnus,
     ] {
         assert_eq!(IntegratorChoice::parse(choice.name()), Some(choice));
     }
@@ -183,7 +190,10 @@ fn methods_and_choices_parse_from_the_command_line_words() {
     assert_eq!(stiff.integrator_name(&StiffPair { rate: 1e3 }), "RODAS4");
     assert_eq!(stiff.integrator_name(&Oscillator { omega: 1.0 }), "DOP853");
     let auto = FieldOptions::for_choice(IntegratorChoice::Auto, TOL, Anchor::Zero);
-    assert_eq!(auto.integrator_name(&StiffPair { rate: 1e3 }), "Magnus-4");
+    assert_eq!(auto.integrator_name(&StiffPair { rate: 1e3 }), "DOP853");
+    let magnus = FieldOptions::for_choice(IntegratorChoice::Magnus, TOL, Anchor::Zero);
+    assert_eq!(magnus.integrator_name(&StiffPair { rate: 1e3 }), "Magnus-4");
+    assert_eq!(magnus.integrator_name(&Oscillator { omega: 1.0 }), "DOP853");
 }
 
 /// Work and error of the field's coefficient integrators and of the direct
@@ -255,7 +265,7 @@ fn measure_field_integrators_on_stiff_and_paper_cases() {
         [
             FieldOptions {
                 max_growth: growth,
-                ..field_options()
+                ..magnus_options()
             },
             FieldOptions {
                 magnus: false,
@@ -281,6 +291,7 @@ fn measure_field_integrators_on_stiff_and_paper_cases() {
         IntegratorChoice::Auto,
         IntegratorChoice::Explicit,
         IntegratorChoice::Stiff,
+        IntegratorChoice::Magnus,
     ] {
         direct_row("paper t∈[0,5]", &paper, choice, &times, &x0, &exact);
     }
