@@ -10,6 +10,7 @@ const RUNTIME: &[(&str, &str)] = &[
     ("error", include_str!("runtime/error.rs")),
     ("field", include_str!("runtime/field.rs")),
     ("local_field", include_str!("runtime/local_field.rs")),
+    ("magnus", include_str!("runtime/magnus.rs")),
     ("method", include_str!("runtime/method.rs")),
     ("output", include_str!("runtime/output.rs")),
     ("rosenbrock", include_str!("runtime/rosenbrock.rs")),
@@ -17,6 +18,12 @@ const RUNTIME: &[(&str, &str)] = &[
     ("stepper", include_str!("runtime/stepper.rs")),
     ("system", include_str!("runtime/system.rs")),
 ];
+
+/// The names of the runtime modules lagc can copy (a test checks that they
+/// are every file of `src/emit/runtime/`).
+pub fn runtime_module_names() -> impl Iterator<Item = &'static str> {
+    RUNTIME.iter().map(|(name, _)| *name)
+}
 
 /// The generated binary: argument parsing, CSV, summary (the same for
 /// every model; the model-specific parts are in the generated library).

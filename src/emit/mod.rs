@@ -31,6 +31,7 @@ use crate::check::model::Model;
 use crate::diagnostic::Diagnostic;
 use crate::field::FieldSystem;
 use crate::mechanics::Derivation;
+pub use files::runtime_module_names;
 use names::SymbolNames;
 use quote::quote;
 

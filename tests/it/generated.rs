@@ -290,3 +290,24 @@ fn ensemble_mode_agrees_with_direct_integrations() {
         .unwrap();
     assert_eq!(output.status.code(), Some(2));
 }
+
+/// The emitter can copy every runtime module: a module missing from its
+/// list would make generated crates that `use` it fail to compile.
+#[test]
+fn the_emitter_knows_every_runtime_module() {
+    let mut on_disk: Vec<String> = std::fs::read_dir(root().join("src/emit/runtime"))
+        .unwrap()
+        .filter_map(|entry| {
+            let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+            name.strip_suffix(".rs")
+                .filter(|stem| *stem != "mod")
+                .map(str::to_string)
+        })
+        .collect();
+    on_disk.sort();
+    let mut known: Vec<String> = lagc::emit::runtime_module_names()
+        .map(str::to_string)
+        .collect();
+    known.sort();
+    assert_eq!(known, on_disk);
+}
