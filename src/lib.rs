@@ -23,4 +23,6 @@ pub mod span;
 mod suggest;
 pub mod syntax;
 
-pub use frontend::{check_and_derive, check_and_derive_bytes, frontend, frontend_bytes, on_big_stack};
+pub use frontend::{
+    check_and_derive, check_and_derive_bytes, frontend, frontend_bytes, on_big_stack,
+};

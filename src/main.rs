@@ -76,8 +76,12 @@ struct RunArgs {
     /// The field method or direct integration of (7).
     #[arg(long, value_enum, default_value_t = Method::Field)]
     method: Method,
-    /// Use the stiff integrator RODAS4.
-    #[arg(long)]
+    /// The integrator: DOP853 (explicit), RODAS4 (stiff), or auto; the
+    /// default is the model's `integrator` statement, or auto.
+    #[arg(long, value_enum, value_name = "CHOICE")]
+    integrator: Option<Integrator>,
+    /// The same as `--integrator stiff`.
+    #[arg(long, conflicts_with = "integrator")]
     stiff: bool,
     /// Relative tolerance.
     #[arg(long, value_name = "R")]
@@ -91,6 +95,16 @@ struct RunArgs {
     /// Every free anchor value c_A of the field method (default 0).
     #[arg(long, value_name = "VALUE", allow_hyphen_values = true)]
     anchor: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Integrator {
+    /// Explicit unless the system is found stiff.
+    Auto,
+    /// DOP853, explicit, order 8.
+    Explicit,
+    /// RODAS4, linearly implicit, order 4.
+    Stiff,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -329,8 +343,14 @@ fn run(args: &RunArgs) -> ExitCode {
         Method::Direct => "direct",
     };
     passed.extend(["--method".to_string(), method.to_string()]);
-    if args.stiff {
-        passed.push("--stiff".to_string());
+    let integrator = match (args.integrator, args.stiff) {
+        (_, true) | (Some(Integrator::Stiff), _) => Some("stiff"),
+        (Some(Integrator::Explicit), _) => Some("explicit"),
+        (Some(Integrator::Auto), _) => Some("auto"),
+        (None, false) => None,
+    };
+    if let Some(integrator) = integrator {
+        passed.extend(["--integrator".to_string(), integrator.to_string()]);
     }
     let numbers = [
         ("--rtol", args.rtol),

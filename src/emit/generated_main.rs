@@ -6,19 +6,24 @@
 
 use model::runtime::error::FAILURE_EXIT_STATUS;
 use model::{
-    initial_state, largest_exact_error, sample_times, solve, time_span, write_header, write_row,
-    Anchor, Options, Params, Tolerance, PARAM_NAMES, STATE_NAMES,
+    initial_state, integrator_choice, largest_exact_error, sample_times, solve, time_span,
+    write_header, write_row, Anchor, IntegratorChoice, Options, Params, Tolerance, PARAM_NAMES,
+    STATE_NAMES,
 };
 use std::io::Write;
 use std::process::ExitCode;
 
 const USAGE: &str = "\
-usage: MODEL [--method field|direct] [--stiff] [--param NAME=VALUE]...
-             [--rtol R] [--atol A] [--samples N] [--anchor VALUE]
+usage: MODEL [--method field|direct] [--integrator auto|explicit|stiff]
+             [--param NAME=VALUE]... [--rtol R] [--atol A] [--samples N]
+             [--anchor VALUE]
 
   --method field|direct  the field method (default) or direct integration
-  --stiff                the stiff integrator RODAS4 (direct; field when the
-                         coefficient system is linear)
+  --integrator auto|explicit|stiff
+                         DOP853 (explicit) or RODAS4 (stiff: direct, and
+                         field when the coefficient system is linear);
+                         default: the model's `integrator` statement, or auto
+  --stiff                the same as `--integrator stiff`
   --param NAME=VALUE     override a param (later params are recomputed)
   --rtol R, --atol A     tolerances (default 1e-10, 1e-12)
   --samples N            evenly spaced sample times (default 101)
@@ -47,7 +52,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
     let mut run = Run {
         options: Options {
             field: true,
-            stiff: false,
+            integrator: None,
             tol: Tolerance::default(),
             anchor: Anchor::Zero,
         },
@@ -62,7 +67,15 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
                 Some("direct") => run.options.field = false,
                 other => return Err(format!("`--method` takes `field` or `direct`, not {other:?}")),
             },
-            "--stiff" => run.options.stiff = true,
+            "--stiff" => run.options.integrator = Some(IntegratorChoice::Stiff),
+            "--integrator" => {
+                let value = args.next();
+                let choice = value.as_deref().and_then(IntegratorChoice::from_name);
+                let choice = choice.ok_or_else(|| {
+                    format!("`--integrator` takes `auto`, `explicit` or `stiff`, not {value:?}")
+                })?;
+                run.options.integrator = Some(choice);
+            }
             "--rtol" => run.options.tol.rtol = positive("--rtol", args.next())?,
             "--atol" => run.options.tol.atol = positive("--atol", args.next())?,
             "--anchor" => {
@@ -121,6 +134,7 @@ fn main() -> ExitCode {
     let times = sample_times(t0, t1, run.samples);
     let x0 = initial_state(&params);
     let mut samples: Vec<(f64, Vec<f64>)> = Vec::with_capacity(times.len());
+    eprintln!("{}", integrator_choice(&run.options));
     let result = solve(&params, &run.options, &times, &x0, |t, x| {
         samples.push((t, x.to_vec()))
     });

@@ -86,7 +86,11 @@ pub fn emit_crate(
     let linear_solve = motion.linear_solve.then(support::linear_solve);
     let newton = motion.newton.then(support::newton);
     let implicit = (motion.linear_solve || motion.newton).then(support::finite_differences);
-    let solve = support::solve(affine);
+    let linear = field
+        .coefficient_system
+        .as_ref()
+        .is_some_and(|system| system.linear);
+    let solve = support::solve(affine, linear, model.integrator.map(|d| d.choice));
     let motion_items = motion.items;
     let coefficient_import = if affine {
         quote! { use runtime::field::solve_field; use runtime::system::CoefficientSystem; }

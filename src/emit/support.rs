@@ -2,6 +2,7 @@
 //! needs them: the linear solve of the mass matrix, Newton's method, and
 //! finite-difference Jacobians for implicit systems.
 
+use crate::check::model::IntegratorChoice;
 use proc_macro2::TokenStream;
 use quote::quote;
 
@@ -95,8 +96,15 @@ pub fn finite_differences() -> TokenStream {
     }
 }
 
-/// `solve(...)`: the method chosen at run time, on this system.
-pub fn solve(affine: bool) -> TokenStream {
+/// `solve(...)`: the method chosen at run time, on this system, and the
+/// choice of integrator with the model's `integrator` statement as default.
+pub fn solve(affine: bool, linear: bool, declared: Option<IntegratorChoice>) -> TokenStream {
+    let declared = match declared {
+        None => quote! { None },
+        Some(IntegratorChoice::Auto) => quote! { Some(IntegratorChoice::Auto) },
+        Some(IntegratorChoice::Explicit) => quote! { Some(IntegratorChoice::Explicit) },
+        Some(IntegratorChoice::Stiff) => quote! { Some(IntegratorChoice::Stiff) },
+    };
     let field = if affine {
         quote! {
             let coefficients = Coefficients { params: params.clone() };
@@ -126,14 +134,95 @@ pub fn solve(affine: bool) -> TokenStream {
             })
         }
     };
+    // What the field method makes of the chosen integrator: RODAS4 needs
+    // the exact Jacobian of a linear coefficient system.
+    let field_integrator = if affine && linear {
+        quote! { (integrator, reason) }
+    } else if affine {
+        quote! {
+            if integrator == Integrator::Explicit {
+                (integrator, reason)
+            } else {
+                (Integrator::Explicit, format!("{reason}; not RODAS4: the coefficient system is of Riccati type, and RODAS4 needs a linear one"))
+            }
+        }
+    } else {
+        quote! {
+            let _ = integrator;
+            (Integrator::Explicit, "the local field method integrates each window's linear field with DOP853".to_string())
+        }
+    };
     quote! {
+        /// How a run chooses its integrator: `--integrator`, or else the
+        /// model's `integrator` statement, or else `Auto`.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum IntegratorChoice {
+            /// Explicit unless the system is found stiff.
+            Auto,
+            /// DOP853.
+            Explicit,
+            /// RODAS4 (declared stiff).
+            Stiff,
+        }
+
+        impl IntegratorChoice {
+            /// `auto`, `explicit` or `stiff`, as on the command line.
+            pub fn from_name(name: &str) -> Option<IntegratorChoice> {
+                match name {
+                    "auto" => Some(IntegratorChoice::Auto),
+                    "explicit" => Some(IntegratorChoice::Explicit),
+                    "stiff" => Some(IntegratorChoice::Stiff),
+                    _ => None,
+                }
+            }
+
+            fn name(self) -> &'static str {
+                match self {
+                    IntegratorChoice::Auto => "auto",
+                    IntegratorChoice::Explicit => "explicit",
+                    IntegratorChoice::Stiff => "stiff",
+                }
+            }
+        }
+
+        /// The model's `integrator` statement (`None`: it has none).
+        pub const DECLARED_INTEGRATOR: Option<IntegratorChoice> = #declared;
+
         /// How to integrate (the generated binary's options).
         #[derive(Clone, Debug, PartialEq)]
         pub struct Options {
             pub field: bool,
-            pub stiff: bool,
+            /// `None`: the model's `integrator` statement decides.
+            pub integrator: Option<IntegratorChoice>,
             pub tol: Tolerance,
             pub anchor: Anchor,
+        }
+
+        /// The integrator a run with `options` uses, and why, in words.
+        fn chosen_integrator(options: &Options) -> (Integrator, String) {
+            let (choice, source) = match (options.integrator, DECLARED_INTEGRATOR) {
+                (Some(choice), _) => (choice, format!("--integrator {}", choice.name())),
+                (None, Some(choice)) => (choice, format!("declared {} in the model", choice.name())),
+                (None, None) => (IntegratorChoice::Auto, "auto, the default".to_string()),
+            };
+            let (integrator, reason) = match choice {
+                IntegratorChoice::Stiff => (Integrator::Stiff, source),
+                IntegratorChoice::Explicit => (Integrator::Explicit, source),
+                // This runtime detects no stiffness: auto is DOP853.
+                IntegratorChoice::Auto => (Integrator::Explicit, format!("{source}; no stiffness detection: use --integrator stiff for a stiff system")),
+            };
+            if !options.field {
+                return (integrator, reason);
+            }
+            #field_integrator
+        }
+
+        /// The line a run prints on stderr before it starts, e.g.
+        /// `direct: RODAS4 (declared stiff in the model)`.
+        pub fn integrator_choice(options: &Options) -> String {
+            let (integrator, reason) = chosen_integrator(options);
+            let method = if options.field { "field" } else { "direct" };
+            format!("{method}: {} ({reason})", integrator.name())
         }
 
         /// Integrates the model from `x0` over `times`, by the field method
@@ -147,7 +236,7 @@ pub fn solve(affine: bool) -> TokenStream {
         ) -> Result<Summary, Failure> {
             let start = std::time::Instant::now();
             let system = System { params: params.clone() };
-            let integrator = if options.stiff { Integrator::Stiff } else { Integrator::Explicit };
+            let (integrator, _) = chosen_integrator(options);
             if !options.field {
                 let stats = solve_direct(&system, integrator, options.tol, times, x0, on_sample)?;
                 return Ok(Summary {

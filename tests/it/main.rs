@@ -19,9 +19,11 @@ use lagc::diagnostic::{self, Diagnostic};
 pub fn check_bytes(bytes: &[u8], file_name: &str) -> Result<lagc::check::model::Model, String> {
     lagc::on_big_stack(|| {
         let (source, result) = lagc::check_and_derive_bytes(bytes);
-        result.map(|(model, _)| model).map_err(|diagnostics: Vec<Diagnostic>| {
-            diagnostic::render(&diagnostics, file_name, &source, false)
-        })
+        result
+            .map(|(model, _)| model)
+            .map_err(|diagnostics: Vec<Diagnostic>| {
+                diagnostic::render(&diagnostics, file_name, &source, false)
+            })
     })
 }
 
