@@ -95,6 +95,10 @@ struct RunArgs {
     /// Every free anchor value c_A of the field method (default 0).
     #[arg(long, value_name = "VALUE", allow_hyphen_values = true)]
     anchor: Option<f64>,
+    /// Field method: stop with a failure when the conditions (13) become
+    /// ill-conditioned instead of re-anchoring.
+    #[arg(long)]
+    no_reanchor: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -361,6 +365,9 @@ fn run(args: &RunArgs) -> ExitCode {
         if let Some(v) = value {
             passed.extend([flag.to_string(), format!("{v:?}")]);
         }
+    }
+    if args.no_reanchor {
+        passed.push("--no-reanchor".to_string());
     }
     if let Some(n) = args.samples {
         passed.extend(["--samples".to_string(), n.to_string()]);

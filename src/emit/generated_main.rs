@@ -16,7 +16,7 @@ use std::process::ExitCode;
 const USAGE: &str = "\
 usage: MODEL [--method field|direct] [--integrator auto|explicit|stiff]
              [--param NAME=VALUE]... [--rtol R] [--atol A] [--samples N]
-             [--anchor VALUE]
+             [--anchor VALUE] [--no-reanchor]
 
   --method field|direct  the field method (default) or direct integration
   --integrator auto|explicit|stiff
@@ -28,6 +28,8 @@ usage: MODEL [--method field|direct] [--integrator auto|explicit|stiff]
   --rtol R, --atol A     tolerances (default 1e-10, 1e-12)
   --samples N            evenly spaced sample times (default 101)
   --anchor VALUE         every free anchor value c_A = VALUE (default 0)
+  --no-reanchor          field: stop when the conditions (13) become
+                         ill-conditioned instead of re-anchoring
   --help                 this text";
 
 const EXIT_USAGE: u8 = 2;
@@ -55,6 +57,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
             integrator: None,
             tol: Tolerance::default(),
             anchor: Anchor::Zero,
+            reanchor: true,
         },
         overrides: vec![None; PARAM_NAMES.len()],
         samples: 101,
@@ -76,6 +79,7 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
                 })?;
                 run.options.integrator = Some(choice);
             }
+            "--no-reanchor" => run.options.reanchor = false,
             "--rtol" => run.options.tol.rtol = positive("--rtol", args.next())?,
             "--atol" => run.options.tol.atol = positive("--atol", args.next())?,
             "--anchor" => {

@@ -84,6 +84,15 @@ pub fn emit_crate(
     let coefficients = coefficients::coefficient_code(&arena, &mut names, field);
     let affine = coefficients.is_some();
     let linear_solve = motion.linear_solve.then(support::linear_solve);
+    let (watch_field, watch_init, explain) = if motion.linear_solve {
+        (
+            quote! { mass_matrix: MassMatrixWatch, },
+            quote! { mass_matrix: MassMatrixWatch::default() },
+            quote! { self.mass_matrix.explain(failure) },
+        )
+    } else {
+        (quote! {}, quote! {}, quote! { failure })
+    };
     let newton = motion.newton.then(support::newton);
     let implicit = (motion.linear_solve || motion.newton).then(support::finite_differences);
     let linear = field
@@ -149,6 +158,19 @@ pub fn emit_crate(
         /// The reduced system (7).
         pub struct System {
             pub params: Params,
+            #watch_field
+        }
+
+        impl System {
+            pub fn new(params: Params) -> System {
+                System { params, #watch_init }
+            }
+
+            /// A failure of the integrator, with its cause named when the
+            /// system can see it (a mass matrix becoming singular).
+            fn explain(&self, failure: Failure) -> Failure {
+                #explain
+            }
         }
 
         #motion_items

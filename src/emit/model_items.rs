@@ -149,6 +149,7 @@ pub fn initial_code(
     let mut statements = Vec::new();
     let mut known: HashMap<Symbol, TokenStream> = HashMap::new();
     let mut uses_time = false;
+    let mut uses_params = false;
     let mut emit = |arena: &mut Arena,
                     names: &mut SymbolNames,
                     s: Symbol,
@@ -159,6 +160,7 @@ pub fn initial_code(
         let value = code.single(quote! { params });
         let name = names.ident(arena, s);
         uses_time |= code.uses_time;
+        uses_params |= code.uses_params;
         statements.push(quote! { let #name = #value; });
         known.insert(s, name);
     };
@@ -201,9 +203,16 @@ pub fn initial_code(
             }
         }
     }
+    // A model without params, or whose initial values use none, would
+    // leave `params` unused (a warning in the generated crate).
+    let params = if uses_params || uses_time {
+        quote! { params }
+    } else {
+        quote! { _params }
+    };
     Ok(quote! {
         /// The initial state (6) at `t0`.
-        pub fn initial_state(params: &Params) -> Vec<f64> {
+        pub fn initial_state(#params: &Params) -> Vec<f64> {
             #t
             #(#statements)*
             vec![#(#values),*]

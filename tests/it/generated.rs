@@ -11,7 +11,13 @@ fn root() -> PathBuf {
 }
 
 fn generate(name: &str) -> GeneratedCrate {
-    let source = std::fs::read_to_string(root().join(format!("examples/{name}.lag"))).unwrap();
+    generate_file(&root().join(format!("examples/{name}.lag")))
+}
+
+/// The crate of the model in `path`, named by the file's stem.
+fn generate_file(path: &Path) -> GeneratedCrate {
+    let name = path.file_stem().unwrap().to_str().unwrap();
+    let source = std::fs::read_to_string(path).unwrap();
     let model = lagc::frontend(&source).unwrap_or_else(|d| panic!("{name}: {d:?}"));
     let (generated, _notes) =
         lagc::pipeline::generate_crate(&model, name).unwrap_or_else(|d| panic!("{name}: {d:?}"));
@@ -32,7 +38,13 @@ fn write(generated: &GeneratedCrate, dir: &Path) {
 /// Builds the crate (release: the runs below dominate a debug build's
 /// saving, measured) with warnings as errors; returns the binary.
 fn build(name: &str) -> PathBuf {
-    let generated = generate(name);
+    build_file(&root().join(format!("examples/{name}.lag")))
+}
+
+/// [`build`] for the model in any file.
+pub(crate) fn build_file(path: &Path) -> PathBuf {
+    let generated = generate_file(path);
+    let name = &generated.package;
     let base = root().join("target/generated-crates");
     let dir = base.join("crates").join(&generated.package);
     write(&generated, &dir);

@@ -10,6 +10,7 @@ mod mechanics;
 mod parser;
 mod robustness;
 mod runtime;
+mod runtime_failures;
 
 use lagc::diagnostic::{self, Diagnostic};
 
