@@ -11,6 +11,7 @@ mod parser;
 mod robustness;
 mod runtime;
 mod runtime_failures;
+mod stiff_extreme;
 
 use lagc::diagnostic::{self, Diagnostic};
 
