@@ -4,6 +4,7 @@
 #[path = "../../src/emit/runtime/mod.rs"]
 mod rt;
 
+mod stability;
 mod systems;
 
 use rt::direct::solve_direct;
@@ -145,11 +146,13 @@ fn damped_oscillator_by_field_and_direct_matches_exact_motion() {
 fn stiff_system_field_reanchors_and_both_integrators_handle_it() {
     let system = StiffPair { rate: 1000.0 };
     let x0 = [1.0, 2.0];
-    let times = sample_times(0.0, 2.0, 21);
+    // Past t = 0.8, where S would overflow without re-anchoring.
+    let times = sample_times(0.0, 1.0, 11);
     let exact = |t| system.exact(t, &x0);
     for integrator in [Integrator::Explicit, Integrator::Stiff] {
         let options = FieldOptions {
             integrator,
+            magnus: false,
             ..field_options()
         };
         let (by_field, report) = field(&system, &options, &times, &x0).unwrap();
@@ -397,7 +400,7 @@ fn measure_field_against_direct() {
         }
         let (samples, report) = run.unwrap();
         let summary = Summary {
-            method: "field (DOP853)".into(),
+            method: format!("field ({})", report.integrator),
             steps: report.stats.accepted_steps,
             rejected_steps: report.stats.rejected_steps,
             rhs_evaluations: report.stats.rhs_evaluations,

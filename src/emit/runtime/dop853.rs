@@ -135,6 +135,14 @@ const ER: [(usize, f64); 8] = [
     (11, -0.2235530786388629525884427845e-01),
 ];
 
+/// Hairer's stiffness test (`dop853.f`): `h·ρ` estimated from the last
+/// stage, `h ‖X(t+h, y₁) − X(t+h, ŷ)‖ / ‖y₁ − ŷ‖`, past the edge of
+/// DOP853's stability region (≈ 6.1 on the negative real axis) on
+/// `STIFF_STEPS` tests, not interrupted by `NON_STIFF_STEPS` tests below it.
+const STIFF_H_RHO: f64 = 6.1;
+const STIFF_STEPS: usize = 15;
+const NON_STIFF_STEPS: usize = 6;
+
 const SAFETY: f64 = 0.9;
 const MIN_SCALE: f64 = 0.333;
 const MAX_SCALE: f64 = 6.0;
@@ -150,6 +158,9 @@ pub struct Dop853 {
     stage_state: Vec<f64>,
     h: f64,
     stats: Stats,
+    stiff_tests: usize,
+    non_stiff_tests: usize,
+    stiffness_detected: Option<f64>,
 }
 
 impl Dop853 {
@@ -186,7 +197,37 @@ impl Dop853 {
                 rhs_evaluations: 2,
                 ..Stats::default()
             },
+            stiff_tests: 0,
+            non_stiff_tests: 0,
+            stiffness_detected: None,
         })
+    }
+
+    /// Hairer's test after an accepted step of length `h`: `y` is the new
+    /// state, `k[0] = X(t, y)`, and the last stage `k[11] = X(t, y₁)` was
+    /// evaluated at the same time (node 1) at `stage_state = y₁`.
+    fn test_stiffness(&mut self, h: f64) {
+        let (mut numerator, mut denominator) = (0.0, 0.0);
+        for i in 0..self.y.len() {
+            numerator += (self.k[0][i] - self.k[STAGES - 1][i]).powi(2);
+            denominator += (self.y[i] - self.stage_state[i]).powi(2);
+        }
+        if denominator <= 0.0 || !numerator.is_finite() {
+            return;
+        }
+        let h_rho = h.abs() * (numerator / denominator).sqrt();
+        if h_rho > STIFF_H_RHO {
+            self.non_stiff_tests = 0;
+            self.stiff_tests += 1;
+            if self.stiff_tests >= STIFF_STEPS && self.stiffness_detected.is_none() {
+                self.stiffness_detected = Some(self.t);
+            }
+        } else {
+            self.non_stiff_tests += 1;
+            if self.non_stiff_tests >= NON_STIFF_STEPS {
+                self.stiff_tests = 0;
+            }
+        }
     }
 
     /// Computes the stages and `y_trial` for step `h`; returns the scaled
@@ -248,6 +289,10 @@ impl Stepper for Dop853 {
         }
     }
 
+    fn stiffness_detected(&self) -> Option<f64> {
+        self.stiffness_detected
+    }
+
     fn step<M: Motion + ?Sized>(&mut self, system: &M, t_limit: f64) -> Result<(), Failure> {
         let mut last_rejected = false;
         let mut last_non_finite = false;
@@ -304,6 +349,7 @@ impl Stepper for Dop853 {
                             format!("{}'", system.component_name(i)),
                         ));
                     }
+                    self.test_stiffness(h);
                     return Ok(());
                 }
                 Some(err) => {

@@ -29,6 +29,11 @@ pub enum FailureKind {
     /// `∂²Φ̄/∂c_A∂x_B` has condition number `condition` and re-anchoring
     /// could not restore it.
     SingularConditionMatrix { condition: f64 },
+    /// The determinant of the field's condition matrix changed sign between
+    /// the accepted steps at `since` and at `time`: the matrix passed
+    /// through singularity in between, where no step looked (the field
+    /// cannot tell the state there) and re-anchoring was off.
+    ConditionMatrixCrossedSingularity { since: f64 },
     /// Newton's method for non-linear highest derivatives did not converge;
     /// `residual` is the last residual norm after `iterations` iterations.
     NewtonNonConvergence { residual: f64, iterations: usize },
@@ -72,6 +77,11 @@ impl fmt::Display for Failure {
                 f,
                 "at t = {t:e}: the field's condition matrix is singular \
                  (condition number {condition:e}) and re-anchoring did not help"
+            ),
+            FailureKind::ConditionMatrixCrossedSingularity { since } => write!(
+                f,
+                "at t = {t:e}: the field's condition matrix passed through singularity \
+                 after t = {since:e} (its determinant changed sign) and re-anchoring was off"
             ),
             FailureKind::NewtonNonConvergence {
                 residual,

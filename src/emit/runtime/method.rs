@@ -24,6 +24,70 @@ impl Integrator {
     }
 }
 
+/// How the motion is computed (`--method`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Vujanović's field method (local field for non-affine systems).
+    Field,
+    /// Direct integration of the reduced system (7).
+    Direct,
+}
+
+impl Method {
+    /// `field` or `direct`, as on the command line.
+    pub fn parse(text: &str) -> Option<Method> {
+        match text {
+            "field" => Some(Method::Field),
+            "direct" => Some(Method::Direct),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Field => "field",
+            Method::Direct => "direct",
+        }
+    }
+}
+
+/// The user's choice of integrator (`--integrator auto|explicit|stiff|magnus`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IntegratorChoice {
+    /// Direct: DOP853, switching to RODAS4 when it detects stiffness.
+    /// Field: DOP853 (see `FieldOptions::magnus` for why).
+    #[default]
+    Auto,
+    /// DOP853 throughout (stiffness is only reported).
+    Explicit,
+    /// RODAS4 throughout (field: linear coefficient systems only).
+    Stiff,
+    /// Field: the Magnus integrator for linear coefficient systems (DOP853
+    /// otherwise). Direct: the same as `Auto` (no exponential integrator).
+    Magnus,
+}
+
+impl IntegratorChoice {
+    pub fn parse(text: &str) -> Option<IntegratorChoice> {
+        match text {
+            "auto" => Some(IntegratorChoice::Auto),
+            "explicit" => Some(IntegratorChoice::Explicit),
+            "stiff" => Some(IntegratorChoice::Stiff),
+            "magnus" => Some(IntegratorChoice::Magnus),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorChoice::Auto => "auto",
+            IntegratorChoice::Explicit => "explicit",
+            IntegratorChoice::Stiff => "stiff",
+            IntegratorChoice::Magnus => "magnus",
+        }
+    }
+}
+
 pub enum AnyStepper {
     Explicit(Dop853),
     Stiff(Rodas4),
@@ -85,6 +149,13 @@ impl Stepper for AnyStepper {
         match self {
             AnyStepper::Explicit(s) => s.step(system, t_limit),
             AnyStepper::Stiff(s) => s.step(system, t_limit),
+        }
+    }
+
+    fn stiffness_detected(&self) -> Option<f64> {
+        match self {
+            AnyStepper::Explicit(s) => s.stiffness_detected(),
+            AnyStepper::Stiff(s) => s.stiffness_detected(),
         }
     }
 }

@@ -13,6 +13,7 @@
 //! | `stepper` | tolerances, work counters, the error norm, the stepping loop |
 //! | `dop853` | the explicit DOP853 integrator (order 8, embedded 5 and 3) |
 //! | `rosenbrock` | the stiff RODAS4 integrator (order 4, embedded 3) |
+//! | `magnus` | the Magnus integrator (order 4) for linear coefficient systems |
 //! | `sensitivity` | the coefficient system augmented by `S = ∂f/∂c` |
 //! | `conditioned` | the conditions (13): `x_B(t)` from `f`, `S` |
 //! | `field` | the field method with re-anchoring |
@@ -31,6 +32,7 @@ pub mod dop853;
 pub mod error;
 pub mod field;
 pub mod local_field;
+pub mod magnus;
 pub mod method;
 pub mod output;
 pub mod rosenbrock;

@@ -5,14 +5,23 @@
 use super::error::Failure;
 use super::system::{CoefficientSystem, Motion};
 use nalgebra::{DMatrix, DVectorView};
+use std::cell::RefCell;
 
 pub struct Sensitized<'a, C: CoefficientSystem + ?Sized> {
     pub coefficients: &'a C,
+    /// `∂F/∂f`, reused by every right-side evaluation: `rhs` takes `&self`
+    /// (the integrators see a [`Motion`]) and is called a dozen times per
+    /// step, so a fresh `N × N` allocation each time showed in the profile.
+    jacobian_scratch: RefCell<DMatrix<f64>>,
 }
 
 impl<'a, C: CoefficientSystem + ?Sized> Sensitized<'a, C> {
     pub fn new(coefficients: &'a C) -> Self {
-        Sensitized { coefficients }
+        let n = coefficients.dim();
+        Sensitized {
+            coefficients,
+            jacobian_scratch: RefCell::new(DMatrix::zeros(n, n)),
+        }
     }
 
     /// The augmented state at an anchor `c`: `f = c`, `S = I`.
@@ -43,11 +52,13 @@ impl<C: CoefficientSystem + ?Sized> Motion for Sensitized<'_, C> {
         let (f, s) = y.split_at(n);
         let (df, ds) = dy.split_at_mut(n);
         self.coefficients.rhs(t, f, df)?;
-        let mut jacobian = DMatrix::zeros(n, n);
+        let mut jacobian = self.jacobian_scratch.borrow_mut();
+        // The trait promises a zeroed matrix: only non-zeros are written.
+        jacobian.fill(0.0);
         self.coefficients.jacobian(t, f, &mut jacobian)?;
         let s = nalgebra::DMatrixView::from_slice(s, n, n);
         let mut ds = nalgebra::DMatrixViewMut::from_slice(ds, n, n);
-        ds.gemm(1.0, &jacobian, &s, 0.0);
+        ds.gemm(1.0, &*jacobian, &s, 0.0);
         Ok(())
     }
 

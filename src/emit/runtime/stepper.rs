@@ -29,6 +29,8 @@ pub struct Stats {
     pub rhs_evaluations: usize,
     pub jacobian_evaluations: usize,
     pub lu_decompositions: usize,
+    /// Matrix exponentials (the Magnus integrator of the field method).
+    pub matrix_exponentials: usize,
 }
 
 impl std::ops::AddAssign for Stats {
@@ -38,6 +40,7 @@ impl std::ops::AddAssign for Stats {
         self.rhs_evaluations += other.rhs_evaluations;
         self.jacobian_evaluations += other.jacobian_evaluations;
         self.lu_decompositions += other.lu_decompositions;
+        self.matrix_exponentials += other.matrix_exponentials;
     }
 }
 
@@ -54,6 +57,13 @@ pub trait Stepper {
     /// Takes one accepted step that does not pass `t_limit`; when the step
     /// is cut to reach `t_limit`, the time is set to `t_limit` exactly.
     fn step<M: Motion + ?Sized>(&mut self, system: &M, t_limit: f64) -> Result<(), Failure>;
+
+    /// The time at which an explicit integrator found its step held by
+    /// stability rather than accuracy, repeatedly (the system is stiff
+    /// there); `None` if it never did or the method is stiff itself.
+    fn stiffness_detected(&self) -> Option<f64> {
+        None
+    }
 
     /// Steps until the time is exactly `t_target`.
     fn advance_to<M: Motion + ?Sized>(&mut self, system: &M, t_target: f64) -> Result<(), Failure> {

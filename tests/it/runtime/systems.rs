@@ -401,3 +401,39 @@ impl Motion for Cubic {
         Ok(())
     }
 }
+
+/// A linear coefficient system whose condition matrix passes through
+/// singularity without its condition number ever showing it:
+/// `f1' = 0`, `f2' = −k f1`, so `S = [[1, 0], [−k t, 1]]` and the 1 × 1
+/// condition matrix is `S_22 − S_21 x_20 = 1 + k t x_20`, zero at
+/// `t = −1/(k x_20)` (its condition number is 1 on both sides).
+///
+/// The SPEC's coefficient systems never do this (their `f_B'` do not
+/// involve `f_1`, so the matrix is a block of a fundamental matrix, whose
+/// determinant is positive by Liouville); this one is made to, to test the
+/// runtime's guard (an `f_1` in `f_2'` comes from a term `x_1 x_2` in the
+/// motion, which the linear ansatz does not solve).
+pub struct SingularCrossing {
+    pub rate: f64,
+}
+
+impl CoefficientSystem for SingularCrossing {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _t: f64, f: &[f64], df: &mut [f64]) -> Result<(), Failure> {
+        df[0] = 0.0;
+        df[1] = -self.rate * f[0];
+        Ok(())
+    }
+    fn jacobian(&self, _t: f64, _f: &[f64], jac: &mut DMatrix<f64>) -> Result<(), Failure> {
+        jac[(1, 0)] = -self.rate;
+        Ok(())
+    }
+    fn time_partial(&self, _t: f64, _f: &[f64], _dfdt: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn is_linear(&self) -> bool {
+        true
+    }
+}
