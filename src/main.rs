@@ -103,12 +103,15 @@ struct RunArgs {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 enum Integrator {
-    /// Explicit unless the system is found stiff.
+    /// DOP853; direct integration switches to RODAS4 when it detects
+    /// stiffness.
     Auto,
     /// DOP853, explicit, order 8.
     Explicit,
     /// RODAS4, linearly implicit, order 4.
     Stiff,
+    /// Field method: Magnus-4 for a linear coefficient system.
+    Magnus,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -351,6 +354,7 @@ fn run(args: &RunArgs) -> ExitCode {
         (_, true) | (Some(Integrator::Stiff), _) => Some("stiff"),
         (Some(Integrator::Explicit), _) => Some("explicit"),
         (Some(Integrator::Auto), _) => Some("auto"),
+        (Some(Integrator::Magnus), _) => Some("magnus"),
         (None, false) => None,
     };
     if let Some(integrator) = integrator {

@@ -148,13 +148,17 @@ pub enum IntegratorChoice {
     Explicit,
     /// RODAS4 from the start: the model is declared stiff.
     Stiff,
+    /// The field method's Magnus integrator for linear coefficient
+    /// systems (direct integration: as `Auto`).
+    Magnus,
 }
 
 impl IntegratorChoice {
-    pub const ALL: [IntegratorChoice; 3] = [
+    pub const ALL: [IntegratorChoice; 4] = [
         IntegratorChoice::Auto,
         IntegratorChoice::Explicit,
         IntegratorChoice::Stiff,
+        IntegratorChoice::Magnus,
     ];
 
     /// The word in `.lag` files and on the command line.
@@ -163,6 +167,7 @@ impl IntegratorChoice {
             IntegratorChoice::Auto => "auto",
             IntegratorChoice::Explicit => "explicit",
             IntegratorChoice::Stiff => "stiff",
+            IntegratorChoice::Magnus => "magnus",
         }
     }
 

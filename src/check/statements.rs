@@ -210,7 +210,7 @@ impl<'a> Checker<'a> {
                     format!("unknown integrator `{}`", name.name),
                 )
                 .with_primary(name.span, "not an integrator")
-                .with_help("the integrators are `auto`, `explicit` and `stiff`");
+                .with_help("the integrators are `auto`, `explicit`, `stiff` and `magnus`");
                 if let Some(close) = crate::suggest::closest(&name.name, names.iter().copied()) {
                     diagnostic = diagnostic.with_help(format!("did you mean `{close}`?"));
                 }

@@ -9,6 +9,7 @@ const RUNTIME: &[(&str, &str)] = &[
     ("error", include_str!("runtime/error.rs")),
     ("field", include_str!("runtime/field.rs")),
     ("local_field", include_str!("runtime/local_field.rs")),
+    ("magnus", include_str!("runtime/magnus.rs")),
     ("method", include_str!("runtime/method.rs")),
     ("output", include_str!("runtime/output.rs")),
     ("rosenbrock", include_str!("runtime/rosenbrock.rs")),

@@ -14,14 +14,16 @@ use std::io::Write;
 use std::process::ExitCode;
 
 const USAGE: &str = "\
-usage: MODEL [--method field|direct] [--integrator auto|explicit|stiff]
+usage: MODEL [--method field|direct] [--integrator auto|explicit|stiff|magnus]
              [--param NAME=VALUE]... [--rtol R] [--atol A] [--samples N]
              [--anchor VALUE] [--no-reanchor]
 
   --method field|direct  the field method (default) or direct integration
-  --integrator auto|explicit|stiff
-                         DOP853 (explicit) or RODAS4 (stiff: direct, and
-                         field when the coefficient system is linear);
+  --integrator auto|explicit|stiff|magnus
+                         auto: DOP853, direct switching to RODAS4 when it
+                         detects stiffness; explicit: DOP853; stiff: RODAS4
+                         (field: for a linear coefficient system); magnus:
+                         field with Magnus-4 for a linear coefficient system;
                          default: the model's `integrator` statement, or auto
   --stiff                the same as `--integrator stiff`
   --param NAME=VALUE     override a param (later params are recomputed)
@@ -73,9 +75,9 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
             "--stiff" => run.options.integrator = Some(IntegratorChoice::Stiff),
             "--integrator" => {
                 let value = args.next();
-                let choice = value.as_deref().and_then(IntegratorChoice::from_name);
+                let choice = value.as_deref().and_then(IntegratorChoice::parse);
                 let choice = choice.ok_or_else(|| {
-                    format!("`--integrator` takes `auto`, `explicit` or `stiff`, not {value:?}")
+                    format!("`--integrator` takes `auto`, `explicit`, `stiff` or `magnus`, not {value:?}")
                 })?;
                 run.options.integrator = Some(choice);
             }

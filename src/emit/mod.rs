@@ -135,12 +135,11 @@ pub fn emit_crate(
 
         use nalgebra::DMatrix;
         #dvector
-        use runtime::direct::solve_direct;
+        use runtime::direct::solve_direct_choice;
         use runtime::error::Failure;
         #failure_kind
         use runtime::field::FieldOptions;
         pub use runtime::field::Anchor;
-        use runtime::method::Integrator;
         pub use runtime::output::{sample_times, write_header, write_row, Summary};
         pub use runtime::stepper::Tolerance;
         use runtime::system::Motion;

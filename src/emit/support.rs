@@ -153,14 +153,14 @@ pub fn solve(affine: bool, linear: bool, declared: Option<IntegratorChoice>) -> 
         Some(IntegratorChoice::Auto) => quote! { Some(IntegratorChoice::Auto) },
         Some(IntegratorChoice::Explicit) => quote! { Some(IntegratorChoice::Explicit) },
         Some(IntegratorChoice::Stiff) => quote! { Some(IntegratorChoice::Stiff) },
+        Some(IntegratorChoice::Magnus) => quote! { Some(IntegratorChoice::Magnus) },
     };
     let field = if affine {
         quote! {
             let coefficients = Coefficients { params: params.clone() };
             let report = solve_field(&coefficients, &field_options, times, x0, on_sample)?;
-            let integrator = if coefficients.is_linear() { integrator } else { Integrator::Explicit };
             Ok(Summary {
-                method: format!("field ({})", integrator.name()),
+                method: format!("field ({})", report.integrator),
                 steps: report.stats.accepted_steps,
                 rejected_steps: report.stats.rejected_steps,
                 rhs_evaluations: report.stats.rhs_evaluations,
@@ -184,56 +184,34 @@ pub fn solve(affine: bool, linear: bool, declared: Option<IntegratorChoice>) -> 
             })
         }
     };
-    // What the field method makes of the chosen integrator: RODAS4 needs
-    // the exact Jacobian of a linear coefficient system.
-    let field_integrator = if affine && linear {
-        quote! { (integrator, reason) }
+    // What the field method makes of the choice (FieldOptions::for_choice):
+    // RODAS4 and Magnus need a linear coefficient system.
+    let field_plan = if affine && linear {
+        quote! {
+            match choice {
+                IntegratorChoice::Stiff => format!("RODAS4 ({source})"),
+                IntegratorChoice::Magnus => format!("Magnus-4 ({source})"),
+                IntegratorChoice::Auto | IntegratorChoice::Explicit => format!("DOP853 ({source})"),
+            }
+        }
     } else if affine {
         quote! {
-            if integrator == Integrator::Explicit {
-                (integrator, reason)
-            } else {
-                (Integrator::Explicit, format!("{reason}; not RODAS4: the coefficient system is of Riccati type, and RODAS4 needs a linear one"))
+            match choice {
+                IntegratorChoice::Stiff | IntegratorChoice::Magnus => format!(
+                    "DOP853 ({source}; not {}: the coefficient system is of Riccati type, and it needs a linear one)",
+                    choice.name()
+                ),
+                IntegratorChoice::Auto | IntegratorChoice::Explicit => format!("DOP853 ({source})"),
             }
         }
     } else {
         quote! {
-            let _ = integrator;
-            (Integrator::Explicit, "the local field method integrates each window's linear field with DOP853".to_string())
+            let _ = choice;
+            format!("DOP853 ({source}; the local field method integrates each window's linear field with DOP853)")
         }
     };
     quote! {
-        /// How a run chooses its integrator: `--integrator`, or else the
-        /// model's `integrator` statement, or else `Auto`.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-        pub enum IntegratorChoice {
-            /// Explicit unless the system is found stiff.
-            Auto,
-            /// DOP853.
-            Explicit,
-            /// RODAS4 (declared stiff).
-            Stiff,
-        }
-
-        impl IntegratorChoice {
-            /// `auto`, `explicit` or `stiff`, as on the command line.
-            pub fn from_name(name: &str) -> Option<IntegratorChoice> {
-                match name {
-                    "auto" => Some(IntegratorChoice::Auto),
-                    "explicit" => Some(IntegratorChoice::Explicit),
-                    "stiff" => Some(IntegratorChoice::Stiff),
-                    _ => None,
-                }
-            }
-
-            fn name(self) -> &'static str {
-                match self {
-                    IntegratorChoice::Auto => "auto",
-                    IntegratorChoice::Explicit => "explicit",
-                    IntegratorChoice::Stiff => "stiff",
-                }
-            }
-        }
+        pub use runtime::method::IntegratorChoice;
 
         /// The model's `integrator` statement (`None`: it has none).
         pub const DECLARED_INTEGRATOR: Option<IntegratorChoice> = #declared;
@@ -242,7 +220,7 @@ pub fn solve(affine: bool, linear: bool, declared: Option<IntegratorChoice>) -> 
         #[derive(Clone, Debug, PartialEq)]
         pub struct Options {
             pub field: bool,
-            /// `None`: the model's `integrator` statement decides.
+            /// `None`: the model's `integrator` statement decides, or `Auto`.
             pub integrator: Option<IntegratorChoice>,
             pub tol: Tolerance,
             pub anchor: Anchor,
@@ -252,31 +230,33 @@ pub fn solve(affine: bool, linear: bool, declared: Option<IntegratorChoice>) -> 
             pub reanchor: bool,
         }
 
-        /// The integrator a run with `options` uses, and why, in words.
-        fn chosen_integrator(options: &Options) -> (Integrator, String) {
-            let (choice, source) = match (options.integrator, DECLARED_INTEGRATOR) {
+        /// The integrator choice of a run with `options`, and where it
+        /// comes from, in words.
+        fn resolved_choice(options: &Options) -> (IntegratorChoice, String) {
+            match (options.integrator, DECLARED_INTEGRATOR) {
                 (Some(choice), _) => (choice, format!("--integrator {}", choice.name())),
                 (None, Some(choice)) => (choice, format!("declared {} in the model", choice.name())),
                 (None, None) => (IntegratorChoice::Auto, "auto, the default".to_string()),
-            };
-            let (integrator, reason) = match choice {
-                IntegratorChoice::Stiff => (Integrator::Stiff, source),
-                IntegratorChoice::Explicit => (Integrator::Explicit, source),
-                // This runtime detects no stiffness: auto is DOP853.
-                IntegratorChoice::Auto => (Integrator::Explicit, format!("{source}; no stiffness detection: use --integrator stiff for a stiff system")),
-            };
-            if !options.field {
-                return (integrator, reason);
             }
-            #field_integrator
         }
 
         /// The line a run prints on stderr before it starts, e.g.
-        /// `direct: RODAS4 (declared stiff in the model)`.
+        /// `direct: RODAS4 (declared stiff in the model)`; a switch made
+        /// during the run shows in the summary's method.
         pub fn integrator_choice(options: &Options) -> String {
-            let (integrator, reason) = chosen_integrator(options);
-            let method = if options.field { "field" } else { "direct" };
-            format!("{method}: {} ({reason})", integrator.name())
+            let (choice, source) = resolved_choice(options);
+            if options.field {
+                let plan = { #field_plan };
+                return format!("field: {plan}");
+            }
+            let plan = match choice {
+                IntegratorChoice::Stiff => format!("RODAS4 ({source})"),
+                IntegratorChoice::Explicit => format!("DOP853 ({source}; stiffness is only reported)"),
+                IntegratorChoice::Auto | IntegratorChoice::Magnus => {
+                    format!("DOP853, switching to RODAS4 if it detects stiffness ({source})")
+                }
+            };
+            format!("direct: {plan}")
         }
 
         /// Integrates the model from `x0` over `times`, by the field method
@@ -290,26 +270,27 @@ pub fn solve(affine: bool, linear: bool, declared: Option<IntegratorChoice>) -> 
         ) -> Result<Summary, Failure> {
             let start = std::time::Instant::now();
             let system = System::new(params.clone());
-            let (integrator, _) = chosen_integrator(options);
+            let (choice, _) = resolved_choice(options);
             if !options.field {
-                let stats = solve_direct(&system, integrator, options.tol, times, x0, on_sample)
+                let report = solve_direct_choice(&system, choice, options.tol, times, x0, on_sample)
                     .map_err(|failure| system.explain(failure))?;
+                let method = match report.note() {
+                    Some(note) => format!("{} [{}]", report.method_name(), note.trim_start_matches("direct: ")),
+                    None => report.method_name(),
+                };
                 return Ok(Summary {
-                    method: format!("direct ({})", integrator.name()),
-                    steps: stats.accepted_steps,
-                    rejected_steps: stats.rejected_steps,
-                    rhs_evaluations: stats.rhs_evaluations,
+                    method,
+                    steps: report.stats.accepted_steps,
+                    rejected_steps: report.stats.rejected_steps,
+                    rhs_evaluations: report.stats.rhs_evaluations,
                     largest_condition: None,
                     reanchorings: None,
                     wall_time: start.elapsed(),
                 });
             }
             let field_options = FieldOptions {
-                tol: options.tol,
-                integrator,
-                anchor: options.anchor.clone(),
                 reanchor: options.reanchor,
-                ..FieldOptions::default()
+                ..FieldOptions::for_choice(choice, options.tol, options.anchor.clone())
             };
             #field
         }
