@@ -203,6 +203,9 @@ pub mod codes {
     pub const NUMBER_TOO_LARGE: &str = "E0029";
     pub const NESTING_TOO_DEEP: &str = "E0030";
     pub const NO_INDEPENDENT_COORDINATE: &str = "E0031";
+    // Added by the stability work (additive):
+    /// An `integrator` statement naming none of `auto`, `explicit`, `stiff`.
+    pub const UNKNOWN_INTEGRATOR: &str = "E0032";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

@@ -115,8 +115,12 @@ struct RunArgs {
     /// The field method or direct integration of (7).
     #[arg(long, value_enum, default_value_t = Method::Field)]
     method: Method,
-    /// Use the stiff integrator RODAS4.
-    #[arg(long)]
+    /// The integrator: DOP853 (explicit), RODAS4 (stiff), or auto; the
+    /// default is the model's `integrator` statement, or auto.
+    #[arg(long, value_enum, value_name = "CHOICE")]
+    integrator: Option<Integrator>,
+    /// The same as `--integrator stiff`.
+    #[arg(long, conflicts_with = "integrator")]
     stiff: bool,
     /// Relative tolerance.
     #[arg(long, value_name = "R")]
@@ -144,12 +148,29 @@ struct RunArgs {
     /// direct integrations (affine systems): times and largest difference.
     #[arg(long, value_name = "K")]
     ensemble: Option<usize>,
+    /// Field method: stop with a failure when the conditions (13) become
+    /// ill-conditioned instead of re-anchoring.
+    #[arg(long)]
+    no_reanchor: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 enum SummaryFormat {
     Text,
     Json,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Integrator {
+    /// DOP853; direct integration switches to RODAS4 when it detects
+    /// stiffness.
+    Auto,
+    /// DOP853, explicit, order 8.
+    Explicit,
+    /// RODAS4, linearly implicit, order 4.
+    Stiff,
+    /// Field method: Magnus-4 for a linear coefficient system.
+    Magnus,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -372,8 +393,15 @@ fn run(args: &RunArgs) -> ExitCode {
         Method::Direct => "direct",
     };
     passed.extend(["--method".to_string(), method.to_string()]);
-    if args.stiff {
-        passed.push("--stiff".to_string());
+    let integrator = match (args.integrator, args.stiff) {
+        (_, true) | (Some(Integrator::Stiff), _) => Some("stiff"),
+        (Some(Integrator::Explicit), _) => Some("explicit"),
+        (Some(Integrator::Auto), _) => Some("auto"),
+        (Some(Integrator::Magnus), _) => Some("magnus"),
+        (None, false) => None,
+    };
+    if let Some(integrator) = integrator {
+        passed.extend(["--integrator".to_string(), integrator.to_string()]);
     }
     let numbers = [
         ("--rtol", args.rtol),
@@ -384,6 +412,9 @@ fn run(args: &RunArgs) -> ExitCode {
         if let Some(v) = value {
             passed.extend([flag.to_string(), format!("{v:?}")]);
         }
+    }
+    if args.no_reanchor {
+        passed.push("--no-reanchor".to_string());
     }
     let counts = [
         ("--samples", args.samples),

@@ -39,6 +39,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let initial = checker.initial(constraint_order, &constraints);
     let exact = checker.exact();
     let time = checker.time();
+    let integrator = checker.integrator();
 
     let mut diagnostics = checker.diagnostics;
     let (Some(lagrangian), Some(time), true) = (lagrangian, time, diagnostics.is_empty()) else {
@@ -65,6 +66,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
         initial,
         time,
         exact,
+        integrator,
         names: checker
             .names
             .iter()

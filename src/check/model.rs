@@ -32,6 +32,9 @@ pub struct Model {
     pub initial: Vec<Initial>,
     pub time: TimeSpan,
     pub exact: Vec<Exact>,
+    /// The model's `integrator` statement, when it has one: the default of
+    /// every run (a command-line `--integrator` overrides it).
+    pub integrator: Option<DeclaredIntegrator>,
     /// Every declared name (params, coordinates, masses, points).
     pub names: HashMap<String, Name>,
 }
@@ -132,6 +135,51 @@ pub struct Initial {
     pub coord: usize,
     pub order: u32,
     pub value: Expr,
+    pub span: Span,
+}
+
+/// How a run chooses its one-step integrator (`integrator NAME;`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IntegratorChoice {
+    /// Explicit, switching to the stiff integrator when stiffness is
+    /// detected.
+    Auto,
+    /// DOP853 only.
+    Explicit,
+    /// RODAS4 from the start: the model is declared stiff.
+    Stiff,
+    /// The field method's Magnus integrator for linear coefficient
+    /// systems (direct integration: as `Auto`).
+    Magnus,
+}
+
+impl IntegratorChoice {
+    pub const ALL: [IntegratorChoice; 4] = [
+        IntegratorChoice::Auto,
+        IntegratorChoice::Explicit,
+        IntegratorChoice::Stiff,
+        IntegratorChoice::Magnus,
+    ];
+
+    /// The word in `.lag` files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorChoice::Auto => "auto",
+            IntegratorChoice::Explicit => "explicit",
+            IntegratorChoice::Stiff => "stiff",
+            IntegratorChoice::Magnus => "magnus",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<IntegratorChoice> {
+        IntegratorChoice::ALL.into_iter().find(|c| c.name() == name)
+    }
+}
+
+/// `integrator NAME;`, with the statement's span.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeclaredIntegrator {
+    pub choice: IntegratorChoice,
     pub span: Span,
 }
 

@@ -2,7 +2,9 @@
 //! span: the statements checked one by one.
 
 use super::expressions::Allowed;
-use super::model::{Exact, Force, MassLaw, Name, Param, TimeSpan};
+use super::model::{
+    DeclaredIntegrator, Exact, Force, IntegratorChoice, MassLaw, Name, Param, TimeSpan,
+};
 use super::Checker;
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
@@ -193,6 +195,31 @@ impl<'a> Checker<'a> {
         exact
     }
 
+    /// The `integrator` statement: one at most, naming a known choice.
+    pub(super) fn integrator(&mut self) -> Option<DeclaredIntegrator> {
+        let (name, span) = self.single("integrator", |item| match item {
+            ItemKind::Integrator(name) => Some(name),
+            _ => None,
+        })?;
+        match IntegratorChoice::from_name(&name.name) {
+            Some(choice) => Some(DeclaredIntegrator { choice, span }),
+            None => {
+                let names: Vec<&str> = IntegratorChoice::ALL.iter().map(|c| c.name()).collect();
+                let mut diagnostic = Diagnostic::error(
+                    codes::UNKNOWN_INTEGRATOR,
+                    format!("unknown integrator `{}`", name.name),
+                )
+                .with_primary(name.span, "not an integrator")
+                .with_help("the integrators are `auto`, `explicit`, `stiff` and `magnus`");
+                if let Some(close) = crate::suggest::closest(&name.name, names.iter().copied()) {
+                    diagnostic = diagnostic.with_help(format!("did you mean `{close}`?"));
+                }
+                self.report(diagnostic);
+                None
+            }
+        }
+    }
+
     /// The only statement that `pick` selects, reporting any repeat.
     fn single<T>(
         &mut self,
@@ -216,7 +243,9 @@ impl<'a> Checker<'a> {
             )
             .with_primary(span, "repeated here")
             .with_secondary(first, "first given here")
-            .with_help(format!("a model has exactly one `{keyword}` statement"));
+            .with_help(format!(
+                "a model has no more than one `{keyword}` statement"
+            ));
             self.report(diagnostic);
         }
         found

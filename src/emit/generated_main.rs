@@ -6,8 +6,9 @@
 
 use model::runtime::error::FAILURE_EXIT_STATUS;
 use model::{
-    initial_state, largest_exact_error, sample_times, solve, solve_ensemble, time_span,
-    write_header, write_row, Anchor, Options, Params, Summary, Tolerance, PARAM_NAMES,
+    initial_state, integrator_choice, largest_exact_error, sample_times, solve, solve_ensemble,
+    time_span, write_header, write_row, Anchor, IntegratorChoice, Options, Params, Summary,
+    Tolerance, PARAM_NAMES,
     STATE_NAMES,
 };
 use std::io::Write;
@@ -15,16 +16,24 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 const USAGE: &str = "\
-usage: MODEL [--method field|direct] [--stiff] [--param NAME=VALUE]...
-             [--rtol R] [--atol A] [--samples N] [--anchor VALUE]
+usage: MODEL [--method field|direct] [--integrator auto|explicit|stiff|magnus]
+             [--param NAME=VALUE]... [--rtol R] [--atol A] [--samples N]
+             [--anchor VALUE] [--no-reanchor]
 
   --method field|direct  the field method (default) or direct integration
-  --stiff                the stiff integrator RODAS4 (direct; field when the
-                         coefficient system is linear)
+  --integrator auto|explicit|stiff|magnus
+                         auto: DOP853, direct switching to RODAS4 when it
+                         detects stiffness; explicit: DOP853; stiff: RODAS4
+                         (field: for a linear coefficient system); magnus:
+                         field with Magnus-4 for a linear coefficient system;
+                         default: the model's `integrator` statement, or auto
+  --stiff                the same as `--integrator stiff`
   --param NAME=VALUE     override a param (later params are recomputed)
   --rtol R, --atol A     tolerances (default 1e-10, 1e-12)
   --samples N            evenly spaced sample times (default 101)
   --anchor VALUE         every free anchor value c_A = VALUE (default 0)
+  --no-reanchor          field: stop when the conditions (13) become
+                         ill-conditioned instead of re-anchoring
   --repeat N             solve N times (after one warm-up solve when N > 1)
                          and report the smallest wall time (default 1)
   --quiet                no CSV on stdout
@@ -71,9 +80,10 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
     let mut run = Run {
         options: Options {
             field: true,
-            stiff: false,
+            integrator: None,
             tol: Tolerance::default(),
             anchor: Anchor::Zero,
+            reanchor: true,
         },
         overrides: vec![None; PARAM_NAMES.len()],
         samples: 101,
@@ -90,7 +100,16 @@ fn parse(args: impl Iterator<Item = String>) -> Result<Option<Run>, String> {
                 Some("direct") => run.options.field = false,
                 other => return Err(format!("`--method` takes `field` or `direct`, not {other:?}")),
             },
-            "--stiff" => run.options.stiff = true,
+            "--stiff" => run.options.integrator = Some(IntegratorChoice::Stiff),
+            "--integrator" => {
+                let value = args.next();
+                let choice = value.as_deref().and_then(IntegratorChoice::parse);
+                let choice = choice.ok_or_else(|| {
+                    format!("`--integrator` takes `auto`, `explicit`, `stiff` or `magnus`, not {value:?}")
+                })?;
+                run.options.integrator = Some(choice);
+            }
+            "--no-reanchor" => run.options.reanchor = false,
             "--rtol" => run.options.tol.rtol = positive("--rtol", args.next())?,
             "--atol" => run.options.tol.atol = positive("--atol", args.next())?,
             "--anchor" => {
@@ -160,6 +179,7 @@ fn main() -> ExitCode {
         return ensemble(&run, &params, &times, &x0, members);
     }
     let mut samples: Vec<(f64, Vec<f64>)> = Vec::with_capacity(times.len());
+    eprintln!("{}", integrator_choice(&run.options));
     let mut result = Err(None);
     // One warm-up solve first when timing several (caches, page faults).
     let solves = if run.repeat > 1 { run.repeat + 1 } else { 1 };

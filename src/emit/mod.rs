@@ -85,9 +85,22 @@ pub fn emit_crate(
     let coefficients = coefficients::coefficient_code(&arena, &mut names, field);
     let affine = coefficients.is_some();
     let linear_solve = motion.linear_solve.then(support::linear_solve);
+    let (watch_field, watch_init, explain) = if motion.linear_solve {
+        (
+            quote! { mass_matrix: MassMatrixWatch, },
+            quote! { mass_matrix: MassMatrixWatch::default() },
+            quote! { self.mass_matrix.explain(failure) },
+        )
+    } else {
+        (quote! {}, quote! {}, quote! { failure })
+    };
     let newton = motion.newton.then(support::newton);
     let implicit = (motion.linear_solve || motion.newton).then(support::finite_differences);
-    let solve = support::solve(affine);
+    let linear = field
+        .coefficient_system
+        .as_ref()
+        .is_some_and(|system| system.linear);
+    let solve = support::solve(affine, linear, model.integrator.map(|d| d.choice));
     let motion_items = motion.items;
     let coefficient_import = if affine {
         quote! {
@@ -127,12 +140,11 @@ pub fn emit_crate(
 
         use nalgebra::DMatrix;
         #dvector
-        use runtime::direct::solve_direct;
+        use runtime::direct::solve_direct_choice;
         use runtime::error::Failure;
         #failure_kind
         use runtime::field::FieldOptions;
         pub use runtime::field::Anchor;
-        use runtime::method::Integrator;
         pub use runtime::output::{sample_times, write_header, write_row, Summary};
         pub use runtime::stepper::Tolerance;
         use runtime::system::Motion;
@@ -150,6 +162,19 @@ pub fn emit_crate(
         /// The reduced system (7).
         pub struct System {
             pub params: Params,
+            #watch_field
+        }
+
+        impl System {
+            pub fn new(params: Params) -> System {
+                System { params, #watch_init }
+            }
+
+            /// A failure of the integrator, with its cause named when the
+            /// system can see it (a mass matrix becoming singular).
+            fn explain(&self, failure: Failure) -> Failure {
+                #explain
+            }
         }
 
         #motion_items

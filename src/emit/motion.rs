@@ -188,7 +188,7 @@ pub fn motion_code(
                         let mut a = DMatrix::<f64>::zeros(#size, #size);
                         #(#cell_code)*
                         let b = DVector::from_vec(vec![#(-(#free)),*]);
-                        solve_mass_matrix(t, a, b)
+                        solve_mass_matrix(t, a, b, &self.mass_matrix)
                     }
                 }
             } else {

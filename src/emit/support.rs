@@ -2,16 +2,20 @@
 //! needs them: the linear solve of the mass matrix, Newton's method, and
 //! finite-difference Jacobians for implicit systems.
 
+use crate::check::model::IntegratorChoice;
 use proc_macro2::TokenStream;
 use quote::quote;
 
-/// `A z = b` by LU, with the failure SPEC §4 asks for.
+/// `A z = b` by LU, with the failure SPEC §4 asks for, and the watch on
+/// the mass matrix's condition that names a singular mass matrix as the
+/// cause when the integrator stops.
 pub fn linear_solve() -> TokenStream {
     quote! {
         /// Solves `a z = b` for the highest derivatives; a singular mass
         /// matrix stops the run.
-        fn solve_mass_matrix(t: f64, a: DMatrix<f64>, b: DVector<f64>) -> Result<DVector<f64>, Failure> {
+        fn solve_mass_matrix(t: f64, a: DMatrix<f64>, b: DVector<f64>, watch: &MassMatrixWatch) -> Result<DVector<f64>, Failure> {
             let condition = condition_number(&a);
+            watch.record(t, condition);
             match a.lu().solve(&b) {
                 Some(z) if z.iter().all(|v| v.is_finite()) && condition < 1e15 => Ok(z),
                 _ => Err(Failure::new(t, FailureKind::SingularMassMatrix { condition })),
@@ -24,6 +28,52 @@ pub fn linear_solve() -> TokenStream {
             let largest = values.max();
             let smallest = values.min();
             if smallest > 0.0 { largest / smallest } else { f64::INFINITY }
+        }
+
+        /// The mass matrix's condition number at the first solve and at the
+        /// latest one. A mass matrix that becomes singular at `t*` (a mass
+        /// that vanishes) rarely meets the exact singularity: the motion
+        /// blows up as `t → t*` and the integrator's step underflows first.
+        /// The watch lets that failure name its cause.
+        #[derive(Debug, Default)]
+        pub struct MassMatrixWatch {
+            first: std::cell::Cell<Option<f64>>,
+            latest: std::cell::Cell<f64>,
+        }
+
+        impl MassMatrixWatch {
+            /// The growth of the condition number since the start beyond
+            /// which a failure of the integrator is blamed on the mass
+            /// matrix: four orders of magnitude. RODAS4 (with its
+            /// finite-difference Jacobian) gives up at `1 − t ≈ 6e-6` on
+            /// `tests/data/runtime_failures/singular_mass_matrix.lag`, a
+            /// growth of 1e5; DOP853 at `1e-11`.
+            const GROWTH: f64 = 1e4;
+
+            fn record(&self, _t: f64, condition: f64) {
+                if self.first.get().is_none() {
+                    self.first.set(Some(condition));
+                }
+                self.latest.set(condition);
+            }
+
+            /// A step-size underflow or a non-finite state while the mass
+            /// matrix is nearly singular is reported as a singular mass
+            /// matrix, at the same time.
+            fn explain(&self, failure: Failure) -> Failure {
+                let (Some(first), latest) = (self.first.get(), self.latest.get()) else {
+                    return failure;
+                };
+                let integrator_stopped = matches!(
+                    failure.kind,
+                    FailureKind::StepSizeUnderflow { .. } | FailureKind::NonFiniteState { .. }
+                );
+                if integrator_stopped && !(latest <= Self::GROWTH * first) {
+                    Failure::new(failure.time, FailureKind::SingularMassMatrix { condition: latest })
+                } else {
+                    failure
+                }
+            }
         }
     }
 }
@@ -95,15 +145,22 @@ pub fn finite_differences() -> TokenStream {
     }
 }
 
-/// `solve(...)`: the method chosen at run time, on this system.
-pub fn solve(affine: bool) -> TokenStream {
+/// `solve(...)`: the method chosen at run time, on this system, and the
+/// choice of integrator with the model's `integrator` statement as default.
+pub fn solve(affine: bool, linear: bool, declared: Option<IntegratorChoice>) -> TokenStream {
+    let declared = match declared {
+        None => quote! { None },
+        Some(IntegratorChoice::Auto) => quote! { Some(IntegratorChoice::Auto) },
+        Some(IntegratorChoice::Explicit) => quote! { Some(IntegratorChoice::Explicit) },
+        Some(IntegratorChoice::Stiff) => quote! { Some(IntegratorChoice::Stiff) },
+        Some(IntegratorChoice::Magnus) => quote! { Some(IntegratorChoice::Magnus) },
+    };
     let field = if affine {
         quote! {
             let coefficients = Coefficients { params: params.clone() };
             let report = solve_field(&coefficients, &field_options, times, x0, on_sample)?;
-            let integrator = if coefficients.is_linear() { integrator } else { Integrator::Explicit };
             Ok(Summary {
-                method: format!("field ({})", integrator.name()),
+                method: format!("field ({})", report.integrator),
                 steps: report.stats.accepted_steps,
                 rejected_steps: report.stats.rejected_steps,
                 rhs_evaluations: report.stats.rhs_evaluations,
@@ -114,7 +171,8 @@ pub fn solve(affine: bool) -> TokenStream {
         }
     } else {
         quote! {
-            let report = solve_local_field(&system, &field_options, times, x0, on_sample)?;
+            let report = solve_local_field(&system, &field_options, times, x0, on_sample)
+                .map_err(|failure| system.explain(failure))?;
             Ok(Summary {
                 method: "local field (DOP853 windows)".to_string(),
                 steps: report.accepted_windows,
@@ -124,6 +182,32 @@ pub fn solve(affine: bool) -> TokenStream {
                 reanchorings: Some(report.accepted_windows),
                 wall_time: start.elapsed(),
             })
+        }
+    };
+    // What the field method makes of the choice (FieldOptions::for_choice):
+    // RODAS4 and Magnus need a linear coefficient system.
+    let field_plan = if affine && linear {
+        quote! {
+            match choice {
+                IntegratorChoice::Stiff => format!("RODAS4 ({source})"),
+                IntegratorChoice::Magnus => format!("Magnus-4 ({source})"),
+                IntegratorChoice::Auto | IntegratorChoice::Explicit => format!("DOP853 ({source})"),
+            }
+        }
+    } else if affine {
+        quote! {
+            match choice {
+                IntegratorChoice::Stiff | IntegratorChoice::Magnus => format!(
+                    "DOP853 ({source}; not {}: the coefficient system is of Riccati type, and it needs a linear one)",
+                    choice.name()
+                ),
+                IntegratorChoice::Auto | IntegratorChoice::Explicit => format!("DOP853 ({source})"),
+            }
+        }
+    } else {
+        quote! {
+            let _ = choice;
+            format!("DOP853 ({source}; the local field method integrates each window's linear field with DOP853)")
         }
     };
     let ensemble = if affine {
@@ -140,16 +224,17 @@ pub fn solve(affine: bool) -> TokenStream {
             ) -> Option<Result<Summary, Failure>> {
                 let start = std::time::Instant::now();
                 let coefficients = Coefficients { params: params.clone() };
-                let integrator = if options.stiff && coefficients.is_linear() { Integrator::Stiff } else { Integrator::Explicit };
+                let (choice, _) = resolved_choice(options);
+                // The ensemble integrates with DOP853 or RODAS4 (no Magnus).
                 let field_options = FieldOptions {
-                    tol: options.tol,
-                    integrator,
-                    anchor: options.anchor.clone(),
-                    ..FieldOptions::default()
+                    reanchor: options.reanchor,
+                    magnus: false,
+                    ..FieldOptions::for_choice(choice, options.tol, options.anchor.clone())
                 };
+                let integrator = field_options.integrator_name(&coefficients);
                 let solved = solve_field_ensemble(&coefficients, &field_options, times, members, on_sample);
                 Some(solved.map(|report| Summary {
-                    method: format!("field ensemble ({}, {} cop{})", integrator.name(), report.copies, if report.copies == 1 { "y" } else { "ies" }),
+                    method: format!("field ensemble ({}, {} cop{})", integrator, report.copies, if report.copies == 1 { "y" } else { "ies" }),
                     steps: report.stats.accepted_steps,
                     rejected_steps: report.stats.rejected_steps,
                     rhs_evaluations: report.stats.rhs_evaluations,
@@ -177,13 +262,52 @@ pub fn solve(affine: bool) -> TokenStream {
     quote! {
         #ensemble
 
+        pub use runtime::method::IntegratorChoice;
+
+        /// The model's `integrator` statement (`None`: it has none).
+        pub const DECLARED_INTEGRATOR: Option<IntegratorChoice> = #declared;
+
         /// How to integrate (the generated binary's options).
         #[derive(Clone, Debug, PartialEq)]
         pub struct Options {
             pub field: bool,
-            pub stiff: bool,
+            /// `None`: the model's `integrator` statement decides, or `Auto`.
+            pub integrator: Option<IntegratorChoice>,
             pub tol: Tolerance,
             pub anchor: Anchor,
+            /// `false`: stop with a singular-condition-matrix failure when
+            /// the conditions (13) pass the field's condition threshold,
+            /// instead of re-anchoring (to see where the field degrades).
+            pub reanchor: bool,
+        }
+
+        /// The integrator choice of a run with `options`, and where it
+        /// comes from, in words.
+        fn resolved_choice(options: &Options) -> (IntegratorChoice, String) {
+            match (options.integrator, DECLARED_INTEGRATOR) {
+                (Some(choice), _) => (choice, format!("--integrator {}", choice.name())),
+                (None, Some(choice)) => (choice, format!("declared {} in the model", choice.name())),
+                (None, None) => (IntegratorChoice::Auto, "auto, the default".to_string()),
+            }
+        }
+
+        /// The line a run prints on stderr before it starts, e.g.
+        /// `direct: RODAS4 (declared stiff in the model)`; a switch made
+        /// during the run shows in the summary's method.
+        pub fn integrator_choice(options: &Options) -> String {
+            let (choice, source) = resolved_choice(options);
+            if options.field {
+                let plan = { #field_plan };
+                return format!("field: {plan}");
+            }
+            let plan = match choice {
+                IntegratorChoice::Stiff => format!("RODAS4 ({source})"),
+                IntegratorChoice::Explicit => format!("DOP853 ({source}; stiffness is only reported)"),
+                IntegratorChoice::Auto | IntegratorChoice::Magnus => {
+                    format!("DOP853, switching to RODAS4 if it detects stiffness ({source})")
+                }
+            };
+            format!("direct: {plan}")
         }
 
         /// Integrates the model from `x0` over `times`, by the field method
@@ -196,25 +320,28 @@ pub fn solve(affine: bool) -> TokenStream {
             on_sample: impl FnMut(f64, &[f64]),
         ) -> Result<Summary, Failure> {
             let start = std::time::Instant::now();
-            let system = System { params: params.clone() };
-            let integrator = if options.stiff { Integrator::Stiff } else { Integrator::Explicit };
+            let system = System::new(params.clone());
+            let (choice, _) = resolved_choice(options);
             if !options.field {
-                let stats = solve_direct(&system, integrator, options.tol, times, x0, on_sample)?;
+                let report = solve_direct_choice(&system, choice, options.tol, times, x0, on_sample)
+                    .map_err(|failure| system.explain(failure))?;
+                let method = match report.note() {
+                    Some(note) => format!("{} [{}]", report.method_name(), note.trim_start_matches("direct: ")),
+                    None => report.method_name(),
+                };
                 return Ok(Summary {
-                    method: format!("direct ({})", integrator.name()),
-                    steps: stats.accepted_steps,
-                    rejected_steps: stats.rejected_steps,
-                    rhs_evaluations: stats.rhs_evaluations,
+                    method,
+                    steps: report.stats.accepted_steps,
+                    rejected_steps: report.stats.rejected_steps,
+                    rhs_evaluations: report.stats.rhs_evaluations,
                     largest_condition: None,
                     reanchorings: None,
                     wall_time: start.elapsed(),
                 });
             }
             let field_options = FieldOptions {
-                tol: options.tol,
-                integrator,
-                anchor: options.anchor.clone(),
-                ..FieldOptions::default()
+                reanchor: options.reanchor,
+                ..FieldOptions::for_choice(choice, options.tol, options.anchor.clone())
             };
             #field
         }

@@ -45,12 +45,15 @@ impl Method {
         }
     }
 
-    /// The generated binary's arguments that select this method.
+    /// The generated binary's arguments that select this method. The
+    /// integrator is pinned, so that neither the model's `integrator`
+    /// statement nor the automatic switch to RODAS4 changes what a line of
+    /// the report measures.
     pub fn binary_args(self) -> &'static [&'static str] {
         match self {
-            Method::Field => &["--method", "field"],
-            Method::Explicit => &["--method", "direct"],
-            Method::Stiff => &["--method", "direct", "--stiff"],
+            Method::Field => &["--method", "field", "--integrator", "explicit"],
+            Method::Explicit => &["--method", "direct", "--integrator", "explicit"],
+            Method::Stiff => &["--method", "direct", "--integrator", "stiff"],
         }
     }
 }

@@ -163,6 +163,9 @@ pub enum ItemKind {
     Time { start: Expr, end: Expr },
     /// `exact q = expr;` — `target` is a `Var` (with primes for a derivative).
     Exact { target: Expr, value: Expr },
+    /// `integrator stiff;` — the integrator runs use unless told otherwise;
+    /// `check` requires `auto`, `explicit` or `stiff`.
+    Integrator(Ident),
 }
 
 #[derive(Debug, Clone, PartialEq)]

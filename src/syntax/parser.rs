@@ -92,6 +92,7 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
             target: expr(children.expect(Rule::expr)?)?,
             value: expr(children.expect(Rule::expr)?)?,
         },
+        Rule::integrator => ItemKind::Integrator(ident(children.expect(Rule::ident)?)),
         _ => return Err(unexpected_tree(span)),
     };
     Ok(Item { kind, span })
@@ -411,6 +412,7 @@ fn is_punctuation(rule: Rule) -> bool {
             | Rule::kw_initial
             | Rule::kw_time
             | Rule::kw_exact
+            | Rule::kw_integrator
             | Rule::kw_position
             | Rule::kw_absolute
             | Rule::kw_relative

@@ -6,7 +6,7 @@ use crate::span::Span;
 use pest::error::{Error, ErrorVariant, InputLocation};
 
 const STATEMENT_KEYWORDS: &str =
-    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time` or `exact`";
+    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact` or `integrator`";
 const POINT_FIELDS: &str =
     "`mass = …;`, `position = (…);`, `absolute velocity = (…);` or `relative velocity = (…);`";
 
@@ -158,6 +158,7 @@ fn is_statement(rule: Rule) -> bool {
             | Rule::initial
             | Rule::time
             | Rule::exact
+            | Rule::integrator
             | Rule::kw_param
             | Rule::kw_coord
             | Rule::kw_mass
@@ -168,6 +169,7 @@ fn is_statement(rule: Rule) -> bool {
             | Rule::kw_initial
             | Rule::kw_time
             | Rule::kw_exact
+            | Rule::kw_integrator
     )
 }
 

@@ -11,6 +11,8 @@ mod parser;
 mod report;
 mod robustness;
 mod runtime;
+mod runtime_failures;
+mod stiff_extreme;
 
 use lagc::diagnostic::{self, Diagnostic};
 

@@ -97,6 +97,7 @@ fn paper_model() -> Model {
             span: Span::default(),
         },
         exact: Vec::new(),
+        integrator: None,
         names: HashMap::from([
             ("M0".to_string(), Name::Param(0)),
             ("alpha".to_string(), Name::Param(1)),
