@@ -3,7 +3,7 @@
 
 use super::error::Failure;
 use super::method::{AnyStepper, Integrator, IntegratorChoice};
-use super::stepper::{Stats, Stepper, Tolerance};
+use super::stepper::{within_step_budget, Stats, Stepper, Tolerance};
 use super::system::Motion;
 
 /// Integrates `motion` from `(times[0], x0)` and calls `on_sample` at every
@@ -109,6 +109,9 @@ pub fn solve_direct_choice<M: Motion + ?Sized>(
     on_sample(t0, x0);
     for &t in rest {
         while stepper.time() < t {
+            let mut so_far = report.stats;
+            so_far += stepper.stats();
+            within_step_budget(stepper.time(), &so_far)?;
             stepper.step(motion, t)?;
             if report.stiffness_detected_at.is_none() {
                 report.stiffness_detected_at = stepper.stiffness_detected();

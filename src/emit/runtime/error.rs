@@ -34,6 +34,10 @@ pub enum FailureKind {
     /// through singularity in between, where no step looked (the field
     /// cannot tell the state there) and re-anchoring was off.
     ConditionMatrixCrossedSingularity { since: f64 },
+    /// The integration took `steps` steps (the budget) before reaching the
+    /// end: the local errors of so many steps may add up beyond the
+    /// tolerance.
+    StepBudgetExhausted { steps: usize },
     /// Newton's method for non-linear highest derivatives did not converge;
     /// `residual` is the last residual norm after `iterations` iterations.
     NewtonNonConvergence { residual: f64, iterations: usize },
@@ -82,6 +86,12 @@ impl fmt::Display for Failure {
                 f,
                 "at t = {t:e}: the field's condition matrix passed through singularity \
                  after t = {since:e} (its determinant changed sign) and re-anchoring was off"
+            ),
+            FailureKind::StepBudgetExhausted { steps } => write!(
+                f,
+                "at t = {t:e}: the step budget is exhausted ({steps} steps): the local errors \
+                 of so many steps may add up beyond the tolerance; try another integrator \
+                 (--integrator) or a looser tolerance"
             ),
             FailureKind::NewtonNonConvergence {
                 residual,
