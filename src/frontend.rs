@@ -48,7 +48,8 @@ pub fn check_and_derive_bytes(bytes: &[u8]) -> (Cow<'_, str>, Checked) {
     decode_then(bytes, check_and_derive)
 }
 
-fn decode_then<T>(
+/// Decodes a file's bytes and runs `stage` on the text; see [`frontend_bytes`].
+pub fn decode_then<T>(
     bytes: &[u8],
     stage: impl FnOnce(&str) -> Result<T, Vec<Diagnostic>>,
 ) -> (Cow<'_, str>, Result<T, Vec<Diagnostic>>) {

@@ -7,8 +7,9 @@
 mod cli;
 
 use clap::{Args, Parser, Subcommand};
+use lagc::diagnostic::{render, Diagnostic};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// lagc compiles a `.lag` model of a mechanical system with variable mass
@@ -219,92 +220,93 @@ fn main() -> ExitCode {
     }
 }
 
-fn check(args: &CheckArgs) -> ExitCode {
-    let file_name = args.file.display().to_string();
-    let bytes = match std::fs::read(&args.file) {
+/// Reads `file`, runs `stage` on its text (on the big stack, invalid UTF-8
+/// a diagnostic) and renders what it reports on stderr: on success its
+/// notes, after which `then` runs (still on the big stack); on failure the
+/// diagnostics and a count. `Err` holds the exit status of a failure.
+fn compile<T, R: Send>(
+    file: &Path,
+    stage: impl FnOnce(&str) -> Result<(T, Vec<Diagnostic>), Vec<Diagnostic>> + Send,
+    then: impl FnOnce(T) -> R + Send,
+) -> Result<R, ExitCode> {
+    let file_name = file.display().to_string();
+    let bytes = match std::fs::read(file) {
         Ok(bytes) => bytes,
         Err(error) => {
             eprintln!("error: cannot read `{file_name}`: {error}");
-            return ExitCode::from(EXIT_USAGE);
+            return Err(ExitCode::from(EXIT_USAGE));
         }
     };
     let color = std::io::stderr().is_terminal();
     lagc::on_big_stack(|| {
-        let (source, result) = lagc::check_and_derive_bytes(&bytes);
+        let (source, result) = lagc::decode_then(&bytes, stage);
         match result {
-            Ok((model, _)) => {
-                let constraints = match model.constraint_order {
-                    Some(k) => format!(
-                        "{} of order {k}",
-                        count(model.constraints.len(), "constraint")
-                    ),
-                    None => "no constraints".to_string(),
-                };
-                let coords = count(model.coords.len(), "coordinate");
-                eprintln!("{file_name}: ok ({coords}, {constraints})");
-                ExitCode::SUCCESS
+            Ok((value, notes)) => {
+                eprint!("{}", render(&notes, &file_name, &source, color));
+                Ok(then(value))
             }
             Err(diagnostics) => {
-                eprint!(
-                    "{}",
-                    lagc::diagnostic::render(&diagnostics, &file_name, &source, color)
-                );
+                eprint!("{}", render(&diagnostics, &file_name, &source, color));
                 let errors = diagnostics.iter().filter(|d| d.is_error()).count();
                 eprintln!("error: `{file_name}` has {}", count(errors, "error"));
-                ExitCode::from(EXIT_MODEL_ERRORS)
+                Err(ExitCode::from(EXIT_MODEL_ERRORS))
             }
         }
     })
 }
 
-fn derive(args: &DeriveArgs) -> ExitCode {
+/// `Ok` or `Err`, both an exit status.
+fn status(result: Result<ExitCode, ExitCode>) -> ExitCode {
+    result.unwrap_or_else(|status| status)
+}
+
+fn check(args: &CheckArgs) -> ExitCode {
     let file_name = args.file.display().to_string();
-    let bytes = match std::fs::read(&args.file) {
-        Ok(bytes) => bytes,
-        Err(error) => {
-            eprintln!("error: cannot read `{file_name}`: {error}");
-            return ExitCode::from(EXIT_USAGE);
-        }
+    let stage = |source: &str| lagc::check_and_derive(source).map(|(model, _)| (model, Vec::new()));
+    status(compile(&args.file, stage, |model| {
+        let constraints = match model.constraint_order {
+            Some(k) => format!(
+                "{} of order {k}",
+                count(model.constraints.len(), "constraint")
+            ),
+            None => "no constraints".to_string(),
+        };
+        let coords = count(model.coords.len(), "coordinate");
+        eprintln!("{file_name}: ok ({coords}, {constraints})");
+        ExitCode::SUCCESS
+    }))
+}
+
+fn derive(args: &DeriveArgs) -> ExitCode {
+    let stage = |source: &str| {
+        let model = lagc::frontend(source)?;
+        lagc::mechanics::derive(&model).map(|derivation| (derivation, Vec::new()))
     };
-    let color = std::io::stderr().is_terminal();
-    lagc::on_big_stack(|| {
-        let (source, result) = lagc::frontend_bytes(&bytes);
-        let derived = result.and_then(|model| lagc::mechanics::derive(&model));
-        match derived {
-            Ok(mut derivation) => {
-                match args.format {
-                    Format::Text => {
-                        print!("{}", derivation.text());
-                        let reduced = derivation.reduced.clone();
-                        let mut arena = derivation.arena.clone();
-                        let field = lagc::field::field_system(&mut arena, &reduced);
-                        print!("{}", field.text(&arena, &reduced.state));
-                    }
-                    Format::Latex => print!("{}", derivation.latex()),
-                }
-                match lagc::mechanics::cross_check(&mut derivation) {
-                    Ok(check) => eprintln!(
-                        "cross-check of (4) against the multiplier route: passed at {} points",
-                        check.points
-                    ),
-                    Err(failure) => {
-                        eprintln!("error: cross-check failed: {failure}");
-                        return ExitCode::from(EXIT_MODEL_ERRORS);
-                    }
-                }
+    status(compile(&args.file, stage, |mut derivation| {
+        match args.format {
+            Format::Text => {
+                print!("{}", derivation.text());
+                let reduced = derivation.reduced.clone();
+                let mut arena = derivation.arena.clone();
+                let field = lagc::field::field_system(&mut arena, &reduced);
+                print!("{}", field.text(&arena, &reduced.state));
+            }
+            Format::Latex => print!("{}", derivation.latex()),
+        }
+        match lagc::mechanics::cross_check(&mut derivation) {
+            Ok(check) => {
+                eprintln!(
+                    "cross-check of (4) against the multiplier route: passed at {} points",
+                    check.points
+                );
                 ExitCode::SUCCESS
             }
-            Err(diagnostics) => {
-                eprint!(
-                    "{}",
-                    lagc::diagnostic::render(&diagnostics, &file_name, &source, color)
-                );
-                let errors = diagnostics.iter().filter(|d| d.is_error()).count();
-                eprintln!("error: `{file_name}` has {}", count(errors, "error"));
+            Err(failure) => {
+                eprintln!("error: cross-check failed: {failure}");
                 ExitCode::from(EXIT_MODEL_ERRORS)
             }
         }
-    })
+    }))
 }
 
 /// "1 constraint", "2 constraints".
@@ -315,40 +317,15 @@ fn count(n: usize, noun: &str) -> String {
 
 /// Reads, checks and generates the crate of `file`, printing diagnostics
 /// and notes; `Err(status)` when that fails.
-fn generate(file: &std::path::Path) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
-    let file_name = file.display().to_string();
-    let bytes = match std::fs::read(file) {
-        Ok(bytes) => bytes,
-        Err(error) => {
-            eprintln!("error: cannot read `{file_name}`: {error}");
-            return Err(ExitCode::from(EXIT_USAGE));
-        }
-    };
+fn generate(file: &Path) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
     let model_name = file
         .file_stem()
         .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
-    let color = std::io::stderr().is_terminal();
-    lagc::on_big_stack(|| {
-        let (source, result) = lagc::frontend_bytes(&bytes);
-        match result.and_then(|model| lagc::pipeline::generate_crate(&model, &model_name)) {
-            Ok((generated, notes)) => {
-                eprint!(
-                    "{}",
-                    lagc::diagnostic::render(&notes, &file_name, &source, color)
-                );
-                Ok(generated)
-            }
-            Err(diagnostics) => {
-                eprint!(
-                    "{}",
-                    lagc::diagnostic::render(&diagnostics, &file_name, &source, color)
-                );
-                let errors = diagnostics.iter().filter(|d| d.is_error()).count();
-                eprintln!("error: `{file_name}` has {}", count(errors, "error"));
-                Err(ExitCode::from(EXIT_MODEL_ERRORS))
-            }
-        }
-    })
+    let stage = |source: &str| {
+        let model = lagc::frontend(source)?;
+        lagc::pipeline::generate_crate(&model, &model_name)
+    };
+    compile(file, stage, |generated| generated)
 }
 
 fn build(args: &BuildArgs) -> ExitCode {
