@@ -69,3 +69,43 @@ fn help_exits_0() {
     assert_eq!(out.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&out.stdout).contains("Usage: lagc check"));
 }
+
+/// `lagc run` end to end: it builds the paper's crate in the cache, runs
+/// it (CSV with the state's header, the exact motion of SPEC 1.6), and a
+/// second run of the unchanged model does not rebuild. The cache is the
+/// generated-crate tests' (same RUSTFLAGS), so nalgebra builds once.
+#[test]
+fn run_reproduces_the_paper_and_does_not_rebuild_an_unchanged_model() {
+    let cache = crate::root().join("target/generated-crates");
+    let run = || {
+        Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .args(["run", "examples/paper.lag", "--samples", "3"])
+            .env("LAGC_CACHE_DIR", &cache)
+            .env("RUSTFLAGS", "-D warnings")
+            .current_dir(crate::root())
+            .output()
+            .expect("lagc runs")
+    };
+    let first = run();
+    let stderr = String::from_utf8_lossy(&first.stderr);
+    assert_eq!(first.status.code(), Some(0), "{stderr}");
+    let stdout = String::from_utf8(first.stdout).unwrap();
+    let mut lines = stdout.lines();
+    assert_eq!(lines.next(), Some("t,q1,q2,q1',q2'"));
+    let last: Vec<f64> = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // t = 5: q1' = e^{αt}/√(1+t²) with α = 0.5, q2' = t q1'.
+    let q1_dot = (0.5_f64 * 5.0).exp() / 26.0_f64.sqrt();
+    assert!((last[3] - q1_dot).abs() <= 1e-9 * q1_dot, "{last:?}");
+    assert!((last[4] - 5.0 * q1_dot).abs() <= 1e-9 * q1_dot, "{last:?}");
+
+    let second = run();
+    let stderr = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(second.status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("Compiling"), "rebuilt:\n{stderr}");
+    assert_eq!(String::from_utf8(second.stdout).unwrap(), stdout);
+}
