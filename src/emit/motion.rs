@@ -160,26 +160,13 @@ pub fn motion_code(
                     unknowns.iter().map(|&s| (s, zero)).collect();
                 let mut roots: Vec<ExprId> =
                     residual.iter().map(|&r| arena.subst(r, &at_zero)).collect();
-                let mut cells = Vec::new();
-                for (r, row) in jacobian.iter().enumerate() {
-                    for (c, &entry) in row.iter().enumerate() {
-                        if !arena.is_zero(entry) {
-                            cells.push((r, c));
-                            roots.push(entry);
-                        }
-                    }
-                }
+                let (cells, entries) = nonzero_cells(arena, jacobian);
+                roots.extend(entries);
                 let code = names.code(arena, &roots, &from_x);
                 let statements = code.statements(quote! { &self.params });
                 let free: Vec<TokenStream> = code.roots[..residual.len()].to_vec();
-                let cell_code: Vec<TokenStream> = cells
-                    .iter()
-                    .zip(&code.roots[residual.len()..])
-                    .map(|(&(r, c), v)| {
-                        let (r, c) = (index(r), index(c));
-                        quote! { a[(#r, #c)] = #v; }
-                    })
-                    .collect();
+                let cell_code =
+                    cell_assignments(&quote! { a }, &cells, &code.roots[residual.len()..]);
                 quote! {
                     /// The independent highest derivatives from `A z = b`
                     /// (the equations are affine in them): one LU solve.
@@ -193,26 +180,13 @@ pub fn motion_code(
                 }
             } else {
                 let mut roots: Vec<ExprId> = residual.clone();
-                let mut cells = Vec::new();
-                for (r, row) in jacobian.iter().enumerate() {
-                    for (c, &entry) in row.iter().enumerate() {
-                        if !arena.is_zero(entry) {
-                            cells.push((r, c));
-                            roots.push(entry);
-                        }
-                    }
-                }
+                let (cells, entries) = nonzero_cells(arena, jacobian);
+                roots.extend(entries);
                 let code = names.code(arena, &roots, &from_xz);
                 let statements = code.statements(quote! { &self.params });
                 let residual_values: Vec<TokenStream> = code.roots[..residual.len()].to_vec();
-                let cell_code: Vec<TokenStream> = cells
-                    .iter()
-                    .zip(&code.roots[residual.len()..])
-                    .map(|(&(r, c), v)| {
-                        let (r, c) = (index(r), index(c));
-                        quote! { g_z[(#r, #c)] = #v; }
-                    })
-                    .collect();
+                let cell_code =
+                    cell_assignments(&quote! { g_z }, &cells, &code.roots[residual.len()..]);
                 let t = code.time_arg();
                 let x = if uses_any(arena, &roots, &reduced.state) {
                     quote! { x }
@@ -330,4 +304,36 @@ fn uses_any(arena: &Arena, roots: &[ExprId], symbols: &[Symbol]) -> bool {
     roots
         .iter()
         .any(|&r| symbols.iter().any(|&s| arena.depends_on(r, s)))
+}
+
+/// The non-zero entries of `matrix`: their `(row, column)`, and their
+/// expressions in the same order.
+fn nonzero_cells(arena: &Arena, matrix: &[Vec<ExprId>]) -> (Vec<(usize, usize)>, Vec<ExprId>) {
+    let mut cells = Vec::new();
+    let mut entries = Vec::new();
+    for (r, row) in matrix.iter().enumerate() {
+        for (c, &entry) in row.iter().enumerate() {
+            if !arena.is_zero(entry) {
+                cells.push((r, c));
+                entries.push(entry);
+            }
+        }
+    }
+    (cells, entries)
+}
+
+/// `matrix[(r, c)] = value;` for every cell and its value's code.
+fn cell_assignments(
+    matrix: &TokenStream,
+    cells: &[(usize, usize)],
+    values: &[TokenStream],
+) -> Vec<TokenStream> {
+    cells
+        .iter()
+        .zip(values)
+        .map(|(&(r, c), v)| {
+            let (r, c) = (index(r), index(c));
+            quote! { #matrix[(#r, #c)] = #v; }
+        })
+        .collect()
 }
