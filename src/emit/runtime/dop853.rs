@@ -7,7 +7,8 @@
 
 use super::error::Failure;
 use super::stepper::{
-    first_non_finite, initial_step, underflow_failure, underflows, Stats, Stepper, Tolerance,
+    first_non_finite, initial_step, step_toward, underflow_failure, underflows, Stats, Stepper,
+    Tolerance,
 };
 use super::system::Motion;
 
@@ -297,12 +298,7 @@ impl Stepper for Dop853 {
         let mut last_rejected = false;
         let mut last_non_finite = false;
         loop {
-            let reaches_limit = self.t + self.h >= t_limit;
-            let h = if reaches_limit {
-                t_limit - self.t
-            } else {
-                self.h
-            };
+            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
             if underflows(self.t, h) && !reaches_limit {
                 return Err(if last_non_finite {
                     let i = first_non_finite(&self.y_trial).unwrap_or(0);

@@ -16,7 +16,9 @@
 
 use super::error::Failure;
 use super::field::{solve_field, FieldOptions};
-use super::stepper::{first_non_finite, rms_norm, underflow_failure, underflows, Stats};
+use super::stepper::{
+    first_non_finite, rms_norm, step_toward, underflow_failure, underflows, Stats,
+};
 use super::system::{CoefficientSystem, Motion};
 use nalgebra::{DMatrix, DVector};
 
@@ -130,8 +132,7 @@ pub fn solve_local_field<M: Motion + ?Sized>(
     on_sample(t0, x0);
     for &target in rest {
         while t < target {
-            let reaches = t + window >= target;
-            let h = if reaches { target - t } else { window };
+            let (h, reaches) = step_toward(t, window, target);
             if underflows(t, h) && !reaches {
                 return Err(underflow_failure(t, h));
             }

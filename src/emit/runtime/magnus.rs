@@ -20,7 +20,9 @@
 //! the accepted state is the Richardson combination (local order 6).
 
 use super::error::Failure;
-use super::stepper::{first_non_finite, rms_norm, underflow_failure, underflows, Stats, Tolerance};
+use super::stepper::{
+    first_non_finite, rms_norm, step_toward, underflow_failure, underflows, Stats, Tolerance,
+};
 use super::system::CoefficientSystem;
 use nalgebra::DMatrix;
 
@@ -155,12 +157,7 @@ impl Magnus {
         let (mut full, mut half, mut twice) = (vec![0.0; size], vec![0.0; size], vec![0.0; size]);
         let mut last_rejected = false;
         loop {
-            let reaches_limit = self.t + self.h >= t_limit;
-            let h = if reaches_limit {
-                t_limit - self.t
-            } else {
-                self.h
-            };
+            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
             if underflows(self.t, h) && !reaches_limit {
                 return Err(underflow_failure(self.t, h));
             }

@@ -10,8 +10,8 @@
 
 use super::error::Failure;
 use super::stepper::{
-    first_non_finite, initial_step, rms_norm, underflow_failure, underflows, Stats, Stepper,
-    Tolerance,
+    first_non_finite, initial_step, rms_norm, step_toward, underflow_failure, underflows, Stats,
+    Stepper, Tolerance,
 };
 use super::system::Motion;
 use nalgebra::{DMatrix, DVector};
@@ -235,12 +235,7 @@ impl Stepper for Rodas4 {
         let mut last_rejected = false;
         let mut broken: Option<usize> = None;
         loop {
-            let reaches_limit = self.t + self.h >= t_limit;
-            let h = if reaches_limit {
-                t_limit - self.t
-            } else {
-                self.h
-            };
+            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
             if underflows(self.t, h) && !reaches_limit {
                 return Err(match broken {
                     Some(i) => Failure::non_finite(self.t, system.component_name(i)),

@@ -92,6 +92,17 @@ pub fn within_step_budget(t: f64, stats: &Stats) -> Result<(), Failure> {
     Ok(())
 }
 
+/// The step to try from `t` with proposed length `h` toward `t_limit`:
+/// `(length, reaches_limit)`, the length cut to land on `t_limit` exactly
+/// when the proposed step would reach or pass it.
+pub fn step_toward(t: f64, h: f64, t_limit: f64) -> (f64, bool) {
+    if t + h >= t_limit {
+        (t_limit - t, true)
+    } else {
+        (h, false)
+    }
+}
+
 /// The smallest step allowed at time `t` (Hairer's `16·eps·|t|` test).
 pub fn underflows(t: f64, h: f64) -> bool {
     h.abs() < 16.0 * f64::EPSILON * t.abs().max(f64::MIN_POSITIVE)
