@@ -1,0 +1,535 @@
+//! The generated binary's command line: one function, [`main`], that a
+//! generated crate's `main` hands over to. Arguments are parsed by hand
+//! (the runtime has no dependencies); `lagc run` calls [`parse`] too, so
+//! that bad usage is reported before anything is built.
+//!
+//! Exit status: 0 success, 2 bad usage (including overrides that make the
+//! model inconsistent), 3 a numerical failure.
+
+use crate::driver::{run, Ending, Options};
+use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
+use crate::field::Anchor;
+use crate::method::{IntegratorChoice, Method};
+use crate::model::{Initial, Model};
+use crate::output::{sample_times, write_header, write_row};
+use crate::plot::{write_plot, PlotRequest};
+use crate::summary::{json_string, Summary};
+use std::io::Write;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+/// The most samples a run may print: beyond it the request is surely a
+/// mistake (the CSV alone would be tens of gigabytes).
+pub const MAX_SAMPLES: usize = 100_000_000;
+
+pub const USAGE: &str = "\
+usage: MODEL [OPTIONS]
+
+  --method field|direct  the field method (default) or direct integration
+  --integrator auto|explicit|stiff|magnus
+                         auto (default): DOP853, direct integration switching
+                         to RODAS4 where DOP853 detects stiffness; explicit:
+                         DOP853; stiff: RODAS4; magnus: the field's Magnus
+                         integrator for linear coefficient systems; the
+                         model's `integrator` statement is the default
+  --stiff                the same as `--integrator stiff`
+  --param NAME=VALUE     override a param (params computed from it follow)
+  --init NAME=VALUE      override an initial value (`q1`, \"q1'\"); values the
+                         constraints fix are checked against them
+  --rtol R, --atol A     the per-step tolerance (default 1e-10, 1e-12): each
+                         step's local error is kept below atol + rtol·|x|;
+                         the global error is usually a modest multiple of it
+                         (see --estimate-error)
+  --samples N            N evenly spaced output times over the span
+                         (default 101; 1 prints the final state only);
+                         output times never change the steps
+  --times T1,T2,...      output at these times instead
+  --estimate-error       also run at a 100× tighter tolerance and report the
+                         largest difference (an estimate of the global error)
+  --anchor VALUE         field: every free anchor value c_A (default 0)
+  --no-reanchor          field: stop where the conditions (13) degrade
+                         instead of re-anchoring
+  --max-steps N          the work budget: steps of every kind (default 1e6)
+  --plot FILE.svg        draw the columns against time into FILE.svg
+  --phase X,Y            with --plot: draw column Y against column X
+  --repeat N             solve N times (after a warm-up) and report the
+                         smallest wall time
+  --quiet                no CSV on stdout
+  --summary text|json    the summary on stderr as text (default) or JSON
+  --help                 this text";
+
+/// What the command line asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    Help,
+    /// Print the model's source hash (lagc checks that a binary belongs to
+    /// its model).
+    SourceHash,
+    Run(Invocation),
+}
+
+/// A run, as the command line describes it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Invocation {
+    pub options: Options,
+    /// `(param index, value)`.
+    pub params: Vec<(usize, f64)>,
+    /// `(state index, value)`.
+    pub inits: Vec<(usize, f64)>,
+    pub samples: usize,
+    pub times: Option<Vec<f64>>,
+    pub estimate_error: bool,
+    pub plot: Option<PlotRequest>,
+    pub repeat: usize,
+    pub quiet: bool,
+    pub json: bool,
+    /// Warnings to print before running (e.g. a tolerance below rounding).
+    pub warnings: Vec<String>,
+}
+
+fn value<'a>(flag: &str, args: &mut impl Iterator<Item = &'a String>) -> Result<&'a str, String> {
+    args.next()
+        .map(String::as_str)
+        .ok_or_else(|| format!("`{flag}` needs a value"))
+}
+
+fn number(flag: &str, text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("`{flag}`: `{text}` is not a finite number")),
+    }
+}
+
+fn count(flag: &str, text: &str, max: usize) -> Result<usize, String> {
+    // Accept `1e6` as well as `1000000`.
+    let parsed = text.trim().parse::<usize>().ok().or_else(|| {
+        text.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.fract() == 0.0 && *v >= 0.0 && *v <= usize::MAX as f64)
+            .map(|v| v as usize)
+    });
+    match parsed {
+        Some(n) if (1..=max).contains(&n) => Ok(n),
+        Some(n) if n > max => Err(format!(
+            "`{flag} {text}`: at most {max} (a larger count is surely a mistake)"
+        )),
+        _ => Err(format!("`{flag}`: `{text}` is not a count ≥ 1")),
+    }
+}
+
+fn name_value<'a>(flag: &str, text: &'a str) -> Result<(&'a str, &'a str), String> {
+    text.split_once('=')
+        .map(|(n, v)| (n.trim(), v.trim()))
+        .ok_or_else(|| format!("`{flag} {text}`: expected NAME=VALUE"))
+}
+
+/// Parses the arguments (without the program name) for a model with these
+/// params, state and output columns.
+pub fn parse(
+    args: &[String],
+    params: &[&str],
+    state: &[&str],
+    outputs: &[&str],
+) -> Result<Command, String> {
+    let mut inv = Invocation {
+        options: Options {
+            progress: true,
+            ..Options::default()
+        },
+        params: Vec::new(),
+        inits: Vec::new(),
+        samples: 101,
+        times: None,
+        estimate_error: false,
+        plot: None,
+        repeat: 1,
+        quiet: false,
+        json: false,
+        warnings: Vec::new(),
+    };
+    let mut phase: Option<String> = None;
+    let mut args = args.iter();
+    while let Some(arg) = args.next() {
+        let flag = arg.as_str();
+        match flag {
+            "--help" | "-h" => return Ok(Command::Help),
+            "--lagc-source-hash" => return Ok(Command::SourceHash),
+            "--method" => {
+                let v = value(flag, &mut args)?;
+                inv.options.method = Method::parse(v)
+                    .ok_or_else(|| format!("`--method` takes `field` or `direct`, not `{v}`"))?;
+            }
+            "--stiff" => inv.options.integrator = Some(IntegratorChoice::Stiff),
+            "--integrator" => {
+                let v = value(flag, &mut args)?;
+                let choice = IntegratorChoice::parse(v).ok_or_else(|| {
+                    format!("`--integrator` takes `auto`, `explicit`, `stiff` or `magnus`, not `{v}`")
+                })?;
+                inv.options.integrator = Some(choice);
+            }
+            "--no-reanchor" => inv.options.reanchor = false,
+            "--rtol" => {
+                let r = number(flag, value(flag, &mut args)?)?;
+                if !(r > 0.0 && r < 1.0) {
+                    return Err(format!(
+                        "`--rtol {r}`: a relative tolerance must be between 0 and 1"
+                    ));
+                }
+                if r < 1e-14 {
+                    inv.warnings.push(format!(
+                        "--rtol {r:e} is below the rounding of f64 (about 1e-16 per \
+                         operation, accumulated over every step): the run will take \
+                         many steps and cannot reach it"
+                    ));
+                }
+                inv.options.tol.rtol = r;
+            }
+            "--atol" => {
+                let a = number(flag, value(flag, &mut args)?)?;
+                if a <= 0.0 {
+                    return Err(format!("`--atol {a}`: an absolute tolerance must be positive"));
+                }
+                inv.options.tol.atol = a;
+            }
+            "--anchor" => {
+                let a = number(flag, value(flag, &mut args)?)?;
+                inv.options.anchor = Anchor::Given(vec![a; state.len()]);
+            }
+            "--max-steps" => {
+                inv.options.max_steps = count(flag, value(flag, &mut args)?, usize::MAX / 2)?
+            }
+            "--samples" => inv.samples = count(flag, value(flag, &mut args)?, MAX_SAMPLES)?,
+            "--times" => {
+                let v = value(flag, &mut args)?;
+                let times: Vec<f64> = v
+                    .split(',')
+                    .map(|t| number(flag, t))
+                    .collect::<Result<_, _>>()?;
+                if times.is_empty() || times.windows(2).any(|w| w[1] <= w[0]) {
+                    return Err(format!("`--times {v}`: give increasing times"));
+                }
+                if times.len() > MAX_SAMPLES {
+                    return Err(format!("`--times`: at most {MAX_SAMPLES} times"));
+                }
+                inv.times = Some(times);
+            }
+            "--estimate-error" => inv.estimate_error = true,
+            "--repeat" => inv.repeat = count(flag, value(flag, &mut args)?, 1_000_000)?,
+            "--quiet" => inv.quiet = true,
+            "--summary" => match value(flag, &mut args)? {
+                "text" => inv.json = false,
+                "json" => inv.json = true,
+                other => return Err(format!("`--summary` takes `text` or `json`, not `{other}`")),
+            },
+            "--plot" => {
+                inv.plot = Some(PlotRequest {
+                    file: value(flag, &mut args)?.to_string(),
+                    phase: None,
+                })
+            }
+            "--phase" => phase = Some(value(flag, &mut args)?.to_string()),
+            "--param" => {
+                let (name, v) = name_value(flag, value(flag, &mut args)?)?;
+                let index = params.iter().position(|p| *p == name).ok_or_else(|| {
+                    if params.is_empty() {
+                        format!("`--param {name}`: the model has no params")
+                    } else {
+                        format!("`--param`: no param `{name}` (params: {})", params.join(", "))
+                    }
+                })?;
+                inv.params.push((index, number(flag, v)?));
+            }
+            "--init" => {
+                let (name, v) = name_value(flag, value(flag, &mut args)?)?;
+                let index = state.iter().position(|s| *s == name).ok_or_else(|| {
+                    format!(
+                        "`--init`: `{name}` is not a component of the state (state: {})",
+                        state.join(", ")
+                    )
+                })?;
+                inv.inits.push((index, number(flag, v)?));
+            }
+            other => return Err(format!("unknown argument `{other}`")),
+        }
+    }
+    if let Some(phase) = phase {
+        let plot = inv
+            .plot
+            .as_mut()
+            .ok_or("`--phase X,Y` needs `--plot FILE.svg`")?;
+        let (x, y) = phase
+            .split_once(',')
+            .ok_or_else(|| format!("`--phase {phase}`: expected two column names X,Y"))?;
+        let columns: Vec<&str> = std::iter::once("t")
+            .chain(state.iter().copied())
+            .chain(outputs.iter().copied())
+            .collect();
+        for c in [x, y] {
+            if !columns.contains(&c.trim()) {
+                return Err(format!(
+                    "`--phase`: no column `{c}` (columns: {})",
+                    columns.join(", ")
+                ));
+            }
+        }
+        plot.phase = Some((x.trim().to_string(), y.trim().to_string()));
+    }
+    Ok(Command::Run(inv))
+}
+
+/// The generated binary's `main`.
+pub fn main<M: Model + 'static>() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match parse(&args, M::PARAMS, M::STATE, M::OUTPUTS) {
+        Err(message) => {
+            eprintln!("error: {message}\n\n{USAGE}");
+            ExitCode::from(USAGE_EXIT_STATUS)
+        }
+        Ok(Command::Help) => {
+            println!("{USAGE}");
+            ExitCode::SUCCESS
+        }
+        Ok(Command::SourceHash) => {
+            println!("{}", M::SOURCE_HASH);
+            ExitCode::SUCCESS
+        }
+        Ok(Command::Run(invocation)) => execute::<M>(&invocation),
+    }
+}
+
+/// The model, its span and initial state for an invocation, with every
+/// check the file's own values get.
+pub fn prepare<M: Model>(inv: &Invocation) -> Result<(M, f64, f64, Vec<f64>), Failure> {
+    let mut overrides = vec![None; M::PARAMS.len()];
+    for &(i, v) in &inv.params {
+        overrides[i] = Some(v);
+    }
+    let params = M::parameters(&overrides);
+    let model = M::new(&params);
+    let (t0, t1) = model.time_span();
+    if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+        return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
+    }
+    let mut given = vec![None; M::STATE.len()];
+    for &(i, v) in &inv.inits {
+        if M::INITIAL.get(i) == Some(&Initial::Given) {
+            given[i] = Some(v);
+        }
+    }
+    let x0 = model.initial_state(&given)?;
+    for (i, v) in x0.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(Failure::new(
+                t0,
+                FailureKind::NonFiniteInitialValue {
+                    component: M::STATE[i].to_string(),
+                },
+            ));
+        }
+    }
+    // A value the constraints fix may be stated, if it agrees.
+    for &(i, stated) in &inv.inits {
+        if M::INITIAL.get(i) != Some(&Initial::Given) {
+            let required = x0[i];
+            if (stated - required).abs() > 1e-9 * required.abs().max(1.0) {
+                return Err(Failure::new(
+                    t0,
+                    FailureKind::InconsistentInitialValue {
+                        component: M::STATE[i].to_string(),
+                        stated,
+                        required,
+                    },
+                ));
+            }
+        }
+    }
+    Ok((model, t0, t1, x0))
+}
+
+/// The line a run prints first: the method and integrator, and why.
+pub fn plan<M: Model>(options: &Options) -> String {
+    let (choice, source) = options.choice::<M>();
+    match options.method {
+        Method::Direct => match choice {
+            IntegratorChoice::Stiff => format!("direct: RODAS4 ({source})"),
+            IntegratorChoice::Explicit => {
+                format!("direct: DOP853 ({source}; stiffness is only reported)")
+            }
+            _ => format!("direct: DOP853, switching to RODAS4 if it detects stiffness ({source})"),
+        },
+        Method::Field if M::AFFINE => format!("field: the coefficient system by DOP853 ({source})"),
+        Method::Field => format!(
+            "field: quasilinear windows (the motion linearised along a predictor, each \
+             window's field by DOP853) ({source})"
+        ),
+    }
+}
+
+fn fail(json: bool, failure: &Failure) -> ExitCode {
+    let message = failure.to_string();
+    if json {
+        eprintln!("{{\"failed\":true,\"message\":{}}}", json_string(&message));
+    }
+    eprintln!("error: {message}");
+    ExitCode::from(failure.exit_status())
+}
+
+fn execute<M: Model + 'static>(inv: &Invocation) -> ExitCode {
+    for warning in &inv.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let (mut model, t0, t1, x0) = match prepare::<M>(inv) {
+        Ok(prepared) => prepared,
+        Err(failure) => return fail(inv.json, &failure),
+    };
+    let times = match &inv.times {
+        Some(times) => {
+            if let Some(t) = times.iter().find(|&&t| t < t0 || t > t1) {
+                eprintln!("error: `--times`: {t} is outside the time span {t0} .. {t1}");
+                return ExitCode::from(USAGE_EXIT_STATUS);
+            }
+            times.clone()
+        }
+        None => sample_times(t0, t1, inv.samples),
+    };
+    eprintln!("{}", plan::<M>(&inv.options));
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let columns = M::STATE.len() + M::OUTPUTS.len();
+    let mut written: Result<(), std::io::Error> = Ok(());
+    if !inv.quiet {
+        written = write_header(&mut out, M::STATE, M::OUTPUTS);
+    }
+    let mut exact_error: Option<f64> = M::EXACT.then_some(0.0);
+    let mut plotted: Vec<(f64, Vec<f64>)> = Vec::new();
+    let mut outputs = vec![0.0; M::OUTPUTS.len()];
+    let mut exact = vec![None; M::STATE.len()];
+    let first_start = Instant::now();
+    // The first solve streams the CSV; `--repeat N` then times N more
+    // solves without output and reports the fastest.
+    let first = run(
+        &mut model,
+        &inv.options,
+        t0,
+        t1,
+        &x0,
+        &times,
+        |model: &M, t, x| {
+            model.outputs(t, x, &mut outputs);
+            if written.is_ok() && !inv.quiet {
+                written = write_row(&mut out, t, x, &outputs);
+            }
+            if let Some(largest) = exact_error.as_mut() {
+                model.exact(t, &mut exact);
+                for (value, truth) in x.iter().zip(&exact) {
+                    if let Some(truth) = truth {
+                        *largest = largest.max((value - truth).abs() / truth.abs().max(1.0));
+                    }
+                }
+            }
+            if inv.plot.is_some() || inv.estimate_error {
+                let mut row = x.to_vec();
+                row.extend_from_slice(&outputs);
+                plotted.push((t, row));
+            }
+            Ok(())
+        },
+    );
+    let first_time = first_start.elapsed();
+    let flushed = written.and_then(|()| out.flush());
+    drop(out);
+    if let Err(error) = flushed {
+        if error.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("error: cannot write the trajectory: {error}");
+            return ExitCode::FAILURE;
+        }
+    }
+    let outcome = match first {
+        Ok(outcome) => outcome,
+        Err(failure) => return fail(inv.json, &failure),
+    };
+    let mut fastest = first_time;
+    if inv.repeat > 1 {
+        fastest = Duration::MAX;
+        for _ in 0..inv.repeat {
+            let start = Instant::now();
+            let quiet = Options {
+                progress: false,
+                ..inv.options.clone()
+            };
+            if let Err(failure) = run(&mut model, &quiet, t0, t1, &x0, &times, |_, _, _| Ok(())) {
+                return fail(inv.json, &failure);
+            }
+            fastest = fastest.min(start.elapsed());
+        }
+    }
+    let estimated_error = if inv.estimate_error {
+        match estimate(&mut model, inv, t0, t1, &x0, &plotted) {
+            Ok(e) => Some(e),
+            Err(failure) => {
+                eprintln!("warning: the error estimate failed: {failure}");
+                None
+            }
+        }
+    } else {
+        None
+    };
+    if let Some(request) = &inv.plot {
+        let mut names: Vec<&str> = vec!["t"];
+        names.extend(M::STATE);
+        names.extend(M::OUTPUTS);
+        if let Err(error) = write_plot(request, M::NAME, &names, &plotted) {
+            eprintln!("error: cannot write the plot `{}`: {error}", request.file);
+            return ExitCode::FAILURE;
+        }
+    }
+    debug_assert!(plotted.iter().all(|(_, r)| r.len() == columns));
+    let summary = Summary {
+        outcome,
+        wall_time: fastest,
+        runs: inv.repeat,
+        exact_error,
+        estimated_error,
+    };
+    if inv.json {
+        eprintln!("{}", summary.json());
+    } else {
+        eprintln!("{}", summary.text());
+    }
+    if let Ending::Stopped(_) = summary.outcome.ending {
+        // The run ended where the model said: a success.
+    }
+    ExitCode::SUCCESS
+}
+
+/// The largest difference (relative to `max(|x|, 1)`) between the samples
+/// of the run and those of a run at a 100× tighter tolerance.
+fn estimate<M: Model + 'static>(
+    model: &mut M,
+    inv: &Invocation,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    samples: &[(f64, Vec<f64>)],
+) -> Result<f64, Failure> {
+    let mut options = inv.options.clone();
+    options.tol = options.tol.scaled(0.01);
+    options.progress = false;
+    let times: Vec<f64> = samples.iter().map(|(t, _)| *t).collect();
+    let n = M::STATE.len();
+    let mut largest = 0.0_f64;
+    let mut i = 0;
+    run(model, &options, t0, t1, x0, &times, |_, t, x| {
+        if let Some((ts, row)) = samples.get(i) {
+            if *ts == t {
+                for (a, b) in row[..n].iter().zip(x) {
+                    largest = largest.max((a - b).abs() / b.abs().max(1.0));
+                }
+            }
+        }
+        i += 1;
+        Ok(())
+    })?;
+    Ok(largest)
+}

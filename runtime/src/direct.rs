@@ -1,0 +1,168 @@
+//! Direct integration of the reduced system (7) with the user's choice of
+//! integrator: `Auto` starts with DOP853 and continues with RODAS4 from the
+//! step where Hairer's stiffness test fires; `Explicit` keeps DOP853 and
+//! only reports the detection; `Stiff` is RODAS4 throughout.
+
+use crate::budget::Budget;
+use crate::failure::Failure;
+use crate::method::{AnyStepper, Integrator, IntegratorChoice};
+use crate::model::Model;
+use crate::solver::{Report, Solver};
+use crate::stepper::Stepper;
+use crate::system::ModelSystem;
+use crate::tolerance::{Stats, Tolerance};
+
+pub struct Direct {
+    choice: IntegratorChoice,
+    tol: Tolerance,
+    h_max: f64,
+    stepper: AnyStepper,
+    /// Work of the integrators before the current one.
+    done: Stats,
+    first: Integrator,
+    stiffness_detected_at: Option<f64>,
+    switched_at: Option<f64>,
+}
+
+impl Direct {
+    pub fn new<M: Model>(
+        model: &M,
+        choice: IntegratorChoice,
+        tol: Tolerance,
+        t0: f64,
+        x0: &[f64],
+        h_max: f64,
+    ) -> Result<Direct, Failure> {
+        let first = match choice {
+            IntegratorChoice::Stiff => Integrator::Stiff,
+            _ => Integrator::Explicit,
+        };
+        let stepper = AnyStepper::new(first, &ModelSystem(model), t0, x0, tol, h_max, None)?;
+        Ok(Direct {
+            choice,
+            tol,
+            h_max,
+            stepper,
+            done: Stats::default(),
+            first,
+            stiffness_detected_at: None,
+            switched_at: None,
+        })
+    }
+
+    /// The integrator finishing the run.
+    pub fn integrator(&self) -> Integrator {
+        self.stepper.integrator()
+    }
+
+    fn method_name(&self) -> String {
+        match self.switched_at {
+            Some(_) => format!(
+                "direct ({} → {})",
+                self.first.name(),
+                self.stepper.integrator().name()
+            ),
+            None => format!("direct ({})", self.stepper.integrator().name()),
+        }
+    }
+}
+
+impl<M: Model> Solver<M> for Direct {
+    fn time(&self) -> f64 {
+        self.stepper.time()
+    }
+
+    fn previous_time(&self) -> f64 {
+        self.stepper.previous_time()
+    }
+
+    fn state(&self) -> &[f64] {
+        self.stepper.state()
+    }
+
+    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+        // A switch decided after the last step happens now: the driver has
+        // used that step's (DOP853) dense output by the time it asks for
+        // the next step.
+        self.switch_if_stiff(model)?;
+        let system = ModelSystem(model);
+        self.stepper.step(&system, t_limit, budget)?;
+        if self.stiffness_detected_at.is_none() {
+            self.stiffness_detected_at = self.stepper.stiffness_detected();
+            let switches = matches!(
+                self.choice,
+                IntegratorChoice::Auto | IntegratorChoice::Magnus
+            );
+            if self.stiffness_detected_at.is_some() && switches {
+                // The switch happens after this step: its dense output was
+                // made by DOP853 and stays valid until the next step.
+                self.switched_at = Some(self.stepper.time());
+            }
+        }
+        Ok(())
+    }
+
+    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        self.stepper.dense(&ModelSystem(model), t, out)
+    }
+
+    fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
+        let h = self.stepper.proposed_step();
+        let integrator = self.stepper.integrator();
+        self.done += self.stepper.stats();
+        self.stepper = AnyStepper::new(
+            integrator,
+            &ModelSystem(model),
+            t,
+            x,
+            self.tol,
+            self.h_max,
+            Some(h),
+        )?;
+        Ok(())
+    }
+
+    fn report(&self) -> Report {
+        let mut notes = Vec::new();
+        match (self.switched_at, self.stiffness_detected_at) {
+            (Some(t), _) => notes.push(format!(
+                "switched to RODAS4 at t = {t:e} (DOP853 detected stiffness)"
+            )),
+            (None, Some(t)) => notes.push(format!(
+                "the motion looks stiff from t = {t:e} on; RODAS4 may be faster \
+                 (--integrator stiff or auto)"
+            )),
+            (None, None) => {}
+        }
+        Report {
+            method: self.method_name(),
+            stats: self.done + self.stepper.stats(),
+            notes,
+            ..Report::default()
+        }
+    }
+}
+
+impl Direct {
+    /// Performs a pending switch to RODAS4.
+    fn switch_if_stiff<M: Model>(&mut self, model: &M) -> Result<(), Failure> {
+        if self.switched_at.is_some() && self.stepper.integrator() == Integrator::Explicit {
+            let (t, x, h) = (
+                self.stepper.time(),
+                self.stepper.state().to_vec(),
+                self.stepper.proposed_step(),
+            );
+            self.done += self.stepper.stats();
+            self.stepper = AnyStepper::new(
+                Integrator::Stiff,
+                &ModelSystem(model),
+                t,
+                &x,
+                self.tol,
+                self.h_max,
+                Some(h),
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,790 @@
+//! DOP853: the explicit Runge–Kutta method of order 8 of Dormand and Prince
+//! with Hairer's combined 5th/3rd-order error estimate and his continuous
+//! extension of order 7 (HNW I, II.10; `dop853.f`, `contd8`), under the
+//! PI step-size controller. Dense output costs three more evaluations per
+//! step, spent only for steps whose interior is asked for.
+
+// The coefficients are kept to the digits Hairer published them with.
+#![allow(clippy::excessive_precision, clippy::unreadable_literal)]
+
+use crate::budget::Budget;
+use crate::controller::Controller;
+use crate::failure::{Failure, FailureKind};
+use crate::stepper::Stepper;
+use crate::system::System;
+use crate::tolerance::{first_non_finite, initial_step, step_toward, underflows, Stats, Tolerance};
+
+const STAGES: usize = 12;
+
+/// Nodes `c_i` of the twelve stages.
+const C: [f64; STAGES] = [
+    0.0,
+    0.526001519587677318785587544488e-01,
+    0.789002279381515978178381316732e-01,
+    0.118350341907227396726757197510e+00,
+    0.281649658092772603273242802490e+00,
+    0.333333333333333333333333333333e+00,
+    0.25e+00,
+    0.307692307692307692307692307692e+00,
+    0.651282051282051282051282051282e+00,
+    0.6e+00,
+    0.857142857142857142857142857142e+00,
+    1.0,
+];
+
+/// The non-zero entries `(j, a_ij)` of row `i` of the Butcher matrix.
+const A: [&[(usize, f64)]; STAGES] = [
+    &[],
+    &[(0, 5.26001519587677318785587544488e-2)],
+    &[
+        (0, 1.97250569845378994544595329183e-2),
+        (1, 5.91751709536136983633785987549e-2),
+    ],
+    &[
+        (0, 2.95875854768068491816892993775e-2),
+        (2, 8.87627564304205475450678981324e-2),
+    ],
+    &[
+        (0, 2.41365134159266685502369798665e-1),
+        (2, -8.84549479328286085344864962717e-1),
+        (3, 9.24834003261792003115737966543e-1),
+    ],
+    &[
+        (0, 3.7037037037037037037037037037e-2),
+        (3, 1.70828608729473871279604482173e-1),
+        (4, 1.25467687566822425016691814123e-1),
+    ],
+    &[
+        (0, 3.7109375e-2),
+        (3, 1.70252211019544039314978060272e-1),
+        (4, 6.02165389804559606850219397283e-2),
+        (5, -1.7578125e-2),
+    ],
+    &[
+        (0, 3.70920001185047927108779319836e-2),
+        (3, 1.70383925712239993810214054705e-1),
+        (4, 1.07262030446373284651809199168e-1),
+        (5, -1.53194377486244017527936158236e-2),
+        (6, 8.27378916381402288758473766002e-3),
+    ],
+    &[
+        (0, 6.24110958716075717114429577812e-1),
+        (3, -3.36089262944694129406857109825e0),
+        (4, -8.68219346841726006818189891453e-1),
+        (5, 2.75920996994467083049415600797e1),
+        (6, 2.01540675504778934086186788979e1),
+        (7, -4.34898841810699588477366255144e1),
+    ],
+    &[
+        (0, 4.77662536438264365890433908527e-1),
+        (3, -2.48811461997166764192642586468e0),
+        (4, -5.90290826836842996371446475743e-1),
+        (5, 2.12300514481811942347288949897e1),
+        (6, 1.52792336328824235832596922938e1),
+        (7, -3.32882109689848629194453265587e1),
+        (8, -2.03312017085086261358222928593e-2),
+    ],
+    &[
+        (0, -9.3714243008598732571704021658e-1),
+        (3, 5.18637242884406370830023853209e0),
+        (4, 1.09143734899672957818500254654e0),
+        (5, -8.14978701074692612513997267357e0),
+        (6, -1.85200656599969598641566180701e1),
+        (7, 2.27394870993505042818970056734e1),
+        (8, 2.49360555267965238987089396762e0),
+        (9, -3.0467644718982195003823669022e0),
+    ],
+    &[
+        (0, 2.27331014751653820792359768449e0),
+        (3, -1.05344954667372501984066689879e1),
+        (4, -2.00087205822486249909675718444e0),
+        (5, -1.79589318631187989172765950534e1),
+        (6, 2.79488845294199600508499808837e1),
+        (7, -2.85899827713502369474065508674e0),
+        (8, -8.87285693353062954433549289258e0),
+        (9, 1.23605671757943030647266201528e1),
+        (10, 6.43392746015763530355970484046e-1),
+    ],
+];
+
+/// Weights of the 8th-order solution.
+const B: [(usize, f64); 8] = [
+    (0, 5.42937341165687622380535766363e-2),
+    (5, 4.45031289275240888144113950566e0),
+    (6, 1.89151789931450038304281599044e0),
+    (7, -5.8012039600105847814672114227e0),
+    (8, 3.1116436695781989440891606237e-1),
+    (9, -1.52160949662516078556178806805e-1),
+    (10, 2.01365400804030348374776537501e-1),
+    (11, 4.47106157277725905176885569043e-2),
+];
+
+/// The 3rd-order estimate: `B·k − BHH·k`.
+const BHH: [(usize, f64); 3] = [
+    (0, 0.244094488188976377952755905512e+00),
+    (8, 0.733846688281611857341361741547e+00),
+    (11, 0.220588235294117647058823529412e-01),
+];
+
+/// The 5th-order error estimate.
+const ER: [(usize, f64); 8] = [
+    (0, 0.1312004499419488073250102996e-01),
+    (5, -0.1225156446376204440720569753e+01),
+    (6, -0.4957589496572501915214079952e+00),
+    (7, 0.1664377182454986536961530415e+01),
+    (8, -0.3503288487499736816886487290e+00),
+    (9, 0.3341791187130174790297318841e+00),
+    (10, 0.8192320648511571246570742613e-01),
+    (11, -0.2235530786388629525884427845e-01),
+];
+
+/// The three extra stages of the continuous extension: node, then the
+/// non-zero `(j, a_ij)` with `j` indexing `k[0..12]`, `k_new = k[12]`
+/// (`X(t + h, y_new)`), and the extra stages `k[13]`, `k[14]`.
+const C_EXTRA: [f64; 3] = [0.1, 0.2, 0.777777777777777777777777777778];
+const A_EXTRA: [&[(usize, f64)]; 3] = [
+    &[
+        (0, 5.61675022830479523392909219681e-2),
+        (6, 2.53500210216624811088794765333e-1),
+        (7, -2.46239037470802489917441475441e-1),
+        (8, -1.24191423263816360469010140626e-1),
+        (9, 1.5329179827876569731206322685e-1),
+        (10, 8.20105229563468988491666602057e-3),
+        (11, 7.56789766054569976138603589584e-3),
+        (12, -8.298e-3),
+    ],
+    &[
+        (0, 3.18346481635021405060768473261e-2),
+        (5, 2.83009096723667755288322961402e-2),
+        (6, 5.35419883074385676223797384372e-2),
+        (7, -5.49237485713909884646569340306e-2),
+        (10, -1.08347328697249322858509316994e-4),
+        (11, 3.82571090835658412954920192323e-4),
+        (12, -3.40465008687404560802977114492e-4),
+        (13, 1.41312443674632500278074618366e-1),
+    ],
+    &[
+        (0, -4.28896301583791923408573538692e-1),
+        (5, -4.69762141536116384314449447206e0),
+        (6, 7.68342119606259904184240953878e0),
+        (7, 4.06898981839711007970213554331e0),
+        (8, 3.56727187455281109270669543021e-1),
+        (12, -1.39902416515901462129418009734e-3),
+        (13, 2.9475147891527723389556272149e0),
+        (14, -9.15095847217987001081870187138e0),
+    ],
+];
+
+/// The rows `d4..d7` of the continuous extension over `k[0..16]`.
+const D: [[f64; 16]; 4] = [
+    [
+        -0.84289382761090128651353491142e+01,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.56671495351937776962531783590e+00,
+        -0.30689499459498916912797304727e+01,
+        0.23846676565120698287728149680e+01,
+        0.21170345824450282767155149946e+01,
+        -0.87139158377797299206789907490e+00,
+        0.22404374302607882758541771650e+01,
+        0.63157877876946881815570249290e+00,
+        -0.88990336451333310820698117400e-01,
+        0.18148505520854727256656404962e+02,
+        -0.91946323924783554000451984436e+01,
+        -0.44360363875948939664310572000e+01,
+    ],
+    [
+        0.10427508642579134603413151009e+02,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        0.24228349177525818288430175319e+03,
+        0.16520045171727028198505394887e+03,
+        -0.37454675472269020279518312152e+03,
+        -0.22113666853125306036270938578e+02,
+        0.77334326684722638389603898808e+01,
+        -0.30674084731089398182061213626e+02,
+        -0.93321305264302278729567221706e+01,
+        0.15697238121770843886131091075e+02,
+        -0.31139403219565177677282850411e+02,
+        -0.93529243588444783865713862664e+01,
+        0.35816841486394083752465898540e+02,
+    ],
+    [
+        0.19985053242002433820987653617e+02,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -0.38703730874935176555105901742e+03,
+        -0.18917813819516756882830838328e+03,
+        0.52780815920542364900561016686e+03,
+        -0.11573902539959630126141871134e+02,
+        0.68812326946963000169666922661e+01,
+        -0.10006050966910838403183860980e+01,
+        0.77771377980534432092869265740e+00,
+        -0.27782057523535084065932004339e+01,
+        -0.60196695231264120758267380846e+02,
+        0.84320405506677161018159903784e+02,
+        0.11992291136182789328035130030e+02,
+    ],
+    [
+        -0.25693933462703749003312586129e+02,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -0.15418974869023643374053993627e+03,
+        -0.23152937917604549567536039109e+03,
+        0.35763911791061412378285349910e+03,
+        0.93405324183624310003907691704e+02,
+        -0.37458323136451633156875139351e+02,
+        0.10409964950896230045147246184e+03,
+        0.29840293426660503123344363579e+02,
+        -0.43533456590011143754432175058e+02,
+        0.96324553959188282948394950600e+02,
+        -0.39177261675615439165231486172e+02,
+        -0.14972683625798562581422125276e+03,
+    ],
+];
+
+/// Hairer's stiffness test (`dop853.f`): `h·ρ` estimated from the last
+/// stage, `h ‖X(t+h, y₁) − X(t+h, ŷ)‖ / ‖y₁ − ŷ‖`, past the edge of
+/// DOP853's stability region (≈ 6.1 on the negative real axis) on
+/// `STIFF_STEPS` tests, not interrupted by `NON_STIFF_STEPS` tests below it.
+const STIFF_H_RHO: f64 = 6.1;
+const STIFF_STEPS: usize = 15;
+const NON_STIFF_STEPS: usize = 6;
+
+/// How a DOP853 step's error estimates become one scaled error (≤ 1
+/// accepts). The field method measures the error of the state it recovers
+/// from the coefficients rather than of the coefficients themselves.
+pub trait ErrorMeasure {
+    /// The scaled error of the step from `(t0, y0)` to `(t0 + h, y1)`, with
+    /// Hairer's 3rd- and 5th-order estimates `e3`, `e5` per unit step;
+    /// `None` declines the step: it must not be taken at any length that
+    /// reaches this far (the field's conditions degraded).
+    fn measure(&mut self, t0: f64, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], e5: &[f64])
+        -> Option<f64>;
+}
+
+/// Hairer's measure (`dop853.f`): `|h| ε₅ / √(n (ε₅² + 0.01 ε₃²))`, the
+/// sums scaled by `atol + rtol·max(|y0|, |y1|)`.
+pub struct HairerMeasure(pub Tolerance);
+
+impl ErrorMeasure for HairerMeasure {
+    fn measure(
+        &mut self,
+        _t0: f64,
+        h: f64,
+        y0: &[f64],
+        y1: &[f64],
+        e3: &[f64],
+        e5: &[f64],
+    ) -> Option<f64> {
+        Some(hairer_error(self.0, h, y0, y1, e3, e5))
+    }
+}
+
+/// Hairer's combined error norm of DOP853.
+pub fn hairer_error(tol: Tolerance, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], e5: &[f64]) -> f64 {
+    let n = y0.len();
+    let (mut err3, mut err5) = (0.0, 0.0);
+    for i in 0..n {
+        let scale = tol.atol + tol.rtol * y0[i].abs().max(y1[i].abs());
+        err3 += (e3[i] / scale).powi(2);
+        err5 += (e5[i] / scale).powi(2);
+    }
+    let denominator = if err5 + 0.01 * err3 > 0.0 {
+        err5 + 0.01 * err3
+    } else {
+        1.0
+    };
+    let err = h.abs() * err5 * (1.0 / (n.max(1) as f64 * denominator)).sqrt();
+    if err.is_finite() {
+        err
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// What [`Dop853::step_measured`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepOutcome {
+    Accepted,
+    /// The measure declined the step: nothing changed.
+    Declined,
+}
+
+/// The DOP853 integrator at time `t` with state `y`.
+pub struct Dop853 {
+    tol: Tolerance,
+    t: f64,
+    y: Vec<f64>,
+    /// Stages: `k[0] = X(t, y)` (first same as last), `k[1..12]` the
+    /// stages of the last step, `k[12] = X(t, y)` again after a step is
+    /// accepted (kept for the continuous extension), `k[13..16]` its extra
+    /// stages.
+    k: Vec<Vec<f64>>,
+    y_trial: Vec<f64>,
+    /// The 3rd- and 5th-order error estimates of the last attempt, per unit
+    /// step (multiply by `h`).
+    error3: Vec<f64>,
+    error5: Vec<f64>,
+    stage_state: Vec<f64>,
+    h: f64,
+    controller: Controller,
+    stats: Stats,
+    /// The last accepted step: its start, length and start state.
+    t_old: f64,
+    h_old: f64,
+    y_old: Vec<f64>,
+    /// The continuous extension's coefficients (8 blocks of `n`), valid
+    /// when `dense_ready`.
+    cont: Vec<f64>,
+    dense_ready: bool,
+    stiff_tests: usize,
+    non_stiff_tests: usize,
+    stiffness_detected: Option<f64>,
+}
+
+impl Dop853 {
+    /// Starts at `(t0, y0)`; `h_max` bounds the first step guess; `h0`, when
+    /// given, replaces the guess (a restart keeps the step that worked).
+    pub fn new<S: System + ?Sized>(
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure> {
+        let n = y0.len();
+        if let Some(i) = first_non_finite(y0) {
+            return Err(Failure::non_finite(t0, system.component_name(i)));
+        }
+        let mut k = vec![vec![0.0; n]; STAGES + 4];
+        system.rhs(t0, y0, &mut k[0])?;
+        if let Some(i) = first_non_finite(&k[0]) {
+            return Err(Failure::non_finite_rate(t0, system.rate_name(i)));
+        }
+        let mut stats = Stats {
+            rhs_evaluations: 1,
+            ..Stats::default()
+        };
+        let h = match h0 {
+            Some(h) if h.is_finite() && h > 0.0 => h.min(h_max),
+            _ => {
+                stats.rhs_evaluations += 1;
+                initial_step(system, t0, y0, &k[0], tol, 8, h_max)?
+            }
+        };
+        Ok(Dop853 {
+            tol,
+            t: t0,
+            y: y0.to_vec(),
+            k,
+            y_trial: vec![0.0; n],
+            error3: vec![0.0; n],
+            error5: vec![0.0; n],
+            stage_state: vec![0.0; n],
+            h,
+            controller: Controller::dop853(),
+            stats,
+            t_old: t0,
+            h_old: 0.0,
+            y_old: y0.to_vec(),
+            cont: vec![0.0; 8 * n],
+            dense_ready: false,
+            stiff_tests: 0,
+            non_stiff_tests: 0,
+            stiffness_detected: None,
+        })
+    }
+
+    /// The slope `X(t, y)` at the current state.
+    pub fn slope(&self) -> &[f64] {
+        &self.k[0]
+    }
+
+    /// One accepted step under `measure` (see [`Stepper::step`]), or
+    /// [`StepOutcome::Declined`] when the measure declines it.
+    pub fn step_measured<S: System + ?Sized, E: ErrorMeasure + ?Sized>(
+        &mut self,
+        system: &S,
+        t_limit: f64,
+        budget: &Budget,
+        measure: &mut E,
+    ) -> Result<StepOutcome, Failure> {
+        let mut last_non_finite = false;
+        loop {
+            budget.draw(self.t)?;
+            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
+            if underflows(self.t, h) && !reaches_limit {
+                return Err(if last_non_finite {
+                    let i = first_non_finite(&self.y_trial).unwrap_or(0);
+                    Failure::non_finite(self.t, system.component_name(i))
+                } else {
+                    Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h })
+                });
+            }
+            let finite = self.attempt(system, h)?;
+            let err = if finite {
+                match measure.measure(self.t, h, &self.y, &self.y_trial, &self.error3, &self.error5)
+                {
+                    Some(err) => err,
+                    None => {
+                        self.stats.rejected_steps += 1;
+                        return Ok(StepOutcome::Declined);
+                    }
+                }
+            } else {
+                f64::INFINITY
+            };
+            if !finite {
+                // A stage overflowed: the step was too long for a solution
+                // that grows fast; retry shorter.
+                self.stats.rejected_steps += 1;
+                self.h = self.controller.reject(h, f64::INFINITY);
+                last_non_finite = true;
+            } else if err <= 1.0 {
+                let h_next = self.controller.accept(h, err);
+                self.y_old.copy_from_slice(&self.y);
+                std::mem::swap(&mut self.y, &mut self.y_trial);
+                self.t_old = self.t;
+                self.h_old = h;
+                self.t = if reaches_limit { t_limit } else { self.t + h };
+                // A step cut short to land on `t_limit` says nothing against
+                // the longer step proposed before.
+                self.h = if reaches_limit {
+                    h_next.max(self.h)
+                } else {
+                    h_next
+                };
+                // Keep X(t_old) for the continuous extension.
+                self.k.swap(0, 12);
+                let mut out = std::mem::take(&mut self.k[0]);
+                let evaluated = system.rhs(self.t, &self.y, &mut out);
+                self.k[0] = out;
+                evaluated?;
+                self.stats.rhs_evaluations += 1;
+                self.stats.accepted_steps += 1;
+                self.dense_ready = false;
+                if let Some(i) = first_non_finite(&self.k[0]) {
+                    return Err(Failure::non_finite_rate(self.t, system.rate_name(i)));
+                }
+                self.test_stiffness(h);
+                return Ok(StepOutcome::Accepted);
+            } else {
+                self.stats.rejected_steps += 1;
+                self.h = self.controller.reject(h, err);
+                last_non_finite = false;
+            }
+        }
+    }
+
+    /// Hairer's test after an accepted step of length `h`: `y` is the new
+    /// state, `k[0] = X(t, y)`, and the last stage `k[11] = X(t, y₁)` was
+    /// evaluated at the same time at `stage_state = y₁`.
+    fn test_stiffness(&mut self, h: f64) {
+        let (mut numerator, mut denominator) = (0.0, 0.0);
+        for i in 0..self.y.len() {
+            numerator += (self.k[0][i] - self.k[STAGES - 1][i]).powi(2);
+            denominator += (self.y[i] - self.stage_state[i]).powi(2);
+        }
+        if denominator <= 0.0 || !numerator.is_finite() {
+            return;
+        }
+        let h_rho = h.abs() * (numerator / denominator).sqrt();
+        if h_rho > STIFF_H_RHO {
+            self.non_stiff_tests = 0;
+            self.stiff_tests += 1;
+            if self.stiff_tests >= STIFF_STEPS && self.stiffness_detected.is_none() {
+                self.stiffness_detected = Some(self.t);
+            }
+        } else {
+            self.non_stiff_tests += 1;
+            if self.non_stiff_tests >= NON_STIFF_STEPS {
+                self.stiff_tests = 0;
+            }
+        }
+    }
+
+    /// Computes the stages, `y_trial` and the two error estimates (per
+    /// unit step) for step `h`; `false` when a stage is not finite.
+    fn attempt<S: System + ?Sized>(&mut self, system: &S, h: f64) -> Result<bool, Failure> {
+        let n = self.y.len();
+        for s in 1..STAGES {
+            for i in 0..n {
+                let increment: f64 = A[s].iter().map(|&(j, a)| a * self.k[j][i]).sum();
+                self.stage_state[i] = self.y[i] + h * increment;
+            }
+            let mut out = std::mem::take(&mut self.k[s]);
+            let evaluated = system.rhs(self.t + C[s] * h, &self.stage_state, &mut out);
+            self.k[s] = out;
+            evaluated?;
+            self.stats.rhs_evaluations += 1;
+        }
+        for i in 0..n {
+            let slope: f64 = B.iter().map(|&(j, b)| b * self.k[j][i]).sum();
+            self.y_trial[i] = self.y[i] + h * slope;
+            self.error3[i] = slope - BHH.iter().map(|&(j, b)| b * self.k[j][i]).sum::<f64>();
+            self.error5[i] = ER.iter().map(|&(j, e)| e * self.k[j][i]).sum();
+        }
+        Ok(first_non_finite(&self.y_trial).is_none()
+            && first_non_finite(&self.error3).is_none()
+            && first_non_finite(&self.error5).is_none())
+    }
+
+    /// The continuous extension of the last step (Hairer's `dop853.f`,
+    /// `IOUT ≥ 2`): three more stages and the coefficients `cont`.
+    fn prepare_dense<S: System + ?Sized>(&mut self, system: &S) -> Result<(), Failure> {
+        let (mut extra, mut state) = (std::mem::take(&mut self.k), std::mem::take(&mut self.stage_state));
+        let result = continuous_extension(
+            system,
+            self.t_old,
+            self.h_old,
+            &self.y_old,
+            &self.y,
+            &mut extra,
+            &mut state,
+            &mut self.cont,
+        );
+        self.k = extra;
+        self.stage_state = state;
+        result?;
+        self.stats.rhs_evaluations += 3;
+        self.dense_ready = true;
+        Ok(())
+    }
+
+    /// The last accepted step as data, to build its continuous extension
+    /// later (the field method keeps the steps of a window until the window
+    /// is accepted, and prepares only those that output asks for).
+    pub fn raw_step(&self) -> RawStep {
+        RawStep {
+            t_old: self.t_old,
+            h: self.h_old,
+            t_new: self.t,
+            y_old: self.y_old.clone(),
+            y: self.y.clone(),
+            k: self.k[..13].to_vec(),
+        }
+    }
+
+    /// The prepared continuous extension of the last accepted step, as a
+    /// value that outlives the integrator's next step.
+    pub fn dense_step<S: System + ?Sized>(&mut self, system: &S) -> Result<DenseStep, Failure> {
+        if !self.dense_ready {
+            self.prepare_dense(system)?;
+        }
+        Ok(DenseStep {
+            t_old: self.t_old,
+            t_new: self.t,
+            h: self.h_old,
+            cont: self.cont.clone(),
+        })
+    }
+}
+
+impl Stepper for Dop853 {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.y
+    }
+
+    fn previous_time(&self) -> f64 {
+        self.t_old
+    }
+
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    fn proposed_step(&self) -> f64 {
+        self.h
+    }
+
+    fn propose_step(&mut self, h: f64) {
+        if h.is_finite() && h > 0.0 {
+            self.h = h;
+        }
+    }
+
+    fn stiffness_detected(&self) -> Option<f64> {
+        self.stiffness_detected
+    }
+
+    fn step<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure> {
+        let mut measure = HairerMeasure(self.tol);
+        self.step_measured(system, t_limit, budget, &mut measure)
+            .map(|_| ())
+    }
+
+    fn dense<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        t: f64,
+        out: &mut [f64],
+    ) -> Result<(), Failure> {
+        let n = self.y.len();
+        if self.h_old == 0.0 || t >= self.t {
+            out.copy_from_slice(&self.y);
+            return Ok(());
+        }
+        if t <= self.t_old {
+            out.copy_from_slice(&self.y_old);
+            return Ok(());
+        }
+        if !self.dense_ready {
+            self.prepare_dense(system)?;
+        }
+        contd8(&self.cont, n, (t - self.t_old) / self.h_old, out);
+        Ok(())
+    }
+}
+
+/// Hairer's `contd8`: the continuous extension at `θ = (t − t_old)/h`.
+fn contd8(c: &[f64], n: usize, s: f64, out: &mut [f64]) {
+    let s1 = 1.0 - s;
+    for (i, o) in out.iter_mut().enumerate().take(n) {
+        let conf1 = c[4 * n + i] + s * (c[5 * n + i] + s1 * (c[6 * n + i] + s * c[7 * n + i]));
+        *o = c[i] + s * (c[n + i] + s1 * (c[2 * n + i] + s * (c[3 * n + i] + s1 * conf1)));
+    }
+}
+
+/// One step's continuous extension (order 7), detached from the integrator.
+#[derive(Clone, Debug)]
+pub struct DenseStep {
+    pub t_old: f64,
+    pub t_new: f64,
+    h: f64,
+    cont: Vec<f64>,
+}
+
+impl DenseStep {
+    /// The state at `t` (clamped to the step).
+    pub fn eval(&self, t: f64, out: &mut [f64]) {
+        let n = self.cont.len() / 8;
+        let s = if self.h > 0.0 {
+            ((t - self.t_old) / self.h).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        contd8(&self.cont, n, s, out);
+    }
+}
+
+/// Stage `j` of a step in Hairer's numbering of the continuous extension
+/// (0: `X(t_old)`, 1..11: the stages, 12: `X(t_new)`, 13..15: the extra
+/// stages), from the storage of [`Dop853`]: `k[0] = X(t_new)` after the
+/// step, `k[12] = X(t_old)`, `k[13..16]` the extra stages.
+fn stage(k: &[Vec<f64>], j: usize, i: usize) -> f64 {
+    match j {
+        0 => k[12][i],
+        12 => k[0][i],
+        _ => k[j][i],
+    }
+}
+
+/// Computes the three extra stages into `k[13..16]` and the coefficients
+/// `cont` (8 blocks of `n`) of the step from `(t_old, y_old)` of length `h`
+/// to `y`.
+#[allow(clippy::too_many_arguments)]
+fn continuous_extension<S: System + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y: &[f64],
+    k: &mut [Vec<f64>],
+    stage_state: &mut [f64],
+    cont: &mut [f64],
+) -> Result<(), Failure> {
+    let n = y.len();
+    for (e, row) in A_EXTRA.iter().enumerate() {
+        for i in 0..n {
+            let increment: f64 = row.iter().map(|&(j, a)| a * stage(k, j, i)).sum();
+            stage_state[i] = y_old[i] + h * increment;
+        }
+        let mut out = std::mem::take(&mut k[13 + e]);
+        out.resize(n, 0.0);
+        let evaluated = system.rhs(t_old + C_EXTRA[e] * h, stage_state, &mut out);
+        k[13 + e] = out;
+        evaluated?;
+    }
+    for i in 0..n {
+        let y_diff = y[i] - y_old[i];
+        let bspl = h * stage(k, 0, i) - y_diff;
+        cont[i] = y_old[i];
+        cont[n + i] = y_diff;
+        cont[2 * n + i] = bspl;
+        cont[3 * n + i] = y_diff - h * stage(k, 12, i) - bspl;
+        for (r, row) in D.iter().enumerate() {
+            let mut s = 0.0;
+            for (j, &d) in row.iter().enumerate() {
+                if d != 0.0 {
+                    s += d * stage(k, j, i);
+                }
+            }
+            cont[(4 + r) * n + i] = h * s;
+        }
+    }
+    Ok(())
+}
+
+/// An accepted step as data (see [`Dop853::raw_step`]).
+#[derive(Clone, Debug)]
+pub struct RawStep {
+    pub t_old: f64,
+    pub t_new: f64,
+    h: f64,
+    y_old: Vec<f64>,
+    y: Vec<f64>,
+    /// `k[0] = X(t_new)`, `k[1..12]` the stages, `k[12] = X(t_old)`.
+    k: Vec<Vec<f64>>,
+}
+
+impl RawStep {
+    /// The state at the step's end.
+    pub fn end_state(&self) -> &[f64] {
+        &self.y
+    }
+
+    /// The step's continuous extension (three evaluations of `system`,
+    /// which must be the system the step was taken on).
+    pub fn prepare<S: System + ?Sized>(&self, system: &S) -> Result<DenseStep, Failure> {
+        let n = self.y.len();
+        let mut k = self.k.clone();
+        k.resize(16, vec![0.0; n]);
+        let mut stage_state = vec![0.0; n];
+        let mut cont = vec![0.0; 8 * n];
+        continuous_extension(
+            system,
+            self.t_old,
+            self.h,
+            &self.y_old,
+            &self.y,
+            &mut k,
+            &mut stage_state,
+            &mut cont,
+        )?;
+        Ok(DenseStep {
+            t_old: self.t_old,
+            t_new: self.t_new,
+            h: self.h,
+            cont,
+        })
+    }
+}

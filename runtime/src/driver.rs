@@ -1,0 +1,383 @@
+//! The run: one method advancing the model step by step; the output at the
+//! requested times from the dense output (so output never constrains the
+//! steps); events — a switching function changing sign, located by root
+//! finding on the dense output, the integrator (or the field) restarted
+//! there in the new regime; implicit constraints switching candidates; and
+//! `stop when`.
+
+use crate::budget::Budget;
+use crate::direct::Direct;
+use crate::events::locate;
+use crate::failure::{Failure, FailureKind};
+use crate::field::affine::AffineField;
+use crate::field::quasilinear::QuasilinearField;
+use crate::field::{Anchor, FieldOptions};
+use crate::method::{IntegratorChoice, Method};
+use crate::model::{Model, Regime};
+use crate::progress::Progress;
+use crate::solver::{Report, Solver};
+use crate::tolerance::Tolerance;
+
+/// How to integrate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    pub method: Method,
+    /// `None`: the model's `integrator` statement, or `Auto`.
+    pub integrator: Option<IntegratorChoice>,
+    pub tol: Tolerance,
+    pub anchor: Anchor,
+    pub reanchor: bool,
+    /// The work budget: steps of every kind.
+    pub max_steps: usize,
+    /// Show progress on stderr (when it is a terminal) for long runs.
+    pub progress: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            method: Method::Field,
+            integrator: None,
+            tol: Tolerance::default(),
+            anchor: Anchor::Zero,
+            reanchor: true,
+            max_steps: crate::budget::DEFAULT_MAX_STEPS,
+            progress: false,
+        }
+    }
+}
+
+impl Options {
+    /// The integrator choice: the option, else the model's statement,
+    /// else `Auto`; with where it came from, in words.
+    pub fn choice<M: Model>(&self) -> (IntegratorChoice, String) {
+        match (self.integrator, M::DECLARED_INTEGRATOR) {
+            (Some(c), _) => (c, format!("--integrator {}", c.name())),
+            (None, Some(c)) => (c, format!("declared {} in the model", c.name())),
+            (None, None) => (IntegratorChoice::Auto, "auto, the default".to_string()),
+        }
+    }
+}
+
+/// Why the run ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ending {
+    /// At the end of the time span.
+    End,
+    /// `stop when` became true at this time.
+    Stopped(f64),
+}
+
+/// What a run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    pub report: Report,
+    pub ending: Ending,
+    /// Events located (switches and candidate changes).
+    pub events: usize,
+    /// Steps drawn from the budget.
+    pub budget_used: usize,
+}
+
+/// The initial regime at `(t0, x0)`: branches from the switching
+/// functions' signs (a function exactly zero takes the sign it has a moment
+/// later along the initial slope).
+pub fn initial_branches<M: Model>(model: &M, t0: f64, x0: &[f64]) -> Vec<bool> {
+    let k = M::SWITCHES;
+    if k == 0 {
+        return Vec::new();
+    }
+    let mut g = vec![0.0; k];
+    model.switching_functions(t0, x0, &mut g);
+    if g.iter().any(|&v| v == 0.0) {
+        let mut slope = vec![0.0; x0.len()];
+        if model.rhs(t0, x0, &mut slope).is_ok() {
+            let h = 1e-8 * t0.abs().max(1.0);
+            let ahead: Vec<f64> = x0.iter().zip(&slope).map(|(x, s)| x + h * s).collect();
+            let mut g_ahead = vec![0.0; k];
+            model.switching_functions(t0 + h, &ahead, &mut g_ahead);
+            for (v, a) in g.iter_mut().zip(&g_ahead) {
+                if *v == 0.0 {
+                    *v = *a;
+                }
+            }
+        }
+    }
+    g.iter().map(|&v| v > 0.0).collect()
+}
+
+/// The mode whose candidates have the largest pivots at `(t, x)`, with
+/// the worst ratio of a chosen pivot to the best of its constraint.
+pub fn best_mode<M: Model>(model: &M, t: f64, x: &[f64]) -> (usize, Vec<usize>, f64) {
+    let constraints = M::CONSTRAINTS;
+    if constraints.is_empty() {
+        return (0, Vec::new(), 1.0);
+    }
+    let total: usize = constraints.iter().map(|c| c.names.len()).sum();
+    let mut pivots = vec![0.0; total];
+    model.pivots(t, x, &mut pivots);
+    let mut at = 0;
+    let mut choice = Vec::with_capacity(constraints.len());
+    let mut best_pivot = f64::INFINITY;
+    for c in constraints {
+        let slice = &pivots[at..at + c.names.len()];
+        let (j, p) = slice
+            .iter()
+            .enumerate()
+            .map(|(j, p)| (j, p.abs()))
+            .fold((0, -1.0), |b, c| if c.1 > b.1 { c } else { b });
+        choice.push(j);
+        best_pivot = best_pivot.min(p);
+        at += c.names.len();
+    }
+    (mode_index::<M>(&choice), choice, best_pivot)
+}
+
+/// The mode of a choice of candidates (mixed radix, first constraint
+/// lowest).
+pub fn mode_index<M: Model>(choice: &[usize]) -> usize {
+    let mut mode = 0;
+    let mut radix = 1;
+    for (c, &j) in M::CONSTRAINTS.iter().zip(choice) {
+        mode += j * radix;
+        radix *= c.names.len();
+    }
+    mode
+}
+
+fn mode_digits<M: Model>(mode: usize) -> Vec<usize> {
+    let mut rest = mode;
+    M::CONSTRAINTS
+        .iter()
+        .map(|c| {
+            let d = rest % c.names.len();
+            rest /= c.names.len();
+            d
+        })
+        .collect()
+}
+
+/// A candidate is replaced when its pivot falls below this fraction of the
+/// best candidate's.
+const POOR_PIVOT: f64 = 0.1;
+
+/// Makes the solver of `options` for `model` from `(t0, x0)`.
+pub fn make_solver<M: Model + 'static>(
+    model: &M,
+    options: &Options,
+    t0: f64,
+    x0: &[f64],
+    h_max: f64,
+) -> Result<Box<dyn Solver<M>>, Failure> {
+    let (choice, _) = options.choice::<M>();
+    Ok(match options.method {
+        Method::Direct => Box::new(Direct::new(model, choice, options.tol, t0, x0, h_max)?),
+        Method::Field => {
+            let field = FieldOptions {
+                tol: options.tol,
+                anchor: options.anchor.clone(),
+                reanchor: options.reanchor,
+                ..FieldOptions::default()
+            };
+            if M::AFFINE {
+                Box::new(AffineField::new(model, field, t0, x0, h_max)?)
+            } else {
+                Box::new(QuasilinearField::new(field, t0, x0, h_max))
+            }
+        }
+    })
+}
+
+/// Integrates `model` from `(t0, x0)` to `t1`, calling `sample(t, x)` at
+/// every time of `times` (ascending, within `[t0, t1]`) and, when `stop
+/// when` ends the run early, at the stop time.
+#[allow(clippy::too_many_arguments)]
+pub fn run<M: Model + 'static>(
+    model: &mut M,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+    mut sample: impl FnMut(&M, f64, &[f64]) -> Result<(), Failure>,
+) -> Result<Outcome, Failure> {
+    let n = x0.len();
+    let budget = Budget::new(options.max_steps);
+    let span = t1 - t0;
+    let h_max = if span > 0.0 { span } else { 1.0 };
+    let mut regime = Regime {
+        mode: best_mode(model, t0, x0).0,
+        branches: initial_branches(model, t0, x0),
+    };
+    model.set_regime(&regime);
+    let mut next_sample = 0;
+    let mut events = 0;
+    let emit_until = |model: &M,
+                          solver: &mut dyn Solver<M>,
+                          next: &mut usize,
+                          until: f64,
+                          sample: &mut dyn FnMut(&M, f64, &[f64]) -> Result<(), Failure>|
+     -> Result<(), Failure> {
+        let mut x = vec![0.0; n];
+        while *next < times.len() && times[*next] <= until {
+            let t = times[*next];
+            solver.dense(model, t, &mut x)?;
+            sample(model, t, &x)?;
+            *next += 1;
+        }
+        Ok(())
+    };
+    // Samples at t0 come from the initial state itself.
+    while next_sample < times.len() && times[next_sample] <= t0 {
+        sample(model, times[next_sample], x0)?;
+        next_sample += 1;
+    }
+    if M::SWITCHES > 0 && model.stop(&regime.branches) {
+        if times.last().is_none_or(|&t| t > t0) {
+            sample(model, t0, x0)?;
+        }
+        return Ok(Outcome {
+            report: Report::default(),
+            ending: Ending::Stopped(t0),
+            events,
+            budget_used: 0,
+        });
+    }
+    let mut solver = make_solver(model, options, t0, x0, h_max)?;
+    let mut progress = Progress::new(options.progress, t0, t1);
+    let mut g_now = vec![0.0; M::SWITCHES];
+    let mut x_event = vec![0.0; n];
+    while solver.time() < t1 {
+        solver.advance(model, t1, &budget)?;
+        progress.update(solver.time());
+        let (ta, tb) = (solver.previous_time(), solver.time());
+        // A switch whose function changed sign against its branch.
+        let mut event: Option<(f64, Vec<usize>)> = None;
+        if M::SWITCHES > 0 {
+            model.switching_functions(tb, solver.state(), &mut g_now);
+            let changed: Vec<usize> = (0..M::SWITCHES)
+                .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
+                .collect();
+            if !changed.is_empty() {
+                let mut roots = Vec::with_capacity(changed.len());
+                for &k in &changed {
+                    let mut x = vec![0.0; n];
+                    let mut g = vec![0.0; M::SWITCHES];
+                    let mut phi = |t: f64| -> Result<f64, Failure> {
+                        solver.dense(model, t, &mut x)?;
+                        model.switching_functions(t, &x, &mut g);
+                        Ok(g[k])
+                    };
+                    let g_a = {
+                        let v = phi(ta)?;
+                        // At the step's start the function is on its
+                        // branch's side (or exactly zero there).
+                        if regime.branches[k] {
+                            v.max(f64::MIN_POSITIVE)
+                        } else {
+                            v.min(-f64::MIN_POSITIVE)
+                        }
+                    };
+                    let root = locate(ta, g_a, tb, g_now[k], &mut phi)?;
+                    roots.push((k, root));
+                }
+                let t_event = roots.iter().map(|&(_, r)| r).fold(f64::INFINITY, f64::min);
+                let width = 8.0 * f64::EPSILON * t_event.abs().max(1.0);
+                let at: Vec<usize> = roots
+                    .iter()
+                    .filter(|&&(_, r)| r <= t_event + width)
+                    .map(|&(k, _)| k)
+                    .collect();
+                event = Some((t_event, at));
+            }
+        }
+        match event {
+            Some((t_event, switches)) => {
+                emit_until(model, solver.as_mut(), &mut next_sample, t_event, &mut sample)?;
+                solver.dense(model, t_event, &mut x_event)?;
+                for k in switches {
+                    regime.branches[k] = !regime.branches[k];
+                }
+                events += 1;
+                if model.stop(&regime.branches) {
+                    model.set_regime(&regime);
+                    let already = next_sample > 0 && times[next_sample - 1] == t_event;
+                    if !already {
+                        sample(model, t_event, &x_event)?;
+                    }
+                    progress.finish();
+                    return Ok(Outcome {
+                        report: solver.report(),
+                        ending: Ending::Stopped(t_event),
+                        events,
+                        budget_used: budget.used(),
+                    });
+                }
+                model.set_regime(&regime);
+                solver.restart(model, t_event, &x_event)?;
+            }
+            None => {
+                emit_until(model, solver.as_mut(), &mut next_sample, tb, &mut sample)?;
+                if !M::CONSTRAINTS.is_empty() {
+                    switch_candidates(model, &mut regime, solver.as_mut(), tb)?;
+                }
+            }
+        }
+    }
+    emit_until(model, solver.as_mut(), &mut next_sample, f64::INFINITY, &mut sample)?;
+    progress.finish();
+    Ok(Outcome {
+        report: solver.report(),
+        ending: Ending::End,
+        events,
+        budget_used: budget.used(),
+    })
+}
+
+/// After a step: when a constraint's current candidate has become poor
+/// against its best one, continue with the best (the field re-anchors);
+/// when every candidate of a constraint has vanished, stop.
+fn switch_candidates<M: Model>(
+    model: &mut M,
+    regime: &mut Regime,
+    solver: &mut dyn Solver<M>,
+    t: f64,
+) -> Result<(), Failure> {
+    let x = solver.state().to_vec();
+    let total: usize = M::CONSTRAINTS.iter().map(|c| c.names.len()).sum();
+    let mut pivots = vec![0.0; total];
+    model.pivots(t, &x, &mut pivots);
+    let mut digits = mode_digits::<M>(regime.mode);
+    let mut changed = false;
+    let mut at = 0;
+    for (c, digit) in M::CONSTRAINTS.iter().zip(digits.iter_mut()) {
+        let slice = &pivots[at..at + c.names.len()];
+        let (best, best_pivot) = slice
+            .iter()
+            .enumerate()
+            .map(|(j, p)| (j, p.abs()))
+            .fold((0, -1.0), |b, c| if c.1 > b.1 { c } else { b });
+        let current = slice[*digit].abs();
+        let scale = x.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        if best_pivot <= 1e-12 * scale || !best_pivot.is_finite() {
+            return Err(Failure::new(
+                t,
+                FailureKind::ConstraintPivotVanishes {
+                    constraint: c.text.to_string(),
+                    pivot: current,
+                },
+            ));
+        }
+        if current < POOR_PIVOT * best_pivot {
+            *digit = best;
+            changed = true;
+        }
+        at += c.names.len();
+    }
+    if changed {
+        regime.mode = mode_index::<M>(&digits);
+        model.set_regime(regime);
+        solver.restart(model, t, &x)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,210 @@
+//! Run-time failures: each stops the run with a message naming the time and
+//! the physical quantity (never an internal symbol of a method), and the
+//! binary exits with status 3 (2 for a bad initial value, which is the
+//! user's input rather than the numerics).
+
+use std::fmt;
+
+/// Exit status of a run that stopped on a numerical [`Failure`].
+pub const FAILURE_EXIT_STATUS: u8 = 3;
+/// Exit status of bad command-line usage (including overrides that make
+/// the model inconsistent).
+pub const USAGE_EXIT_STATUS: u8 = 2;
+
+/// A failure at time `time`: nothing after it can be trusted.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Failure {
+    pub time: f64,
+    pub kind: FailureKind,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum FailureKind {
+    /// The mass matrix of the highest derivatives is singular (or nearly:
+    /// `condition` is its condition number, infinite when exactly singular).
+    SingularMassMatrix { condition: f64 },
+    /// Mass law `mass` reached zero (or below): the equations of motion
+    /// divide by it.
+    MassVanishes { mass: String, value: f64 },
+    /// A state component became NaN or infinite: the motion blows up.
+    NonFiniteState { component: String },
+    /// The equations of motion give a non-finite value for `component`
+    /// (a rate such as `q1''`) at a finite state: a force, the Lagrangian
+    /// or a mass law is not defined there.
+    NonFiniteRate { component: String },
+    /// The step size fell below `16·eps·|t|`.
+    StepSizeUnderflow { step: f64 },
+    /// The field's conditions (13) are singular and re-anchoring could not
+    /// restore them.
+    SingularConditionMatrix { condition: f64 },
+    /// The field's condition matrix passed through singularity (its
+    /// determinant changed sign) after `since`, with re-anchoring off.
+    ConditionMatrixCrossedSingularity { since: f64 },
+    /// The run used its whole work budget (`steps` steps of every kind).
+    StepBudgetExhausted { steps: usize },
+    /// Newton's method for the highest derivatives did not converge.
+    NewtonNonConvergence { residual: f64, iterations: usize },
+    /// The field method's quasilinearisation did not converge on a window
+    /// even at the shortest window length.
+    FieldNotConverging { correction: f64 },
+    /// The pivot `∂h/∂dep` of an implicit constraint vanished and no other
+    /// candidate is better.
+    ConstraintPivotVanishes { constraint: String, pivot: f64 },
+    /// A stated initial value of a dependent component disagrees with the
+    /// value the constraints require.
+    InconsistentInitialValue {
+        component: String,
+        stated: f64,
+        required: f64,
+    },
+    /// The time span is empty, reversed or not finite (after overrides).
+    BadTimeSpan { t0: f64, t1: f64 },
+    /// An initial value is not finite (after overrides).
+    NonFiniteInitialValue { component: String },
+    /// The anchor makes `x_1 = f_1 + Σ f_A x_A` the difference of huge
+    /// numbers: `digits` more digits would be lost than the tolerance allows.
+    AnchorCancels { digits: f64 },
+    /// The field method proper was asked of a model that is not affine.
+    NotAffine,
+}
+
+impl Failure {
+    pub fn new(time: f64, kind: FailureKind) -> Self {
+        Failure { time, kind }
+    }
+
+    pub fn non_finite(time: f64, component: impl Into<String>) -> Self {
+        Failure::new(
+            time,
+            FailureKind::NonFiniteState {
+                component: component.into(),
+            },
+        )
+    }
+
+    pub fn non_finite_rate(time: f64, component: impl Into<String>) -> Self {
+        Failure::new(
+            time,
+            FailureKind::NonFiniteRate {
+                component: component.into(),
+            },
+        )
+    }
+
+    pub fn not_affine(time: f64) -> Self {
+        Failure::new(time, FailureKind::NotAffine)
+    }
+
+    /// The exit status of a run that stopped on this failure.
+    pub fn exit_status(&self) -> u8 {
+        match self.kind {
+            FailureKind::InconsistentInitialValue { .. }
+            | FailureKind::BadTimeSpan { .. }
+            | FailureKind::NonFiniteInitialValue { .. }
+            | FailureKind::AnchorCancels { .. } => USAGE_EXIT_STATUS,
+            _ => FAILURE_EXIT_STATUS,
+        }
+    }
+}
+
+impl fmt::Display for Failure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let t = self.time;
+        match &self.kind {
+            FailureKind::SingularMassMatrix { condition } => write!(
+                f,
+                "at t = {t:e}: the mass matrix of the highest derivatives is singular \
+                 (condition number {condition:.3e}): the equations of motion do not \
+                 determine the accelerations here"
+            ),
+            FailureKind::MassVanishes { mass, value } => write!(
+                f,
+                "at t = {t:e}: the mass `{mass}` reaches zero ({mass} = {value:.3e}); \
+                 the motion is not defined past it (shorten the time span or change \
+                 the mass law)"
+            ),
+            FailureKind::NonFiniteState { component } => write!(
+                f,
+                "at t = {t:e}: `{component}` is not finite: the motion blows up here"
+            ),
+            FailureKind::NonFiniteRate { component } => write!(
+                f,
+                "at t = {t:e}: the equations of motion give a non-finite `{component}` at \
+                 a finite state: a force, the Lagrangian or a mass law is not defined here"
+            ),
+            FailureKind::StepSizeUnderflow { step } => write!(
+                f,
+                "at t = {t:e}: the step size {step:.3e} underflows (below 16·eps·|t|): \
+                 the motion cannot be followed further at this tolerance; it may blow \
+                 up or be singular here"
+            ),
+            FailureKind::SingularConditionMatrix { condition } => write!(
+                f,
+                "at t = {t:e}: the field's conditions (13) are singular (condition \
+                 number {condition:.3e}) and re-anchoring did not restore them"
+            ),
+            FailureKind::ConditionMatrixCrossedSingularity { since } => write!(
+                f,
+                "at t = {t:e}: the field's condition matrix passed through singularity \
+                 after t = {since:e} (its determinant changed sign) and re-anchoring \
+                 was off"
+            ),
+            FailureKind::StepBudgetExhausted { steps } => write!(
+                f,
+                "at t = {t:e}: the work budget is exhausted ({steps} steps): the local \
+                 errors of so many steps may add up beyond the tolerance; try another \
+                 integrator (--integrator), a looser tolerance, or raise the budget \
+                 (--max-steps)"
+            ),
+            FailureKind::NewtonNonConvergence {
+                residual,
+                iterations,
+            } => write!(
+                f,
+                "at t = {t:e}: Newton's method found no highest derivatives satisfying \
+                 the equations of motion (residual {residual:.3e} after {iterations} \
+                 iterations)"
+            ),
+            FailureKind::FieldNotConverging { correction } => write!(
+                f,
+                "at t = {t:e}: the field method's linearisation along the motion does \
+                 not converge even on the shortest window (last correction \
+                 {correction:.3e} of the tolerance)"
+            ),
+            FailureKind::ConstraintPivotVanishes { constraint, pivot } => write!(
+                f,
+                "at t = {t:e}: the constraint `{constraint}` no longer determines its \
+                 dependent derivative (pivot {pivot:.3e}); name another candidate with \
+                 `for … or …`"
+            ),
+            FailureKind::InconsistentInitialValue {
+                component,
+                stated,
+                required,
+            } => write!(
+                f,
+                "at t = {t:e}: the initial value `{component} = {stated}` violates the \
+                 constraints, which require {component} = {required}"
+            ),
+            FailureKind::BadTimeSpan { t0, t1 } => write!(
+                f,
+                "the time span {t0} .. {t1} is empty, reversed or not finite"
+            ),
+            FailureKind::NonFiniteInitialValue { component } => {
+                write!(f, "the initial value of `{component}` is not finite")
+            }
+            FailureKind::AnchorCancels { digits } => write!(
+                f,
+                "at t = {t:e}: this anchor makes the field recover `x1 = f1 + Σ fA·xA` as \
+                 the difference of huge numbers, losing {digits:.1} more digits than the \
+                 tolerance allows; use a smaller --anchor (the default 0 is best)"
+            ),
+            FailureKind::NotAffine => write!(
+                f,
+                "at t = {t:e}: the field method proper needs an affine system (internal)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for Failure {}

@@ -1,0 +1,166 @@
+//! The field method proper, for reduced systems affine in the state: the
+//! model's symbolic coefficient system integrated window by window, each
+//! window anchored where the last one's conditions degraded.
+
+use super::coefficients::{Augmented, FieldSystem, Iterate, ProjectiveCoefficients, SymbolicCoefficients};
+use super::window::{Window, WindowStep};
+use super::{FieldOptions, MAX_SHORTENINGS};
+use crate::budget::Budget;
+use crate::failure::{Failure, FailureKind};
+use crate::model::Model;
+use crate::solver::{Report, Solver};
+use crate::tolerance::{underflows, Stats};
+
+pub struct AffineField {
+    method: &'static str,
+    options: FieldOptions,
+    h_max: f64,
+    window: Window,
+    /// Work of the closed windows.
+    done: Stats,
+    reanchorings: usize,
+    largest_condition: f64,
+}
+
+impl AffineField {
+    pub fn new<M: Model>(
+        model: &M,
+        options: FieldOptions,
+        t0: f64,
+        x0: &[f64],
+        h_max: f64,
+    ) -> Result<AffineField, Failure> {
+        let window = with_system(model, |system| Window::open(system, &options, t0, x0, None, h_max))?;
+        Ok(AffineField {
+            method: if M::COEFFICIENTS_LINEAR {
+                "field (linear coefficient system, DOP853)"
+            } else {
+                "field (Riccati coefficient system in projective form, DOP853)"
+            },
+            options,
+            h_max,
+            window,
+            done: Stats::default(),
+            reanchorings: 0,
+            largest_condition: 1.0,
+        })
+    }
+}
+
+impl<M: Model> Solver<M> for AffineField {
+    fn time(&self) -> f64 {
+        self.window.time()
+    }
+
+    fn previous_time(&self) -> f64 {
+        self.window.previous_time()
+    }
+
+    fn state(&self) -> &[f64] {
+        self.window.state()
+    }
+
+    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+        let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
+        let (mut done, mut reanchorings, mut largest) = (Stats::default(), 0, self.largest_condition);
+        let result = with_system(model, |system| {
+            advance_window(system, window, options, h_max, t_limit, budget, &mut done, &mut reanchorings, &mut largest)
+        });
+        self.done += done;
+        self.reanchorings += reanchorings;
+        self.largest_condition = largest;
+        result
+    }
+
+    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        let window = &mut self.window;
+        with_system(model, |system| window.dense(system, t, out))
+    }
+
+    fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
+        let h = self.window.proposed_step();
+        self.done += self.window.stats();
+        let (options, h_max) = (&self.options, self.h_max);
+        self.window = with_system(model, |system| Window::open(system, options, t, x, Some(h), h_max))?;
+        Ok(())
+    }
+
+    fn report(&self) -> Report {
+        Report {
+            method: self.method.to_string(),
+            stats: self.done + self.window.stats(),
+            largest_condition: Some(self.largest_condition),
+            reanchorings: Some(self.reanchorings),
+            ..Report::default()
+        }
+    }
+}
+
+/// The affine parts `A(t)`, `b(t)` of an affine model do not depend on the
+/// state: any iterate will do.
+struct AnyState;
+
+impl Iterate for AnyState {
+    fn eval(&self, _t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        out.fill(0.0);
+        Ok(())
+    }
+}
+
+/// Runs `body` on the field system of `model`: the symbolic coefficient
+/// system when it is linear (it has no poles), its projective form when
+/// it is of Riccati type.
+fn with_system<M: Model, R>(model: &M, body: impl FnOnce(&dyn FieldSystem) -> R) -> R {
+    if M::COEFFICIENTS_LINEAR {
+        let source = SymbolicCoefficients::new(model);
+        body(&Augmented(&source))
+    } else {
+        let projective = ProjectiveCoefficients::new(model, &AnyState);
+        body(&projective)
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn advance_window(
+    system: &dyn FieldSystem,
+    window: &mut Window,
+    options: &FieldOptions,
+    h_max: f64,
+    t_limit: f64,
+    budget: &Budget,
+    done: &mut Stats,
+    reanchorings: &mut usize,
+    largest_condition: &mut f64,
+) -> Result<(), Failure> {
+    let mut shortenings = 0;
+    loop {
+        match window.step(system, options, t_limit, budget)? {
+            WindowStep::Accepted => {
+                *largest_condition = largest_condition.max(window.recovered().condition);
+                return Ok(());
+            }
+            WindowStep::Ended if window.steps() == 0 => {
+                // Already degraded one step after a fresh anchor: shorten
+                // that step.
+                shortenings += 1;
+                let h = 0.25 * window.proposed_step();
+                let t = window.time();
+                if shortenings > MAX_SHORTENINGS || underflows(t, h) {
+                    let condition = window.recovered().condition;
+                    return Err(Failure::new(
+                        t,
+                        FailureKind::SingularConditionMatrix { condition },
+                    ));
+                }
+                window.propose_step(h);
+            }
+            WindowStep::Ended => {
+                let (t, x) = (window.time(), window.state().to_vec());
+                let h = window.proposed_step();
+                *done += window.stats();
+                *window = Window::open(system, options, t, &x, Some(h), h_max)?;
+                *reanchorings += 1;
+            }
+        }
+    }
+}

@@ -1,0 +1,534 @@
+//! Coefficient systems of the field method and their sensitivities, as one
+//! first-order system `y = (f, S)` (SPEC §1.5): `f' = F(t, f)`,
+//! `S' = (∂F/∂f) S`, `S = ∂f/∂c` stored column by column.
+//!
+//! Two sources of `F`:
+//! - [`SymbolicCoefficients`]: the model's own coefficient system, derived
+//!   symbolically by lagc for an affine reduced system (the field method
+//!   proper);
+//! - [`LinearizedCoefficients`]: the coefficient system of the motion
+//!   linearised along an iterate `x^k(t)`, `x' = A(t) x + b(t)` with
+//!   `A = ∂X/∂x (t, x^k)`, `b = X(t, x^k) − A x^k`, by SPEC's formulas
+//!   `f_1' = b_1 − Σ_A f_A b_A + λ f_1`, `f_B' = a_1B − Σ_A f_A a_AB + λ f_B`,
+//!   `λ = a_11 − Σ_A f_A a_A1` (the quasilinear field method).
+
+use crate::failure::Failure;
+use crate::linalg::Matrix;
+use crate::model::Model;
+use crate::system::System;
+use std::cell::RefCell;
+
+/// A first-order system whose state `y` represents the field's
+/// coefficients `f` and sensitivities `S` (directly, or in the projective
+/// form of [`ProjectiveCoefficients`]).
+pub trait FieldSystem: System {
+    /// The number of coefficients `N` (the motion's state dimension).
+    fn coefficients(&self) -> usize;
+    /// `y` at an anchor `c` (`f = c`, `S = I`).
+    fn anchored(&self, c: &[f64]) -> Vec<f64>;
+    /// `f` and `S` from `y`; `false` where they are not defined (a pole).
+    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool;
+    /// The first-order change `(df, ds)` of `(f, S)` for a change `dy` of
+    /// `y` at `y`.
+    fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]);
+}
+
+/// A coefficient system with the product of its Jacobian and `S`.
+pub trait CoefficientSource {
+    /// `N`, the number of coefficients (the state dimension).
+    fn dim(&self) -> usize;
+
+    /// `df = F(t, f)` and `ds = (∂F/∂f)(t, f) · S`.
+    fn augmented(
+        &self,
+        t: f64,
+        f: &[f64],
+        s: &[f64],
+        df: &mut [f64],
+        ds: &mut [f64],
+    ) -> Result<(), Failure>;
+
+    /// `∂F/∂f` (sized and zeroed by the caller), for a stiff integrator.
+    fn jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+
+    /// `F` is affine in `f` (then `∂F/∂f` does not depend on `f`).
+    fn is_linear(&self) -> bool;
+}
+
+/// `y = (f, S)` as a [`System`] for the integrators.
+pub struct Augmented<'a, C: CoefficientSource + ?Sized>(pub &'a C);
+
+impl<C: CoefficientSource + ?Sized> Augmented<'_, C> {
+    /// The augmented state at an anchor `c`: `f = c`, `S = I`.
+    pub fn anchored(c: &[f64]) -> Vec<f64> {
+        let n = c.len();
+        let mut y = vec![0.0; n + n * n];
+        y[..n].copy_from_slice(c);
+        for i in 0..n {
+            y[n + i * n + i] = 1.0;
+        }
+        y
+    }
+}
+
+impl<C: CoefficientSource + ?Sized> System for Augmented<'_, C> {
+    fn dim(&self) -> usize {
+        let n = self.0.dim();
+        n + n * n
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+        let n = self.0.dim();
+        let (f, s) = y.split_at(n);
+        let (df, ds) = dy.split_at_mut(n);
+        self.0.augmented(t, f, s, df, ds)
+    }
+
+    /// Block diagonal: `∂F/∂f` for `f` and for every column of `S` — exact
+    /// for a linear coefficient system only, where `∂(JS)/∂f = 0`.
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        let n = self.0.dim();
+        let mut block = Matrix::zeros(n, n);
+        self.0.jacobian(t, &y[..n], &mut block)?;
+        for k in 0..=n {
+            for j in 0..n {
+                for i in 0..n {
+                    jac[(k * n + i, k * n + j)] = block[(i, j)];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// By central differences: used only by the stiff integrator of a
+    /// linear coefficient system, once per step.
+    fn time_partial(&self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), Failure> {
+        let m = y.len();
+        let h = f64::EPSILON.cbrt() * t.abs().max(1.0);
+        let mut plus = vec![0.0; m];
+        let mut minus = vec![0.0; m];
+        self.rhs(t + h, y, &mut plus)?;
+        self.rhs(t - h, y, &mut minus)?;
+        for i in 0..m {
+            dydt[i] = (plus[i] - minus[i]) / (2.0 * h);
+        }
+        Ok(())
+    }
+
+    /// The coefficients are named for what they are to the motion: a
+    /// failure of the field is reported in terms of the state.
+    fn component_name(&self, i: usize) -> String {
+        let n = self.0.dim();
+        if i < n {
+            format!("the field coefficient f{}", i + 1)
+        } else {
+            let k = i - n;
+            format!("the field sensitivity S{}{}", k % n + 1, k / n + 1)
+        }
+    }
+}
+
+impl<C: CoefficientSource + ?Sized> FieldSystem for Augmented<'_, C> {
+    fn coefficients(&self) -> usize {
+        self.0.dim()
+    }
+
+    fn anchored(&self, c: &[f64]) -> Vec<f64> {
+        Augmented::<C>::anchored(c)
+    }
+
+    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool {
+        let n = f.len();
+        f.copy_from_slice(&y[..n]);
+        s.copy_from_slice(&y[n..]);
+        true
+    }
+
+    fn field_change(&self, _y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]) {
+        let n = df.len();
+        df.copy_from_slice(&dy[..n]);
+        ds.copy_from_slice(&dy[n..]);
+    }
+}
+
+/// The model's symbolic coefficient system (affine models).
+pub struct SymbolicCoefficients<'a, M: Model> {
+    model: &'a M,
+    scratch: RefCell<Matrix>,
+}
+
+impl<'a, M: Model> SymbolicCoefficients<'a, M> {
+    pub fn new(model: &'a M) -> Self {
+        let n = M::STATE.len();
+        SymbolicCoefficients {
+            model,
+            scratch: RefCell::new(Matrix::zeros(n, n)),
+        }
+    }
+}
+
+impl<M: Model> CoefficientSource for SymbolicCoefficients<'_, M> {
+    fn dim(&self) -> usize {
+        M::STATE.len()
+    }
+
+    fn augmented(
+        &self,
+        t: f64,
+        f: &[f64],
+        s: &[f64],
+        df: &mut [f64],
+        ds: &mut [f64],
+    ) -> Result<(), Failure> {
+        let n = f.len();
+        self.model.coefficients(t, f, df)?;
+        let mut jac = self.scratch.borrow_mut();
+        jac.fill(0.0);
+        self.model.coefficient_jacobian(t, f, &mut jac)?;
+        // ds = J S, column by column, skipping zero entries of J (the
+        // coefficient systems of mechanics are sparse).
+        ds.fill(0.0);
+        for k in 0..n {
+            let column = jac.column(k);
+            for j in 0..n {
+                let skj = s[j * n + k];
+                if skj == 0.0 {
+                    continue;
+                }
+                let target = &mut ds[j * n..(j + 1) * n];
+                for (t, &a) in target.iter_mut().zip(column) {
+                    *t += a * skj;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        self.model.coefficient_jacobian(t, f, jac)
+    }
+
+    fn is_linear(&self) -> bool {
+        M::COEFFICIENTS_LINEAR
+    }
+}
+
+/// An iterate `x^k(t)` of the motion over a window, for the linearisation.
+pub trait Iterate {
+    fn eval(&self, t: f64, out: &mut [f64]) -> Result<(), Failure>;
+}
+
+struct LinearizationScratch {
+    x: Vec<f64>,
+    rate: Vec<f64>,
+    b: Vec<f64>,
+    a: Matrix,
+    g: Vec<f64>,
+    r: Vec<f64>,
+}
+
+/// The coefficient system of the motion linearised along an iterate.
+pub struct LinearizedCoefficients<'a, M: Model, I: Iterate + ?Sized> {
+    model: &'a M,
+    iterate: &'a I,
+    scratch: RefCell<LinearizationScratch>,
+    evaluations: std::cell::Cell<usize>,
+}
+
+impl<'a, M: Model, I: Iterate + ?Sized> LinearizedCoefficients<'a, M, I> {
+    pub fn new(model: &'a M, iterate: &'a I) -> Self {
+        let n = M::STATE.len();
+        LinearizedCoefficients {
+            model,
+            iterate,
+            scratch: RefCell::new(LinearizationScratch {
+                x: vec![0.0; n],
+                rate: vec![0.0; n],
+                b: vec![0.0; n],
+                a: Matrix::zeros(n, n),
+                g: vec![0.0; n],
+                r: vec![0.0; n],
+            }),
+            evaluations: std::cell::Cell::new(0),
+        }
+    }
+
+    /// How many linearisations (`X` with `∂X/∂x`) were evaluated.
+    pub fn linearizations(&self) -> usize {
+        self.evaluations.get()
+    }
+
+    /// `A` and `b` at `t`, into the scratch.
+    fn linearize(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
+        self.iterate.eval(t, &mut sc.x)?;
+        sc.a.fill(0.0);
+        self.model.linearize(t, &sc.x, &mut sc.rate, &mut sc.a)?;
+        self.evaluations.set(self.evaluations.get() + 1);
+        // b = X − A x
+        sc.a.mul_vec(&sc.x, &mut sc.b);
+        for (b, r) in sc.b.iter_mut().zip(&sc.rate) {
+            *b = r - *b;
+        }
+        Ok(())
+    }
+}
+
+/// `out_B = Σ_i a_iB g_i` (`Aᵀ g`), with the first `N − n` rows of `A` the
+/// shifts `x_i' = x_{i+n}` (`a_{i,i+n} = 1`), which are not read.
+fn transpose_times(a: &Matrix, g: &[f64], shift: usize, out: &mut [f64]) {
+    let n = g.len();
+    let shifted = n - shift;
+    for (b, o) in out.iter_mut().enumerate() {
+        let column = a.column(b);
+        let mut v: f64 = column[shifted..]
+            .iter()
+            .zip(&g[shifted..])
+            .map(|(x, y)| x * y)
+            .sum();
+        if b >= shift {
+            v += g[b - shift];
+        }
+        *o = v;
+    }
+}
+
+impl<M: Model, I: Iterate + ?Sized> CoefficientSource for LinearizedCoefficients<'_, M, I> {
+    fn dim(&self) -> usize {
+        M::STATE.len()
+    }
+
+    fn augmented(
+        &self,
+        t: f64,
+        f: &[f64],
+        s: &[f64],
+        df: &mut [f64],
+        ds: &mut [f64],
+    ) -> Result<(), Failure> {
+        let n = f.len();
+        let shift = M::COORDINATES;
+        let mut guard = self.scratch.borrow_mut();
+        let sc = &mut *guard;
+        self.linearize(t, sc)?;
+        // g = (1, −f_2..−f_N); r = Aᵀ g; λ = r_1.
+        sc.g[0] = 1.0;
+        for a in 1..n {
+            sc.g[a] = -f[a];
+        }
+        transpose_times(&sc.a, &sc.g, shift, &mut sc.r);
+        let lambda = sc.r[0];
+        let gb: f64 = sc.g.iter().zip(&sc.b).map(|(x, y)| x * y).sum();
+        df[0] = gb + lambda * f[0];
+        for b in 1..n {
+            df[b] = sc.r[b] + lambda * f[b];
+        }
+        // For each column v of S: δg = (0, −v_2..), δr = Aᵀ δg,
+        // δλ = δr_1, δF_1 = δg·b + δλ f_1 + λ v_1,
+        // δF_B = δr_B + δλ f_B + λ v_B.
+        for j in 0..n {
+            let v = &s[j * n..(j + 1) * n];
+            sc.g[0] = 0.0;
+            for a in 1..n {
+                sc.g[a] = -v[a];
+            }
+            transpose_times(&sc.a, &sc.g, shift, &mut sc.r);
+            let d_lambda = sc.r[0];
+            let dgb: f64 = sc.g.iter().zip(&sc.b).map(|(x, y)| x * y).sum();
+            let out = &mut ds[j * n..(j + 1) * n];
+            out[0] = dgb + d_lambda * f[0] + lambda * v[0];
+            for b in 1..n {
+                out[b] = sc.r[b] + d_lambda * f[b] + lambda * v[b];
+            }
+        }
+        Ok(())
+    }
+
+    fn jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        let n = f.len();
+        let mut guard = self.scratch.borrow_mut();
+        let sc = &mut *guard;
+        self.linearize(t, sc)?;
+        let a = &sc.a;
+        let lambda = a[(0, 0)] - (1..n).map(|k| f[k] * a[(k, 0)]).sum::<f64>();
+        jac[(0, 0)] = lambda;
+        for k in 1..n {
+            jac[(0, k)] = -sc.b[k] - a[(k, 0)] * f[0];
+        }
+        for row in 1..n {
+            for k in 1..n {
+                jac[(row, k)] = -a[(k, row)] - a[(k, 0)] * f[row];
+            }
+            jac[(row, row)] += lambda;
+        }
+        Ok(())
+    }
+
+    fn is_linear(&self) -> bool {
+        false
+    }
+}
+
+/// The coefficient system in projective (linear) form: the field's
+/// hyperplane `f_1 + Σ_A f_A x_A − x_1 = 0` has the homogeneous normal
+/// `w ∝ (f_1, −1, f_2, …, f_N)` (index 0 the constant term), which the
+/// motion `x' = A x + b` transports linearly,
+///
+/// `w_0' = −b · w_x`,  `w_x' = −Aᵀ w_x`,
+///
+/// and the coefficients are the ratios `f_1 = −w_0/w_1`, `f_A = −w_A/w_1`.
+/// That is the classical linearisation of the Riccati coefficient system
+/// (SPEC §1.5): the same `f(t)` exactly, but integrated as a linear system
+/// whose solutions are as smooth as the motion, where the Riccati form has
+/// poles (the oscillator's `f_2 = tan(ωt)/ω`) that hold an integrator's
+/// steps to a fraction of the motion's. The sensitivities `∂w/∂c_j` are
+/// columns `P_j` of the same linear flow, and `S = ∂f/∂c` follows by the
+/// quotient rule. Where `w_1` nears zero the coefficients grow without
+/// bound and the field is re-anchored, as before.
+///
+/// Layout: `y = (w, P_1, …, P_N)`, each of length `N + 1`; `P_j = ∂w/∂c_j`
+/// with `c_1` the free term.
+pub struct ProjectiveCoefficients<'a, M: Model, I: Iterate + ?Sized> {
+    linear: LinearizedCoefficients<'a, M, I>,
+}
+
+impl<'a, M: Model, I: Iterate + ?Sized> ProjectiveCoefficients<'a, M, I> {
+    pub fn new(model: &'a M, iterate: &'a I) -> Self {
+        ProjectiveCoefficients {
+            linear: LinearizedCoefficients::new(model, iterate),
+        }
+    }
+
+    pub fn linearizations(&self) -> usize {
+        self.linear.linearizations()
+    }
+
+    /// The index in `w` of coefficient `i` (0: the free term).
+    fn slot(i: usize) -> usize {
+        if i == 0 {
+            0
+        } else {
+            i + 1
+        }
+    }
+}
+
+impl<M: Model, I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, M, I> {
+    fn dim(&self) -> usize {
+        let n = M::STATE.len();
+        (n + 1) * (n + 1)
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+        let n = M::STATE.len();
+        let shift = M::COORDINATES;
+        let mut guard = self.linear.scratch.borrow_mut();
+        let sc = &mut *guard;
+        self.linear.linearize(t, sc)?;
+        for (v, dv) in y.chunks_exact(n + 1).zip(dy.chunks_exact_mut(n + 1)) {
+            let (v0, vx) = v.split_at(1);
+            let _ = v0;
+            dv[0] = -sc.b.iter().zip(vx).map(|(b, w)| b * w).sum::<f64>();
+            transpose_times(&sc.a, vx, shift, &mut sc.r);
+            for (d, r) in dv[1..].iter_mut().zip(&sc.r) {
+                *d = -r;
+            }
+        }
+        Ok(())
+    }
+
+    fn jacobian(&self, t: f64, _y: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        let n = M::STATE.len();
+        let mut guard = self.linear.scratch.borrow_mut();
+        let sc = &mut *guard;
+        self.linear.linearize(t, sc)?;
+        for k in 0..=n {
+            let base = k * (n + 1);
+            for i in 0..n {
+                jac[(base, base + 1 + i)] = -sc.b[i];
+                for j in 0..n {
+                    jac[(base + 1 + j, base + 1 + i)] = -sc.a[(i, j)];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn time_partial(&self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), Failure> {
+        let m = y.len();
+        let h = f64::EPSILON.cbrt() * t.abs().max(1.0);
+        let mut plus = vec![0.0; m];
+        let mut minus = vec![0.0; m];
+        self.rhs(t + h, y, &mut plus)?;
+        self.rhs(t - h, y, &mut minus)?;
+        for i in 0..m {
+            dydt[i] = (plus[i] - minus[i]) / (2.0 * h);
+        }
+        Ok(())
+    }
+
+    fn component_name(&self, i: usize) -> String {
+        format!("the field's normal w{}", i + 1)
+    }
+}
+
+impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M, I> {
+    fn coefficients(&self) -> usize {
+        M::STATE.len()
+    }
+
+    fn anchored(&self, c: &[f64]) -> Vec<f64> {
+        let n = c.len();
+        let mut y = vec![0.0; (n + 1) * (n + 1)];
+        y[0] = c[0];
+        y[1] = -1.0;
+        for a in 1..n {
+            y[a + 1] = c[a];
+        }
+        for j in 0..n {
+            y[(j + 1) * (n + 1) + Self::slot(j)] = 1.0;
+        }
+        y
+    }
+
+    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool {
+        let n = f.len();
+        let w = &y[..=n];
+        let w1 = w[1];
+        if w1 == 0.0 || !w1.is_finite() {
+            return false;
+        }
+        for i in 0..n {
+            f[i] = -w[Self::slot(i)] / w1;
+        }
+        let w1_sq = w1 * w1;
+        for j in 0..n {
+            let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
+            for i in 0..n {
+                let k = Self::slot(i);
+                s[j * n + i] = -(p[k] * w1 - w[k] * p[1]) / w1_sq;
+            }
+        }
+        true
+    }
+
+    fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]) {
+        let n = df.len();
+        let (w, dw) = (&y[..=n], &dy[..=n]);
+        let w1 = w[1];
+        let dw1 = dw[1];
+        for i in 0..n {
+            let k = Self::slot(i);
+            df[i] = -(dw[k] * w1 - w[k] * dw1) / (w1 * w1);
+        }
+        for j in 0..n {
+            let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
+            let dp = &dy[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
+            for i in 0..n {
+                let k = Self::slot(i);
+                let s = -(p[k] * w1 - w[k] * p[1]) / (w1 * w1);
+                let d_numerator = dp[k] * w1 + p[k] * dw1 - dw[k] * p[1] - w[k] * dp[1];
+                ds[j * n + i] = -d_numerator / (w1 * w1) - 2.0 * s * dw1 / w1;
+            }
+        }
+    }
+}

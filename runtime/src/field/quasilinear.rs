@@ -1,0 +1,527 @@
+//! The field method for reduced systems that are not affine in the state
+//! (SPEC §1.5): quasilinearisation (Newton–Kantorovich) on windows.
+//!
+//! On a window from the anchor `(t_r, x_r)` the motion is linearised along
+//! an iterate `x^0(t)`, `x' = A(t) x + b(t)` with `A = ∂X/∂x (t, x^0)` and
+//! `b = X(t, x^0) − A x^0` — exactly the class the field method solves —
+//! and that time-varying affine system's field gives the next iterate
+//! `x^1`. Newton's method converges quadratically, so a good `x^0` makes
+//! one pass enough: `x^0` is a predictor, DOP853 at a looser tolerance
+//! (about the square root of the requested one), run lazily as far as the
+//! field asks for it. The field is then integrated by DOP853 with the
+//! recovered state's error controlled at the requested tolerance, so its
+//! error is that of an 8th-order integration, not of the linearisation.
+//!
+//! Newton's remaining error is watched directly: the defect of `x^1` in
+//! the true equations, `r = X(t, x^1) − X(t, x^0) − A (x^1 − x^0)`
+//! (`≈ ½ X_xx (x^1 − x^0)²`), integrated along the window bounds it. A
+//! window ends where that bound would pass a fraction of the tolerance,
+//! where the conditions (13) degrade, or at the end of the span; the next
+//! window is anchored at its end.
+
+use super::coefficients::{FieldSystem, Iterate, ProjectiveCoefficients};
+use super::conditions::recover;
+use super::window::{Window, WindowStep};
+use super::{FieldOptions, MAX_SHORTENINGS};
+use crate::budget::Budget;
+use crate::dop853::{DenseStep, Dop853, RawStep};
+use crate::failure::{Failure, FailureKind};
+use crate::linalg::Matrix;
+use crate::model::Model;
+use crate::solver::{Report, Solver};
+use crate::stepper::Stepper;
+use crate::system::ModelSystem;
+use crate::tolerance::{underflows, Stats, Tolerance};
+use std::cell::{Cell, RefCell};
+
+/// Newton's error bound a window may reach, in units of the tolerance.
+const DEFECT_LIMIT: f64 = 0.2;
+/// The most field steps one window keeps (its steps are stored until it
+/// is accepted).
+const MAX_WINDOW_STEPS: usize = 400;
+/// The predictor's tolerance over the requested one, at most and at least.
+const MAX_PREDICTOR_RATIO: f64 = 1e6;
+const MIN_PREDICTOR_RATIO: f64 = 1.0;
+
+/// The predictor: DOP853 on the motion at a looser tolerance, extended
+/// step by step as the field asks for later times.
+struct Predictor<'a, M: Model> {
+    model: &'a M,
+    budget: &'a Budget,
+    t0: f64,
+    x0: Vec<f64>,
+    stepper: RefCell<Dop853>,
+    steps: RefCell<Vec<DenseStep>>,
+    cursor: Cell<usize>,
+    /// The first failure of the predictor (reported by the window).
+    failure: RefCell<Option<Failure>>,
+}
+
+impl<'a, M: Model> Predictor<'a, M> {
+    fn new(
+        model: &'a M,
+        budget: &'a Budget,
+        t0: f64,
+        x0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure> {
+        let stepper = Dop853::new(&ModelSystem(model), t0, x0, tol, h_max, h0)?;
+        Ok(Predictor {
+            model,
+            budget,
+            t0,
+            x0: x0.to_vec(),
+            stepper: RefCell::new(stepper),
+            steps: RefCell::new(Vec::new()),
+            cursor: Cell::new(0),
+            failure: RefCell::new(None),
+        })
+    }
+
+    fn extend_to(&self, t: f64, t_limit: f64) -> Result<(), Failure> {
+        let mut stepper = self.stepper.borrow_mut();
+        let system = ModelSystem(self.model);
+        while stepper.time() < t && stepper.time() < t_limit {
+            stepper.step(&system, t_limit, self.budget)?;
+            let dense = stepper.dense_step(&system)?;
+            self.steps.borrow_mut().push(dense);
+        }
+        Ok(())
+    }
+
+    fn stats(&self) -> Stats {
+        self.stepper.borrow().stats()
+    }
+
+    fn proposed_step(&self) -> f64 {
+        self.stepper.borrow().proposed_step()
+    }
+}
+
+/// The predictor, frozen after its window: its steps cover the window.
+struct PredictorPath {
+    t0: f64,
+    x0: Vec<f64>,
+    steps: Vec<DenseStep>,
+    cursor: Cell<usize>,
+}
+
+fn eval_steps(steps: &[DenseStep], cursor: &Cell<usize>, t: f64, out: &mut [f64]) -> bool {
+    if steps.is_empty() {
+        return false;
+    }
+    let mut i = cursor.get().min(steps.len() - 1);
+    while i > 0 && t < steps[i].t_old {
+        i -= 1;
+    }
+    while i + 1 < steps.len() && t > steps[i].t_new {
+        i += 1;
+    }
+    cursor.set(i);
+    steps[i].eval(t, out);
+    true
+}
+
+impl Iterate for PredictorPath {
+    fn eval(&self, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        if t <= self.t0 || !eval_steps(&self.steps, &self.cursor, t, out) {
+            out.copy_from_slice(&self.x0);
+        }
+        Ok(())
+    }
+}
+
+/// A window's span of time for the lazily extended predictor.
+struct LivePath<'p, 'a, M: Model> {
+    predictor: &'p Predictor<'a, M>,
+    t_limit: f64,
+}
+
+impl<M: Model> Iterate for LivePath<'_, '_, M> {
+    fn eval(&self, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        let p = self.predictor;
+        if t <= p.t0 {
+            out.copy_from_slice(&p.x0);
+            return Ok(());
+        }
+        if let Err(failure) = p.extend_to(t, self.t_limit) {
+            p.failure.borrow_mut().get_or_insert(failure.clone());
+            return Err(failure);
+        }
+        let steps = p.steps.borrow();
+        if !eval_steps(&steps, &p.cursor, t, out) {
+            out.copy_from_slice(&p.x0);
+        }
+        Ok(())
+    }
+}
+
+/// The accepted window, kept for dense output of its steps.
+struct AcceptedWindow {
+    anchor_x: Vec<f64>,
+    path: PredictorPath,
+    steps: Vec<RawStep>,
+    prepared: Vec<Option<DenseStep>>,
+    /// The recovered state at the end of each step.
+    states: Vec<Vec<f64>>,
+}
+
+/// Why a window ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum WindowEnd {
+    Span,
+    Conditioning,
+    Defect,
+    Length,
+}
+
+pub struct QuasilinearField {
+    options: FieldOptions,
+    h_max: f64,
+    t: f64,
+    t_prev: f64,
+    x: Vec<f64>,
+    /// The predictor's tolerance over the requested one.
+    predictor_ratio: f64,
+    predictor_h: Option<f64>,
+    field_h: Option<f64>,
+    accepted: Option<AcceptedWindow>,
+    stats: Stats,
+    predictor_stats: Stats,
+    windows: usize,
+    passes: usize,
+    linearizations: usize,
+    largest_condition: f64,
+}
+
+impl QuasilinearField {
+    pub fn new(options: FieldOptions, t0: f64, x0: &[f64], h_max: f64) -> QuasilinearField {
+        // Newton's error after one pass is about K·δ² with δ the
+        // predictor's error: a predictor near the square root of the
+        // tolerance leaves it well below the tolerance.
+        let ratio = (0.1 / options.tol.rtol.sqrt())
+            .clamp(MIN_PREDICTOR_RATIO, MAX_PREDICTOR_RATIO);
+        QuasilinearField {
+            options,
+            h_max,
+            t: t0,
+            t_prev: t0,
+            x: x0.to_vec(),
+            predictor_ratio: ratio,
+            predictor_h: None,
+            field_h: None,
+            accepted: None,
+            stats: Stats::default(),
+            predictor_stats: Stats::default(),
+            windows: 0,
+            passes: 0,
+            linearizations: 0,
+            largest_condition: 1.0,
+        }
+    }
+
+    fn predictor_tolerance(&self) -> Tolerance {
+        let tol = self.options.tol.scaled(self.predictor_ratio);
+        Tolerance {
+            rtol: tol.rtol.min(1e-3),
+            atol: tol.atol.min(1e-5),
+        }
+    }
+
+    /// The defect of `x1` at `t` in tolerance units (RMS).
+    fn defect<M: Model>(
+        &self,
+        model: &M,
+        t: f64,
+        x0: &[f64],
+        x1: &[f64],
+        scratch: &mut DefectScratch,
+    ) -> Result<f64, Failure> {
+        let n = x1.len();
+        scratch.a.fill(0.0);
+        model.linearize(t, x0, &mut scratch.rate0, &mut scratch.a)?;
+        model.rhs(t, x1, &mut scratch.rate1)?;
+        for i in 0..n {
+            scratch.dx[i] = x1[i] - x0[i];
+        }
+        scratch.a.mul_vec(&scratch.dx, &mut scratch.lin);
+        let tol = self.options.tol;
+        let mut sum = 0.0;
+        for i in 0..n {
+            let r = scratch.rate1[i] - scratch.rate0[i] - scratch.lin[i];
+            let scale = tol.atol + tol.rtol * x1[i].abs();
+            sum += (r / scale).powi(2);
+        }
+        Ok((sum / n as f64).sqrt())
+    }
+}
+
+struct DefectScratch {
+    a: Matrix,
+    rate0: Vec<f64>,
+    rate1: Vec<f64>,
+    dx: Vec<f64>,
+    lin: Vec<f64>,
+    x0: Vec<f64>,
+}
+
+impl DefectScratch {
+    fn new(n: usize) -> Self {
+        DefectScratch {
+            a: Matrix::zeros(n, n),
+            rate0: vec![0.0; n],
+            rate1: vec![0.0; n],
+            dx: vec![0.0; n],
+            lin: vec![0.0; n],
+            x0: vec![0.0; n],
+        }
+    }
+}
+
+/// One pass over a window, before it is accepted.
+struct Pass {
+    steps: Vec<RawStep>,
+    states: Vec<Vec<f64>>,
+    end: WindowEnd,
+    stats: Stats,
+    largest_condition: f64,
+    field_h: f64,
+}
+
+impl<M: Model> Solver<M> for QuasilinearField {
+    fn time(&self) -> f64 {
+        self.t
+    }
+
+    fn previous_time(&self) -> f64 {
+        self.t_prev
+    }
+
+    fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+        let n = self.x.len();
+        let mut retries = 0;
+        loop {
+            let predictor = Predictor::new(
+                model,
+                budget,
+                self.t,
+                &self.x,
+                self.predictor_tolerance(),
+                self.h_max,
+                self.predictor_h,
+            )?;
+            let live = LivePath {
+                predictor: &predictor,
+                t_limit,
+            };
+            let pass = self.pass(model, &live, t_limit, budget);
+            self.predictor_stats += predictor.stats();
+            self.predictor_h = Some(predictor.proposed_step());
+            if let Some(failure) = predictor.failure.borrow_mut().take() {
+                return Err(failure);
+            }
+            let pass = pass?;
+            self.passes += 1;
+            self.stats += pass.stats;
+            if pass.steps.is_empty() {
+                // Even the first step's Newton error was too large: the
+                // predictor is too loose for this motion, or the step too
+                // long for the linearisation.
+                retries += 1;
+                self.predictor_ratio = (self.predictor_ratio * 0.1).max(MIN_PREDICTOR_RATIO);
+                self.field_h = Some(0.25 * pass.field_h);
+                if retries > 12 {
+                    return Err(Failure::new(
+                        self.t,
+                        FailureKind::FieldNotConverging {
+                            correction: DEFECT_LIMIT,
+                        },
+                    ));
+                }
+                continue;
+            }
+            // Adapt the predictor: windows cut short by Newton's error ask
+            // for a better one; windows limited by the conditions with a
+            // small defect can do with a cheaper one.
+            match pass.end {
+                WindowEnd::Defect => {
+                    self.predictor_ratio = (self.predictor_ratio * 0.25).max(MIN_PREDICTOR_RATIO)
+                }
+                WindowEnd::Conditioning | WindowEnd::Length => {
+                    self.predictor_ratio = (self.predictor_ratio * 1.5).min(MAX_PREDICTOR_RATIO)
+                }
+                WindowEnd::Span => {}
+            }
+            self.field_h = Some(pass.field_h);
+            self.largest_condition = self.largest_condition.max(pass.largest_condition);
+            let end_state = pass.states.last().cloned().unwrap_or_else(|| self.x.clone());
+            let end_time = pass.steps.last().map_or(self.t, |s| s.t_new);
+            let frozen = PredictorPath {
+                t0: predictor.t0,
+                x0: predictor.x0.clone(),
+                steps: predictor.steps.take(),
+                cursor: Cell::new(0),
+            };
+            let count = pass.steps.len();
+            self.accepted = Some(AcceptedWindow {
+                anchor_x: std::mem::replace(&mut self.x, end_state),
+                path: frozen,
+                steps: pass.steps,
+                prepared: vec![None; count],
+                states: pass.states,
+            });
+            self.t_prev = self.t;
+            self.t = end_time;
+            self.windows += 1;
+            debug_assert_eq!(self.x.len(), n);
+            return Ok(());
+        }
+    }
+
+    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        let Some(window) = self.accepted.as_mut() else {
+            out.copy_from_slice(&self.x);
+            return Ok(());
+        };
+        if t >= self.t {
+            out.copy_from_slice(&self.x);
+            return Ok(());
+        }
+        if t <= self.t_prev {
+            out.copy_from_slice(&window.anchor_x);
+            return Ok(());
+        }
+        let i = window
+            .steps
+            .iter()
+            .position(|s| t <= s.t_new)
+            .unwrap_or(window.steps.len() - 1);
+        if window.prepared[i].is_none() {
+            let source = ProjectiveCoefficients::new(model, &window.path);
+            let dense = window.steps[i].prepare(&source)?;
+            self.linearizations += source.linearizations();
+            window.prepared[i] = Some(dense);
+        }
+        let n = window.anchor_x.len();
+        let mut y = vec![0.0; (n + 1) * (n + 1)];
+        if let Some(dense) = &window.prepared[i] {
+            dense.eval(t, &mut y);
+        }
+        let source = ProjectiveCoefficients::new(model, &window.path);
+        let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
+        let defined = source.field(&y, &mut f, &mut s);
+        match recover(&f, &s, &window.anchor_x).filter(|_| defined) {
+            Some(rec) => out.copy_from_slice(&rec.state),
+            // The conditions were regular at both ends of this step;
+            // between them fall back to the nearer end.
+            None => out.copy_from_slice(&window.states[i]),
+        }
+        Ok(())
+    }
+
+    fn restart(&mut self, _model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
+        self.t = t;
+        self.t_prev = t;
+        self.x = x.to_vec();
+        self.accepted = None;
+        Ok(())
+    }
+
+    fn report(&self) -> Report {
+        Report {
+            method: "field (quasilinear, DOP853)".to_string(),
+            stats: self.stats,
+            largest_condition: Some(self.largest_condition),
+            reanchorings: Some(self.windows.saturating_sub(1)),
+            windows: Some(self.windows),
+            passes: Some(self.passes),
+            predictor: Some(self.predictor_stats),
+            linearizations: self.linearizations,
+            notes: Vec::new(),
+        }
+    }
+}
+
+impl QuasilinearField {
+    /// One pass of the field along `iterate` from the current anchor,
+    /// until the window ends.
+    fn pass<M: Model, I: Iterate>(
+        &mut self,
+        model: &M,
+        iterate: &I,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<Pass, Failure> {
+        let n = self.x.len();
+        let source = ProjectiveCoefficients::new(model, iterate);
+        let mut window = Window::open(
+            &source,
+            &self.options,
+            self.t,
+            &self.x,
+            self.field_h,
+            self.h_max,
+        )?;
+        let mut steps: Vec<RawStep> = Vec::new();
+        let mut states: Vec<Vec<f64>> = Vec::new();
+        let mut scratch = DefectScratch::new(n);
+        let mut bound = 0.0;
+        let (mut t_last, mut defect_last) = (self.t, 0.0);
+        let mut shortenings = 0;
+        let mut largest_condition = 1.0_f64;
+        let end = loop {
+            if window.time() >= t_limit {
+                break WindowEnd::Span;
+            }
+            if steps.len() >= MAX_WINDOW_STEPS {
+                break WindowEnd::Length;
+            }
+            match window.step(&source, &self.options, t_limit, budget)? {
+                WindowStep::Accepted => {
+                    let t = window.time();
+                    iterate.eval(t, &mut scratch.x0)?;
+                    let x0 = scratch.x0.clone();
+                    let defect = self.defect(model, t, &x0, window.state(), &mut scratch)?;
+                    let grown = bound + 0.5 * (defect + defect_last) * (t - t_last);
+                    if grown > DEFECT_LIMIT {
+                        break WindowEnd::Defect;
+                    }
+                    bound = grown;
+                    t_last = t;
+                    defect_last = defect;
+                    largest_condition = largest_condition.max(window.recovered().condition);
+                    steps.push(window.raw_step());
+                    states.push(window.state().to_vec());
+                }
+                WindowStep::Ended if window.steps() == 0 => {
+                    shortenings += 1;
+                    let h = 0.25 * window.proposed_step();
+                    if shortenings > MAX_SHORTENINGS || underflows(self.t, h) {
+                        let condition = window.recovered().condition;
+                        return Err(Failure::new(
+                            self.t,
+                            FailureKind::SingularConditionMatrix { condition },
+                        ));
+                    }
+                    window.propose_step(h);
+                }
+                WindowStep::Ended => break WindowEnd::Conditioning,
+            }
+        };
+        self.linearizations += source.linearizations();
+        Ok(Pass {
+            steps,
+            states,
+            end,
+            stats: window.stats(),
+            largest_condition,
+            field_h: window.proposed_step(),
+        })
+    }
+}

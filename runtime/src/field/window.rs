@@ -1,0 +1,327 @@
+//! One window of the field method: from an anchor state `(t_r, x_r)` the
+//! coefficients start at `f = c` (`c_1 = x_1r − Σ_A c_A x_Ar`, (12)) and
+//! their sensitivities at `S = I`; the augmented system is integrated by
+//! DOP853 and after every step the conditions (13) give the state.
+//!
+//! The step size is controlled by the error of the recovered state (the
+//! error estimates of `(f, S)` mapped through the conditions), so the
+//! tolerance means for the field what it means for direct integration. A
+//! step whose conditions degrade past the options' limits is declined:
+//! the window ends and the caller re-anchors.
+
+use super::coefficients::FieldSystem;
+use super::conditions::{recover, Recovered};
+use super::FieldOptions;
+use crate::budget::Budget;
+use crate::dop853::{hairer_error, DenseStep, Dop853, ErrorMeasure, StepOutcome};
+use crate::failure::{Failure, FailureKind};
+use crate::stepper::Stepper;
+use crate::tolerance::Tolerance;
+
+/// The free anchor values `c_2..c_N` used at every (re-)anchoring.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Anchor {
+    /// `c_A = 0`: the field starts as `x_1 = x_1r`, the smallest
+    /// coefficients there are, so a Riccati coefficient system starts as
+    /// far from its poles as it can.
+    #[default]
+    Zero,
+    /// Given values `c_2..c_N` (missing ones are 0).
+    Given(Vec<f64>),
+}
+
+/// The anchor `c` at state `x`: `c_A` by the rule, `c_1` by (12).
+pub fn anchor_values(anchor: &Anchor, x: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    let mut c = vec![0.0; n];
+    if let Anchor::Given(values) = anchor {
+        for (c_a, value) in c.iter_mut().skip(1).zip(values) {
+            *c_a = *value;
+        }
+    }
+    c[0] = x[0] - (1..n).map(|a| c[a] * x[a]).sum::<f64>();
+    c
+}
+
+/// The relative rounding error of `x_1 = f_1 + Σ_A f_A x_A` over the
+/// precision it needs: large when huge coefficients cancel (an anchor
+/// like `c_A = 1e300` recovers `x_1` as the difference of huge numbers).
+pub fn cancellation(f: &[f64], x: &[f64], tol: Tolerance) -> f64 {
+    let magnitude: f64 = f[0].abs() + (1..f.len()).map(|a| (f[a] * x[a]).abs()).sum::<f64>();
+    magnitude * f64::EPSILON / (tol.atol + tol.rtol * x[0].abs())
+}
+
+/// The field's error measure: the state's error, from the coefficients'.
+struct StateMeasure<'a, F: FieldSystem + ?Sized> {
+    system: &'a F,
+    tol: Tolerance,
+    options: &'a FieldOptions,
+    anchor_x: &'a [f64],
+    /// The state at the start of the step being tried.
+    start: &'a [f64],
+    /// The recovered state at the last trial's end.
+    trial: Option<Recovered>,
+    dx3: Vec<f64>,
+    dx5: Vec<f64>,
+    f: Vec<f64>,
+    s: Vec<f64>,
+    df: Vec<f64>,
+    ds: Vec<f64>,
+}
+
+impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
+    fn measure(
+        &mut self,
+        _t0: f64,
+        h: f64,
+        _y0: &[f64],
+        y1: &[f64],
+        e3: &[f64],
+        e5: &[f64],
+    ) -> Option<f64> {
+        if !self.system.field(y1, &mut self.f, &mut self.s) {
+            self.trial = None;
+            return None;
+        }
+        let Some(rec) = recover(&self.f, &self.s, self.anchor_x) else {
+            self.trial = None;
+            return None;
+        };
+        let within = rec.condition <= self.options.max_condition
+            && rec.growth <= self.options.max_growth
+            && rec.determinant > 0.0
+            && cancellation(&self.f, &rec.state, self.tol) <= 0.1;
+        if !within && self.options.reanchor {
+            self.trial = None;
+            return None;
+        }
+        self.system.field_change(y1, e3, &mut self.df, &mut self.ds);
+        rec.map_error(&self.f, self.anchor_x, &self.df, &self.ds, &mut self.dx3);
+        self.system.field_change(y1, e5, &mut self.df, &mut self.ds);
+        rec.map_error(&self.f, self.anchor_x, &self.df, &self.ds, &mut self.dx5);
+        let err = hairer_error(self.tol, h, self.start, &rec.state, &self.dx3, &self.dx5);
+        self.trial = Some(rec);
+        Some(err)
+    }
+}
+
+/// What [`Window::step`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WindowStep {
+    Accepted,
+    /// The conditions degraded: the window ends at its current time.
+    Ended,
+}
+
+/// One anchored field.
+pub struct Window {
+    pub anchor_t: f64,
+    pub anchor_x: Vec<f64>,
+    stepper: Dop853,
+    /// The recovered state at the stepper's time, and its conditioning.
+    current: Recovered,
+    previous_state: Vec<f64>,
+    steps: usize,
+    f: Vec<f64>,
+    s: Vec<f64>,
+}
+
+impl Window {
+    /// Anchors a field at `(t, x)`; `h0` is the first step to try.
+    pub fn open<F: FieldSystem + ?Sized>(
+        system: &F,
+        options: &FieldOptions,
+        t: f64,
+        x: &[f64],
+        h0: Option<f64>,
+        h_max: f64,
+    ) -> Result<Window, Failure> {
+        let n = x.len();
+        let c = anchor_values(&options.anchor, x);
+        let y = system.anchored(&c);
+        let mut identity = vec![0.0; n * n];
+        for i in 0..n {
+            identity[i * n + i] = 1.0;
+        }
+        let current = recover(&c, &identity, x).ok_or_else(|| {
+            Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: f64::INFINITY,
+                },
+            )
+        })?;
+        let lost = cancellation(&c, x, options.tol);
+        if lost > 0.1 {
+            return Err(Failure::new(
+                t,
+                FailureKind::AnchorCancels {
+                    digits: (lost / 0.1).log10().max(0.0),
+                },
+            ));
+        }
+        let stepper = Dop853::new(system, t, &y, options.tol, h_max, h0)?;
+        Ok(Window {
+            anchor_t: t,
+            anchor_x: x.to_vec(),
+            stepper,
+            previous_state: x.to_vec(),
+            current,
+            steps: 0,
+            f: vec![0.0; n],
+            s: vec![0.0; n * n],
+        })
+    }
+
+    pub fn time(&self) -> f64 {
+        self.stepper.time()
+    }
+
+    pub fn previous_time(&self) -> f64 {
+        self.stepper.previous_time()
+    }
+
+    pub fn state(&self) -> &[f64] {
+        &self.current.state
+    }
+
+    pub fn recovered(&self) -> &Recovered {
+        &self.current
+    }
+
+    /// Accepted steps since the anchor.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    pub fn proposed_step(&self) -> f64 {
+        self.stepper.proposed_step()
+    }
+
+    pub fn propose_step(&mut self, h: f64) {
+        self.stepper.propose_step(h);
+    }
+
+    pub fn stats(&self) -> crate::tolerance::Stats {
+        self.stepper.stats()
+    }
+
+    /// One step of the field; [`WindowStep::Ended`] when the conditions
+    /// would degrade past the limits (then nothing changed).
+    pub fn step<F: FieldSystem + ?Sized>(
+        &mut self,
+        system: &F,
+        options: &FieldOptions,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<WindowStep, Failure> {
+        let n = self.anchor_x.len();
+        let mut measure = StateMeasure {
+            system,
+            tol: options.tol,
+            options,
+            anchor_x: &self.anchor_x,
+            start: &self.current.state,
+            trial: None,
+            dx3: vec![0.0; n],
+            dx5: vec![0.0; n],
+            f: vec![0.0; n],
+            s: vec![0.0; n * n],
+            df: vec![0.0; n],
+            ds: vec![0.0; n * n],
+        };
+        let outcome = self
+            .stepper
+            .step_measured(system, t_limit, budget, &mut measure)?;
+        match outcome {
+            StepOutcome::Declined => Ok(WindowStep::Ended),
+            StepOutcome::Accepted => {
+                let Some(rec) = measure.trial.take() else {
+                    return Ok(WindowStep::Ended);
+                };
+                if !options.reanchor {
+                    check_without_reanchoring(&rec, options, self.stepper.previous_time(), self.time())?;
+                }
+                self.previous_state = std::mem::replace(&mut self.current, rec).state;
+                self.steps += 1;
+                Ok(WindowStep::Accepted)
+            }
+        }
+    }
+
+    /// The state at `t` within the last step (the coefficients' continuous
+    /// extension, then the conditions at `t`).
+    pub fn dense<F: FieldSystem + ?Sized>(
+        &mut self,
+        system: &F,
+        t: f64,
+        out: &mut [f64],
+    ) -> Result<(), Failure> {
+        if t >= self.time() {
+            out.copy_from_slice(&self.current.state);
+            return Ok(());
+        }
+        if t <= self.previous_time() || self.steps == 0 {
+            out.copy_from_slice(&self.previous_state);
+            return Ok(());
+        }
+        let mut y = vec![0.0; system.dim()];
+        self.stepper.dense(system, t, &mut y)?;
+        let singular = || {
+            Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: f64::INFINITY,
+                },
+            )
+        };
+        if !system.field(&y, &mut self.f, &mut self.s) {
+            return Err(singular());
+        }
+        let rec = recover(&self.f, &self.s, &self.anchor_x).ok_or_else(|| {
+            Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: f64::INFINITY,
+                },
+            )
+        })?;
+        out.copy_from_slice(&rec.state);
+        Ok(())
+    }
+
+    /// The last step as data (its continuous extension built later).
+    pub fn raw_step(&self) -> crate::dop853::RawStep {
+        self.stepper.raw_step()
+    }
+
+    /// The last step's continuous extension of `(f, S)`, detached.
+    pub fn dense_step<F: FieldSystem + ?Sized>(&mut self, system: &F) -> Result<DenseStep, Failure> {
+        self.stepper.dense_step(system)
+    }
+}
+
+/// With re-anchoring off (`--no-reanchor`), degraded conditions are a
+/// failure rather than a reason to re-anchor.
+fn check_without_reanchoring(
+    rec: &Recovered,
+    options: &FieldOptions,
+    since: f64,
+    t: f64,
+) -> Result<(), Failure> {
+    if rec.determinant <= 0.0 {
+        return Err(Failure::new(
+            t,
+            FailureKind::ConditionMatrixCrossedSingularity { since },
+        ));
+    }
+    if rec.condition > options.max_condition {
+        return Err(Failure::new(
+            t,
+            FailureKind::SingularConditionMatrix {
+                condition: rec.condition,
+            },
+        ));
+    }
+    Ok(())
+}

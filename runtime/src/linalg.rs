@@ -1,0 +1,552 @@
+//! The dense linear algebra the methods need, for the small matrices of
+//! mechanics (a few to a few dozen rows): a column-major [`Matrix`], LU
+//! with partial pivoting (solve, determinant, a cheap condition estimate),
+//! Cholesky for symmetric positive definite mass matrices, fixed-size
+//! solves on the stack for generated code, products and the matrix
+//! exponential.
+
+use std::ops::{Index, IndexMut};
+
+/// A dense column-major matrix: entry `(i, j)` is `data[j * rows + i]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Matrix {
+    rows: usize,
+    cols: usize,
+    data: Vec<f64>,
+}
+
+impl Matrix {
+    pub fn zeros(rows: usize, cols: usize) -> Matrix {
+        Matrix {
+            rows,
+            cols,
+            data: vec![0.0; rows * cols],
+        }
+    }
+
+    pub fn identity(n: usize) -> Matrix {
+        let mut m = Matrix::zeros(n, n);
+        for i in 0..n {
+            m[(i, i)] = 1.0;
+        }
+        m
+    }
+
+    /// A matrix from its entries, row by row (for tests and small literals).
+    pub fn from_rows(rows: &[&[f64]]) -> Matrix {
+        let r = rows.len();
+        let c = rows.first().map_or(0, |row| row.len());
+        let mut m = Matrix::zeros(r, c);
+        for (i, row) in rows.iter().enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                m[(i, j)] = v;
+            }
+        }
+        m
+    }
+
+    /// A matrix over column-major `data`.
+    pub fn from_column_major(rows: usize, cols: usize, data: Vec<f64>) -> Matrix {
+        assert_eq!(data.len(), rows * cols, "matrix data of the wrong length");
+        Matrix { rows, cols, data }
+    }
+
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+
+    pub fn as_slice(&self) -> &[f64] {
+        &self.data
+    }
+
+    pub fn as_mut_slice(&mut self) -> &mut [f64] {
+        &mut self.data
+    }
+
+    pub fn fill(&mut self, value: f64) {
+        self.data.fill(value);
+    }
+
+    /// Column `j` as a slice.
+    pub fn column(&self, j: usize) -> &[f64] {
+        &self.data[j * self.rows..(j + 1) * self.rows]
+    }
+
+    pub fn column_mut(&mut self, j: usize) -> &mut [f64] {
+        &mut self.data[j * self.rows..(j + 1) * self.rows]
+    }
+
+    /// `out = self · x`.
+    pub fn mul_vec(&self, x: &[f64], out: &mut [f64]) {
+        out[..self.rows].fill(0.0);
+        for j in 0..self.cols {
+            let xj = x[j];
+            if xj == 0.0 {
+                continue;
+            }
+            for (o, a) in out.iter_mut().zip(self.column(j)) {
+                *o += a * xj;
+            }
+        }
+    }
+
+    /// `out = selfᵀ · x`.
+    pub fn mul_transpose_vec(&self, x: &[f64], out: &mut [f64]) {
+        for (j, o) in out.iter_mut().enumerate().take(self.cols) {
+            *o = self.column(j).iter().zip(x).map(|(a, b)| a * b).sum();
+        }
+    }
+
+    /// `out = self · other`.
+    pub fn mul_to(&self, other: &Matrix, out: &mut Matrix) {
+        debug_assert_eq!(self.cols, other.rows);
+        out.fill(0.0);
+        for j in 0..other.cols {
+            for k in 0..self.cols {
+                let b = other[(k, j)];
+                if b == 0.0 {
+                    continue;
+                }
+                let column = self.column(k);
+                let target = &mut out.data[j * self.rows..(j + 1) * self.rows];
+                for (t, a) in target.iter_mut().zip(column) {
+                    *t += a * b;
+                }
+            }
+        }
+    }
+
+    pub fn mul(&self, other: &Matrix) -> Matrix {
+        let mut out = Matrix::zeros(self.rows, other.cols);
+        self.mul_to(other, &mut out);
+        out
+    }
+
+    /// The largest column sum of absolute values.
+    pub fn one_norm(&self) -> f64 {
+        (0..self.cols)
+            .map(|j| self.column(j).iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max)
+    }
+
+    /// The largest absolute entry.
+    pub fn max_abs(&self) -> f64 {
+        self.data.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.data.iter().all(|v| v.is_finite())
+    }
+}
+
+impl Index<(usize, usize)> for Matrix {
+    type Output = f64;
+    fn index(&self, (i, j): (usize, usize)) -> &f64 {
+        debug_assert!(i < self.rows && j < self.cols);
+        &self.data[j * self.rows + i]
+    }
+}
+
+impl IndexMut<(usize, usize)> for Matrix {
+    fn index_mut(&mut self, (i, j): (usize, usize)) -> &mut f64 {
+        debug_assert!(i < self.rows && j < self.cols);
+        &mut self.data[j * self.rows + i]
+    }
+}
+
+/// `PA = LU` of a square matrix, with partial pivoting.
+#[derive(Clone, Debug)]
+pub struct Lu {
+    factors: Matrix,
+    pivots: Vec<usize>,
+    /// +1 or −1: the sign of the row permutation.
+    sign: f64,
+    /// An exactly zero pivot was met (the factors are then incomplete).
+    singular: bool,
+}
+
+impl Lu {
+    /// Factors `a` (a copy).
+    pub fn new(a: &Matrix) -> Lu {
+        Lu::in_place(a.clone())
+    }
+
+    /// Factors `a`, reusing its storage.
+    pub fn in_place(mut a: Matrix) -> Lu {
+        let n = a.rows;
+        debug_assert_eq!(n, a.cols);
+        let mut pivots = Vec::with_capacity(n);
+        let mut sign = 1.0;
+        let mut singular = false;
+        for k in 0..n {
+            let (p, largest) = (k..n)
+                .map(|i| (i, a[(i, k)].abs()))
+                .fold((k, -1.0), |best, c| if c.1 > best.1 { c } else { best });
+            pivots.push(p);
+            if p != k {
+                sign = -sign;
+                for j in 0..n {
+                    a.data.swap(j * n + k, j * n + p);
+                }
+            }
+            if largest == 0.0 || !largest.is_finite() {
+                singular = true;
+                continue;
+            }
+            let pivot = a[(k, k)];
+            for i in k + 1..n {
+                a[(i, k)] /= pivot;
+            }
+            for j in k + 1..n {
+                let u = a[(k, j)];
+                if u == 0.0 {
+                    continue;
+                }
+                for i in k + 1..n {
+                    let l = a[(i, k)];
+                    a[(i, j)] -= l * u;
+                }
+            }
+        }
+        Lu {
+            factors: a,
+            pivots,
+            sign,
+            singular,
+        }
+    }
+
+    pub fn dim(&self) -> usize {
+        self.factors.rows
+    }
+
+    /// An exactly zero (or non-finite) pivot was met.
+    pub fn is_singular(&self) -> bool {
+        self.singular
+    }
+
+    pub fn determinant(&self) -> f64 {
+        if self.singular {
+            return 0.0;
+        }
+        (0..self.dim()).fold(self.sign, |d, k| d * self.factors[(k, k)])
+    }
+
+    /// The smallest over the largest absolute pivot: a cheap lower bound
+    /// on `1/κ` up to growth, computed for free with the factors.
+    pub fn pivot_ratio(&self) -> f64 {
+        let n = self.dim();
+        if n == 0 {
+            return 1.0;
+        }
+        let (mut small, mut large) = (f64::INFINITY, 0.0_f64);
+        for k in 0..n {
+            let u = self.factors[(k, k)].abs();
+            small = small.min(u);
+            large = large.max(u);
+        }
+        if large > 0.0 {
+            small / large
+        } else {
+            0.0
+        }
+    }
+
+    /// Solves `A x = b` in place; `false` when `A` is singular.
+    pub fn solve_in_place(&self, b: &mut [f64]) -> bool {
+        if self.singular {
+            return false;
+        }
+        let n = self.dim();
+        let f = &self.factors;
+        for k in 0..n {
+            b.swap(k, self.pivots[k]);
+        }
+        for j in 0..n {
+            let bj = b[j];
+            if bj != 0.0 {
+                for i in j + 1..n {
+                    b[i] -= f[(i, j)] * bj;
+                }
+            }
+        }
+        for j in (0..n).rev() {
+            b[j] /= f[(j, j)];
+            let bj = b[j];
+            if bj != 0.0 {
+                for i in 0..j {
+                    b[i] -= f[(i, j)] * bj;
+                }
+            }
+        }
+        true
+    }
+
+    /// Solves `Aᵀ x = b` in place; `false` when `A` is singular.
+    pub fn solve_transpose_in_place(&self, b: &mut [f64]) -> bool {
+        if self.singular {
+            return false;
+        }
+        let n = self.dim();
+        let f = &self.factors;
+        // Aᵀ = Uᵀ Lᵀ P: solve Uᵀ y = b, Lᵀ z = y, then x = Pᵀ z.
+        for j in 0..n {
+            let mut s = b[j];
+            for i in 0..j {
+                s -= f[(i, j)] * b[i];
+            }
+            b[j] = s / f[(j, j)];
+        }
+        for j in (0..n).rev() {
+            let mut s = b[j];
+            for i in j + 1..n {
+                s -= f[(i, j)] * b[i];
+            }
+            b[j] = s;
+        }
+        for k in (0..n).rev() {
+            b.swap(k, self.pivots[k]);
+        }
+        true
+    }
+
+    /// Hager's (Higham's) estimate of `‖A⁻¹‖₁` from the factors: a few
+    /// solves instead of an inverse. A lower bound, exact in most cases.
+    pub fn inverse_one_norm_estimate(&self) -> f64 {
+        if self.singular {
+            return f64::INFINITY;
+        }
+        let n = self.dim();
+        if n == 0 {
+            return 0.0;
+        }
+        let mut x = vec![1.0 / n as f64; n];
+        let mut estimate = 0.0;
+        for _ in 0..5 {
+            let mut y = x.clone();
+            self.solve_in_place(&mut y);
+            let norm: f64 = y.iter().map(|v| v.abs()).sum();
+            if !norm.is_finite() {
+                return f64::INFINITY;
+            }
+            if norm <= estimate {
+                break;
+            }
+            estimate = norm;
+            let mut z: Vec<f64> = y
+                .iter()
+                .map(|&v| if v >= 0.0 { 1.0 } else { -1.0 })
+                .collect();
+            self.solve_transpose_in_place(&mut z);
+            let (j, largest) = z
+                .iter()
+                .enumerate()
+                .map(|(j, v)| (j, v.abs()))
+                .fold((0, -1.0), |b, c| if c.1 > b.1 { c } else { b });
+            let zx: f64 = z.iter().zip(&x).map(|(a, b)| a * b).sum();
+            if largest <= zx {
+                break;
+            }
+            x.fill(0.0);
+            x[j] = 1.0;
+        }
+        estimate
+    }
+
+    /// The inverse, column by column.
+    pub fn inverse(&self) -> Option<Matrix> {
+        if self.singular {
+            return None;
+        }
+        let n = self.dim();
+        let mut inv = Matrix::identity(n);
+        for j in 0..n {
+            self.solve_in_place(inv.column_mut(j));
+        }
+        Some(inv)
+    }
+}
+
+/// The 1-norm condition number of `a` estimated from its factors.
+pub fn condition_estimate(a: &Matrix, lu: &Lu) -> f64 {
+    let estimate = a.one_norm() * lu.inverse_one_norm_estimate();
+    if estimate.is_finite() {
+        estimate.max(1.0)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Solves `A z = b` for a fixed-size system on the stack (generated code:
+/// the mass matrix of the highest derivatives). `None` when a pivot is
+/// zero or the result is not finite. LU with partial pivoting: the rows of
+/// (4) may be scaled differently, so `A` need not be symmetric.
+pub fn solve_fixed<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+    for k in 0..N {
+        let mut p = k;
+        for i in k + 1..N {
+            if a[i][k].abs() > a[p][k].abs() {
+                p = i;
+            }
+        }
+        if a[p][k] == 0.0 || !a[p][k].is_finite() {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        let pivot = a[k][k];
+        for i in k + 1..N {
+            let l = a[i][k] / pivot;
+            if l != 0.0 {
+                for j in k + 1..N {
+                    a[i][j] -= l * a[k][j];
+                }
+                b[i] -= l * b[k];
+            }
+        }
+    }
+    for k in (0..N).rev() {
+        let mut s = b[k];
+        for j in k + 1..N {
+            s -= a[k][j] * b[j];
+        }
+        b[k] = s / a[k][k];
+    }
+    b.iter().all(|v| v.is_finite()).then_some(b)
+}
+
+/// [`solve_fixed`] for a size known only at run time (large systems):
+/// `a` is row-major `n × n`, overwritten; `b` becomes the solution.
+pub fn solve_dense(n: usize, a: &mut [f64], b: &mut [f64]) -> bool {
+    let mut m = Matrix::zeros(n, n);
+    for i in 0..n {
+        for j in 0..n {
+            m[(i, j)] = a[i * n + j];
+        }
+    }
+    let lu = Lu::in_place(m);
+    lu.solve_in_place(b) && b.iter().all(|v| v.is_finite())
+}
+
+/// `exp(a)` by scaling and squaring with the diagonal Padé approximant of
+/// degree 6 (Moler and Van Loan's method 3): accurate to rounding for
+/// `‖a‖/2^s ≤ 1/2`.
+pub fn expm(a: &Matrix) -> Matrix {
+    let n = a.rows;
+    let norm = a.one_norm();
+    let squarings = if norm > 0.5 {
+        (norm / 0.5).log2().ceil().max(0.0) as u32
+    } else {
+        0
+    };
+    let scale = 0.5_f64.powi(squarings as i32);
+    let mut x = a.clone();
+    x.data.iter_mut().for_each(|v| *v *= scale);
+    // Padé(6,6): c_k = (2q−k)! q! / ((2q)! k! (q−k)!), q = 6.
+    const C: [f64; 7] = [
+        1.0,
+        0.5,
+        5.0 / 44.0,
+        1.0 / 66.0,
+        1.0 / 792.0,
+        1.0 / 15840.0,
+        1.0 / 665280.0,
+    ];
+    let mut power = Matrix::identity(n);
+    let mut numerator = Matrix::identity(n);
+    let mut denominator = Matrix::identity(n);
+    for (k, &c) in C.iter().enumerate().skip(1) {
+        power = power.mul(&x);
+        let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+        for (idx, &p) in power.data.iter().enumerate() {
+            numerator.data[idx] += c * p;
+            denominator.data[idx] += sign * c * p;
+        }
+    }
+    let lu = Lu::in_place(denominator);
+    let mut result = numerator;
+    for j in 0..n {
+        lu.solve_in_place(result.column_mut(j));
+    }
+    for _ in 0..squarings {
+        result = result.mul(&result);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol * (1.0 + b.abs())
+    }
+
+    #[test]
+    fn lu_solves_and_transposed_solves_match_the_definition() {
+        let a = Matrix::from_rows(&[&[2.0, 1.0, 1.0], &[4.0, -6.0, 0.0], &[-2.0, 7.0, 2.0]]);
+        let lu = Lu::new(&a);
+        let x = [1.0, -2.0, 3.0];
+        let mut b = vec![0.0; 3];
+        a.mul_vec(&x, &mut b);
+        assert!(lu.solve_in_place(&mut b));
+        for i in 0..3 {
+            assert!(close(b[i], x[i], 1e-14), "{b:?}");
+        }
+        let mut bt = vec![0.0; 3];
+        a.mul_transpose_vec(&x, &mut bt);
+        assert!(lu.solve_transpose_in_place(&mut bt));
+        for i in 0..3 {
+            assert!(close(bt[i], x[i], 1e-14), "{bt:?}");
+        }
+        // det = 2(−12 − 0) − 1(8 − 0) + 1(28 − 12) = −16
+        assert!(close(lu.determinant(), -16.0, 1e-14));
+    }
+
+    #[test]
+    fn condition_estimate_is_exact_on_a_diagonal_and_large_near_singular() {
+        let a = Matrix::from_rows(&[&[1.0, 0.0], &[0.0, 1e-6]]);
+        let lu = Lu::new(&a);
+        assert!(close(condition_estimate(&a, &lu), 1e6, 1e-12));
+        let b = Matrix::from_rows(&[&[1.0, 1.0], &[1.0, 1.0 + 1e-12]]);
+        let lu = Lu::new(&b);
+        assert!(condition_estimate(&b, &lu) > 1e11);
+        let c = Matrix::from_rows(&[&[1.0, 2.0], &[2.0, 4.0]]);
+        assert!(Lu::new(&c).is_singular() || condition_estimate(&c, &Lu::new(&c)) > 1e15);
+    }
+
+    #[test]
+    fn fixed_and_dense_solves_agree_with_lu() {
+        let rows = [[3.0, 1.0, 0.5], [1.0, 4.0, 1.0], [0.5, 1.0, 5.0]];
+        let b = [1.0, 2.0, 3.0];
+        let fixed = solve_fixed(rows, b).unwrap();
+        let mut flat: Vec<f64> = rows.iter().flatten().copied().collect();
+        let mut dense = b.to_vec();
+        assert!(solve_dense(3, &mut flat, &mut dense));
+        let a = Matrix::from_rows(&[&rows[0], &rows[1], &rows[2]]);
+        let mut check = vec![0.0; 3];
+        a.mul_vec(&fixed, &mut check);
+        for i in 0..3 {
+            assert!(close(fixed[i], dense[i], 1e-14));
+            assert!(close(check[i], b[i], 1e-14));
+        }
+        assert!(solve_fixed([[1.0, 2.0], [2.0, 4.0]], [1.0, 1.0]).is_none());
+    }
+
+    #[test]
+    fn expm_of_a_rotation_generator_and_a_nilpotent_matrix() {
+        let w = 3.0;
+        let a = Matrix::from_rows(&[&[0.0, w], &[-w, 0.0]]);
+        let e = expm(&a);
+        assert!(close(e[(0, 0)], w.cos(), 1e-13));
+        assert!(close(e[(0, 1)], w.sin(), 1e-13));
+        assert!(close(e[(1, 0)], -w.sin(), 1e-13));
+        let n = Matrix::from_rows(&[&[0.0, 1.0, 0.0], &[0.0, 0.0, 1.0], &[0.0, 0.0, 0.0]]);
+        let e = expm(&n);
+        assert!(close(e[(0, 2)], 0.5, 1e-15) && close(e[(0, 1)], 1.0, 1e-15));
+    }
+}

@@ -1,0 +1,182 @@
+//! The integrators a run can use, and the user's choice among them.
+
+use crate::budget::Budget;
+use crate::dop853::Dop853;
+use crate::failure::Failure;
+use crate::rodas4::Rodas4;
+use crate::stepper::Stepper;
+use crate::system::System;
+use crate::tolerance::{Stats, Tolerance};
+
+/// Which one-step method integrates a system.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// DOP853, explicit, order 8.
+    Explicit,
+    /// RODAS4, linearly implicit, order 4, for stiff systems.
+    Stiff,
+}
+
+impl Integrator {
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Explicit => "DOP853",
+            Integrator::Stiff => "RODAS4",
+        }
+    }
+}
+
+/// How the motion is computed (`--method`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Method {
+    /// Vujanović's field method.
+    #[default]
+    Field,
+    /// Direct integration of the reduced system (7).
+    Direct,
+}
+
+impl Method {
+    pub fn parse(text: &str) -> Option<Method> {
+        match text {
+            "field" => Some(Method::Field),
+            "direct" => Some(Method::Direct),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Field => "field",
+            Method::Direct => "direct",
+        }
+    }
+}
+
+/// The user's choice of integrator (`integrator …;`, `--integrator`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IntegratorChoice {
+    /// Direct: DOP853, switching to RODAS4 when it detects stiffness.
+    /// Field: DOP853 for the coefficients, RODAS4 for the window's
+    /// predictor when the motion is stiff.
+    #[default]
+    Auto,
+    /// DOP853 throughout (stiffness is only reported).
+    Explicit,
+    /// RODAS4 throughout.
+    Stiff,
+    /// Field: the Magnus integrator for linear coefficient systems
+    /// (DOP853 otherwise). Direct: the same as `Auto`.
+    Magnus,
+}
+
+impl IntegratorChoice {
+    pub const ALL: [IntegratorChoice; 4] = [
+        IntegratorChoice::Auto,
+        IntegratorChoice::Explicit,
+        IntegratorChoice::Stiff,
+        IntegratorChoice::Magnus,
+    ];
+
+    pub fn parse(text: &str) -> Option<IntegratorChoice> {
+        IntegratorChoice::ALL.into_iter().find(|c| c.name() == text)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorChoice::Auto => "auto",
+            IntegratorChoice::Explicit => "explicit",
+            IntegratorChoice::Stiff => "stiff",
+            IntegratorChoice::Magnus => "magnus",
+        }
+    }
+}
+
+/// DOP853 or RODAS4 behind one type.
+pub enum AnyStepper {
+    Explicit(Dop853),
+    Stiff(Rodas4),
+}
+
+impl AnyStepper {
+    pub fn new<S: System + ?Sized>(
+        integrator: Integrator,
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure> {
+        Ok(match integrator {
+            Integrator::Explicit => {
+                AnyStepper::Explicit(Dop853::new(system, t0, y0, tol, h_max, h0)?)
+            }
+            Integrator::Stiff => AnyStepper::Stiff(Rodas4::new(system, t0, y0, tol, h_max, h0)?),
+        })
+    }
+
+    pub fn integrator(&self) -> Integrator {
+        match self {
+            AnyStepper::Explicit(_) => Integrator::Explicit,
+            AnyStepper::Stiff(_) => Integrator::Stiff,
+        }
+    }
+}
+
+macro_rules! each {
+    ($self:ident, $s:ident => $e:expr) => {
+        match $self {
+            AnyStepper::Explicit($s) => $e,
+            AnyStepper::Stiff($s) => $e,
+        }
+    };
+}
+
+impl Stepper for AnyStepper {
+    fn time(&self) -> f64 {
+        each!(self, s => s.time())
+    }
+
+    fn state(&self) -> &[f64] {
+        each!(self, s => s.state())
+    }
+
+    fn previous_time(&self) -> f64 {
+        each!(self, s => s.previous_time())
+    }
+
+    fn stats(&self) -> Stats {
+        each!(self, s => s.stats())
+    }
+
+    fn proposed_step(&self) -> f64 {
+        each!(self, s => s.proposed_step())
+    }
+
+    fn propose_step(&mut self, h: f64) {
+        each!(self, s => s.propose_step(h))
+    }
+
+    fn step<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure> {
+        each!(self, s => s.step(system, t_limit, budget))
+    }
+
+    fn dense<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        t: f64,
+        out: &mut [f64],
+    ) -> Result<(), Failure> {
+        each!(self, s => s.dense(system, t, out))
+    }
+
+    fn stiffness_detected(&self) -> Option<f64> {
+        each!(self, s => s.stiffness_detected())
+    }
+}

@@ -1,0 +1,189 @@
+//! The one trait a generated crate implements: everything the methods,
+//! the events and the command line need to know about one model.
+//!
+//! Generated code holds only the model's own functions (the right side of
+//! the reduced system (7), its exact Jacobians, the coefficient system of
+//! the field method, initial values, outputs, switching functions); every
+//! model-independent line lives in this crate. Methods that a model does
+//! not need keep their defaults, so a model without events, outputs or a
+//! coefficient system emits nothing for them.
+
+use crate::failure::Failure;
+use crate::linalg::Matrix;
+use crate::method::IntegratorChoice;
+
+/// How a state component's initial value is found (SPEC §1.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Initial {
+    /// Stated in the model (`initial q1 = …;`), overridable by `--init`.
+    Given,
+    /// Fixed by a constraint (or its derivatives) from the given values.
+    Constraint,
+    /// An independent derivative of order 2..k−1 (k ≥ 3), solved from the
+    /// equations of motion at `t0`.
+    Solved,
+}
+
+/// One implicit constraint whose dependent derivative is chosen at run
+/// time among `candidates` (`constraint … for y' or x';`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Candidates {
+    /// The constraint as written, for messages.
+    pub text: &'static str,
+    /// The candidate dependent derivatives, as written (`y'`, `x'`).
+    pub names: &'static [&'static str],
+}
+
+/// The discrete state of a run between two events: which reduced system
+/// (mode) is integrated and which branch every switch is on. Within a
+/// segment the right side is smooth; an event changes the regime and
+/// restarts the integrator.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Regime {
+    /// The candidate combination: the index of the reduced system, mixed
+    /// radix over [`Model::CONSTRAINTS`] (the first constraint's choice is
+    /// the lowest digit). 0 for models without candidates.
+    pub mode: usize,
+    /// `branches[k]`: switching function `g_k` is positive on this segment.
+    pub branches: Vec<bool>,
+}
+
+/// A model compiled by lagc.
+///
+/// Matrices are [`Matrix`] (column-major), sized and zeroed by the caller:
+/// implementations write only their non-zero entries. Methods return
+/// `Err` for failures only the model can see (a singular mass matrix,
+/// Newton without a root); the integrators check for non-finite values
+/// themselves.
+pub trait Model: Clone {
+    /// The model's name (its file's stem), for messages.
+    const NAME: &'static str;
+    /// A hash of the model's source and lagc's version: `lagc run` checks
+    /// it to be sure a binary belongs to the model it is asked to run.
+    const SOURCE_HASH: &'static str;
+    /// The params, in declaration order (`--param NAME=VALUE`).
+    const PARAMS: &'static [&'static str];
+    /// The state (6), `x = (q, q', …, q^(u−1))`: the CSV columns after `t`.
+    const STATE: &'static [&'static str];
+    /// The number of coordinates `n`: the state is `u` blocks of `n`, and
+    /// its first `N − n` rows are `x_i' = x_{i+n}` (the methods use this
+    /// structure of `∂X/∂x`).
+    const COORDINATES: usize;
+    /// How each state component's initial value is found.
+    const INITIAL: &'static [Initial];
+    /// Extra CSV columns after the state (`output` statements, a vector
+    /// output flattened to `p.x`, `p.y`).
+    const OUTPUTS: &'static [&'static str] = &[];
+    /// The mass laws, for naming a mass that reaches zero.
+    const MASSES: &'static [&'static str] = &[];
+    /// The model's `integrator` statement.
+    const DECLARED_INTEGRATOR: Option<IntegratorChoice> = None;
+    /// The number of switching functions (kinks and switches of `if`,
+    /// `abs`, `sign`, `min`, `max`, and the comparisons of `stop when`).
+    const SWITCHES: usize = 0;
+    /// Implicit constraints with run-time candidates.
+    const CONSTRAINTS: &'static [Candidates] = &[];
+    /// The reduced system (7) is affine in the state: the linear field
+    /// ansatz is a complete solution and [`Model::coefficients`] is given.
+    const AFFINE: bool = false;
+    /// The coefficient system is linear in the coefficients (no `X_A`
+    /// depends on `x_1`); otherwise it is of Riccati type.
+    const COEFFICIENTS_LINEAR: bool = false;
+    /// The model states exact solutions (`exact` lines).
+    const EXACT: bool = false;
+
+    /// Every param's value: param `i` is `overrides[i]` when given, else
+    /// its expression evaluated with the values before it (so an override
+    /// recomputes the params computed from it).
+    fn parameters(overrides: &[Option<f64>]) -> Vec<f64>;
+
+    /// The model with these param values (as [`Model::parameters`] gives).
+    fn new(params: &[f64]) -> Self;
+
+    /// The param values the model was made with.
+    fn param_values(&self) -> &[f64];
+
+    /// The time span `(t0, t1)` (it may depend on params).
+    fn time_span(&self) -> (f64, f64);
+
+    /// The initial state (6) at `t0`. `given[i]`, when present, replaces
+    /// the model's value of a [`Initial::Given`] component. Values the model
+    /// states for dependent components are checked against the
+    /// constraints (an [`crate::failure::FailureKind::InconsistentInitialValue`]).
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure>;
+
+    /// Selects the reduced system and the branches for the next segment.
+    fn set_regime(&mut self, _regime: &Regime) {}
+
+    /// `dx = X(t, x)`, the right side of the reduced system (7).
+    fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure>;
+
+    /// `jac = ∂X/∂x (t, x)`, exact.
+    fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+
+    /// `dxdt = ∂X/∂t (t, x)`: the whole explicit time dependence, mass laws
+    /// included (zeroed by the caller).
+    fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure>;
+
+    /// `X` and `∂X/∂x` at once, sharing their common subexpressions: the
+    /// field method linearises the motion at every stage.
+    fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+        self.rhs(t, x, dx)?;
+        self.jacobian(t, x, jac)
+    }
+
+    /// The coefficient system `df = F(t, f)` of the field ansatz (10)
+    /// (affine models only): `f[0]` is the free term `f_1`, `f[A − 1]` the
+    /// coefficient of `x_A`.
+    fn coefficients(&self, t: f64, _f: &[f64], _df: &mut [f64]) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
+
+    /// `∂F/∂f`.
+    fn coefficient_jacobian(&self, t: f64, _f: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
+
+    /// `∂F/∂t` (zeroed by the caller).
+    fn coefficient_time_partial(
+        &self,
+        t: f64,
+        _f: &[f64],
+        _dfdt: &mut [f64],
+    ) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
+
+    /// The exact solution at `t`, for the components the model states.
+    fn exact(&self, _t: f64, _out: &mut [Option<f64>]) {}
+
+    /// The `output` columns at `(t, x)` in the current regime.
+    fn outputs(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+
+    /// The switching functions `g_k(t, x)`; an event is a sign change.
+    fn switching_functions(&self, _t: f64, _x: &[f64], _g: &mut [f64]) {}
+
+    /// Whether `stop when` holds with these branches.
+    fn stop(&self, _branches: &[bool]) -> bool {
+        false
+    }
+
+    /// The pivots `∂h/∂dep` of every candidate of every implicit
+    /// constraint, flattened in [`Model::CONSTRAINTS`] order.
+    fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+
+    /// The mass laws' values at `t`, in [`Model::MASSES`] order.
+    fn masses(&self, _t: f64, _out: &mut [f64]) {}
+
+    /// The condition number of the mass matrix of the highest derivatives
+    /// at `(t, x)` (models that solve for them numerically), for naming a
+    /// singular mass matrix as the cause of a failure.
+    fn mass_matrix_condition(&self, _t: f64, _x: &[f64]) -> Option<f64> {
+        None
+    }
+}
+
+/// The state dimension of a model.
+pub fn dimension<M: Model>() -> usize {
+    M::STATE.len()
+}

@@ -1,0 +1,50 @@
+//! The interface between a method (direct integration, the field method)
+//! and the run driver: advance one step, interpolate within it, restart at
+//! an event, report the work.
+
+use crate::budget::Budget;
+use crate::failure::Failure;
+use crate::model::Model;
+use crate::tolerance::Stats;
+
+/// What a method did, for the run summary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// e.g. `field (DOP853)`, `direct (DOP853 → RODAS4)`.
+    pub method: String,
+    /// Work of every integrator the method ran (for the field: the
+    /// coefficient steps, and the predictor's under `predictor`).
+    pub stats: Stats,
+    /// Field: the largest condition number of the conditions (13).
+    pub largest_condition: Option<f64>,
+    /// Field: how many times the field was re-anchored.
+    pub reanchorings: Option<usize>,
+    /// Quasilinear field: windows accepted, passes over them, and the
+    /// predictor's work.
+    pub windows: Option<usize>,
+    pub passes: Option<usize>,
+    pub predictor: Option<Stats>,
+    /// Evaluations of `X` with `∂X/∂x` (the field's linearisations).
+    pub linearizations: usize,
+    /// Lines for the summary (a switch of integrator, a stiffness note).
+    pub notes: Vec<String>,
+}
+
+/// A method advancing a model's motion step by step.
+pub trait Solver<M: Model> {
+    /// The time of the last accepted step's end.
+    fn time(&self) -> f64;
+    /// The time of the last accepted step's start.
+    fn previous_time(&self) -> f64;
+    /// The state at [`Solver::time`].
+    fn state(&self) -> &[f64];
+    /// Takes one step (never past `t_limit`, landing on it exactly when
+    /// reached), drawing on `budget`.
+    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure>;
+    /// The state at `t` in `[previous_time, time]`.
+    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure>;
+    /// Starts afresh from `(t, x)` (after an event changed the regime).
+    fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure>;
+    /// The work so far.
+    fn report(&self) -> Report;
+}

@@ -1,0 +1,127 @@
+//! The run summary on stderr: what the method did, in words a user of the
+//! field method can read (see the README for what each figure means), or
+//! as one JSON object line (`--summary json`) for scripts.
+
+use crate::driver::{Ending, Outcome};
+use std::fmt::Write as _;
+use std::time::Duration;
+
+/// Everything the summary line reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Summary {
+    pub outcome: Outcome,
+    /// The smallest wall time of the solves (`--repeat`).
+    pub wall_time: Duration,
+    pub runs: usize,
+    /// The largest error against the model's `exact` lines over the samples
+    /// (relative to `max(|exact|, 1)`).
+    pub exact_error: Option<f64>,
+    /// `--estimate-error`: the largest difference from a run at a 100×
+    /// tighter tolerance.
+    pub estimated_error: Option<f64>,
+}
+
+impl Summary {
+    /// The text form (several `key: value` parts on one line, then notes).
+    pub fn text(&self) -> String {
+        let r = &self.outcome.report;
+        let mut s = format!(
+            "method: {}; steps: {} (+{} rejected); right-side evaluations: {}",
+            r.method, r.stats.accepted_steps, r.stats.rejected_steps, r.stats.rhs_evaluations
+        );
+        if let (Some(windows), Some(predictor)) = (r.windows, r.predictor) {
+            let _ = write!(
+                s,
+                "; windows: {windows}; linearisations: {}; predictor steps: {}",
+                r.linearizations, predictor.accepted_steps
+            );
+        }
+        if let Some(condition) = r.largest_condition {
+            let _ = write!(s, "; largest condition number: {condition:.3e}");
+        }
+        if let Some(count) = r.reanchorings {
+            let _ = write!(s, "; re-anchorings: {count}");
+        }
+        if self.outcome.events > 0 {
+            let _ = write!(s, "; events: {}", self.outcome.events);
+        }
+        let _ = write!(s, "; wall time: {:.3} ms", self.wall_time.as_secs_f64() * 1e3);
+        if let Ending::Stopped(t) = self.outcome.ending {
+            let _ = write!(s, "\nstopped at t = {t} (`stop when` became true)");
+        }
+        for note in &r.notes {
+            let _ = write!(s, "\nnote: {note}");
+        }
+        if let Some(error) = self.exact_error {
+            let _ = write!(s, "\nlargest error against the exact solution: {error:.3e}");
+        }
+        if let Some(error) = self.estimated_error {
+            let _ = write!(
+                s,
+                "\nestimated global error (against a run at a 100× tighter tolerance): \
+                 {error:.3e}"
+            );
+        }
+        s
+    }
+
+    /// One JSON object (written by hand: the runtime has no dependencies).
+    pub fn json(&self) -> String {
+        let r = &self.outcome.report;
+        let stopped = match self.outcome.ending {
+            Ending::End => "null".to_string(),
+            Ending::Stopped(t) => json_number(Some(t)),
+        };
+        format!(
+            "{{\"method\":{},\"steps\":{},\"rejected_steps\":{},\"rhs_evaluations\":{},\
+             \"jacobian_evaluations\":{},\"linearizations\":{},\"windows\":{},\
+             \"predictor_steps\":{},\"largest_condition\":{},\"reanchorings\":{},\
+             \"events\":{},\"stopped_at\":{},\"budget_used\":{},\"wall_time_s\":{},\
+             \"runs\":{},\"exact_error\":{},\"estimated_error\":{}}}",
+            json_string(&r.method),
+            r.stats.accepted_steps,
+            r.stats.rejected_steps,
+            r.stats.rhs_evaluations,
+            r.stats.jacobian_evaluations,
+            r.linearizations,
+            r.windows.map_or("null".to_string(), |w| w.to_string()),
+            r.predictor
+                .map_or("null".to_string(), |p| p.accepted_steps.to_string()),
+            json_number(r.largest_condition),
+            r.reanchorings.map_or("null".to_string(), |c| c.to_string()),
+            self.outcome.events,
+            stopped,
+            self.outcome.budget_used,
+            json_number(Some(self.wall_time.as_secs_f64())),
+            self.runs,
+            json_number(self.exact_error),
+            json_number(self.estimated_error),
+        )
+    }
+}
+
+/// A JSON number (`{:e}` reads back exactly), `null` when absent or not
+/// finite.
+pub fn json_number(value: Option<f64>) -> String {
+    match value {
+        Some(v) if v.is_finite() => format!("{v:e}"),
+        _ => "null".to_string(),
+    }
+}
+
+pub fn json_string(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 2);
+    out.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => {
+                let _ = write!(out, "\\u{:04x}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
