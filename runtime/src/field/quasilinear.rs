@@ -194,6 +194,9 @@ pub struct QuasilinearField {
     passes: usize,
     linearizations: usize,
     largest_condition: f64,
+    /// Storage of past windows' steps, reused.
+    pool: Vec<RawStep>,
+    state_pool: Vec<Vec<f64>>,
 }
 
 impl QuasilinearField {
@@ -219,6 +222,8 @@ impl QuasilinearField {
             passes: 0,
             linearizations: 0,
             largest_condition: 1.0,
+            pool: Vec::new(),
+            state_pool: Vec::new(),
         }
     }
 
@@ -369,6 +374,10 @@ impl<M: Model> Solver<M> for QuasilinearField {
                 cursor: Cell::new(0),
             };
             let count = pass.steps.len();
+            if let Some(old) = self.accepted.take() {
+                self.pool.extend(old.steps);
+                self.state_pool.extend(old.states);
+            }
             self.accepted = Some(AcceptedWindow {
                 anchor_x: std::mem::replace(&mut self.x, end_state),
                 path: frozen,
@@ -486,8 +495,10 @@ impl QuasilinearField {
                 WindowStep::Accepted => {
                     let t = window.time();
                     iterate.eval(t, &mut scratch.x0)?;
-                    let x0 = scratch.x0.clone();
-                    let defect = self.defect(model, t, &x0, window.state(), &mut scratch)?;
+                    let x0 = std::mem::take(&mut scratch.x0);
+                    let defect = self.defect(model, t, &x0, window.state(), &mut scratch);
+                    scratch.x0 = x0;
+                    let defect = defect?;
                     let grown = bound + 0.5 * (defect + defect_last) * (t - t_last);
                     if grown > DEFECT_LIMIT {
                         break WindowEnd::Defect;
@@ -496,8 +507,14 @@ impl QuasilinearField {
                     t_last = t;
                     defect_last = defect;
                     largest_condition = largest_condition.max(window.recovered().condition);
-                    steps.push(window.raw_step());
-                    states.push(window.state().to_vec());
+                    // Reuse the storage of the last window's steps.
+                    let mut raw = self.pool.pop().unwrap_or_default();
+                    window.raw_step_into(&mut raw);
+                    steps.push(raw);
+                    let mut state = self.state_pool.pop().unwrap_or_default();
+                    state.clear();
+                    state.extend_from_slice(window.state());
+                    states.push(state);
                 }
                 WindowStep::Ended if window.steps() == 0 => {
                     shortenings += 1;

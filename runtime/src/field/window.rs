@@ -51,6 +51,30 @@ pub fn cancellation(f: &[f64], x: &[f64], tol: Tolerance) -> f64 {
     magnitude * f64::EPSILON / (tol.atol + tol.rtol * x[0].abs())
 }
 
+/// Scratch of the error measure, kept with the window (a step would
+/// otherwise allocate six vectors).
+struct Buffers {
+    dx3: Vec<f64>,
+    dx5: Vec<f64>,
+    f: Vec<f64>,
+    s: Vec<f64>,
+    df: Vec<f64>,
+    ds: Vec<f64>,
+}
+
+impl Buffers {
+    fn new(n: usize) -> Buffers {
+        Buffers {
+            dx3: vec![0.0; n],
+            dx5: vec![0.0; n],
+            f: vec![0.0; n],
+            s: vec![0.0; n * n],
+            df: vec![0.0; n],
+            ds: vec![0.0; n * n],
+        }
+    }
+}
+
 /// The field's error measure: the state's error, from the coefficients'.
 struct StateMeasure<'a, F: FieldSystem + ?Sized> {
     system: &'a F,
@@ -61,12 +85,7 @@ struct StateMeasure<'a, F: FieldSystem + ?Sized> {
     start: &'a [f64],
     /// The recovered state at the last trial's end.
     trial: Option<Recovered>,
-    dx3: Vec<f64>,
-    dx5: Vec<f64>,
-    f: Vec<f64>,
-    s: Vec<f64>,
-    df: Vec<f64>,
-    ds: Vec<f64>,
+    b: &'a mut Buffers,
 }
 
 impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
@@ -79,27 +98,28 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
         e3: &[f64],
         e5: &[f64],
     ) -> Option<f64> {
-        if !self.system.field(y1, &mut self.f, &mut self.s) {
+        let b = &mut *self.b;
+        if !self.system.field(y1, &mut b.f, &mut b.s) {
             self.trial = None;
             return None;
         }
-        let Some(rec) = recover(&self.f, &self.s, self.anchor_x) else {
+        let Some(rec) = recover(&b.f, &b.s, self.anchor_x) else {
             self.trial = None;
             return None;
         };
         let within = rec.condition <= self.options.max_condition
             && rec.growth <= self.options.max_growth
             && rec.determinant > 0.0
-            && cancellation(&self.f, &rec.state, self.tol) <= 0.1;
+            && cancellation(&b.f, &rec.state, self.tol) <= 0.1;
         if !within && self.options.reanchor {
             self.trial = None;
             return None;
         }
-        self.system.field_change(y1, e3, &mut self.df, &mut self.ds);
-        rec.map_error(&self.f, self.anchor_x, &self.df, &self.ds, &mut self.dx3);
-        self.system.field_change(y1, e5, &mut self.df, &mut self.ds);
-        rec.map_error(&self.f, self.anchor_x, &self.df, &self.ds, &mut self.dx5);
-        let err = hairer_error(self.tol, h, self.start, &rec.state, &self.dx3, &self.dx5);
+        self.system.field_change(y1, e3, &mut b.df, &mut b.ds);
+        rec.map_error(&b.f, self.anchor_x, &b.df, &b.ds, &mut b.dx3);
+        self.system.field_change(y1, e5, &mut b.df, &mut b.ds);
+        rec.map_error(&b.f, self.anchor_x, &b.df, &b.ds, &mut b.dx5);
+        let err = hairer_error(self.tol, h, self.start, &rec.state, &b.dx3, &b.dx5);
         self.trial = Some(rec);
         Some(err)
     }
@@ -122,8 +142,7 @@ pub struct Window {
     current: Recovered,
     previous_state: Vec<f64>,
     steps: usize,
-    f: Vec<f64>,
-    s: Vec<f64>,
+    buffers: Buffers,
 }
 
 impl Window {
@@ -168,8 +187,7 @@ impl Window {
             previous_state: x.to_vec(),
             current,
             steps: 0,
-            f: vec![0.0; n],
-            s: vec![0.0; n * n],
+            buffers: Buffers::new(n),
         })
     }
 
@@ -215,7 +233,6 @@ impl Window {
         t_limit: f64,
         budget: &Budget,
     ) -> Result<WindowStep, Failure> {
-        let n = self.anchor_x.len();
         let mut measure = StateMeasure {
             system,
             tol: options.tol,
@@ -223,12 +240,7 @@ impl Window {
             anchor_x: &self.anchor_x,
             start: &self.current.state,
             trial: None,
-            dx3: vec![0.0; n],
-            dx5: vec![0.0; n],
-            f: vec![0.0; n],
-            s: vec![0.0; n * n],
-            df: vec![0.0; n],
-            ds: vec![0.0; n * n],
+            b: &mut self.buffers,
         };
         let outcome = self
             .stepper
@@ -275,10 +287,11 @@ impl Window {
                 },
             )
         };
-        if !system.field(&y, &mut self.f, &mut self.s) {
+        let b = &mut self.buffers;
+        if !system.field(&y, &mut b.f, &mut b.s) {
             return Err(singular());
         }
-        let rec = recover(&self.f, &self.s, &self.anchor_x).ok_or_else(|| {
+        let rec = recover(&b.f, &b.s, &self.anchor_x).ok_or_else(|| {
             Failure::new(
                 t,
                 FailureKind::SingularConditionMatrix {
@@ -293,6 +306,11 @@ impl Window {
     /// The last step as data (its continuous extension built later).
     pub fn raw_step(&self) -> crate::dop853::RawStep {
         self.stepper.raw_step()
+    }
+
+    /// [`Window::raw_step`] into an existing value (its storage reused).
+    pub fn raw_step_into(&self, dst: &mut crate::dop853::RawStep) {
+        self.stepper.raw_step_into(dst);
     }
 
     /// The last step's continuous extension of `(f, S)`, detached.
