@@ -10,7 +10,7 @@
 use crate::budget::Budget;
 use crate::controller::Controller;
 use crate::failure::{Failure, FailureKind};
-use crate::stepper::Stepper;
+use crate::stepper::{ErrorMeasure, StepOutcome, Stepper};
 use crate::system::System;
 use crate::tolerance::{first_non_finite, initial_step, step_toward, underflows, Stats, Tolerance};
 
@@ -259,18 +259,6 @@ const STIFF_H_RHO: f64 = 6.1;
 const STIFF_STEPS: usize = 15;
 const NON_STIFF_STEPS: usize = 6;
 
-/// How a DOP853 step's error estimates become one scaled error (≤ 1
-/// accepts). The field method measures the error of the state it recovers
-/// from the coefficients rather than of the coefficients themselves.
-pub trait ErrorMeasure {
-    /// The scaled error of the step from `(t0, y0)` to `(t0 + h, y1)`, with
-    /// Hairer's 3rd- and 5th-order estimates `e3`, `e5` per unit step;
-    /// `None` declines the step: it must not be taken at any length that
-    /// reaches this far (the field's conditions degraded).
-    fn measure(&mut self, t0: f64, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], e5: &[f64])
-        -> Option<f64>;
-}
-
 /// Hairer's measure (`dop853.f`): `|h| ε₅ / √(n (ε₅² + 0.01 ε₃²))`, the
 /// sums scaled by `atol + rtol·max(|y0|, |y1|)`.
 pub struct HairerMeasure(pub Tolerance);
@@ -309,14 +297,6 @@ pub fn hairer_error(tol: Tolerance, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], 
     } else {
         f64::INFINITY
     }
-}
-
-/// What [`Dop853::step_measured`] did.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StepOutcome {
-    Accepted,
-    /// The measure declined the step: nothing changed.
-    Declined,
 }
 
 /// The DOP853 integrator at time `t` with state `y`.
@@ -607,12 +587,7 @@ impl Dop853 {
         if !self.dense_ready {
             self.prepare_dense(system)?;
         }
-        Ok(DenseStep {
-            t_old: self.t_old,
-            t_new: self.t,
-            h: self.h_old,
-            cont: self.cont.clone(),
-        })
+        Ok(DenseStep::dop853(self.t_old, self.t, self.h_old, self.cont.clone()))
     }
 }
 
@@ -690,26 +665,22 @@ fn contd8(c: &[f64], n: usize, s: f64, out: &mut [f64]) {
     }
 }
 
-/// One step's continuous extension (order 7), detached from the integrator.
-#[derive(Clone, Debug)]
-pub struct DenseStep {
-    pub t_old: f64,
-    pub t_new: f64,
-    h: f64,
-    cont: Vec<f64>,
-}
+pub use crate::stepper::DenseStep;
 
 impl DenseStep {
-    /// The state at `t` (clamped to the step).
-    pub fn eval(&self, t: f64, out: &mut [f64]) {
-        let n = self.cont.len() / 8;
-        let s = if self.h > 0.0 {
-            ((t - self.t_old) / self.h).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
-        contd8(&self.cont, n, s, out);
+    fn dop853(t_old: f64, t_new: f64, h: f64, cont: Vec<f64>) -> DenseStep {
+        DenseStep {
+            t_old,
+            t_new,
+            h,
+            kind: crate::stepper::DenseKind::Dop853 { cont },
+        }
     }
+}
+
+/// `contd8` for [`DenseStep`].
+pub(crate) fn eval_contd8(cont: &[f64], s: f64, out: &mut [f64]) {
+    contd8(cont, cont.len() / 8, s, out);
 }
 
 /// Stage `j` of a step in Hairer's numbering of the continuous extension
@@ -806,12 +777,7 @@ impl RawStep {
             &mut stage_state,
             &mut cont,
         )?;
-        Ok(DenseStep {
-            t_old: self.t_old,
-            t_new: self.t_new,
-            h: self.h,
-            cont,
-        })
+        Ok(DenseStep::dop853(self.t_old, self.t_new, self.h, cont))
     }
 }
 

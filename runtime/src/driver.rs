@@ -177,6 +177,8 @@ pub fn make_solver<M: Model + 'static>(
                 tol: options.tol,
                 anchor: options.anchor.clone(),
                 reanchor: options.reanchor,
+                stiff: choice == IntegratorChoice::Stiff,
+                auto_stiff: matches!(choice, IntegratorChoice::Auto | IntegratorChoice::Magnus),
                 ..FieldOptions::default()
             };
             if M::AFFINE {

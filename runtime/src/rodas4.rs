@@ -13,7 +13,7 @@ use crate::budget::Budget;
 use crate::controller::Controller;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{Lu, Matrix};
-use crate::stepper::Stepper;
+use crate::stepper::{DenseKind, DenseStep, ErrorMeasure, StepOutcome, Stepper};
 use crate::system::System;
 use crate::tolerance::{
     first_non_finite, initial_step, rms_norm, step_toward, underflows, Stats, Tolerance,
@@ -133,7 +133,7 @@ pub struct Rodas4 {
 }
 
 enum Attempt {
-    Done { error: f64 },
+    Done,
     /// A stage was not finite or the iteration matrix was singular.
     Broken { component: usize },
 }
@@ -237,8 +237,130 @@ impl Rodas4 {
             }
             self.y_new[i] = v;
         }
-        let error = rms_norm(&self.k[5], &self.y, &self.y_new, self.tol);
-        Ok(Attempt::Done { error })
+        Ok(Attempt::Done)
+    }
+}
+
+/// The RMS norm of RODAS4's error estimate, scaled by the tolerance.
+struct RmsMeasure(Tolerance);
+
+impl ErrorMeasure for RmsMeasure {
+    fn measure(
+        &mut self,
+        _t0: f64,
+        h: f64,
+        y0: &[f64],
+        y1: &[f64],
+        _e3: &[f64],
+        e5: &[f64],
+    ) -> Option<f64> {
+        let e: Vec<f64> = e5.iter().map(|v| v * h).collect();
+        Some(rms_norm(&e, y0, y1, self.0))
+    }
+}
+
+impl Rodas4 {
+    /// One accepted step under `measure`, which sees the error estimate
+    /// per unit step (twice, as `e3` and `e5`), or
+    /// [`StepOutcome::Declined`] when the measure declines it.
+    pub fn step_measured<S: System + ?Sized, E: ErrorMeasure + ?Sized>(
+        &mut self,
+        system: &S,
+        t_limit: f64,
+        budget: &Budget,
+        measure: &mut E,
+    ) -> Result<StepOutcome, Failure> {
+        self.jacobian.fill(0.0);
+        system.jacobian(self.t, &self.y, &mut self.jacobian)?;
+        self.time_partial.fill(0.0);
+        system.time_partial(self.t, &self.y, &mut self.time_partial)?;
+        self.stats.jacobian_evaluations += 1;
+        let mut broken: Option<usize> = None;
+        let mut estimate = vec![0.0; self.y.len()];
+        loop {
+            budget.draw(self.t)?;
+            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
+            if underflows(self.t, h) && !reaches_limit {
+                return Err(match broken {
+                    Some(i) => Failure::non_finite(self.t, system.component_name(i)),
+                    None => Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h }),
+                });
+            }
+            let error = match self.attempt(system, h)? {
+                Attempt::Broken { component } => {
+                    broken = Some(component);
+                    f64::INFINITY
+                }
+                Attempt::Done => {
+                    broken = None;
+                    for (e, k) in estimate.iter_mut().zip(&self.k[5]) {
+                        *e = k / h;
+                    }
+                    match measure.measure(self.t, h, &self.y, &self.y_new, &estimate, &estimate) {
+                        Some(error) => error,
+                        None => {
+                            self.stats.rejected_steps += 1;
+                            return Ok(StepOutcome::Declined);
+                        }
+                    }
+                }
+            };
+            if error <= 1.0 {
+                let h_next = self.controller.accept(h, error);
+                for i in 0..self.y.len() {
+                    let mut d2 = 0.0;
+                    let mut d3 = 0.0;
+                    for j in 0..5 {
+                        d2 += D2[j] * self.k[j][i];
+                        d3 += D3[j] * self.k[j][i];
+                    }
+                    self.dense_d2[i] = d2;
+                    self.dense_d3[i] = d3;
+                }
+                self.y_old.copy_from_slice(&self.y);
+                std::mem::swap(&mut self.y, &mut self.y_new);
+                self.t_old = self.t;
+                self.h_old = h;
+                self.t = if reaches_limit { t_limit } else { self.t + h };
+                self.h = if reaches_limit {
+                    h_next.max(self.h)
+                } else {
+                    h_next
+                };
+                system.rhs(self.t, &self.y, &mut self.slope)?;
+                self.stats.rhs_evaluations += 1;
+                self.stats.accepted_steps += 1;
+                if let Some(i) = first_non_finite(&self.slope) {
+                    return Err(Failure::non_finite_rate(self.t, system.rate_name(i)));
+                }
+                return Ok(StepOutcome::Accepted);
+            }
+            self.stats.rejected_steps += 1;
+            self.h = self.controller.reject(h, error);
+        }
+    }
+
+    /// The last accepted step's continuous extension, detached.
+    pub fn dense_step(&self) -> DenseStep {
+        DenseStep {
+            t_old: self.t_old,
+            t_new: self.t,
+            h: self.h_old,
+            kind: DenseKind::Rodas4 {
+                y_old: self.y_old.clone(),
+                y: self.y.clone(),
+                d2: self.dense_d2.clone(),
+                d3: self.dense_d3.clone(),
+            },
+        }
+    }
+}
+
+/// RODAS4's continuous extension at `θ`.
+pub(crate) fn eval_dense(y_old: &[f64], y: &[f64], d2: &[f64], d3: &[f64], s: f64, out: &mut [f64]) {
+    let s1 = 1.0 - s;
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = y_old[i] * s1 + s * (y[i] + s1 * (d2[i] + s * d3[i]));
     }
 }
 
@@ -275,64 +397,9 @@ impl Stepper for Rodas4 {
         t_limit: f64,
         budget: &Budget,
     ) -> Result<(), Failure> {
-        self.jacobian.fill(0.0);
-        system.jacobian(self.t, &self.y, &mut self.jacobian)?;
-        self.time_partial.fill(0.0);
-        system.time_partial(self.t, &self.y, &mut self.time_partial)?;
-        self.stats.jacobian_evaluations += 1;
-        let mut broken: Option<usize> = None;
-        loop {
-            budget.draw(self.t)?;
-            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
-            if underflows(self.t, h) && !reaches_limit {
-                return Err(match broken {
-                    Some(i) => Failure::non_finite(self.t, system.component_name(i)),
-                    None => Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h }),
-                });
-            }
-            match self.attempt(system, h)? {
-                Attempt::Broken { component } => {
-                    self.stats.rejected_steps += 1;
-                    self.h = self.controller.reject(h, f64::INFINITY);
-                    broken = Some(component);
-                }
-                Attempt::Done { error } if error <= 1.0 => {
-                    let h_next = self.controller.accept(h, error);
-                    for i in 0..self.y.len() {
-                        let mut d2 = 0.0;
-                        let mut d3 = 0.0;
-                        for j in 0..5 {
-                            d2 += D2[j] * self.k[j][i];
-                            d3 += D3[j] * self.k[j][i];
-                        }
-                        self.dense_d2[i] = d2;
-                        self.dense_d3[i] = d3;
-                    }
-                    self.y_old.copy_from_slice(&self.y);
-                    std::mem::swap(&mut self.y, &mut self.y_new);
-                    self.t_old = self.t;
-                    self.h_old = h;
-                    self.t = if reaches_limit { t_limit } else { self.t + h };
-                    self.h = if reaches_limit {
-                        h_next.max(self.h)
-                    } else {
-                        h_next
-                    };
-                    system.rhs(self.t, &self.y, &mut self.slope)?;
-                    self.stats.rhs_evaluations += 1;
-                    self.stats.accepted_steps += 1;
-                    if let Some(i) = first_non_finite(&self.slope) {
-                        return Err(Failure::non_finite_rate(self.t, system.rate_name(i)));
-                    }
-                    return Ok(());
-                }
-                Attempt::Done { error } => {
-                    self.stats.rejected_steps += 1;
-                    self.h = self.controller.reject(h, error);
-                    broken = None;
-                }
-            }
-        }
+        let mut measure = RmsMeasure(self.tol);
+        self.step_measured(system, t_limit, budget, &mut measure)
+            .map(|_| ())
     }
 
     fn dense<S: System + ?Sized>(
@@ -350,11 +417,7 @@ impl Stepper for Rodas4 {
             return Ok(());
         }
         let s = (t - self.t_old) / self.h_old;
-        let s1 = 1.0 - s;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = self.y_old[i] * s1
-                + s * (self.y[i] + s1 * (self.dense_d2[i] + s * self.dense_d3[i]));
-        }
+        eval_dense(&self.y_old, &self.y, &self.dense_d2, &self.dense_d3, s, out);
         Ok(())
     }
 }

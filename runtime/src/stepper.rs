@@ -44,3 +44,64 @@ pub trait Stepper {
         None
     }
 }
+
+/// How a an integrator step's error estimates become one scaled error (≤ 1
+/// accepts). The field method measures the error of the state it recovers
+/// from the coefficients rather than of the coefficients themselves.
+pub trait ErrorMeasure {
+    /// The scaled error of the step from `(t0, y0)` to `(t0 + h, y1)`, with
+    /// the step's error estimates `e3`, `e5` per unit step (DOP853: Hairer's 3rd- and 5th-order ones; RODAS4: its one estimate, twice);
+    /// `None` declines the step: it must not be taken at any length that
+    /// reaches this far (the field's conditions degraded).
+    fn measure(&mut self, t0: f64, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], e5: &[f64])
+        -> Option<f64>;
+}
+
+
+/// What `step_measured` did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepOutcome {
+    Accepted,
+    /// The measure declined the step: nothing changed.
+    Declined,
+}
+
+
+/// One step's continuous extension, detached from its integrator.
+#[derive(Clone, Debug)]
+pub struct DenseStep {
+    pub t_old: f64,
+    pub t_new: f64,
+    pub(crate) h: f64,
+    pub(crate) kind: DenseKind,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) enum DenseKind {
+    /// DOP853's order-7 extension (Hairer's `contd8` coefficients).
+    Dop853 { cont: Vec<f64> },
+    /// RODAS4's order-3 extension.
+    Rodas4 {
+        y_old: Vec<f64>,
+        y: Vec<f64>,
+        d2: Vec<f64>,
+        d3: Vec<f64>,
+    },
+}
+
+impl DenseStep {
+    /// The state at `t` (clamped to the step).
+    pub fn eval(&self, t: f64, out: &mut [f64]) {
+        let s = if self.h > 0.0 {
+            ((t - self.t_old) / self.h).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        match &self.kind {
+            DenseKind::Dop853 { cont } => crate::dop853::eval_contd8(cont, s, out),
+            DenseKind::Rodas4 { y_old, y, d2, d3 } => {
+                crate::rodas4::eval_dense(y_old, y, d2, d3, s, out)
+            }
+        }
+    }
+}

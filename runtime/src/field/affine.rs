@@ -30,7 +30,9 @@ impl AffineField {
         x0: &[f64],
         h_max: f64,
     ) -> Result<AffineField, Failure> {
-        let window = with_system(model, |system| Window::open(system, &options, t0, x0, None, h_max))?;
+        let stiff = options.stiff;
+        let window =
+            with_system(model, |system| Window::open(system, &options, t0, x0, None, h_max, stiff))?;
         Ok(AffineField {
             method: if M::COEFFICIENTS_LINEAR {
                 "field (linear coefficient system, DOP853)"
@@ -80,14 +82,20 @@ impl<M: Model> Solver<M> for AffineField {
     fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
         let h = self.window.proposed_step();
         self.done += self.window.stats();
-        let (options, h_max) = (&self.options, self.h_max);
-        self.window = with_system(model, |system| Window::open(system, options, t, x, Some(h), h_max))?;
+        let (options, h_max, stiff) = (&self.options, self.h_max, self.window.is_stiff());
+        self.window = with_system(model, |system| {
+            Window::open(system, options, t, x, Some(h), h_max, stiff)
+        })?;
         Ok(())
     }
 
     fn report(&self) -> Report {
         Report {
-            method: self.method.to_string(),
+            method: if self.window.is_stiff() {
+                self.method.replace("DOP853", "RODAS4")
+            } else {
+                self.method.to_string()
+            },
             stats: self.done + self.window.stats(),
             largest_condition: Some(self.largest_condition),
             reanchorings: Some(self.reanchorings),
@@ -157,8 +165,11 @@ fn advance_window(
             WindowStep::Ended => {
                 let (t, x) = (window.time(), window.state().to_vec());
                 let h = window.proposed_step();
+                // DOP853 found the coefficients stiff: continue with RODAS4.
+                let stiff =
+                    window.is_stiff() || (options.auto_stiff && window.stiffness_detected());
                 *done += window.stats();
-                *window = Window::open(system, options, t, &x, Some(h), h_max)?;
+                *window = Window::open(system, options, t, &x, Some(h), h_max, stiff)?;
                 *reanchorings += 1;
             }
         }

@@ -26,8 +26,10 @@ pub trait FieldSystem: System {
     fn coefficients(&self) -> usize;
     /// `y` at an anchor `c` (`f = c`, `S = I`).
     fn anchored(&self, c: &[f64]) -> Vec<f64>;
-    /// `f` and `S` from `y`; `false` where they are not defined (a pole).
-    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool;
+    /// `f` and `S` from `y`, and the factor by which computing them
+    /// amplified rounding (1 when `y` holds them directly); `None` where
+    /// they are not defined (a pole).
+    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> Option<f64>;
     /// The first-order change `(df, ds)` of `(f, S)` for a change `dy` of
     /// `y` at `y`.
     fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]);
@@ -137,11 +139,11 @@ impl<C: CoefficientSource + ?Sized> FieldSystem for Augmented<'_, C> {
         Augmented::<C>::anchored(c)
     }
 
-    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool {
+    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> Option<f64> {
         let n = f.len();
         f.copy_from_slice(&y[..n]);
         s.copy_from_slice(&y[n..]);
-        true
+        Some(1.0)
     }
 
     fn field_change(&self, _y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]) {
@@ -490,25 +492,35 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
         y
     }
 
-    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool {
+    /// The rounding amplification is that of the differences
+    /// `P_kj w_1 − w_k P_1j`: where one mode of the adjoint dominates (the
+    /// adjoint of a fast decaying mode grows like `e^{+|λ|t}`), the columns
+    /// align and the differences cancel to noise although `S` looks
+    /// harmless.
+    fn field(&self, y: &[f64], f: &mut [f64], s: &mut [f64]) -> Option<f64> {
         let n = f.len();
         let w = &y[..=n];
         let w1 = w[1];
         if w1 == 0.0 || !w1.is_finite() {
-            return false;
+            return None;
         }
         for i in 0..n {
             f[i] = -w[Self::slot(i)] / w1;
         }
         let w1_sq = w1 * w1;
+        let (mut magnitude, mut value) = (0.0_f64, 0.0_f64);
         for j in 0..n {
             let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
             for i in 0..n {
                 let k = Self::slot(i);
-                s[j * n + i] = -(p[k] * w1 - w[k] * p[1]) / w1_sq;
+                let (a, b) = (p[k] * w1, w[k] * p[1]);
+                magnitude = magnitude.max(a.abs() + b.abs());
+                value = value.max((a - b).abs());
+                s[j * n + i] = -(a - b) / w1_sq;
             }
         }
-        true
+        let loss = if value > 0.0 { magnitude / value } else { f64::INFINITY };
+        loss.is_finite().then_some(loss)
     }
 
     fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]) {

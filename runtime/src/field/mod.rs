@@ -33,6 +33,11 @@ pub struct FieldOptions {
     /// Without re-anchoring, degraded conditions are a failure
     /// (`--no-reanchor`, to see where the field degrades).
     pub reanchor: bool,
+    /// Integrate the coefficients with RODAS4 from the start.
+    pub stiff: bool,
+    /// Switch to RODAS4 at the next re-anchoring once DOP853 detects
+    /// stiffness in the coefficients.
+    pub auto_stiff: bool,
 }
 
 impl Default for FieldOptions {
@@ -43,6 +48,8 @@ impl Default for FieldOptions {
             max_condition: 1e4,
             max_growth: 1e3,
             reanchor: true,
+            stiff: false,
+            auto_stiff: true,
         }
     }
 }

@@ -21,10 +21,11 @@
 
 use super::coefficients::{FieldSystem, Iterate, ProjectiveCoefficients};
 use super::conditions::recover;
-use super::window::{Window, WindowStep};
+use super::window::{StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
-use crate::dop853::{DenseStep, Dop853, RawStep};
+use crate::dop853::Dop853;
+use crate::stepper::DenseStep;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::model::Model;
@@ -162,7 +163,7 @@ impl<M: Model> Iterate for LivePath<'_, '_, M> {
 struct AcceptedWindow {
     anchor_x: Vec<f64>,
     path: PredictorPath,
-    steps: Vec<RawStep>,
+    steps: Vec<StoredStep>,
     prepared: Vec<Option<DenseStep>>,
     /// The recovered state at the end of each step.
     states: Vec<Vec<f64>>,
@@ -195,8 +196,10 @@ pub struct QuasilinearField {
     linearizations: usize,
     largest_condition: f64,
     /// Storage of past windows' steps, reused.
-    pool: Vec<RawStep>,
+    pool: Vec<StoredStep>,
     state_pool: Vec<Vec<f64>>,
+    /// The windows' coefficients are integrated by RODAS4.
+    stiff: bool,
 }
 
 impl QuasilinearField {
@@ -206,6 +209,7 @@ impl QuasilinearField {
         // tolerance leaves it well below the tolerance.
         let ratio = (0.1 / options.tol.rtol.sqrt())
             .clamp(MIN_PREDICTOR_RATIO, MAX_PREDICTOR_RATIO);
+        let stiff = options.stiff;
         QuasilinearField {
             options,
             h_max,
@@ -224,6 +228,7 @@ impl QuasilinearField {
             largest_condition: 1.0,
             pool: Vec::new(),
             state_pool: Vec::new(),
+            stiff,
         }
     }
 
@@ -287,7 +292,7 @@ impl DefectScratch {
 
 /// One pass over a window, before it is accepted.
 struct Pass {
-    steps: Vec<RawStep>,
+    steps: Vec<StoredStep>,
     states: Vec<Vec<f64>>,
     end: WindowEnd,
     stats: Stats,
@@ -366,7 +371,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
             self.field_h = Some(pass.field_h);
             self.largest_condition = self.largest_condition.max(pass.largest_condition);
             let end_state = pass.states.last().cloned().unwrap_or_else(|| self.x.clone());
-            let end_time = pass.steps.last().map_or(self.t, |s| s.t_new);
+            let end_time = pass.steps.last().map_or(self.t, StoredStep::t_new);
             let frozen = PredictorPath {
                 t0: predictor.t0,
                 x0: predictor.x0.clone(),
@@ -409,7 +414,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
         let i = window
             .steps
             .iter()
-            .position(|s| t <= s.t_new)
+            .position(|s| t <= s.t_new())
             .unwrap_or(window.steps.len() - 1);
         if window.prepared[i].is_none() {
             let source = ProjectiveCoefficients::new(model, &window.path);
@@ -424,7 +429,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
         }
         let source = ProjectiveCoefficients::new(model, &window.path);
         let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
-        let defined = source.field(&y, &mut f, &mut s);
+        let defined = source.field(&y, &mut f, &mut s).is_some();
         match recover(&f, &s, &window.anchor_x).filter(|_| defined) {
             Some(rec) => out.copy_from_slice(&rec.state),
             // The conditions were regular at both ends of this step;
@@ -444,7 +449,11 @@ impl<M: Model> Solver<M> for QuasilinearField {
 
     fn report(&self) -> Report {
         Report {
-            method: "field (quasilinear, DOP853)".to_string(),
+            method: if self.stiff {
+                "field (quasilinear, RODAS4)".to_string()
+            } else {
+                "field (quasilinear, DOP853)".to_string()
+            },
             stats: self.stats,
             largest_condition: Some(self.largest_condition),
             reanchorings: Some(self.windows.saturating_sub(1)),
@@ -476,8 +485,9 @@ impl QuasilinearField {
             &self.x,
             self.field_h,
             self.h_max,
+            self.stiff,
         )?;
-        let mut steps: Vec<RawStep> = Vec::new();
+        let mut steps: Vec<StoredStep> = Vec::new();
         let mut states: Vec<Vec<f64>> = Vec::new();
         let mut scratch = DefectScratch::new(n);
         let mut bound = 0.0;
@@ -508,9 +518,9 @@ impl QuasilinearField {
                     defect_last = defect;
                     largest_condition = largest_condition.max(window.recovered().condition);
                     // Reuse the storage of the last window's steps.
-                    let mut raw = self.pool.pop().unwrap_or_default();
-                    window.raw_step_into(&mut raw);
-                    steps.push(raw);
+                    let mut stored = self.pool.pop().unwrap_or_default();
+                    window.store_step(&mut stored);
+                    steps.push(stored);
                     let mut state = self.state_pool.pop().unwrap_or_default();
                     state.clear();
                     state.extend_from_slice(window.state());
@@ -532,6 +542,9 @@ impl QuasilinearField {
             }
         };
         self.linearizations += source.linearizations();
+        if self.options.auto_stiff && window.stiffness_detected() {
+            self.stiff = true;
+        }
         Ok(Pass {
             steps,
             states,

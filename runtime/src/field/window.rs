@@ -13,10 +13,11 @@ use super::coefficients::FieldSystem;
 use super::conditions::{recover, Recovered};
 use super::FieldOptions;
 use crate::budget::Budget;
-use crate::dop853::{hairer_error, DenseStep, Dop853, ErrorMeasure, StepOutcome};
+use crate::dop853::{hairer_error, Dop853, RawStep};
+use crate::rodas4::Rodas4;
+use crate::stepper::{DenseStep, ErrorMeasure, StepOutcome, Stepper};
 use crate::failure::{Failure, FailureKind};
-use crate::stepper::Stepper;
-use crate::tolerance::Tolerance;
+use crate::tolerance::{Stats, Tolerance};
 
 /// The free anchor values `c_2..c_N` used at every (re-)anchoring.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -99,17 +100,21 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
         e5: &[f64],
     ) -> Option<f64> {
         let b = &mut *self.b;
-        if !self.system.field(y1, &mut b.f, &mut b.s) {
+        let Some(loss) = self.system.field(y1, &mut b.f, &mut b.s) else {
             self.trial = None;
             return None;
-        }
+        };
         let Some(rec) = recover(&b.f, &b.s, self.anchor_x) else {
             self.trial = None;
             return None;
         };
+        // Rounding in S, amplified by the conditions, must stay well below
+        // the tolerance.
+        let rounding = loss * rec.condition * f64::EPSILON;
         let within = rec.condition <= self.options.max_condition
             && rec.growth <= self.options.max_growth
             && rec.determinant > 0.0
+            && rounding <= 0.01 * self.tol.rtol.max(1e-13)
             && cancellation(&b.f, &rec.state, self.tol) <= 0.1;
         if !within && self.options.reanchor {
             self.trial = None;
@@ -133,11 +138,60 @@ pub enum WindowStep {
     Ended,
 }
 
+/// The integrator of a window's coefficients: DOP853, or RODAS4 where the
+/// coefficient system is stiff (it is linear in the projective form, so
+/// RODAS4's Jacobian is exact).
+enum WindowStepper {
+    Explicit(Dop853),
+    Stiff(Rodas4),
+}
+
+/// A window's step kept for later dense output: DOP853's continuous
+/// extension is built only when asked for; RODAS4's costs nothing more.
+#[derive(Clone, Debug)]
+pub enum StoredStep {
+    Raw(RawStep),
+    Ready(DenseStep),
+}
+
+impl Default for StoredStep {
+    fn default() -> StoredStep {
+        StoredStep::Raw(RawStep::default())
+    }
+}
+
+impl StoredStep {
+    pub fn t_new(&self) -> f64 {
+        match self {
+            StoredStep::Raw(r) => r.t_new,
+            StoredStep::Ready(d) => d.t_new,
+        }
+    }
+
+    /// The continuous extension (three evaluations of `system` for a raw
+    /// DOP853 step; `system` must be the one the step was taken on).
+    pub fn prepare<F: FieldSystem + ?Sized>(&self, system: &F) -> Result<DenseStep, Failure> {
+        match self {
+            StoredStep::Raw(r) => r.prepare(system),
+            StoredStep::Ready(d) => Ok(d.clone()),
+        }
+    }
+}
+
+macro_rules! each {
+    ($self:expr, $s:ident => $e:expr) => {
+        match $self {
+            WindowStepper::Explicit($s) => $e,
+            WindowStepper::Stiff($s) => $e,
+        }
+    };
+}
+
 /// One anchored field.
 pub struct Window {
     pub anchor_t: f64,
     pub anchor_x: Vec<f64>,
-    stepper: Dop853,
+    stepper: WindowStepper,
     /// The recovered state at the stepper's time, and its conditioning.
     current: Recovered,
     previous_state: Vec<f64>,
@@ -154,6 +208,7 @@ impl Window {
         x: &[f64],
         h0: Option<f64>,
         h_max: f64,
+        stiff: bool,
     ) -> Result<Window, Failure> {
         let n = x.len();
         let c = anchor_values(&options.anchor, x);
@@ -179,7 +234,11 @@ impl Window {
                 },
             ));
         }
-        let stepper = Dop853::new(system, t, &y, options.tol, h_max, h0)?;
+        let stepper = if stiff {
+            WindowStepper::Stiff(Rodas4::new(system, t, &y, options.tol, h_max, h0)?)
+        } else {
+            WindowStepper::Explicit(Dop853::new(system, t, &y, options.tol, h_max, h0)?)
+        };
         Ok(Window {
             anchor_t: t,
             anchor_x: x.to_vec(),
@@ -192,11 +251,20 @@ impl Window {
     }
 
     pub fn time(&self) -> f64 {
-        self.stepper.time()
+        each!(&self.stepper, s => s.time())
     }
 
     pub fn previous_time(&self) -> f64 {
-        self.stepper.previous_time()
+        each!(&self.stepper, s => s.previous_time())
+    }
+
+    /// Whether DOP853 found the coefficient system stiff.
+    pub fn stiffness_detected(&self) -> bool {
+        each!(&self.stepper, s => s.stiffness_detected()).is_some()
+    }
+
+    pub fn is_stiff(&self) -> bool {
+        matches!(self.stepper, WindowStepper::Stiff(_))
     }
 
     pub fn state(&self) -> &[f64] {
@@ -213,15 +281,15 @@ impl Window {
     }
 
     pub fn proposed_step(&self) -> f64 {
-        self.stepper.proposed_step()
+        each!(&self.stepper, s => s.proposed_step())
     }
 
     pub fn propose_step(&mut self, h: f64) {
-        self.stepper.propose_step(h);
+        each!(&mut self.stepper, s => s.propose_step(h));
     }
 
-    pub fn stats(&self) -> crate::tolerance::Stats {
-        self.stepper.stats()
+    pub fn stats(&self) -> Stats {
+        each!(&self.stepper, s => s.stats())
     }
 
     /// One step of the field; [`WindowStep::Ended`] when the conditions
@@ -242,9 +310,7 @@ impl Window {
             trial: None,
             b: &mut self.buffers,
         };
-        let outcome = self
-            .stepper
-            .step_measured(system, t_limit, budget, &mut measure)?;
+        let outcome = each!(&mut self.stepper, s => s.step_measured(system, t_limit, budget, &mut measure))?;
         match outcome {
             StepOutcome::Declined => Ok(WindowStep::Ended),
             StepOutcome::Accepted => {
@@ -252,7 +318,7 @@ impl Window {
                     return Ok(WindowStep::Ended);
                 };
                 if !options.reanchor {
-                    check_without_reanchoring(&rec, options, self.stepper.previous_time(), self.time())?;
+                    check_without_reanchoring(&rec, options, self.previous_time(), self.time())?;
                 }
                 self.previous_state = std::mem::replace(&mut self.current, rec).state;
                 self.steps += 1;
@@ -278,7 +344,7 @@ impl Window {
             return Ok(());
         }
         let mut y = vec![0.0; system.dim()];
-        self.stepper.dense(system, t, &mut y)?;
+        each!(&mut self.stepper, s => s.dense(system, t, &mut y))?;
         let singular = || {
             Failure::new(
                 t,
@@ -288,7 +354,7 @@ impl Window {
             )
         };
         let b = &mut self.buffers;
-        if !system.field(&y, &mut b.f, &mut b.s) {
+        if system.field(&y, &mut b.f, &mut b.s).is_none() {
             return Err(singular());
         }
         let rec = recover(&b.f, &b.s, &self.anchor_x).ok_or_else(|| {
@@ -304,18 +370,20 @@ impl Window {
     }
 
     /// The last step as data (its continuous extension built later).
-    pub fn raw_step(&self) -> crate::dop853::RawStep {
-        self.stepper.raw_step()
-    }
-
-    /// [`Window::raw_step`] into an existing value (its storage reused).
-    pub fn raw_step_into(&self, dst: &mut crate::dop853::RawStep) {
-        self.stepper.raw_step_into(dst);
-    }
-
-    /// The last step's continuous extension of `(f, S)`, detached.
-    pub fn dense_step<F: FieldSystem + ?Sized>(&mut self, system: &F) -> Result<DenseStep, Failure> {
-        self.stepper.dense_step(system)
+    /// The last step, kept for dense output later, into `dst` (its
+    /// storage reused).
+    pub fn store_step(&self, dst: &mut StoredStep) {
+        match &self.stepper {
+            WindowStepper::Explicit(s) => {
+                if !matches!(dst, StoredStep::Raw(_)) {
+                    *dst = StoredStep::Raw(RawStep::default());
+                }
+                if let StoredStep::Raw(raw) = dst {
+                    s.raw_step_into(raw);
+                }
+            }
+            WindowStepper::Stiff(s) => *dst = StoredStep::Ready(s.dense_step()),
+        }
     }
 }
 

@@ -223,3 +223,177 @@ impl Model for SphericalPendulum {
         Ok(())
     }
 }
+
+/// `x'' + 1000 x' + x = 0` (stiffness ratio 1e6), x(0) = 1, x'(0) = 0:
+/// `x = A e^{r1 t} + B e^{r2 t}`. Affine; its adjoint grows like e^{+1000t}.
+#[derive(Clone)]
+pub struct StiffDamped {
+    pub params: Vec<f64>,
+}
+
+impl StiffDamped {
+    pub fn exact_at(t: f64) -> [f64; 2] {
+        let (g, w2): (f64, f64) = (1000.0, 1.0);
+        let d = (g * g - 4.0 * w2).sqrt();
+        let (r1, r2) = ((-g + d) / 2.0, (-g - d) / 2.0);
+        let (x0, v0) = (1.0, 0.0);
+        let a = (v0 - r2 * x0) / (r1 - r2);
+        let b = (r1 * x0 - v0) / (r1 - r2);
+        [a * (r1 * t).exp() + b * (r2 * t).exp(), a * r1 * (r1 * t).exp() + b * r2 * (r2 * t).exp()]
+    }
+}
+
+impl Model for StiffDamped {
+    const NAME: &'static str = "stiff_damped";
+    const SOURCE_HASH: &'static str = "test";
+    const PARAMS: &'static [&'static str] = &[];
+    const STATE: &'static [&'static str] = &["x", "x'"];
+    const COORDINATES: usize = 1;
+    const INITIAL: &'static [Initial] = &[Initial::Given, Initial::Given];
+    const AFFINE: bool = true;
+    const EXACT: bool = true;
+
+    fn parameters(_o: &[Option<f64>]) -> Vec<f64> {
+        Vec::new()
+    }
+    fn new(_p: &[f64]) -> Self {
+        StiffDamped { params: Vec::new() }
+    }
+    fn param_values(&self) -> &[f64] {
+        &self.params
+    }
+    fn time_span(&self) -> (f64, f64) {
+        (0.0, 2.0)
+    }
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+        Ok(vec![given[0].unwrap_or(1.0), given[1].unwrap_or(0.0)])
+    }
+    fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        dx[0] = x[1];
+        dx[1] = -x[0] - 1000.0 * x[1];
+        Ok(())
+    }
+    fn jacobian(&self, _t: f64, _x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        jac[(0, 1)] = 1.0;
+        jac[(1, 0)] = -1.0;
+        jac[(1, 1)] = -1000.0;
+        Ok(())
+    }
+    fn time_partial(&self, _t: f64, _x: &[f64], _dxdt: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn coefficients(&self, t: f64, f: &[f64], df: &mut [f64]) -> Result<(), Failure> {
+        affine_coefficients(self, t, f, df)
+    }
+    fn coefficient_jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        affine_jacobian(self, t, f, jac)
+    }
+    fn exact(&self, t: f64, out: &mut [Option<f64>]) {
+        let e = Self::exact_at(t);
+        out[0] = Some(e[0]);
+        out[1] = Some(e[1]);
+    }
+}
+
+/// A ball thrown upward against quadratic drag, `z'' = −g − c z'|z'|`,
+/// until it lands (`stop when z < 0`): the kink of `|z'|` at the top and
+/// the landing are events. g = 9.81, c = 0.05, z(0) = 0, z'(0) = 20.
+#[derive(Clone)]
+pub struct ThrownBall {
+    pub params: Vec<f64>,
+    pub rising: bool,
+}
+
+impl ThrownBall {
+    pub const G: f64 = 9.81;
+    pub const C: f64 = 0.05;
+    pub const V0: f64 = 20.0;
+
+    fn k() -> f64 {
+        (Self::G * Self::C).sqrt()
+    }
+
+    pub fn top_time() -> f64 {
+        (Self::V0 * (Self::C / Self::G).sqrt()).atan() / Self::k()
+    }
+
+    pub fn top_height() -> f64 {
+        (1.0 + Self::C * Self::V0 * Self::V0 / Self::G).ln() / (2.0 * Self::C)
+    }
+
+    pub fn landing_time() -> f64 {
+        Self::top_time() + (Self::C * Self::top_height()).exp().acosh() / Self::k()
+    }
+
+    /// The closed form of both phases.
+    pub fn exact_at(t: f64) -> [f64; 2] {
+        let (g, c, k) = (Self::G, Self::C, Self::k());
+        let vt = (g / c).sqrt();
+        let phi = (Self::V0 / vt).atan();
+        if t <= Self::top_time() {
+            let a = phi - k * t;
+            [(a.cos() / phi.cos()).ln() / c, vt * a.tan()]
+        } else {
+            let s = k * (t - Self::top_time());
+            [Self::top_height() - s.cosh().ln() / c, -vt * s.tanh()]
+        }
+    }
+}
+
+impl Model for ThrownBall {
+    const NAME: &'static str = "thrown_ball";
+    const SOURCE_HASH: &'static str = "test";
+    const PARAMS: &'static [&'static str] = &[];
+    const STATE: &'static [&'static str] = &["z", "z'"];
+    const COORDINATES: usize = 1;
+    const INITIAL: &'static [Initial] = &[Initial::Given, Initial::Given];
+    const SWITCHES: usize = 2;
+    const EXACT: bool = true;
+
+    fn parameters(_o: &[Option<f64>]) -> Vec<f64> {
+        Vec::new()
+    }
+    fn new(_p: &[f64]) -> Self {
+        ThrownBall { params: Vec::new(), rising: true }
+    }
+    fn param_values(&self) -> &[f64] {
+        &self.params
+    }
+    fn time_span(&self) -> (f64, f64) {
+        (0.0, 10.0)
+    }
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+        Ok(vec![given[0].unwrap_or(0.0), given[1].unwrap_or(Self::V0)])
+    }
+    fn set_regime(&mut self, regime: &lagc_runtime::model::Regime) {
+        self.rising = regime.branches[0];
+    }
+    fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        let v = x[1];
+        let abs_v = if self.rising { v } else { -v };
+        dx[0] = v;
+        dx[1] = -Self::G - Self::C * v * abs_v;
+        Ok(())
+    }
+    fn jacobian(&self, _t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        let sign = if self.rising { 1.0 } else { -1.0 };
+        jac[(0, 1)] = 1.0;
+        jac[(1, 1)] = -2.0 * Self::C * sign * x[1];
+        Ok(())
+    }
+    fn time_partial(&self, _t: f64, _x: &[f64], _dxdt: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn switching_functions(&self, _t: f64, x: &[f64], g: &mut [f64]) {
+        g[0] = x[1];
+        g[1] = x[0];
+    }
+    fn stop(&self, branches: &[bool]) -> bool {
+        !branches[1]
+    }
+    fn exact(&self, t: f64, out: &mut [Option<f64>]) {
+        let e = Self::exact_at(t);
+        out[0] = Some(e[0]);
+        out[1] = Some(e[1]);
+    }
+}
