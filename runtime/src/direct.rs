@@ -22,6 +22,13 @@ pub struct Direct {
     first: Integrator,
     stiffness_detected_at: Option<f64>,
     switched_at: Option<f64>,
+    /// DOP853's last step length before the switch, to judge whether
+    /// RODAS4 pays (see [`Direct::advance`]).
+    explicit_step: f64,
+    stiff_steps: usize,
+    stiff_distance: f64,
+    /// Switched back to DOP853: RODAS4 was not cheaper.
+    switched_back_at: Option<f64>,
 }
 
 impl Direct {
@@ -47,6 +54,10 @@ impl Direct {
             first,
             stiffness_detected_at: None,
             switched_at: None,
+            explicit_step: 0.0,
+            stiff_steps: 0,
+            stiff_distance: 0.0,
+            switched_back_at: None,
         })
     }
 
@@ -56,6 +67,9 @@ impl Direct {
     }
 
     fn method_name(&self) -> String {
+        if self.switched_back_at.is_some() {
+            return "direct (DOP853 → RODAS4 → DOP853)".to_string();
+        }
         match self.switched_at {
             Some(_) => format!(
                 "direct ({} → {})",
@@ -86,7 +100,11 @@ impl<M: Model> Solver<M> for Direct {
         // the next step.
         self.switch_if_stiff(model)?;
         let system = ModelSystem(model);
+        let before = self.stepper.time();
         self.stepper.step(&system, t_limit, budget)?;
+        if self.switched_at.is_some() && self.switched_back_at.is_none() {
+            self.judge_the_switch(model, before)?;
+        }
         if self.stiffness_detected_at.is_none() {
             self.stiffness_detected_at = self.stepper.stiffness_detected();
             let switches = matches!(
@@ -124,6 +142,12 @@ impl<M: Model> Solver<M> for Direct {
 
     fn report(&self) -> Report {
         let mut notes = Vec::new();
+        if let Some(t) = self.switched_back_at {
+            notes.push(format!(
+                "back to DOP853 at t = {t:e}: RODAS4's steps were not long enough to pay \
+                 for its cost"
+            ));
+        }
         match (self.switched_at, self.stiffness_detected_at) {
             (Some(t), _) => notes.push(format!(
                 "switched to RODAS4 at t = {t:e} (DOP853 detected stiffness)"
@@ -144,14 +168,53 @@ impl<M: Model> Solver<M> for Direct {
 }
 
 impl Direct {
+    /// After switching to RODAS4 on detected stiffness, whether it pays: a
+    /// RODAS4 step costs about as much as a DOP853 step (six evaluations,
+    /// a Jacobian and an LU against twelve evaluations), so unless its
+    /// steps are clearly longer than DOP853's stability-limited ones, go
+    /// back (the mass-loss spring at loose tolerances: stiff by Hairer's
+    /// test, yet RODAS4 took ten times the work).
+    fn judge_the_switch<M: Model>(&mut self, model: &M, before: f64) -> Result<(), Failure> {
+        const TRIAL_STEPS: usize = 20;
+        const REQUIRED_GAIN: f64 = 2.0;
+        if self.stepper.integrator() != Integrator::Stiff {
+            return Ok(());
+        }
+        self.stiff_steps += 1;
+        self.stiff_distance += self.stepper.time() - before;
+        if self.stiff_steps == TRIAL_STEPS {
+            let mean = self.stiff_distance / TRIAL_STEPS as f64;
+            if mean < REQUIRED_GAIN * self.explicit_step {
+                let (t, x) = (self.stepper.time(), self.stepper.state().to_vec());
+                self.done += self.stepper.stats();
+                self.stepper = AnyStepper::new(
+                    Integrator::Explicit,
+                    &ModelSystem(model),
+                    t,
+                    &x,
+                    self.tol,
+                    self.h_max,
+                    Some(self.explicit_step),
+                )?;
+                self.switched_back_at = Some(t);
+            }
+        }
+        Ok(())
+    }
+
     /// Performs a pending switch to RODAS4.
     fn switch_if_stiff<M: Model>(&mut self, model: &M) -> Result<(), Failure> {
-        if self.switched_at.is_some() && self.stepper.integrator() == Integrator::Explicit {
+        if self.switched_at.is_some()
+            && self.switched_back_at.is_none()
+            && self.stepper.integrator() == Integrator::Explicit
+            && self.stiff_steps == 0
+        {
             let (t, x, h) = (
                 self.stepper.time(),
                 self.stepper.state().to_vec(),
                 self.stepper.proposed_step(),
             );
+            self.explicit_step = self.stepper.time() - self.stepper.previous_time();
             self.done += self.stepper.stats();
             self.stepper = AnyStepper::new(
                 Integrator::Stiff,

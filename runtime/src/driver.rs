@@ -245,12 +245,17 @@ pub fn run<M: Model + 'static>(
             budget_used: 0,
         });
     }
-    let mut solver = make_solver(model, options, t0, x0, h_max)?;
+    check_masses(model, t0)?;
+    let mut solver = make_solver(model, options, t0, x0, h_max).map_err(|f| diagnose(model, f, x0))?;
     let mut progress = Progress::new(options.progress, t0, t1);
     let mut g_now = vec![0.0; M::SWITCHES];
     let mut x_event = vec![0.0; n];
     while solver.time() < t1 {
-        solver.advance(model, t1, &budget)?;
+        if let Err(failure) = solver.advance(model, t1, &budget) {
+            let x = solver.state().to_vec();
+            progress.finish();
+            return Err(diagnose(model, failure, &x));
+        }
         progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
         // A switch whose function changed sign against its branch.
@@ -382,4 +387,75 @@ fn switch_candidates<M: Model>(
         solver.restart(model, t, &x)?;
     }
     Ok(())
+}
+
+/// A mass law at or below zero at `t` stops the run (the equations divide
+/// by it).
+fn check_masses<M: Model>(model: &M, t: f64) -> Result<(), Failure> {
+    if M::MASSES.is_empty() {
+        return Ok(());
+    }
+    let mut masses = vec![0.0; M::MASSES.len()];
+    model.masses(t, &mut masses);
+    match masses.iter().position(|&m| !(m > 0.0)) {
+        Some(i) => Err(Failure::new(
+            t,
+            FailureKind::MassVanishes {
+                mass: M::MASSES[i].to_string(),
+                value: masses[i],
+            },
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The physical cause of a failure where the model can see it: a mass
+/// that reaches zero, a mass matrix that becomes singular — the integrator
+/// usually stops first with a step-size underflow or a non-finite value as
+/// the motion blows up toward them.
+pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64]) -> Failure {
+    if matches!(
+        failure.kind,
+        FailureKind::InconsistentInitialValue { .. }
+            | FailureKind::BadTimeSpan { .. }
+            | FailureKind::StepBudgetExhausted { .. }
+            | FailureKind::AnchorCancels { .. }
+            | FailureKind::ConstraintPivotVanishes { .. }
+    ) {
+        return failure;
+    }
+    let t = failure.time;
+    if !M::MASSES.is_empty() {
+        let mut now = vec![0.0; M::MASSES.len()];
+        let mut ahead = vec![0.0; M::MASSES.len()];
+        model.masses(t, &mut now);
+        // The integrator gives up just before the mass reaches zero.
+        let dt = 1e-6 * t.abs().max(1e-3);
+        model.masses(t + dt, &mut ahead);
+        for (i, (&m, &a)) in now.iter().zip(&ahead).enumerate() {
+            if !(m > 0.0) || !(a > 0.0) {
+                return Failure::new(
+                    t,
+                    FailureKind::MassVanishes {
+                        mass: M::MASSES[i].to_string(),
+                        value: m,
+                    },
+                );
+            }
+        }
+    }
+    if matches!(
+        failure.kind,
+        FailureKind::StepSizeUnderflow { .. }
+            | FailureKind::NonFiniteState { .. }
+            | FailureKind::NonFiniteRate { .. }
+    ) && x.iter().all(|v| v.is_finite())
+    {
+        if let Some(condition) = model.mass_matrix_condition(t, x) {
+            if !(condition < 1e12) {
+                return Failure::new(t, FailureKind::SingularMassMatrix { condition });
+            }
+        }
+    }
+    failure
 }
