@@ -52,6 +52,12 @@ usage: MODEL [OPTIONS]
   --max-steps N          the work budget: steps of every kind (default 1e6)
   --plot FILE.svg        draw the columns against time into FILE.svg
   --phase X,Y            with --plot: draw column Y against column X
+  --ensemble K           K initial states around the model's (spread by
+                         --spread, default 0.1 of each value) through one
+                         field, against K direct integrations: times and
+                         the largest difference (exact for affine motions,
+                         first order in the spread otherwise)
+  --spread S             the ensemble's relative spread
   --repeat N             solve N times (after a warm-up) and report the
                          smallest wall time
   --quiet                no CSV on stdout
@@ -83,6 +89,8 @@ pub struct Invocation {
     pub repeat: usize,
     pub quiet: bool,
     pub json: bool,
+    pub ensemble: Option<usize>,
+    pub spread: f64,
     /// Warnings to print before running (e.g. a tolerance below rounding).
     pub warnings: Vec<String>,
 }
@@ -146,6 +154,8 @@ pub fn parse(
         repeat: 1,
         quiet: false,
         json: false,
+        ensemble: None,
+        spread: 0.1,
         warnings: Vec::new(),
     };
     let mut phase: Option<String> = None;
@@ -215,6 +225,14 @@ pub fn parse(
                 inv.times = Some(times);
             }
             "--estimate-error" => inv.estimate_error = true,
+            "--ensemble" => inv.ensemble = Some(count(flag, value(flag, &mut args)?, 10_000_000)?),
+            "--spread" => {
+                let s = number(flag, value(flag, &mut args)?)?;
+                if !(s >= 0.0) {
+                    return Err(format!("`--spread {s}`: a spread must be ≥ 0"));
+                }
+                inv.spread = s;
+            }
             "--repeat" => inv.repeat = count(flag, value(flag, &mut args)?, 1_000_000)?,
             "--quiet" => inv.quiet = true,
             "--summary" => match value(flag, &mut args)? {
@@ -393,6 +411,9 @@ fn execute<M: Model + 'static>(inv: &Invocation) -> ExitCode {
         }
         None => sample_times(t0, t1, inv.samples),
     };
+    if let Some(count) = inv.ensemble {
+        return ensemble::<M>(&mut model, inv, t0, t1, &x0, &times, count);
+    }
     eprintln!("{}", plan::<M>(&inv.options));
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
@@ -532,4 +553,131 @@ fn estimate<M: Model + 'static>(
         Ok(())
     })?;
     Ok(largest)
+}
+
+/// Member `k` of an ensemble: the model's initial state for `k = 0`,
+/// otherwise each component moved by up to `spread·max(|x0_i|, 1)` along a
+/// Weyl sequence (deterministic, well spread). The moved states are states
+/// of the reduced system (7); they need not satisfy the constraints, which
+/// does not matter for comparing two ways of integrating (7).
+pub fn ensemble_member(x0: &[f64], k: usize, spread: f64) -> Vec<f64> {
+    x0.iter()
+        .enumerate()
+        .map(|(i, &x)| {
+            if k == 0 {
+                return x;
+            }
+            // Square roots of primes: rationally independent increments.
+            let step = [2.0_f64, 3.0, 5.0, 7.0, 11.0, 13.0, 17.0, 19.0][i % 8].sqrt();
+            let u = (k as f64 * step + i as f64 / 8.0).fract() * 2.0 - 1.0;
+            x + spread * x.abs().max(1.0) * u
+        })
+        .collect()
+}
+
+/// `--ensemble K`: one field for K initial states against K direct
+/// integrations, each timed as the smallest of `--repeat` runs.
+fn ensemble<M: Model + 'static>(
+    model: &mut M,
+    inv: &Invocation,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+    count: usize,
+) -> ExitCode {
+    use crate::driver::run_ensemble;
+    let members: Vec<Vec<f64>> = (0..count).map(|k| ensemble_member(x0, k, inv.spread)).collect();
+    let n = x0.len();
+    let quiet = Options {
+        progress: false,
+        ..inv.options.clone()
+    };
+    let direct_options = Options {
+        method: Method::Direct,
+        ..quiet.clone()
+    };
+    let field_options = Options {
+        method: Method::Field,
+        ..quiet
+    };
+    let solves = inv.repeat.max(1);
+    let (mut field_time, mut one_time, mut direct_time) = (Duration::MAX, Duration::MAX, Duration::MAX);
+    let mut field_states = vec![0.0; times.len() * count * n];
+    let mut direct_states = vec![0.0; times.len() * count * n];
+    let mut method = String::new();
+    for _ in 0..solves {
+        let start = Instant::now();
+        let mut i = 0;
+        let outcome = run_ensemble(model, &field_options, t0, t1, &members, times, |_, states| {
+            for (k, s) in states.iter().enumerate() {
+                let at = (i * count + k) * n;
+                field_states[at..at + n].copy_from_slice(s);
+            }
+            i += 1;
+        });
+        match outcome {
+            Ok(outcome) => method = outcome.report.method,
+            Err(failure) => {
+                if failure.kind == FailureKind::NotAffine {
+                    eprintln!(
+                        "error: `--ensemble` needs a model without events or implicit \
+                         constraints"
+                    );
+                    return ExitCode::from(USAGE_EXIT_STATUS);
+                }
+                return fail(inv.json, &failure);
+            }
+        }
+        field_time = field_time.min(start.elapsed());
+        let start = Instant::now();
+        if let Err(failure) = run(model, &field_options, t0, t1, x0, times, |_, _, _| Ok(())) {
+            return fail(inv.json, &failure);
+        }
+        one_time = one_time.min(start.elapsed());
+        let start = Instant::now();
+        for (k, x) in members.iter().enumerate() {
+            let mut i = 0;
+            let solved = run(model, &direct_options, t0, t1, x, times, |_, _, state| {
+                let at = (i * count + k) * n;
+                direct_states[at..at + n].copy_from_slice(state);
+                i += 1;
+                Ok(())
+            });
+            if let Err(failure) = solved {
+                return fail(inv.json, &failure);
+            }
+        }
+        direct_time = direct_time.min(start.elapsed());
+    }
+    let difference = field_states
+        .iter()
+        .zip(&direct_states)
+        .fold(0.0_f64, |m, (f, d)| m.max((f - d).abs() / d.abs().max(1.0)));
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    if inv.json {
+        eprintln!(
+            "{{\"ensemble\":{count},\"method\":{},\"spread\":{},\"ensemble_field_s\":{},\
+             \"one_field_s\":{},\"direct_s\":{},\"largest_difference\":{},\"runs\":{}}}",
+            json_string(&method),
+            crate::summary::json_number(Some(inv.spread)),
+            crate::summary::json_number(Some(field_time.as_secs_f64())),
+            crate::summary::json_number(Some(one_time.as_secs_f64())),
+            crate::summary::json_number(Some(direct_time.as_secs_f64())),
+            crate::summary::json_number(Some(difference)),
+            solves,
+        );
+    } else {
+        eprintln!(
+            "ensemble of {count} initial states (spread {}), {} samples: one field ({method}) \
+             for all: {:.3} ms; the field for one: {:.3} ms; {count} direct integrations: \
+             {:.3} ms; largest difference: {difference:.3e}",
+            inv.spread,
+            times.len(),
+            ms(field_time),
+            ms(one_time),
+            ms(direct_time),
+        );
+    }
+    ExitCode::SUCCESS
 }

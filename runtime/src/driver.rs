@@ -459,3 +459,50 @@ pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64]) -> Failure {
     }
     failure
 }
+
+/// Integrates `members` (the first is the reference) through one field:
+/// `sample(t, states)` at every time of `times`. Exact for affine models;
+/// for the others the members follow the field of the motion linearised
+/// along the reference, to first order in their distance from it.
+pub fn run_ensemble<M: Model + 'static>(
+    model: &mut M,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    members: &[Vec<f64>],
+    times: &[f64],
+    mut sample: impl FnMut(f64, &[Vec<f64>]),
+) -> Result<Outcome, Failure> {
+    if M::SWITCHES > 0 || !M::CONSTRAINTS.is_empty() {
+        return Err(Failure::new(t0, FailureKind::NotAffine));
+    }
+    let budget = Budget::new(options.max_steps);
+    let h_max = (t1 - t0).max(f64::MIN_POSITIVE);
+    let field = Options {
+        method: Method::Field,
+        ..options.clone()
+    };
+    let mut solver = make_solver(model, &field, t0, &members[0], h_max)?;
+    if !solver.track_members(members.to_vec()) {
+        return Err(Failure::new(t0, FailureKind::NotAffine));
+    }
+    let mut next = 0;
+    while next < times.len() && times[next] <= t0 {
+        sample(times[next], members);
+        next += 1;
+    }
+    while solver.time() < t1 {
+        solver.advance(model, t1, &budget)?;
+        while next < times.len() && times[next] <= solver.time() {
+            let states = solver.members_at(model, times[next])?;
+            sample(times[next], &states);
+            next += 1;
+        }
+    }
+    Ok(Outcome {
+        report: solver.report(),
+        ending: Ending::End,
+        events: 0,
+        budget_used: budget.used(),
+    })
+}

@@ -47,4 +47,16 @@ pub trait Solver<M: Model> {
     fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure>;
     /// The work so far.
     fn report(&self) -> Report;
+
+    /// Follows other initial states through the same field (an ensemble:
+    /// exact for affine motions, first order in the spread for others);
+    /// `false` when the method cannot.
+    fn track_members(&mut self, _members: Vec<Vec<f64>>) -> bool {
+        false
+    }
+
+    /// The tracked members' states at `t` in `[previous_time, time]`.
+    fn members_at(&mut self, _model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
+        Err(Failure::new(t, crate::failure::FailureKind::NotAffine))
+    }
 }

@@ -20,6 +20,8 @@ pub struct AffineField {
     done: Stats,
     reanchorings: usize,
     largest_condition: f64,
+    /// Ensemble members' states at the current window's anchor time.
+    members: Option<Vec<Vec<f64>>>,
 }
 
 impl AffineField {
@@ -45,6 +47,7 @@ impl AffineField {
             done: Stats::default(),
             reanchorings: 0,
             largest_condition: 1.0,
+            members: None,
         })
     }
 }
@@ -65,8 +68,20 @@ impl<M: Model> Solver<M> for AffineField {
     fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
         let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
         let (mut done, mut reanchorings, mut largest) = (Stats::default(), 0, self.largest_condition);
+        let members = &mut self.members;
         let result = with_system(model, |system| {
-            advance_window(system, window, options, h_max, t_limit, budget, &mut done, &mut reanchorings, &mut largest)
+            advance_window(
+                system,
+                window,
+                options,
+                h_max,
+                t_limit,
+                budget,
+                &mut done,
+                &mut reanchorings,
+                &mut largest,
+                members,
+            )
         });
         self.done += done;
         self.reanchorings += reanchorings;
@@ -87,6 +102,17 @@ impl<M: Model> Solver<M> for AffineField {
             Window::open(system, options, t, x, Some(h), h_max, stiff)
         })?;
         Ok(())
+    }
+
+    fn track_members(&mut self, members: Vec<Vec<f64>>) -> bool {
+        self.members = Some(members);
+        true
+    }
+
+    fn members_at(&mut self, model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
+        let (window, options) = (&mut self.window, &self.options);
+        let anchors = self.members.as_deref().unwrap_or(&[]);
+        with_system(model, |system| window.members_at(system, options, t, anchors))
     }
 
     fn report(&self) -> Report {
@@ -139,6 +165,7 @@ fn advance_window(
     done: &mut Stats,
     reanchorings: &mut usize,
     largest_condition: &mut f64,
+    members: &mut Option<Vec<Vec<f64>>>,
 ) -> Result<(), Failure> {
     let mut shortenings = 0;
     loop {
@@ -168,6 +195,9 @@ fn advance_window(
                 // DOP853 found the coefficients stiff: continue with RODAS4.
                 let stiff =
                     window.is_stiff() || (options.auto_stiff && window.stiffness_detected());
+                if let Some(anchors) = members.as_mut() {
+                    *anchors = window.members(system, options, anchors)?;
+                }
                 *done += window.stats();
                 *window = Window::open(system, options, t, &x, Some(h), h_max, stiff)?;
                 *reanchorings += 1;

@@ -33,6 +33,11 @@ pub trait FieldSystem: System {
     /// The first-order change `(df, ds)` of `(f, S)` for a change `dy` of
     /// `y` at `y`.
     fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]);
+
+    /// `y` for the anchor's free term `c_1` moved by `delta` (exact: `f` is
+    /// affine in `c_1` for an affine motion, and the other coefficients do
+    /// not depend on it) — another initial state through the same field.
+    fn shift_free_term(&self, y: &mut [f64], delta: f64);
 }
 
 /// A coefficient system with the product of its Jacobian and `S`.
@@ -150,6 +155,13 @@ impl<C: CoefficientSource + ?Sized> FieldSystem for Augmented<'_, C> {
         let n = df.len();
         df.copy_from_slice(&dy[..n]);
         ds.copy_from_slice(&dy[n..]);
+    }
+
+    /// Used only with a linear coefficient system, where `S` does not
+    /// depend on the anchor and `f_1` moves by `S_11 δc_1`.
+    fn shift_free_term(&self, y: &mut [f64], delta: f64) {
+        let n = self.0.dim();
+        y[0] += delta * y[n];
     }
 }
 
@@ -521,6 +533,12 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
         }
         let loss = if value > 0.0 { magnitude / value } else { f64::INFINITY };
         loss.is_finite().then_some(loss)
+    }
+
+    fn shift_free_term(&self, y: &mut [f64], delta: f64) {
+        let n = M::STATE.len();
+        // w_0 moves along P_1 = ∂w/∂c_1, whose only non-zero entry is w_0's.
+        y[0] += delta * y[n + 1];
     }
 
     fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]) {

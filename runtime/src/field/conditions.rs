@@ -92,6 +92,24 @@ pub fn recover(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Recovered> {
 }
 
 impl Recovered {
+    /// The state of another initial state (an ensemble member) through the
+    /// same field: its coefficients `f` and sensitivities `S` differ from
+    /// these only in the free term's (its `c_1` differs), so the condition
+    /// matrix and its factors are shared (SPEC §1.5's `S_B1 = 0` for
+    /// `B ≥ 2`): one `O(N²)` solve per member.
+    pub fn member(&self, f: &[f64], s: &[f64], x0: &[f64]) -> Vec<f64> {
+        let n = f.len();
+        let Some(lu) = &self.lu else {
+            return vec![f[0]];
+        };
+        let mut z: Vec<f64> = (1..n).map(|a| -(s[a * n] - s[0] * x0[a])).collect();
+        lu.solve_in_place(&mut z);
+        let mut state = Vec::with_capacity(n);
+        state.push(f[0] + (1..n).map(|a| f[a] * z[a - 1]).sum::<f64>());
+        state.extend_from_slice(&z);
+        state
+    }
+
     /// The first-order change of the recovered state when `(f, S)` change
     /// by `(df, ds)` (same layouts), into `dx`.
     pub fn map_error(&self, f: &[f64], x0: &[f64], df: &[f64], ds: &[f64], dx: &mut [f64]) {

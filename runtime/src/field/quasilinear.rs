@@ -21,7 +21,7 @@
 
 use super::coefficients::{FieldSystem, Iterate, ProjectiveCoefficients};
 use super::conditions::recover;
-use super::window::{StoredStep, Window, WindowStep};
+use super::window::{member_states, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
 use crate::dop853::Dop853;
@@ -200,6 +200,10 @@ pub struct QuasilinearField {
     state_pool: Vec<Vec<f64>>,
     /// The windows' coefficients are integrated by RODAS4.
     stiff: bool,
+    /// Ensemble members' states at the current anchor, and at the accepted
+    /// window's anchor.
+    members: Option<Vec<Vec<f64>>>,
+    window_members: Option<Vec<Vec<f64>>>,
 }
 
 impl QuasilinearField {
@@ -229,6 +233,8 @@ impl QuasilinearField {
             pool: Vec::new(),
             state_pool: Vec::new(),
             stiff,
+            members: None,
+            window_members: None,
         }
     }
 
@@ -390,6 +396,11 @@ impl<M: Model> Solver<M> for QuasilinearField {
                 prepared: vec![None; count],
                 states: pass.states,
             });
+            if let Some(anchors) = self.members.take() {
+                let ends = self.members_of_window(model, end_time, &anchors)?;
+                self.window_members = Some(anchors);
+                self.members = Some(ends);
+            }
             self.t_prev = self.t;
             self.t = end_time;
             self.windows += 1;
@@ -447,6 +458,22 @@ impl<M: Model> Solver<M> for QuasilinearField {
         Ok(())
     }
 
+    fn track_members(&mut self, members: Vec<Vec<f64>>) -> bool {
+        self.members = Some(members);
+        true
+    }
+
+    fn members_at(&mut self, model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
+        match self.window_members.take() {
+            Some(anchors) => {
+                let states = self.members_of_window(model, t, &anchors);
+                self.window_members = Some(anchors);
+                states
+            }
+            None => Ok(self.members.clone().unwrap_or_default()),
+        }
+    }
+
     fn report(&self) -> Report {
         Report {
             method: if self.stiff {
@@ -467,6 +494,46 @@ impl<M: Model> Solver<M> for QuasilinearField {
 }
 
 impl QuasilinearField {
+    /// The members' states at `t` within the accepted window, from their
+    /// states at its anchor: through the field of the motion linearised
+    /// along the reference (first order in their distance from it).
+    fn members_of_window<M: Model>(
+        &mut self,
+        model: &M,
+        t: f64,
+        anchors: &[Vec<f64>],
+    ) -> Result<Vec<Vec<f64>>, Failure> {
+        let Some(window) = self.accepted.as_mut() else {
+            return Ok(anchors.to_vec());
+        };
+        let n = window.anchor_x.len();
+        let i = window
+            .steps
+            .iter()
+            .position(|s| t <= s.t_new())
+            .unwrap_or(window.steps.len() - 1);
+        let source = ProjectiveCoefficients::new(model, &window.path);
+        if window.prepared[i].is_none() {
+            window.prepared[i] = Some(window.steps[i].prepare(&source)?);
+        }
+        let mut y = vec![0.0; (n + 1) * (n + 1)];
+        if let Some(dense) = &window.prepared[i] {
+            dense.eval(t, &mut y);
+        }
+        let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
+        let singular = || {
+            Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: f64::INFINITY,
+                },
+            )
+        };
+        source.field(&y, &mut f, &mut s).ok_or_else(singular)?;
+        let reference = recover(&f, &s, &window.anchor_x).ok_or_else(singular)?;
+        member_states(&source, &self.options, &window.anchor_x, &reference, &y, anchors, t)
+    }
+
     /// One pass of the field along `iterate` from the current anchor,
     /// until the window ends.
     fn pass<M: Model, I: Iterate>(

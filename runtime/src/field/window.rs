@@ -370,6 +370,48 @@ impl Window {
     }
 
     /// The last step as data (its continuous extension built later).
+    /// The states of other initial states through this field at the
+    /// window's current time: `anchors[m]` is member `m`'s state at the
+    /// window's anchor time.
+    pub fn members<F: FieldSystem + ?Sized>(
+        &mut self,
+        system: &F,
+        options: &FieldOptions,
+        anchors: &[Vec<f64>],
+    ) -> Result<Vec<Vec<f64>>, Failure> {
+        let y = each!(&self.stepper, s => s.state()).to_vec();
+        let reference = self.current.clone();
+        member_states(system, options, &self.anchor_x, &reference, &y, anchors, self.time())
+    }
+
+    /// [`Window::members`] at a time `t` within the last step.
+    pub fn members_at<F: FieldSystem + ?Sized>(
+        &mut self,
+        system: &F,
+        options: &FieldOptions,
+        t: f64,
+        anchors: &[Vec<f64>],
+    ) -> Result<Vec<Vec<f64>>, Failure> {
+        if t >= self.time() || self.steps == 0 {
+            return self.members(system, options, anchors);
+        }
+        let mut y = vec![0.0; system.dim()];
+        each!(&mut self.stepper, s => s.dense(system, t, &mut y))?;
+        let b = &mut self.buffers;
+        let reference = system
+            .field(&y, &mut b.f, &mut b.s)
+            .and_then(|_| recover(&b.f, &b.s, &self.anchor_x))
+            .ok_or_else(|| {
+                Failure::new(
+                    t,
+                    FailureKind::SingularConditionMatrix {
+                        condition: f64::INFINITY,
+                    },
+                )
+            })?;
+        member_states(system, options, &self.anchor_x, &reference, &y, anchors, t)
+    }
+
     /// The last step, kept for dense output later, into `dst` (its
     /// storage reused).
     pub fn store_step(&self, dst: &mut StoredStep) {
@@ -410,4 +452,37 @@ fn check_without_reanchoring(
         ));
     }
     Ok(())
+}
+
+/// Every member's state from the shared `y` (of the reference anchored at
+/// `anchor_x`, recovered as `reference`).
+pub fn member_states<F: FieldSystem + ?Sized>(
+    system: &F,
+    options: &FieldOptions,
+    anchor_x: &[f64],
+    reference: &Recovered,
+    y: &[f64],
+    anchors: &[Vec<f64>],
+    t: f64,
+) -> Result<Vec<Vec<f64>>, Failure> {
+    let n = anchor_x.len();
+    let c_ref = anchor_values(&options.anchor, anchor_x)[0];
+    let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
+    let mut shifted = y.to_vec();
+    anchors
+        .iter()
+        .map(|x0| {
+            shifted.copy_from_slice(y);
+            system.shift_free_term(&mut shifted, anchor_values(&options.anchor, x0)[0] - c_ref);
+            system.field(&shifted, &mut f, &mut s).ok_or_else(|| {
+                Failure::new(
+                    t,
+                    FailureKind::SingularConditionMatrix {
+                        condition: f64::INFINITY,
+                    },
+                )
+            })?;
+            Ok(reference.member(&f, &s, x0))
+        })
+        .collect()
 }
