@@ -71,3 +71,27 @@ fn stiff_affine_field_switches_to_rodas4_and_stays_accurate() {
         assert!(error < 1e-6, "{choice:?}: error {error}");
     }
 }
+
+#[test]
+fn an_implicit_constraint_switches_candidates_through_every_heading() {
+    use models::KnifeEdge;
+    for method in [Method::Direct, Method::Field] {
+        let mut model = KnifeEdge::new(&[]);
+        let x0 = model.initial_state(&[None; 6]).unwrap();
+        let options = Options {
+            method,
+            tol: Tolerance { rtol: 1e-10, atol: 1e-12 },
+            ..Options::default()
+        };
+        let mut error = 0.0_f64;
+        let outcome = run(&mut model, &options, 0.0, 10.0, &x0, &sample_times(0.0, 10.0, 101), |_, t, x| {
+            for (a, b) in x.iter().zip(KnifeEdge::exact_at(t)) {
+                error = error.max((a - b).abs() / b.abs().max(1.0));
+            }
+            Ok(())
+        })
+        .unwrap_or_else(|f| panic!("{method:?}: {f}"));
+        eprintln!("{method:?}: error {error:.2e}, {:?}", outcome.report.stats);
+        assert!(error < 1e-8, "{method:?}: error {error}");
+    }
+}

@@ -397,3 +397,107 @@ impl Model for ThrownBall {
         out[1] = Some(e[1]);
     }
 }
+
+/// A knife edge turning at a constant rate through every heading, with the
+/// implicit constraint `sin(th) x' = cos(th) y'` and two candidates for the
+/// dependent derivative (`y'`: mode 0; `x'`: mode 1). Speed v = 1,
+/// th = t: `x = sin t`, `y = 1 − cos t`.
+#[derive(Clone)]
+pub struct KnifeEdge {
+    pub params: Vec<f64>,
+    pub mode: usize,
+}
+
+impl KnifeEdge {
+    pub fn exact_at(t: f64) -> [f64; 6] {
+        [t.sin(), 1.0 - t.cos(), t, t.cos(), t.sin(), 1.0]
+    }
+}
+
+impl Model for KnifeEdge {
+    const NAME: &'static str = "knife_edge_turning";
+    const SOURCE_HASH: &'static str = "test";
+    const PARAMS: &'static [&'static str] = &[];
+    const STATE: &'static [&'static str] = &["x", "y", "th", "x'", "y'", "th'"];
+    const COORDINATES: usize = 3;
+    const INITIAL: &'static [Initial] = &[
+        Initial::Given,
+        Initial::Given,
+        Initial::Given,
+        Initial::Given,
+        Initial::Constraint,
+        Initial::Given,
+    ];
+    const CONSTRAINTS: &'static [lagc_runtime::model::Candidates] =
+        &[lagc_runtime::model::Candidates { text: "sin(th) * x' = cos(th) * y'", names: &["y'", "x'"] }];
+    const EXACT: bool = true;
+
+    fn parameters(_o: &[Option<f64>]) -> Vec<f64> {
+        Vec::new()
+    }
+    fn new(_p: &[f64]) -> Self {
+        KnifeEdge { params: Vec::new(), mode: 0 }
+    }
+    fn param_values(&self) -> &[f64] {
+        &self.params
+    }
+    fn time_span(&self) -> (f64, f64) {
+        (0.0, 10.0)
+    }
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+        let e = Self::exact_at(0.0);
+        let mut x: Vec<f64> = (0..6).map(|i| given[i].unwrap_or(e[i])).collect();
+        x[4] = x[2].tan() * x[3];
+        Ok(x)
+    }
+    fn set_regime(&mut self, regime: &lagc_runtime::model::Regime) {
+        self.mode = regime.mode;
+    }
+    fn rhs(&self, _t: f64, s: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        let (th, xd, yd, thd) = (s[2], s[3], s[4], s[5]);
+        dx[0] = xd;
+        dx[1] = yd;
+        dx[2] = thd;
+        dx[5] = 0.0;
+        if self.mode == 0 {
+            let x2 = -th.tan() * thd * xd;
+            dx[3] = x2;
+            dx[4] = thd * xd / th.cos().powi(2) + th.tan() * x2;
+        } else {
+            let y2 = thd * yd / th.tan();
+            dx[4] = y2;
+            dx[3] = -thd * yd / th.sin().powi(2) + y2 / th.tan();
+        }
+        Ok(())
+    }
+    fn jacobian(&self, t: f64, s: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        // Central differences are enough for a test model's Jacobian.
+        let mut plus = [0.0; 6];
+        let mut minus = [0.0; 6];
+        let mut x = s.to_vec();
+        for k in 0..6 {
+            let h = 1e-6 * s[k].abs().max(1.0);
+            x[k] = s[k] + h;
+            self.rhs(t, &x, &mut plus)?;
+            x[k] = s[k] - h;
+            self.rhs(t, &x, &mut minus)?;
+            x[k] = s[k];
+            for i in 0..6 {
+                jac[(i, k)] = (plus[i] - minus[i]) / (2.0 * h);
+            }
+        }
+        Ok(())
+    }
+    fn time_partial(&self, _t: f64, _x: &[f64], _dxdt: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn pivots(&self, _t: f64, x: &[f64], out: &mut [f64]) {
+        out[0] = -x[2].cos();
+        out[1] = x[2].sin();
+    }
+    fn exact(&self, t: f64, out: &mut [Option<f64>]) {
+        for (o, e) in out.iter_mut().zip(Self::exact_at(t)) {
+            *o = Some(e);
+        }
+    }
+}
