@@ -178,7 +178,8 @@ pub fn make_solver<M: Model + 'static>(
                 anchor: options.anchor.clone(),
                 reanchor: options.reanchor,
                 stiff: choice == IntegratorChoice::Stiff,
-                auto_stiff: matches!(choice, IntegratorChoice::Auto | IntegratorChoice::Magnus),
+                auto_stiff: choice == IntegratorChoice::Auto,
+                magnus: choice == IntegratorChoice::Magnus,
                 ..FieldOptions::default()
             };
             if M::AFFINE {

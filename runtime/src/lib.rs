@@ -22,6 +22,7 @@ pub mod dop853;
 pub mod failure;
 pub mod highest;
 pub mod linalg;
+pub mod magnus;
 pub mod method;
 pub mod model;
 pub mod rodas4;

@@ -79,3 +79,26 @@ fn quasilinear_field_agrees_with_direct_on_non_affine_motions() {
         assert!(e_field < 100.0 * rtol, "rtol {rtol}: field error {e_field}");
     }
 }
+
+#[test]
+fn every_field_integrator_follows_the_oscillator() {
+    use lagc_runtime::method::IntegratorChoice;
+    for choice in [IntegratorChoice::Explicit, IntegratorChoice::Stiff, IntegratorChoice::Magnus] {
+        let mut model = Oscillator::new(&[2.0, 10.0]);
+        let x0 = model.initial_state(&[None, None]).unwrap();
+        let options = Options {
+            method: Method::Field,
+            integrator: Some(choice),
+            tol: Tolerance { rtol: 1e-8, atol: 1e-10 },
+            ..Options::default()
+        };
+        let mut error = 0.0_f64;
+        let outcome = run(&mut model, &options, 0.0, 10.0, &x0, &sample_times(0.0, 10.0, 21), |_, t, x| {
+            error = error.max((x[0] - (2.0 * t).cos()).abs());
+            Ok(())
+        })
+        .unwrap();
+        eprintln!("{choice:?}: {error:.2e} {:?}", outcome.report);
+        assert!(error < 1e-6, "{choice:?}: {error}");
+    }
+}

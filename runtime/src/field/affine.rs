@@ -3,7 +3,7 @@
 //! window anchored where the last one's conditions degraded.
 
 use super::coefficients::{Augmented, FieldSystem, Iterate, ProjectiveCoefficients, SymbolicCoefficients};
-use super::window::{Window, WindowStep};
+use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
 use crate::failure::{Failure, FailureKind};
@@ -32,9 +32,17 @@ impl AffineField {
         x0: &[f64],
         h_max: f64,
     ) -> Result<AffineField, Failure> {
-        let stiff = options.stiff;
-        let window =
-            with_system(model, |system| Window::open(system, &options, t0, x0, None, h_max, stiff))?;
+        let kind = if options.magnus {
+            StepperKind::Magnus
+        } else if options.stiff {
+            StepperKind::Stiff
+        } else {
+            StepperKind::Explicit
+        };
+        let magnus = options.magnus;
+        let window = with_system(model, magnus, |system| {
+            Window::open(system, &options, t0, x0, None, h_max, kind)
+        })?;
         Ok(AffineField {
             method: if M::COEFFICIENTS_LINEAR {
                 "field (linear coefficient system, DOP853)"
@@ -69,7 +77,7 @@ impl<M: Model> Solver<M> for AffineField {
         let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
         let (mut done, mut reanchorings, mut largest) = (Stats::default(), 0, self.largest_condition);
         let members = &mut self.members;
-        let result = with_system(model, |system| {
+        let result = with_system(model, options.magnus, |system| {
             advance_window(
                 system,
                 window,
@@ -91,15 +99,15 @@ impl<M: Model> Solver<M> for AffineField {
 
     fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let window = &mut self.window;
-        with_system(model, |system| window.dense(system, t, out))
+        with_system(model, self.options.magnus, |system| window.dense(system, t, out))
     }
 
     fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
         let h = self.window.proposed_step();
         self.done += self.window.stats();
-        let (options, h_max, stiff) = (&self.options, self.h_max, self.window.is_stiff());
-        self.window = with_system(model, |system| {
-            Window::open(system, options, t, x, Some(h), h_max, stiff)
+        let (options, h_max, kind) = (&self.options, self.h_max, self.window.kind());
+        self.window = with_system(model, options.magnus, |system| {
+            Window::open(system, options, t, x, Some(h), h_max, kind)
         })?;
         Ok(())
     }
@@ -112,15 +120,18 @@ impl<M: Model> Solver<M> for AffineField {
     fn members_at(&mut self, model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
         let (window, options) = (&mut self.window, &self.options);
         let anchors = self.members.as_deref().unwrap_or(&[]);
-        with_system(model, |system| window.members_at(system, options, t, anchors))
+        with_system(model, options.magnus, |system| window.members_at(system, options, t, anchors))
     }
 
     fn report(&self) -> Report {
         Report {
-            method: if self.window.is_stiff() {
-                self.method.replace("DOP853", "RODAS4")
-            } else {
-                self.method.to_string()
+            method: match self.window.kind() {
+                StepperKind::Stiff => self.method.replace("DOP853", "RODAS4"),
+                StepperKind::Magnus => self
+                    .method
+                    .replace("DOP853", "Magnus-4")
+                    .replace("linear coefficient system", "coefficient system in projective form"),
+                StepperKind::Explicit => self.method.to_string(),
             },
             stats: self.done + self.window.stats(),
             largest_condition: Some(self.largest_condition),
@@ -143,9 +154,10 @@ impl Iterate for AnyState {
 
 /// Runs `body` on the field system of `model`: the symbolic coefficient
 /// system when it is linear (it has no poles), its projective form when
-/// it is of Riccati type.
-fn with_system<M: Model, R>(model: &M, body: impl FnOnce(&dyn FieldSystem) -> R) -> R {
-    if M::COEFFICIENTS_LINEAR {
+/// it is of Riccati type or the Magnus integrator is asked for (which
+/// needs the linear projective form).
+fn with_system<M: Model, R>(model: &M, magnus: bool, body: impl FnOnce(&dyn FieldSystem) -> R) -> R {
+    if M::COEFFICIENTS_LINEAR && !magnus {
         let source = SymbolicCoefficients::new(model);
         body(&Augmented(&source))
     } else {
@@ -193,13 +205,16 @@ fn advance_window(
                 let (t, x) = (window.time(), window.state().to_vec());
                 let h = window.proposed_step();
                 // DOP853 found the coefficients stiff: continue with RODAS4.
-                let stiff =
-                    window.is_stiff() || (options.auto_stiff && window.stiffness_detected());
+                let kind = if options.auto_stiff && window.stiffness_detected() {
+                    StepperKind::Stiff
+                } else {
+                    window.kind()
+                };
                 if let Some(anchors) = members.as_mut() {
                     *anchors = window.members(system, options, anchors)?;
                 }
                 *done += window.stats();
-                *window = Window::open(system, options, t, &x, Some(h), h_max, stiff)?;
+                *window = Window::open(system, options, t, &x, Some(h), h_max, kind)?;
                 *reanchorings += 1;
             }
         }

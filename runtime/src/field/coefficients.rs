@@ -34,6 +34,13 @@ pub trait FieldSystem: System {
     /// `y` at `y`.
     fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]);
 
+    /// `B(t)` of `y' = B(t) y` viewed as `Y' = B Y` (`Y` the `(N+1)²` state
+    /// as a square matrix), when the representation is linear so (the
+    /// projective form); `None` otherwise.
+    fn generator(&self, _t: f64, _b: &mut Matrix) -> Option<Result<(), Failure>> {
+        None
+    }
+
     /// `y` for the anchor's free term `c_1` moved by `delta` (exact: `f` is
     /// affine in `c_1` for an affine motion, and the other coefficients do
     /// not depend on it) — another initial state through the same field.
@@ -533,6 +540,23 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
         }
         let loss = if value > 0.0 { magnitude / value } else { f64::INFINITY };
         loss.is_finite().then_some(loss)
+    }
+
+    /// `Y = (w, P_1, …, P_N)` column by column obeys `Y' = −Ãᵀ Y`.
+    fn generator(&self, t: f64, b: &mut Matrix) -> Option<Result<(), Failure>> {
+        let n = M::STATE.len();
+        let mut guard = self.linear.scratch.borrow_mut();
+        let sc = &mut *guard;
+        if let Err(failure) = self.linear.linearize(t, sc) {
+            return Some(Err(failure));
+        }
+        for i in 0..n {
+            b[(0, i + 1)] = -sc.b[i];
+            for j in 0..n {
+                b[(j + 1, i + 1)] = -sc.a[(i, j)];
+            }
+        }
+        Some(Ok(()))
     }
 
     fn shift_free_term(&self, y: &mut [f64], delta: f64) {

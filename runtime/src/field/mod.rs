@@ -38,6 +38,9 @@ pub struct FieldOptions {
     /// Switch to RODAS4 at the next re-anchoring once DOP853 detects
     /// stiffness in the coefficients.
     pub auto_stiff: bool,
+    /// Affine models: integrate the coefficients (in projective form) by
+    /// the Magnus integrator.
+    pub magnus: bool,
 }
 
 impl Default for FieldOptions {
@@ -50,6 +53,7 @@ impl Default for FieldOptions {
             reanchor: true,
             stiff: false,
             auto_stiff: true,
+            magnus: false,
         }
     }
 }

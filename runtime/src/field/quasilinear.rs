@@ -21,7 +21,7 @@
 
 use super::coefficients::{FieldSystem, Iterate, ProjectiveCoefficients};
 use super::conditions::recover;
-use super::window::{member_states, StoredStep, Window, WindowStep};
+use super::window::{member_states, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
 use crate::dop853::Dop853;
@@ -552,7 +552,11 @@ impl QuasilinearField {
             &self.x,
             self.field_h,
             self.h_max,
-            self.stiff,
+            if self.stiff {
+                StepperKind::Stiff
+            } else {
+                StepperKind::Explicit
+            },
         )?;
         let mut steps: Vec<StoredStep> = Vec::new();
         let mut states: Vec<Vec<f64>> = Vec::new();

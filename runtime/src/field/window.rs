@@ -14,6 +14,8 @@ use super::conditions::{recover, Recovered};
 use super::FieldOptions;
 use crate::budget::Budget;
 use crate::dop853::{hairer_error, Dop853, RawStep};
+use crate::linalg::Matrix;
+use crate::magnus::{LinearGenerator, Magnus};
 use crate::rodas4::Rodas4;
 use crate::stepper::{DenseStep, ErrorMeasure, StepOutcome, Stepper};
 use crate::failure::{Failure, FailureKind};
@@ -140,10 +142,35 @@ pub enum WindowStep {
 
 /// The integrator of a window's coefficients: DOP853, or RODAS4 where the
 /// coefficient system is stiff (it is linear in the projective form, so
-/// RODAS4's Jacobian is exact).
+/// RODAS4's Jacobian is exact), or the Magnus integrator (projective form
+/// only).
 enum WindowStepper {
     Explicit(Dop853),
     Stiff(Rodas4),
+    Magnus(Magnus),
+}
+
+/// Which integrator a window uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepperKind {
+    Explicit,
+    Stiff,
+    Magnus,
+}
+
+/// A field system's projective form as the Magnus integrator sees it.
+struct AsGenerator<'a, F: FieldSystem + ?Sized>(&'a F);
+
+impl<F: FieldSystem + ?Sized> LinearGenerator for AsGenerator<'_, F> {
+    fn order(&self) -> usize {
+        self.0.coefficients() + 1
+    }
+
+    fn generator(&self, t: f64, b: &mut Matrix) -> Result<(), Failure> {
+        self.0
+            .generator(t, b)
+            .unwrap_or(Err(Failure::new(t, FailureKind::NotAffine)))
+    }
 }
 
 /// A window's step kept for later dense output: DOP853's continuous
@@ -183,6 +210,27 @@ macro_rules! each {
         match $self {
             WindowStepper::Explicit($s) => $e,
             WindowStepper::Stiff($s) => $e,
+            WindowStepper::Magnus($s) => $e,
+        }
+    };
+}
+
+/// Like `each!` for the generic methods Magnus takes another system for.
+macro_rules! each_system {
+    ($self:expr, $system:expr, $s:ident, $sys:ident => $e:expr) => {
+        match $self {
+            WindowStepper::Explicit($s) => {
+                let $sys = $system;
+                $e
+            }
+            WindowStepper::Stiff($s) => {
+                let $sys = $system;
+                $e
+            }
+            WindowStepper::Magnus($s) => {
+                let $sys = &AsGenerator($system);
+                $e
+            }
         }
     };
 }
@@ -208,7 +256,7 @@ impl Window {
         x: &[f64],
         h0: Option<f64>,
         h_max: f64,
-        stiff: bool,
+        kind: StepperKind,
     ) -> Result<Window, Failure> {
         let n = x.len();
         let c = anchor_values(&options.anchor, x);
@@ -234,10 +282,23 @@ impl Window {
                 },
             ));
         }
-        let stepper = if stiff {
-            WindowStepper::Stiff(Rodas4::new(system, t, &y, options.tol, h_max, h0)?)
-        } else {
-            WindowStepper::Explicit(Dop853::new(system, t, &y, options.tol, h_max, h0)?)
+        let magnus_possible = system.generator(t, &mut Matrix::zeros(n + 1, n + 1)).is_some();
+        let stepper = match kind {
+            StepperKind::Stiff => {
+                WindowStepper::Stiff(Rodas4::new(system, t, &y, options.tol, h_max, h0)?)
+            }
+            StepperKind::Magnus if magnus_possible => {
+                let h = match h0 {
+                    Some(h) => h,
+                    None => {
+                        let mut slope = vec![0.0; y.len()];
+                        system.rhs(t, &y, &mut slope)?;
+                        crate::tolerance::initial_step(system, t, &y, &slope, options.tol, 4, h_max)?
+                    }
+                };
+                WindowStepper::Magnus(Magnus::new(t, &y, h))
+            }
+            _ => WindowStepper::Explicit(Dop853::new(system, t, &y, options.tol, h_max, h0)?),
         };
         Ok(Window {
             anchor_t: t,
@@ -260,11 +321,19 @@ impl Window {
 
     /// Whether DOP853 found the coefficient system stiff.
     pub fn stiffness_detected(&self) -> bool {
-        each!(&self.stepper, s => s.stiffness_detected()).is_some()
+        match &self.stepper {
+            WindowStepper::Explicit(s) => s.stiffness_detected().is_some(),
+            _ => false,
+        }
     }
 
-    pub fn is_stiff(&self) -> bool {
-        matches!(self.stepper, WindowStepper::Stiff(_))
+    /// The integrator this window uses.
+    pub fn kind(&self) -> StepperKind {
+        match self.stepper {
+            WindowStepper::Explicit(_) => StepperKind::Explicit,
+            WindowStepper::Stiff(_) => StepperKind::Stiff,
+            WindowStepper::Magnus(_) => StepperKind::Magnus,
+        }
     }
 
     pub fn state(&self) -> &[f64] {
@@ -285,7 +354,11 @@ impl Window {
     }
 
     pub fn propose_step(&mut self, h: f64) {
-        each!(&mut self.stepper, s => s.propose_step(h));
+        match &mut self.stepper {
+            WindowStepper::Explicit(s) => s.propose_step(h),
+            WindowStepper::Stiff(s) => s.propose_step(h),
+            WindowStepper::Magnus(s) => s.propose_step(h),
+        }
     }
 
     pub fn stats(&self) -> Stats {
@@ -310,7 +383,7 @@ impl Window {
             trial: None,
             b: &mut self.buffers,
         };
-        let outcome = each!(&mut self.stepper, s => s.step_measured(system, t_limit, budget, &mut measure))?;
+        let outcome = each_system!(&mut self.stepper, system, s, sys => s.step_measured(sys, t_limit, budget, &mut measure))?;
         match outcome {
             StepOutcome::Declined => Ok(WindowStep::Ended),
             StepOutcome::Accepted => {
@@ -344,7 +417,7 @@ impl Window {
             return Ok(());
         }
         let mut y = vec![0.0; system.dim()];
-        each!(&mut self.stepper, s => s.dense(system, t, &mut y))?;
+        each_system!(&mut self.stepper, system, s, sys => s.dense(sys, t, &mut y))?;
         let singular = || {
             Failure::new(
                 t,
@@ -396,7 +469,7 @@ impl Window {
             return self.members(system, options, anchors);
         }
         let mut y = vec![0.0; system.dim()];
-        each!(&mut self.stepper, s => s.dense(system, t, &mut y))?;
+        each_system!(&mut self.stepper, system, s, sys => s.dense(sys, t, &mut y))?;
         let b = &mut self.buffers;
         let reference = system
             .field(&y, &mut b.f, &mut b.s)
@@ -425,6 +498,8 @@ impl Window {
                 }
             }
             WindowStepper::Stiff(s) => *dst = StoredStep::Ready(s.dense_step()),
+            // The quasilinear field does not use Magnus windows.
+            WindowStepper::Magnus(_) => {}
         }
     }
 }
