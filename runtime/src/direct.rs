@@ -140,6 +140,11 @@ impl<M: Model> Solver<M> for Direct {
         Ok(())
     }
 
+    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure> {
+        let dense = self.stepper.dense_step(&ModelSystem(model))?;
+        Ok(vec![crate::solution::Segment::State(dense)])
+    }
+
     fn report(&self) -> Report {
         let mut notes = Vec::new();
         if let Some(t) = self.switched_back_at {

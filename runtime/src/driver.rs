@@ -15,6 +15,7 @@ use crate::field::{Anchor, FieldOptions};
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{Model, Regime};
 use crate::progress::Progress;
+use crate::solution::{Piece, Solution};
 use crate::solver::{Report, Solver};
 use crate::tolerance::Tolerance;
 
@@ -194,7 +195,6 @@ pub fn make_solver<M: Model + 'static>(
 /// Integrates `model` from `(t0, x0)` to `t1`, calling `sample(t, x)` at
 /// every time of `times` (ascending, within `[t0, t1]`) and, when `stop
 /// when` ends the run early, at the stop time.
-#[allow(clippy::too_many_arguments)]
 pub fn run<M: Model + 'static>(
     model: &mut M,
     options: &Options,
@@ -202,7 +202,40 @@ pub fn run<M: Model + 'static>(
     t1: f64,
     x0: &[f64],
     times: &[f64],
+    sample: impl FnMut(&M, f64, &[f64]) -> Result<(), Failure>,
+) -> Result<Outcome, Failure> {
+    run_with(model, options, t0, t1, x0, times, sample, None)
+}
+
+/// The whole solution as a value: [`run`], keeping every step's continuous
+/// extension (memory grows with the number of steps).
+pub fn solve<M: Model + 'static>(
+    model: &mut M,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+) -> Result<Solution, Failure> {
+    let mut pieces = Vec::new();
+    let outcome = run_with(model, options, t0, t1, x0, &[], |_, _, _| Ok(()), Some(&mut pieces))?;
+    Ok(Solution {
+        t0,
+        x0: x0.to_vec(),
+        pieces,
+        outcome,
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_with<M: Model + 'static>(
+    model: &mut M,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
     mut sample: impl FnMut(&M, f64, &[f64]) -> Result<(), Failure>,
+    mut pieces: Option<&mut Vec<Piece>>,
 ) -> Result<Outcome, Failure> {
     let n = x0.len();
     let budget = Budget::new(options.max_steps);
@@ -259,6 +292,14 @@ pub fn run<M: Model + 'static>(
         }
         progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
+        if let Some(pieces) = pieces.as_deref_mut() {
+            for segment in solver.segments(model)? {
+                pieces.push(Piece {
+                    until: segment.t_new(),
+                    segment,
+                });
+            }
+        }
         // A switch whose function changed sign against its branch.
         let mut event: Option<(f64, Vec<usize>)> = None;
         if M::SWITCHES > 0 {
@@ -301,6 +342,13 @@ pub fn run<M: Model + 'static>(
         }
         match event {
             Some((t_event, switches)) => {
+                if let Some(pieces) = pieces.as_deref_mut() {
+                    // The event ends this step's pieces early.
+                    pieces.retain(|p| p.segment.t_old() < t_event);
+                    if let Some(last) = pieces.last_mut() {
+                        last.until = last.until.min(t_event);
+                    }
+                }
                 emit_until(model, solver.as_mut(), &mut next_sample, t_event, &mut sample)?;
                 solver.dense(model, t_event, &mut x_event)?;
                 for k in switches {

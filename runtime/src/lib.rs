@@ -37,5 +37,6 @@ pub mod field;
 pub mod output;
 pub mod plot;
 pub mod progress;
+pub mod solution;
 pub mod solver;
 pub mod summary;

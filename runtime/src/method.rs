@@ -116,6 +116,17 @@ impl AnyStepper {
         })
     }
 
+    /// The last step's continuous extension, detached.
+    pub fn dense_step<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+    ) -> Result<crate::stepper::DenseStep, Failure> {
+        match self {
+            AnyStepper::Explicit(s) => s.dense_step(system),
+            AnyStepper::Stiff(s) => Ok(s.dense_step()),
+        }
+    }
+
     pub fn integrator(&self) -> Integrator {
         match self {
             AnyStepper::Explicit(_) => Integrator::Explicit,

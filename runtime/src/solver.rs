@@ -48,6 +48,10 @@ pub trait Solver<M: Model> {
     /// The work so far.
     fn report(&self) -> Report;
 
+    /// The continuous extension of the last advance, as values that outlive
+    /// the solver (for [`crate::solution::Solution`]).
+    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure>;
+
     /// Follows other initial states through the same field (an ensemble:
     /// exact for affine motions, first order in the spread for others);
     /// `false` when the method cannot.

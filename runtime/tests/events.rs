@@ -95,3 +95,32 @@ fn an_implicit_constraint_switches_candidates_through_every_heading() {
         assert!(error < 1e-8, "{method:?}: error {error}");
     }
 }
+
+#[test]
+fn a_solution_value_interpolates_every_method_across_events() {
+    use lagc_runtime::driver::solve;
+    for method in [Method::Direct, Method::Field] {
+        for choice in [IntegratorChoice::Explicit, IntegratorChoice::Stiff] {
+            let mut model = ThrownBall::new(&[]);
+            let x0 = model.initial_state(&[None, None]).unwrap();
+            let options = Options {
+                method,
+                integrator: Some(choice),
+                tol: Tolerance { rtol: 1e-10, atol: 1e-12 },
+                ..Options::default()
+            };
+            let solution = solve(&mut model, &options, 0.0, 10.0, &x0).unwrap();
+            assert!((solution.end() - ThrownBall::landing_time()).abs() < 1e-9);
+            let mut error = 0.0_f64;
+            for k in 0..=300 {
+                let t = solution.end() * k as f64 / 300.0;
+                let x = solution.at(t);
+                let e = ThrownBall::exact_at(t);
+                error = error.max((x[0] - e[0]).abs()).max((x[1] - e[1]).abs());
+            }
+            eprintln!("{method:?} {choice:?}: Solution::at error {error:.2e}");
+            let allowed = if choice == IntegratorChoice::Stiff { 1e-6 } else { 1e-8 };
+            assert!(error < allowed, "{method:?} {choice:?}: {error}");
+        }
+    }
+}

@@ -112,6 +112,11 @@ impl<M: Model> Solver<M> for AffineField {
         Ok(())
     }
 
+    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure> {
+        let window = &mut self.window;
+        with_system(model, self.options.magnus, |system| window.segment(system)).map(|s| vec![s])
+    }
+
     fn track_members(&mut self, members: Vec<Vec<f64>>) -> bool {
         self.members = Some(members);
         true

@@ -41,6 +41,11 @@ pub trait FieldSystem: System {
         None
     }
 
+    /// `y` is the projective form `(w, P)` rather than `(f, S)`.
+    fn is_projective(&self) -> bool {
+        false
+    }
+
     /// `y` for the anchor's free term `c_1` moved by `delta` (exact: `f` is
     /// affine in `c_1` for an affine motion, and the other coefficients do
     /// not depend on it) — another initial state through the same field.
@@ -542,6 +547,10 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
         loss.is_finite().then_some(loss)
     }
 
+    fn is_projective(&self) -> bool {
+        true
+    }
+
     /// `Y = (w, P_1, …, P_N)` column by column obeys `Y' = −Ãᵀ Y`.
     fn generator(&self, t: f64, b: &mut Matrix) -> Option<Result<(), Failure>> {
         let n = M::STATE.len();
@@ -585,4 +594,27 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
             }
         }
     }
+}
+
+/// `f` and `S` from a projective state `y = (w, P)` (see
+/// [`ProjectiveCoefficients`]); `false` at a pole.
+pub fn projective_field(y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool {
+    let n = f.len();
+    let slot = |i: usize| if i == 0 { 0 } else { i + 1 };
+    let w = &y[..=n];
+    let w1 = w[1];
+    if w1 == 0.0 || !w1.is_finite() {
+        return false;
+    }
+    for i in 0..n {
+        f[i] = -w[slot(i)] / w1;
+    }
+    for j in 0..n {
+        let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
+        for i in 0..n {
+            let k = slot(i);
+            s[j * n + i] = -(p[k] * w1 - w[k] * p[1]) / (w1 * w1);
+        }
+    }
+    true
 }

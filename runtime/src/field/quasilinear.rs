@@ -458,6 +458,26 @@ impl<M: Model> Solver<M> for QuasilinearField {
         Ok(())
     }
 
+    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure> {
+        let Some(window) = self.accepted.as_mut() else {
+            return Ok(Vec::new());
+        };
+        let source = ProjectiveCoefficients::new(model, &window.path);
+        let mut out = Vec::with_capacity(window.steps.len());
+        for (i, step) in window.steps.iter().enumerate() {
+            if window.prepared[i].is_none() {
+                window.prepared[i] = Some(step.prepare(&source)?);
+            }
+            if let Some(y) = &window.prepared[i] {
+                out.push(crate::solution::Segment::Projective {
+                    y: y.clone(),
+                    anchor: window.anchor_x.clone(),
+                });
+            }
+        }
+        Ok(out)
+    }
+
     fn track_members(&mut self, members: Vec<Vec<f64>>) -> bool {
         self.members = Some(members);
         true

@@ -17,6 +17,7 @@ use crate::dop853::{hairer_error, Dop853, RawStep};
 use crate::linalg::Matrix;
 use crate::magnus::{LinearGenerator, Magnus};
 use crate::rodas4::Rodas4;
+use crate::solution::Segment;
 use crate::stepper::{DenseStep, ErrorMeasure, StepOutcome, Stepper};
 use crate::failure::{Failure, FailureKind};
 use crate::tolerance::{Stats, Tolerance};
@@ -483,6 +484,37 @@ impl Window {
                 )
             })?;
         member_states(system, options, &self.anchor_x, &reference, &y, anchors, t)
+    }
+
+    /// The last step's continuous extension as a value.
+    pub fn segment<F: FieldSystem + ?Sized>(&mut self, system: &F) -> Result<Segment, Failure> {
+        let anchor = self.anchor_x.clone();
+        let y = match &mut self.stepper {
+            WindowStepper::Explicit(s) => s.dense_step(system)?,
+            WindowStepper::Stiff(s) => s.dense_step(),
+            WindowStepper::Magnus(_) => {
+                // No continuous extension of its own: the state at the
+                // step's Chebyshev points.
+                let (a, b) = (self.previous_time(), self.time());
+                let n = anchor.len();
+                let mut t = Vec::with_capacity(8);
+                let mut x = Vec::with_capacity(8);
+                for k in 0..8 {
+                    let c = 0.5 - 0.5 * (std::f64::consts::PI * k as f64 / 7.0).cos();
+                    let tk = a + c * (b - a);
+                    let mut state = vec![0.0; n];
+                    self.dense(system, tk, &mut state)?;
+                    t.push(tk);
+                    x.push(state);
+                }
+                return Ok(Segment::Points { t, x });
+            }
+        };
+        Ok(if system.is_projective() {
+            Segment::Projective { y, anchor }
+        } else {
+            Segment::Coefficients { y, anchor }
+        })
     }
 
     /// The last step, kept for dense output later, into `dst` (its
