@@ -54,7 +54,7 @@ fn affine_parts<M: Model>(model: &M, t: f64) -> Result<(Matrix, Vec<f64>), Failu
 
 /// `x'' = −ω² x`, x(0) = 1, x'(0) = 0: `x = cos ωt` (affine; its
 /// coefficient system is of Riccati type with poles every half period).
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct Oscillator {
     pub params: Vec<f64>,
 }
@@ -114,7 +114,7 @@ impl Model for Oscillator {
 
 /// `x'' = −sin(x)/(10 − t/2)`: the pendulum whose mass decreases
 /// (non-affine, explicitly time dependent). x(0) = 1, x'(0) = 0, t ∈ [0, 10].
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct MassLossPendulum {
     pub params: Vec<f64>,
 }
@@ -162,7 +162,7 @@ impl Model for MassLossPendulum {
 /// The spherical pendulum (g/l = 9.81): θ'' = sinθ cosθ φ'² − 9.81 sinθ,
 /// φ'' = −2 cotθ θ' φ'; θ(0) = 1, φ(0) = 0, θ'(0) = 0, φ'(0) = 2. Energy
 /// and `sin²θ φ'` are conserved.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct SphericalPendulum {
     pub params: Vec<f64>,
 }
@@ -226,7 +226,7 @@ impl Model for SphericalPendulum {
 
 /// `x'' + 1000 x' + x = 0` (stiffness ratio 1e6), x(0) = 1, x'(0) = 0:
 /// `x = A e^{r1 t} + B e^{r2 t}`. Affine; its adjoint grows like e^{+1000t}.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct StiffDamped {
     pub params: Vec<f64>,
 }
@@ -298,7 +298,7 @@ impl Model for StiffDamped {
 /// A ball thrown upward against quadratic drag, `z'' = −g − c z'|z'|`,
 /// until it lands (`stop when z < 0`): the kink of `|z'|` at the top and
 /// the landing are events. g = 9.81, c = 0.05, z(0) = 0, z'(0) = 20.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct ThrownBall {
     pub params: Vec<f64>,
     pub rising: bool,
@@ -402,7 +402,7 @@ impl Model for ThrownBall {
 /// implicit constraint `sin(th) x' = cos(th) y'` and two candidates for the
 /// dependent derivative (`y'`: mode 0; `x'`: mode 1). Speed v = 1,
 /// th = t: `x = sin t`, `y = 1 − cos t`.
-#[derive(Clone)]
+#[derive(Clone, Debug)]
 pub struct KnifeEdge {
     pub params: Vec<f64>,
     pub mode: usize,
