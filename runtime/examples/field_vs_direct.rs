@@ -11,7 +11,7 @@ use lagc_runtime::method::{IntegratorChoice, Method};
 use lagc_runtime::model::Model;
 use lagc_runtime::output::sample_times;
 use lagc_runtime::tolerance::Tolerance;
-use models::{MassLossPendulum, Oscillator, SphericalPendulum};
+use models::{DoublePendulum, MassLossPendulum, Oscillator, SphericalPendulum};
 use std::time::Instant;
 
 fn solve<M: Model + 'static>(method: Method, rtol: f64) -> (Vec<(f64, Vec<f64>)>, f64, String) {
@@ -79,4 +79,5 @@ fn main() {
     table::<Oscillator>();
     table::<MassLossPendulum>();
     table::<SphericalPendulum>();
+    table::<DoublePendulum>();
 }

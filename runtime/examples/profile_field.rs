@@ -5,7 +5,7 @@ use lagc_runtime::driver::{run, Options};
 use lagc_runtime::method::Method;
 use lagc_runtime::model::Model;
 use lagc_runtime::tolerance::Tolerance;
-use models::SphericalPendulum;
+use models::DoublePendulum as SphericalPendulum;
 fn main() {
     let mut model = SphericalPendulum::new(&[10.0]);
     let x0 = model.initial_state(&[None; 4]).unwrap();

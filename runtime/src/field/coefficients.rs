@@ -533,6 +533,9 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
         }
         let w1_sq = w1 * w1;
         let (mut magnitude, mut value) = (0.0_f64, 0.0_f64);
+        // How far the sensitivities of the normal grew from the anchor's
+        // unit vectors: the differences below lose as many digits.
+        let growth = y[n + 1..].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         for j in 0..n {
             let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
             for i in 0..n {
@@ -544,6 +547,7 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
             }
         }
         let loss = if value > 0.0 { magnitude / value } else { f64::INFINITY };
+        let loss = loss.max(growth);
         loss.is_finite().then_some(loss)
     }
 

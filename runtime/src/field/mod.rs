@@ -49,7 +49,7 @@ impl Default for FieldOptions {
             tol: Tolerance::default(),
             anchor: Anchor::Zero,
             max_condition: 1e4,
-            max_growth: 1e3,
+            max_growth: 1e12,
             reanchor: true,
             stiff: false,
             auto_stiff: true,

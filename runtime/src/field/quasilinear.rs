@@ -24,7 +24,7 @@ use super::conditions::recover;
 use super::window::{member_states, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
-use crate::dop853::Dop853;
+use crate::method::{AnyStepper, Integrator};
 use crate::stepper::DenseStep;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
@@ -51,7 +51,7 @@ struct Predictor<'a, M: Model> {
     budget: &'a Budget,
     t0: f64,
     x0: Vec<f64>,
-    stepper: RefCell<Dop853>,
+    stepper: RefCell<AnyStepper>,
     steps: RefCell<Vec<DenseStep>>,
     cursor: Cell<usize>,
     /// The first failure of the predictor (reported by the window).
@@ -67,8 +67,9 @@ impl<'a, M: Model> Predictor<'a, M> {
         tol: Tolerance,
         h_max: f64,
         h0: Option<f64>,
+        integrator: Integrator,
     ) -> Result<Self, Failure> {
-        let stepper = Dop853::new(&ModelSystem(model), t0, x0, tol, h_max, h0)?;
+        let stepper = AnyStepper::new(integrator, &ModelSystem(model), t0, x0, tol, h_max, h0)?;
         Ok(Predictor {
             model,
             budget,
@@ -98,6 +99,11 @@ impl<'a, M: Model> Predictor<'a, M> {
 
     fn proposed_step(&self) -> f64 {
         self.stepper.borrow().proposed_step()
+    }
+
+    /// DOP853 found the motion stiff while predicting.
+    fn stiffness_detected(&self) -> bool {
+        self.stepper.borrow().stiffness_detected().is_some()
     }
 }
 
@@ -331,6 +337,11 @@ impl<M: Model> Solver<M> for QuasilinearField {
                 self.predictor_tolerance(),
                 self.h_max,
                 self.predictor_h,
+                if self.stiff {
+                    Integrator::Stiff
+                } else {
+                    Integrator::Explicit
+                },
             )?;
             let live = LivePath {
                 predictor: &predictor,
@@ -339,6 +350,11 @@ impl<M: Model> Solver<M> for QuasilinearField {
             let pass = self.pass(model, &live, t_limit, budget);
             self.predictor_stats += predictor.stats();
             self.predictor_h = Some(predictor.proposed_step());
+            // A stiff motion: predict with RODAS4 and integrate the
+            // windows' coefficients with RODAS4 from the next window on.
+            if self.options.auto_stiff && predictor.stiffness_detected() {
+                self.stiff = true;
+            }
             if let Some(failure) = predictor.failure.borrow_mut().take() {
                 return Err(failure);
             }
