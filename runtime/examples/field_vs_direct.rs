@@ -54,7 +54,11 @@ fn solve<M: Model + 'static>(method: Method, rtol: f64) -> (Vec<(f64, Vec<f64>)>
 fn error(a: &[(f64, Vec<f64>)], b: &[(f64, Vec<f64>)]) -> f64 {
     a.iter()
         .zip(b)
-        .flat_map(|((_, x), (_, y))| x.iter().zip(y).map(|(u, v)| (u - v).abs() / v.abs().max(1.0)))
+        .flat_map(|((_, x), (_, y))| {
+            x.iter()
+                .zip(y)
+                .map(|(u, v)| (u - v).abs() / v.abs().max(1.0))
+        })
         .fold(0.0, f64::max)
 }
 

@@ -9,8 +9,18 @@ use models::DoublePendulum as SphericalPendulum;
 fn main() {
     let mut model = SphericalPendulum::new(&[10.0]);
     let x0 = model.initial_state(&[None; 4]).unwrap();
-    let options = Options { method: Method::Field, tol: Tolerance { rtol: 1e-10, atol: 1e-10 }, ..Options::default() };
+    let options = Options {
+        method: Method::Field,
+        tol: Tolerance {
+            rtol: 1e-10,
+            atol: 1e-10,
+        },
+        ..Options::default()
+    };
     for _ in 0..200 {
-        run(&mut model, &options, 0.0, 10.0, &x0, &[10.0], |_, _, _| Ok(())).unwrap();
+        run(&mut model, &options, 0.0, 10.0, &x0, &[10.0], |_, _, _| {
+            Ok(())
+        })
+        .unwrap();
     }
 }

@@ -71,7 +71,7 @@ pub enum Command {
     /// Print the model's source hash (lagc checks that a binary belongs to
     /// its model).
     SourceHash,
-    Run(Invocation),
+    Run(Box<Invocation>),
 }
 
 /// A run, as the command line describes it.
@@ -174,7 +174,9 @@ pub fn parse(
             "--integrator" => {
                 let v = value(flag, &mut args)?;
                 let choice = IntegratorChoice::parse(v).ok_or_else(|| {
-                    format!("`--integrator` takes `auto`, `explicit`, `stiff` or `magnus`, not `{v}`")
+                    format!(
+                        "`--integrator` takes `auto`, `explicit`, `stiff` or `magnus`, not `{v}`"
+                    )
                 })?;
                 inv.options.integrator = Some(choice);
             }
@@ -198,7 +200,9 @@ pub fn parse(
             "--atol" => {
                 let a = number(flag, value(flag, &mut args)?)?;
                 if a <= 0.0 {
-                    return Err(format!("`--atol {a}`: an absolute tolerance must be positive"));
+                    return Err(format!(
+                        "`--atol {a}`: an absolute tolerance must be positive"
+                    ));
                 }
                 inv.options.tol.atol = a;
             }
@@ -253,7 +257,10 @@ pub fn parse(
                     if params.is_empty() {
                         format!("`--param {name}`: the model has no params")
                     } else {
-                        format!("`--param`: no param `{name}` (params: {})", params.join(", "))
+                        format!(
+                            "`--param`: no param `{name}` (params: {})",
+                            params.join(", ")
+                        )
                     }
                 })?;
                 inv.params.push((index, number(flag, v)?));
@@ -293,7 +300,7 @@ pub fn parse(
         }
         plot.phase = Some((x.trim().to_string(), y.trim().to_string()));
     }
-    Ok(Command::Run(inv))
+    Ok(Command::Run(Box::new(inv)))
 }
 
 /// The generated binary's `main`.
@@ -587,7 +594,9 @@ fn ensemble<M: Model + 'static>(
     count: usize,
 ) -> ExitCode {
     use crate::driver::run_ensemble;
-    let members: Vec<Vec<f64>> = (0..count).map(|k| ensemble_member(x0, k, inv.spread)).collect();
+    let members: Vec<Vec<f64>> = (0..count)
+        .map(|k| ensemble_member(x0, k, inv.spread))
+        .collect();
     let n = x0.len();
     let quiet = Options {
         progress: false,
@@ -602,20 +611,29 @@ fn ensemble<M: Model + 'static>(
         ..quiet
     };
     let solves = inv.repeat.max(1);
-    let (mut field_time, mut one_time, mut direct_time) = (Duration::MAX, Duration::MAX, Duration::MAX);
+    let (mut field_time, mut one_time, mut direct_time) =
+        (Duration::MAX, Duration::MAX, Duration::MAX);
     let mut field_states = vec![0.0; times.len() * count * n];
     let mut direct_states = vec![0.0; times.len() * count * n];
     let mut method = String::new();
     for _ in 0..solves {
         let start = Instant::now();
         let mut i = 0;
-        let outcome = run_ensemble(model, &field_options, t0, t1, &members, times, |_, states| {
-            for (k, s) in states.iter().enumerate() {
-                let at = (i * count + k) * n;
-                field_states[at..at + n].copy_from_slice(s);
-            }
-            i += 1;
-        });
+        let outcome = run_ensemble(
+            model,
+            &field_options,
+            t0,
+            t1,
+            &members,
+            times,
+            |_, states| {
+                for (k, s) in states.iter().enumerate() {
+                    let at = (i * count + k) * n;
+                    field_states[at..at + n].copy_from_slice(s);
+                }
+                i += 1;
+            },
+        );
         match outcome {
             Ok(outcome) => method = outcome.report.method,
             Err(failure) => {

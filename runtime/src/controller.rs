@@ -52,8 +52,7 @@ impl Controller {
     /// `err ≤ 1`.
     pub fn accept(&mut self, h: f64, err: f64) -> f64 {
         let err = err.max(1e-10);
-        let mut scale =
-            self.safety * err.powf(-self.alpha) * self.previous_error.powf(self.beta);
+        let mut scale = self.safety * err.powf(-self.alpha) * self.previous_error.powf(self.beta);
         scale = scale.clamp(self.min_scale, self.max_scale);
         if self.rejected {
             scale = scale.min(1.0);
@@ -92,7 +91,7 @@ mod tests {
         let grown = c.accept(1.0, 1e-6);
         assert!(grown > 1.0 && grown <= 6.0);
         let shrunk = c.reject(1.0, 100.0);
-        assert!(shrunk < 1.0 && shrunk >= 1.0 / 3.0);
+        assert!((1.0 / 3.0..1.0).contains(&shrunk));
         let after = c.accept(1.0, 1e-8);
         assert!(after <= 1.0);
         // An error of exactly 1 keeps the step below its length.

@@ -413,8 +413,14 @@ impl Dop853 {
             }
             let finite = self.attempt(system, h)?;
             let err = if finite {
-                match measure.measure(self.t, h, &self.y, &self.y_trial, &self.error3, &self.error5)
-                {
+                match measure.measure(
+                    self.t,
+                    h,
+                    &self.y,
+                    &self.y_trial,
+                    &self.error3,
+                    &self.error5,
+                ) {
                     Some(err) => err,
                     None => {
                         self.stats.rejected_steps += 1;
@@ -535,7 +541,10 @@ impl Dop853 {
     /// The continuous extension of the last step (Hairer's `dop853.f`,
     /// `IOUT ≥ 2`): three more stages and the coefficients `cont`.
     fn prepare_dense<S: System + ?Sized>(&mut self, system: &S) -> Result<(), Failure> {
-        let (mut extra, mut state) = (std::mem::take(&mut self.k), std::mem::take(&mut self.stage_state));
+        let (mut extra, mut state) = (
+            std::mem::take(&mut self.k),
+            std::mem::take(&mut self.stage_state),
+        );
         let result = continuous_extension(
             system,
             self.t_old,
@@ -587,7 +596,12 @@ impl Dop853 {
         if !self.dense_ready {
             self.prepare_dense(system)?;
         }
-        Ok(DenseStep::dop853(self.t_old, self.t, self.h_old, self.cont.clone()))
+        Ok(DenseStep::dop853(
+            self.t_old,
+            self.t,
+            self.h_old,
+            self.cont.clone(),
+        ))
     }
 }
 

@@ -60,6 +60,9 @@ impl Options {
     }
 }
 
+/// A sample callback: `(model, t, x)`.
+type Sample<'a, M> = dyn FnMut(&M, f64, &[f64]) -> Result<(), Failure> + 'a;
+
 /// Why the run ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Ending {
@@ -90,7 +93,7 @@ pub fn initial_branches<M: Model>(model: &M, t0: f64, x0: &[f64]) -> Vec<bool> {
     }
     let mut g = vec![0.0; k];
     model.switching_functions(t0, x0, &mut g);
-    if g.iter().any(|&v| v == 0.0) {
+    if g.contains(&0.0) {
         let mut slope = vec![0.0; x0.len()];
         if model.rhs(t0, x0, &mut slope).is_ok() {
             let h = 1e-8 * t0.abs().max(1.0);
@@ -217,7 +220,16 @@ pub fn solve<M: Model + 'static>(
     x0: &[f64],
 ) -> Result<Solution, Failure> {
     let mut pieces = Vec::new();
-    let outcome = run_with(model, options, t0, t1, x0, &[], |_, _, _| Ok(()), Some(&mut pieces))?;
+    let outcome = run_with(
+        model,
+        options,
+        t0,
+        t1,
+        x0,
+        &[],
+        |_, _, _| Ok(()),
+        Some(&mut pieces),
+    )?;
     Ok(Solution {
         t0,
         x0: x0.to_vec(),
@@ -249,10 +261,10 @@ fn run_with<M: Model + 'static>(
     let mut next_sample = 0;
     let mut events = 0;
     let emit_until = |model: &M,
-                          solver: &mut dyn Solver<M>,
-                          next: &mut usize,
-                          until: f64,
-                          sample: &mut dyn FnMut(&M, f64, &[f64]) -> Result<(), Failure>|
+                      solver: &mut dyn Solver<M>,
+                      next: &mut usize,
+                      until: f64,
+                      sample: &mut Sample<'_, M>|
      -> Result<(), Failure> {
         let mut x = vec![0.0; n];
         while *next < times.len() && times[*next] <= until {
@@ -280,7 +292,8 @@ fn run_with<M: Model + 'static>(
         });
     }
     check_masses(model, t0)?;
-    let mut solver = make_solver(model, options, t0, x0, h_max).map_err(|f| diagnose(model, f, x0))?;
+    let mut solver =
+        make_solver(model, options, t0, x0, h_max).map_err(|f| diagnose(model, f, x0))?;
     let mut progress = Progress::new(options.progress, t0, t1);
     let mut g_now = vec![0.0; M::SWITCHES];
     let mut x_event = vec![0.0; n];
@@ -349,7 +362,13 @@ fn run_with<M: Model + 'static>(
                         last.until = last.until.min(t_event);
                     }
                 }
-                emit_until(model, solver.as_mut(), &mut next_sample, t_event, &mut sample)?;
+                emit_until(
+                    model,
+                    solver.as_mut(),
+                    &mut next_sample,
+                    t_event,
+                    &mut sample,
+                )?;
                 solver.dense(model, t_event, &mut x_event)?;
                 for k in switches {
                     regime.branches[k] = !regime.branches[k];
@@ -380,7 +399,13 @@ fn run_with<M: Model + 'static>(
             }
         }
     }
-    emit_until(model, solver.as_mut(), &mut next_sample, f64::INFINITY, &mut sample)?;
+    emit_until(
+        model,
+        solver.as_mut(),
+        &mut next_sample,
+        f64::INFINITY,
+        &mut sample,
+    )?;
     progress.finish();
     Ok(Outcome {
         report: solver.report(),

@@ -65,7 +65,10 @@ mod tests {
         assert!((root - 0.3).abs() < 1e-5, "{root}");
         assert!(root >= 0.3 - 1e-15);
         // cos changes sign at π/2.
-        let root = locate(1.0, 1.0_f64.cos(), 2.0, 2.0_f64.cos(), |t| Ok::<_, ()>(t.cos())).unwrap();
+        let root = locate(1.0, 1.0_f64.cos(), 2.0, 2.0_f64.cos(), |t| {
+            Ok::<_, ()>(t.cos())
+        })
+        .unwrap();
         assert!((root - std::f64::consts::FRAC_PI_2).abs() <= 8.0 * f64::EPSILON * 2.0);
     }
 }

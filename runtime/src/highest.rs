@@ -142,7 +142,10 @@ mod tests {
     fn a_singular_mass_matrix_is_a_failure_naming_it() {
         let mass = Matrix::from_rows(&[&[1.0, 2.0], &[2.0, 4.0]]);
         let failure = solve_linear(1.5, mass, &[1.0, 1.0]).unwrap_err();
-        assert!(matches!(failure.kind, FailureKind::SingularMassMatrix { .. }));
+        assert!(matches!(
+            failure.kind,
+            FailureKind::SingularMassMatrix { .. }
+        ));
         assert_eq!(failure.time, 1.5);
     }
 }

@@ -16,27 +16,31 @@
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
 
+// Numerical kernels index several arrays with one loop variable; and
+// `!(x > 0.0)` is meant: it is true for NaN.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod budget;
+pub mod cli;
 pub mod controller;
+pub mod direct;
 pub mod dop853;
+pub mod driver;
+pub mod events;
 pub mod failure;
+pub mod field;
 pub mod highest;
 pub mod linalg;
 pub mod magnus;
 pub mod method;
 pub mod model;
-pub mod rodas4;
-pub mod stepper;
-pub mod system;
-pub mod tolerance;
-pub mod cli;
-pub mod direct;
-pub mod driver;
-pub mod events;
-pub mod field;
 pub mod output;
 pub mod plot;
 pub mod progress;
+pub mod rodas4;
 pub mod solution;
 pub mod solver;
+pub mod stepper;
 pub mod summary;
+pub mod system;
+pub mod tolerance;

@@ -130,7 +130,10 @@ impl Magnus {
             budget.draw(self.t)?;
             let (h, reaches) = step_toward(self.t, self.h, t_limit);
             if underflows(self.t, h) && !reaches {
-                return Err(Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h }));
+                return Err(Failure::new(
+                    self.t,
+                    FailureKind::StepSizeUnderflow { step: h },
+                ));
             }
             let apply = |p: &Matrix, y: &[f64]| -> Vec<f64> {
                 let yy = Matrix::from_column_major(m, m, y.to_vec());

@@ -127,7 +127,13 @@ pub trait Model: Clone {
 
     /// `X` and `∂X/∂x` at once, sharing their common subexpressions: the
     /// field method linearises the motion at every stage.
-    fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+    fn linearize(
+        &self,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut Matrix,
+    ) -> Result<(), Failure> {
         self.rhs(t, x, dx)?;
         self.jacobian(t, x, jac)
     }

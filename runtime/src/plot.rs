@@ -86,8 +86,16 @@ pub fn render(
         },
         None => (1..names.len()).map(|c| (0, c)).collect(),
     };
-    let (x_lo, x_hi) = range(series.iter().flat_map(|&(cx, _)| rows.iter().map(move |r| value(r, cx))));
-    let (y_lo, y_hi) = range(series.iter().flat_map(|&(_, cy)| rows.iter().map(move |r| value(r, cy))));
+    let (x_lo, x_hi) = range(
+        series
+            .iter()
+            .flat_map(|&(cx, _)| rows.iter().map(move |r| value(r, cx))),
+    );
+    let (y_lo, y_hi) = range(
+        series
+            .iter()
+            .flat_map(|&(_, cy)| rows.iter().map(move |r| value(r, cy))),
+    );
     let plot_w = WIDTH - LEFT - RIGHT;
     let plot_h = HEIGHT - TOP - BOTTOM;
     let sx = |v: f64| LEFT + (v - x_lo) / (x_hi - x_lo) * plot_w;
@@ -176,7 +184,11 @@ fn format_tick(v: f64) -> String {
     if v == 0.0 || (1e-3..1e5).contains(&a) {
         let s = format!("{v:.6}");
         let s = s.trim_end_matches('0').trim_end_matches('.');
-        if s == "-0" { "0".to_string() } else { s.to_string() }
+        if s == "-0" {
+            "0".to_string()
+        } else {
+            s.to_string()
+        }
     } else {
         format!("{v:.2e}")
     }
@@ -212,7 +224,15 @@ mod tests {
             })
             .collect();
         let names = ["t", "x", "x'"];
-        let svg = render(&PlotRequest { file: String::new(), phase: None }, "m", &names, &rows);
+        let svg = render(
+            &PlotRequest {
+                file: String::new(),
+                phase: None,
+            },
+            "m",
+            &names,
+            &rows,
+        );
         assert_eq!(svg.matches("<polyline").count(), 2);
         let phase = PlotRequest {
             file: String::new(),

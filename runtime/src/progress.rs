@@ -32,7 +32,10 @@ impl Progress {
         if now.duration_since(self.start) < Duration::from_secs(1) {
             return;
         }
-        if self.last.is_some_and(|l| now.duration_since(l) < Duration::from_millis(100)) {
+        if self
+            .last
+            .is_some_and(|l| now.duration_since(l) < Duration::from_millis(100))
+        {
             return;
         }
         self.last = Some(now);

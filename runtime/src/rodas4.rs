@@ -135,7 +135,9 @@ pub struct Rodas4 {
 enum Attempt {
     Done,
     /// A stage was not finite or the iteration matrix was singular.
-    Broken { component: usize },
+    Broken {
+        component: usize,
+    },
 }
 
 impl Rodas4 {
@@ -357,7 +359,14 @@ impl Rodas4 {
 }
 
 /// RODAS4's continuous extension at `θ`.
-pub(crate) fn eval_dense(y_old: &[f64], y: &[f64], d2: &[f64], d3: &[f64], s: f64, out: &mut [f64]) {
+pub(crate) fn eval_dense(
+    y_old: &[f64],
+    y: &[f64],
+    d2: &[f64],
+    d3: &[f64],
+    s: f64,
+    out: &mut [f64],
+) {
     let s1 = 1.0 - s;
     for (i, o) in out.iter_mut().enumerate() {
         *o = y_old[i] * s1 + s * (y[i] + s1 * (d2[i] + s * d3[i]));

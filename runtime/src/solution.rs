@@ -25,18 +25,18 @@ pub enum Segment {
 impl Segment {
     pub fn t_old(&self) -> f64 {
         match self {
-            Segment::State(d) | Segment::Coefficients { y: d, .. } | Segment::Projective { y: d, .. } => {
-                d.t_old
-            }
+            Segment::State(d)
+            | Segment::Coefficients { y: d, .. }
+            | Segment::Projective { y: d, .. } => d.t_old,
             Segment::Points { t, .. } => t[0],
         }
     }
 
     pub fn t_new(&self) -> f64 {
         match self {
-            Segment::State(d) | Segment::Coefficients { y: d, .. } | Segment::Projective { y: d, .. } => {
-                d.t_new
-            }
+            Segment::State(d)
+            | Segment::Coefficients { y: d, .. }
+            | Segment::Projective { y: d, .. } => d.t_new,
             Segment::Points { t, .. } => *t.last().unwrap_or(&t[0]),
         }
     }

@@ -53,10 +53,16 @@ pub trait ErrorMeasure {
     /// the step's error estimates `e3`, `e5` per unit step (DOP853: Hairer's 3rd- and 5th-order ones; RODAS4: its one estimate, twice);
     /// `None` declines the step: it must not be taken at any length that
     /// reaches this far (the field's conditions degraded).
-    fn measure(&mut self, t0: f64, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], e5: &[f64])
-        -> Option<f64>;
+    fn measure(
+        &mut self,
+        t0: f64,
+        h: f64,
+        y0: &[f64],
+        y1: &[f64],
+        e3: &[f64],
+        e5: &[f64],
+    ) -> Option<f64>;
 }
-
 
 /// What `step_measured` did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -65,7 +71,6 @@ pub enum StepOutcome {
     /// The measure declined the step: nothing changed.
     Declined,
 }
-
 
 /// One step's continuous extension, detached from its integrator.
 #[derive(Clone, Debug)]

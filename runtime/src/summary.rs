@@ -45,7 +45,11 @@ impl Summary {
         if self.outcome.events > 0 {
             let _ = write!(s, "; events: {}", self.outcome.events);
         }
-        let _ = write!(s, "; wall time: {:.3} ms", self.wall_time.as_secs_f64() * 1e3);
+        let _ = write!(
+            s,
+            "; wall time: {:.3} ms",
+            self.wall_time.as_secs_f64() * 1e3
+        );
         if let Ending::Stopped(t) = self.outcome.ending {
             let _ = write!(s, "\nstopped at t = {t} (`stop when` became true)");
         }

@@ -15,7 +15,7 @@ fn args(text: &str) -> Vec<String> {
 
 fn invocation<M: Model>(text: &str) -> Invocation {
     match parse(&args(text), M::PARAMS, M::STATE, M::OUTPUTS) {
-        Ok(Command::Run(inv)) => inv,
+        Ok(Command::Run(inv)) => *inv,
         other => panic!("{text}: {other:?}"),
     }
 }
@@ -35,7 +35,10 @@ fn bad_arguments_are_refused_in_words() {
         ("--samples 18446744073709551615", "at most"),
         ("--samples 1e11", "at most"),
         ("--method sideways", "`field` or `direct`"),
-        ("--integrator fast", "`auto`, `explicit`, `stiff` or `magnus`"),
+        (
+            "--integrator fast",
+            "`auto`, `explicit`, `stiff` or `magnus`",
+        ),
         ("--param nope=1", "no param `nope`"),
         ("--param w", "expected NAME=VALUE"),
         ("--init z=1", "not a component of the state"),
@@ -49,12 +52,14 @@ fn bad_arguments_are_refused_in_words() {
         let message = usage_error::<Oscillator>(text);
         assert!(message.contains(expected), "{text}: {message}");
     }
-    assert!(MAX_SAMPLES >= 1_000_000);
+    let many = usage_error::<Oscillator>(&format!("--samples {}", MAX_SAMPLES + 1));
+    assert!(many.contains("at most"), "{many}");
 }
 
 #[test]
 fn good_arguments_parse() {
-    let inv = invocation::<Oscillator>("--method direct --stiff --rtol 1e-8 --samples 1e3 --param w=3");
+    let inv =
+        invocation::<Oscillator>("--method direct --stiff --rtol 1e-8 --samples 1e3 --param w=3");
     assert_eq!(inv.samples, 1000);
     assert_eq!(inv.params, vec![(0, 3.0)]);
     assert_eq!(inv.options.tol.rtol, 1e-8);
@@ -68,7 +73,10 @@ fn overrides_get_the_checks_the_file_gets() {
     // A reversed span after `--param T=-1`.
     let inv = invocation::<Oscillator>("--param T=-1");
     let failure = prepare::<Oscillator>(&inv).unwrap_err();
-    assert!(matches!(failure.kind, FailureKind::BadTimeSpan { .. }), "{failure}");
+    assert!(
+        matches!(failure.kind, FailureKind::BadTimeSpan { .. }),
+        "{failure}"
+    );
     assert_eq!(failure.exit_status(), 2);
     let inv = invocation::<Oscillator>("--param T=0");
     assert!(prepare::<Oscillator>(&inv).is_err());

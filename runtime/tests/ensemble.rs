@@ -18,7 +18,11 @@ fn members(x0: &[f64], count: usize, spread: f64) -> Vec<Vec<f64>> {
                 .enumerate()
                 .map(|(i, &x)| {
                     let u = ((k as f64) * (2.0 + i as f64).sqrt()).fract() * 2.0 - 1.0;
-                    if k == 0 { x } else { x + spread * x.abs().max(1.0) * u }
+                    if k == 0 {
+                        x
+                    } else {
+                        x + spread * x.abs().max(1.0) * u
+                    }
                 })
                 .collect()
         })
@@ -30,7 +34,10 @@ fn direct<M: Model + 'static>(x0: &[f64], times: &[f64]) -> Vec<Vec<f64>> {
     let (t0, t1) = model.time_span();
     let options = Options {
         method: Method::Direct,
-        tol: Tolerance { rtol: 1e-12, atol: 1e-14 },
+        tol: Tolerance {
+            rtol: 1e-12,
+            atol: 1e-14,
+        },
         ..Options::default()
     };
     let mut rows = Vec::new();
@@ -49,11 +56,17 @@ fn largest_difference<M: Model + 'static>(spread: f64, count: usize) -> f64 {
     let all = members(&x0, count, spread);
     let times = sample_times(t0, t1, 11);
     let options = Options {
-        tol: Tolerance { rtol: 1e-11, atol: 1e-13 },
+        tol: Tolerance {
+            rtol: 1e-11,
+            atol: 1e-13,
+        },
         ..Options::default()
     };
     let mut field: Vec<Vec<Vec<f64>>> = Vec::new();
-    run_ensemble(&mut model, &options, t0, t1, &all, &times, |_, states| field.push(states.to_vec())).unwrap();
+    run_ensemble(&mut model, &options, t0, t1, &all, &times, |_, states| {
+        field.push(states.to_vec())
+    })
+    .unwrap();
     let mut largest = 0.0_f64;
     for (m, x) in all.iter().enumerate() {
         let reference = direct::<M>(x, &times);

@@ -18,7 +18,10 @@ fn a_ball_with_drag_rises_turns_and_lands_on_time_with_both_methods() {
         let x0 = model.initial_state(&[None, None]).unwrap();
         let options = Options {
             method,
-            tol: Tolerance { rtol: 1e-10, atol: 1e-12 },
+            tol: Tolerance {
+                rtol: 1e-10,
+                atol: 1e-12,
+            },
             ..Options::default()
         };
         let times = sample_times(0.0, 10.0, 101);
@@ -32,18 +35,31 @@ fn a_ball_with_drag_rises_turns_and_lands_on_time_with_both_methods() {
         let Ending::Stopped(t_stop) = outcome.ending else {
             panic!("{method:?}: the ball did not land");
         };
-        assert!((t_stop - landing).abs() < 1e-9, "{method:?}: landed at {t_stop}, not {landing}");
-        assert_eq!(rows.last().unwrap().0, t_stop, "the last row is at the stop time");
+        assert!(
+            (t_stop - landing).abs() < 1e-9,
+            "{method:?}: landed at {t_stop}, not {landing}"
+        );
+        assert_eq!(
+            rows.last().unwrap().0,
+            t_stop,
+            "the last row is at the stop time"
+        );
         assert!(rows.iter().all(|(t, _)| *t <= t_stop));
         assert_eq!(outcome.events, 2, "the top and the landing");
         let error = rows
             .iter()
             .flat_map(|(t, x)| {
                 let e = ThrownBall::exact_at(*t);
-                [(x[0] - e[0]).abs(), (x[1] - e[1]).abs() / e[1].abs().max(1.0)]
+                [
+                    (x[0] - e[0]).abs(),
+                    (x[1] - e[1]).abs() / e[1].abs().max(1.0),
+                ]
             })
             .fold(0.0, f64::max);
-        eprintln!("{method:?}: landing {t_stop} (exact {landing}), error {error:.2e}, {:?}", outcome.report.stats);
+        eprintln!(
+            "{method:?}: landing {t_stop} (exact {landing}), error {error:.2e}, {:?}",
+            outcome.report.stats
+        );
         assert!(error < 1e-8, "{method:?}: error {error}");
     }
 }
@@ -56,7 +72,10 @@ fn stiff_affine_field_switches_to_rodas4_and_stays_accurate() {
         let options = Options {
             method: Method::Field,
             integrator: Some(choice),
-            tol: Tolerance { rtol: 1e-8, atol: 1e-10 },
+            tol: Tolerance {
+                rtol: 1e-8,
+                atol: 1e-10,
+            },
             ..Options::default()
         };
         let times = sample_times(0.0, 2.0, 21);
@@ -80,16 +99,27 @@ fn an_implicit_constraint_switches_candidates_through_every_heading() {
         let x0 = model.initial_state(&[None; 6]).unwrap();
         let options = Options {
             method,
-            tol: Tolerance { rtol: 1e-10, atol: 1e-12 },
+            tol: Tolerance {
+                rtol: 1e-10,
+                atol: 1e-12,
+            },
             ..Options::default()
         };
         let mut error = 0.0_f64;
-        let outcome = run(&mut model, &options, 0.0, 10.0, &x0, &sample_times(0.0, 10.0, 101), |_, t, x| {
-            for (a, b) in x.iter().zip(KnifeEdge::exact_at(t)) {
-                error = error.max((a - b).abs() / b.abs().max(1.0));
-            }
-            Ok(())
-        })
+        let outcome = run(
+            &mut model,
+            &options,
+            0.0,
+            10.0,
+            &x0,
+            &sample_times(0.0, 10.0, 101),
+            |_, t, x| {
+                for (a, b) in x.iter().zip(KnifeEdge::exact_at(t)) {
+                    error = error.max((a - b).abs() / b.abs().max(1.0));
+                }
+                Ok(())
+            },
+        )
         .unwrap_or_else(|f| panic!("{method:?}: {f}"));
         eprintln!("{method:?}: error {error:.2e}, {:?}", outcome.report.stats);
         assert!(error < 1e-8, "{method:?}: error {error}");
@@ -106,7 +136,10 @@ fn a_solution_value_interpolates_every_method_across_events() {
             let options = Options {
                 method,
                 integrator: Some(choice),
-                tol: Tolerance { rtol: 1e-10, atol: 1e-12 },
+                tol: Tolerance {
+                    rtol: 1e-10,
+                    atol: 1e-12,
+                },
                 ..Options::default()
             };
             let solution = solve(&mut model, &options, 0.0, 10.0, &x0).unwrap();
@@ -119,7 +152,11 @@ fn a_solution_value_interpolates_every_method_across_events() {
                 error = error.max((x[0] - e[0]).abs()).max((x[1] - e[1]).abs());
             }
             eprintln!("{method:?} {choice:?}: Solution::at error {error:.2e}");
-            let allowed = if choice == IntegratorChoice::Stiff { 1e-6 } else { 1e-8 };
+            let allowed = if choice == IntegratorChoice::Stiff {
+                1e-6
+            } else {
+                1e-8
+            };
             assert!(error < allowed, "{method:?} {choice:?}: {error}");
         }
     }

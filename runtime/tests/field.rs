@@ -22,7 +22,10 @@ fn trajectory<M: Model + 'static>(
     let x0 = model.initial_state(&vec![None; M::STATE.len()]).unwrap();
     let options = Options {
         method,
-        tol: Tolerance { rtol, atol: rtol * 1e-2 },
+        tol: Tolerance {
+            rtol,
+            atol: rtol * 1e-2,
+        },
         ..Options::default()
     };
     let times = sample_times(t0, t1, samples);
@@ -38,7 +41,11 @@ fn trajectory<M: Model + 'static>(
 fn largest_difference(a: &[(f64, Vec<f64>)], b: &[(f64, Vec<f64>)]) -> f64 {
     a.iter()
         .zip(b)
-        .flat_map(|((_, x), (_, y))| x.iter().zip(y).map(|(u, v)| (u - v).abs() / v.abs().max(1.0)))
+        .flat_map(|((_, x), (_, y))| {
+            x.iter()
+                .zip(y)
+                .map(|(u, v)| (u - v).abs() / v.abs().max(1.0))
+        })
         .fold(0.0, f64::max)
 }
 
@@ -49,9 +56,14 @@ fn affine_field_follows_the_oscillator_through_its_riccati_poles() {
         let w: f64 = 2.0;
         let error = rows
             .iter()
-            .map(|(t, x)| ((x[0] - (w * t).cos()).abs()).max((x[1] + w * (w * t).sin()).abs() / 2.0))
+            .map(|(t, x)| {
+                ((x[0] - (w * t).cos()).abs()).max((x[1] + w * (w * t).sin()).abs() / 2.0)
+            })
             .fold(0.0, f64::max);
-        eprintln!("oscillator rtol {rtol:e}: error {error:.2e}, {:?}", outcome.report);
+        eprintln!(
+            "oscillator rtol {rtol:e}: error {error:.2e}, {:?}",
+            outcome.report
+        );
         assert!(error < 100.0 * rtol, "rtol {rtol}: error {error}");
         // The Riccati coefficient f2 = tan(ωt)/ω has a pole every π/ω: six
         // in the span. The projective form passes them (re-anchoring only
@@ -73,13 +85,19 @@ fn quasilinear_field_agrees_with_direct_on_non_affine_motions() {
             "pendulum rtol {rtol:e}: field {e_field:.2e} ({:?}), direct {e_direct:.2e} ({} steps)",
             outcome.report, direct_outcome.report.stats.accepted_steps
         );
-        assert!(e_field < 10.0 * rtol.max(1e-12) * 10.0, "rtol {rtol}: field error {e_field}");
+        assert!(
+            e_field < 10.0 * rtol.max(1e-12) * 10.0,
+            "rtol {rtol}: field error {e_field}"
+        );
     }
     for rtol in [1e-6, 1e-9] {
         let (reference, _) = trajectory::<SphericalPendulum>(Method::Direct, 1e-13, 11);
         let (field, outcome) = trajectory::<SphericalPendulum>(Method::Field, rtol, 11);
         let e_field = largest_difference(&field, &reference);
-        eprintln!("spherical rtol {rtol:e}: field {e_field:.2e} ({:?})", outcome.report);
+        eprintln!(
+            "spherical rtol {rtol:e}: field {e_field:.2e} ({:?})",
+            outcome.report
+        );
         assert!(e_field < 100.0 * rtol, "rtol {rtol}: field error {e_field}");
     }
 }
@@ -87,20 +105,35 @@ fn quasilinear_field_agrees_with_direct_on_non_affine_motions() {
 #[test]
 fn every_field_integrator_follows_the_oscillator() {
     use lagc_runtime::method::IntegratorChoice;
-    for choice in [IntegratorChoice::Explicit, IntegratorChoice::Stiff, IntegratorChoice::Magnus] {
+    for choice in [
+        IntegratorChoice::Explicit,
+        IntegratorChoice::Stiff,
+        IntegratorChoice::Magnus,
+    ] {
         let mut model = Oscillator::new(&[2.0, 10.0]);
         let x0 = model.initial_state(&[None, None]).unwrap();
         let options = Options {
             method: Method::Field,
             integrator: Some(choice),
-            tol: Tolerance { rtol: 1e-8, atol: 1e-10 },
+            tol: Tolerance {
+                rtol: 1e-8,
+                atol: 1e-10,
+            },
             ..Options::default()
         };
         let mut error = 0.0_f64;
-        let outcome = run(&mut model, &options, 0.0, 10.0, &x0, &sample_times(0.0, 10.0, 21), |_, t, x| {
-            error = error.max((x[0] - (2.0 * t).cos()).abs());
-            Ok(())
-        })
+        let outcome = run(
+            &mut model,
+            &options,
+            0.0,
+            10.0,
+            &x0,
+            &sample_times(0.0, 10.0, 21),
+            |_, t, x| {
+                error = error.max((x[0] - (2.0 * t).cos()).abs());
+                Ok(())
+            },
+        )
         .unwrap();
         eprintln!("{choice:?}: {error:.2e} {:?}", outcome.report);
         assert!(error < 1e-6, "{choice:?}: {error}");
@@ -109,8 +142,8 @@ fn every_field_integrator_follows_the_oscillator() {
 
 #[test]
 fn the_double_pendulums_jacobian_is_exact_and_the_field_conserves_energy() {
-    use models::DoublePendulum;
     use lagc_runtime::linalg::Matrix;
+    use models::DoublePendulum;
     let model = DoublePendulum::new(&[10.0]);
     let x = [0.7, -0.3, 1.1, -0.4];
     let mut jac = Matrix::zeros(4, 4);
@@ -125,12 +158,22 @@ fn the_double_pendulums_jacobian_is_exact_and_the_field_conserves_energy() {
         model.rhs(0.0, &m, &mut fm).unwrap();
         for i in 0..4 {
             let fd = (fp[i] - fm[i]) / (2.0 * h);
-            assert!((fd - jac[(i, k)]).abs() < 1e-7, "∂X{i}/∂x{k}: {fd} vs {}", jac[(i, k)]);
+            assert!(
+                (fd - jac[(i, k)]).abs() < 1e-7,
+                "∂X{i}/∂x{k}: {fd} vs {}",
+                jac[(i, k)]
+            );
         }
     }
     let (rows, outcome) = trajectory::<DoublePendulum>(Method::Field, 1e-10, 11);
     let e0 = DoublePendulum::energy(&rows[0].1);
-    let drift = rows.iter().map(|(_, x)| (DoublePendulum::energy(x) - e0).abs()).fold(0.0, f64::max);
-    eprintln!("double pendulum field: energy drift {drift:.2e}, {:?}", outcome.report.stats);
+    let drift = rows
+        .iter()
+        .map(|(_, x)| (DoublePendulum::energy(x) - e0).abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "double pendulum field: energy drift {drift:.2e}, {:?}",
+        outcome.report.stats
+    );
     assert!(drift < 1e-8, "energy drift {drift}");
 }

@@ -16,10 +16,14 @@ use models::{MassLossPendulum, Oscillator, SphericalPendulum};
 struct Run {
     rows: Vec<(f64, Vec<f64>)>,
     steps: usize,
-    evaluations: usize,
 }
 
-fn solve<M: Model + 'static>(method: Method, choice: IntegratorChoice, rtol: f64, samples: usize) -> Run {
+fn solve<M: Model + 'static>(
+    method: Method,
+    choice: IntegratorChoice,
+    rtol: f64,
+    samples: usize,
+) -> Run {
     let params = M::parameters(&vec![None; M::PARAMS.len()]);
     let mut model = M::new(&params);
     let (t0, t1) = model.time_span();
@@ -31,17 +35,26 @@ fn solve<M: Model + 'static>(method: Method, choice: IntegratorChoice, rtol: f64
         ..Options::default()
     };
     let mut rows = Vec::new();
-    let outcome = run(&mut model, &options, t0, t1, &x0, &sample_times(t0, t1, samples), |_, t, x| {
-        rows.push((t, x.to_vec()));
-        Ok(())
-    })
+    let outcome = run(
+        &mut model,
+        &options,
+        t0,
+        t1,
+        &x0,
+        &sample_times(t0, t1, samples),
+        |_, t, x| {
+            rows.push((t, x.to_vec()));
+            Ok(())
+        },
+    )
     .unwrap_or_else(|f| panic!("{} {method:?} {choice:?} rtol {rtol}: {f}", M::NAME));
     let r = outcome.report;
-    let predictor = r.predictor.map_or(0, |p| p.accepted_steps + p.rejected_steps);
+    let predictor = r
+        .predictor
+        .map_or(0, |p| p.accepted_steps + p.rejected_steps);
     Run {
         rows,
         steps: r.stats.accepted_steps + r.stats.rejected_steps + predictor,
-        evaluations: r.stats.rhs_evaluations,
     }
 }
 
@@ -50,7 +63,9 @@ fn error(a: &[(f64, Vec<f64>)], b: &[(f64, Vec<f64>)]) -> f64 {
         .zip(b)
         .flat_map(|((ta, x), (tb, y))| {
             assert_eq!(ta, tb);
-            x.iter().zip(y).map(|(u, v)| (u - v).abs() / v.abs().max(1.0))
+            x.iter()
+                .zip(y)
+                .map(|(u, v)| (u - v).abs() / v.abs().max(1.0))
         })
         .fold(0.0, f64::max)
 }
@@ -93,15 +108,31 @@ fn exact_oscillator(samples: usize) -> Vec<(f64, Vec<f64>)> {
 #[test]
 fn dop853_is_of_order_8_and_rodas4_of_order_4() {
     let exact = exact_oscillator(11);
-    let (p, pts) = ladder::<Oscillator>(Method::Direct, IntegratorChoice::Explicit, &[1e-5, 1e-7, 1e-9, 1e-11], &exact);
+    let (p, pts) = ladder::<Oscillator>(
+        Method::Direct,
+        IntegratorChoice::Explicit,
+        &[1e-5, 1e-7, 1e-9, 1e-11],
+        &exact,
+    );
     eprintln!("DOP853 oscillator: order {p:.2} {pts:?}");
     assert!(p > 7.0, "DOP853 order {p}: {pts:?}");
-    let (p, pts) = ladder::<Oscillator>(Method::Direct, IntegratorChoice::Stiff, &[1e-4, 1e-5, 1e-6, 1e-7, 1e-8], &exact);
+    let (p, pts) = ladder::<Oscillator>(
+        Method::Direct,
+        IntegratorChoice::Stiff,
+        &[1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
+        &exact,
+    );
     eprintln!("RODAS4 oscillator: order {p:.2} {pts:?}");
     assert!(p > 3.5, "RODAS4 order {p}: {pts:?}");
     // An explicitly time-dependent motion: RODAS4 needs the true ∂X/∂t.
-    let reference = solve::<MassLossPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
-    let (p, pts) = ladder::<MassLossPendulum>(Method::Direct, IntegratorChoice::Stiff, &[1e-4, 1e-5, 1e-6, 1e-7, 1e-8], &reference);
+    let reference =
+        solve::<MassLossPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
+    let (p, pts) = ladder::<MassLossPendulum>(
+        Method::Direct,
+        IntegratorChoice::Stiff,
+        &[1e-4, 1e-5, 1e-6, 1e-7, 1e-8],
+        &reference,
+    );
     eprintln!("RODAS4 mass-loss pendulum: order {p:.2} {pts:?}");
     assert!(p > 3.5, "RODAS4 order {p}: {pts:?}");
 }
@@ -109,15 +140,32 @@ fn dop853_is_of_order_8_and_rodas4_of_order_4() {
 #[test]
 fn field_is_of_high_order_on_affine_and_non_affine_motions() {
     let exact = exact_oscillator(11);
-    let (p, pts) = ladder::<Oscillator>(Method::Field, IntegratorChoice::Auto, &[1e-5, 1e-7, 1e-9, 1e-11], &exact);
+    let (p, pts) = ladder::<Oscillator>(
+        Method::Field,
+        IntegratorChoice::Auto,
+        &[1e-5, 1e-7, 1e-9, 1e-11],
+        &exact,
+    );
     eprintln!("field oscillator: order {p:.2} {pts:?}");
     assert!(p > 6.0, "field order {p}: {pts:?}");
-    let reference = solve::<MassLossPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
-    let (p, pts) = ladder::<MassLossPendulum>(Method::Field, IntegratorChoice::Auto, &[1e-5, 1e-7, 1e-9, 1e-11], &reference);
+    let reference =
+        solve::<MassLossPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
+    let (p, pts) = ladder::<MassLossPendulum>(
+        Method::Field,
+        IntegratorChoice::Auto,
+        &[1e-5, 1e-7, 1e-9, 1e-11],
+        &reference,
+    );
     eprintln!("field mass-loss pendulum: order {p:.2} {pts:?}");
     assert!(p > 6.0, "field order {p}: {pts:?}");
-    let reference = solve::<SphericalPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
-    let (p, pts) = ladder::<SphericalPendulum>(Method::Field, IntegratorChoice::Auto, &[1e-5, 1e-7, 1e-9, 1e-11], &reference);
+    let reference =
+        solve::<SphericalPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
+    let (p, pts) = ladder::<SphericalPendulum>(
+        Method::Field,
+        IntegratorChoice::Auto,
+        &[1e-5, 1e-7, 1e-9, 1e-11],
+        &reference,
+    );
     eprintln!("field spherical pendulum: order {p:.2} {pts:?}");
     assert!(p > 6.0, "field order {p}: {pts:?}");
 }
@@ -126,23 +174,37 @@ fn field_is_of_high_order_on_affine_and_non_affine_motions() {
 fn tolerance_means_what_it_says_for_field_and_direct() {
     // A simple pendulum whose mass decreases: the error at rtol R stays
     // within 10·R for both methods.
-    let reference = solve::<MassLossPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
+    let reference =
+        solve::<MassLossPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
     for rtol in [1e-5, 1e-7, 1e-9, 1e-11] {
         for method in [Method::Field, Method::Direct] {
             let r = solve::<MassLossPendulum>(method, IntegratorChoice::Explicit, rtol, 11);
             let e = error(&r.rows, &reference);
-            eprintln!("pendulum {method:?} rtol {rtol:e}: error {e:.2e} ({} steps)", r.steps);
+            eprintln!(
+                "pendulum {method:?} rtol {rtol:e}: error {e:.2e} ({} steps)",
+                r.steps
+            );
             assert!(e <= 10.0 * rtol, "{method:?} at rtol {rtol}: error {e}");
         }
     }
     // The spherical pendulum is sensitive enough that DOP853 itself is off
     // by 18·R at R = 1e-5: there the field must do as well as DOP853 does.
-    let reference = solve::<SphericalPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
+    let reference =
+        solve::<SphericalPendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
     for rtol in [1e-5, 1e-7, 1e-9, 1e-11] {
-        let field = error(&solve::<SphericalPendulum>(Method::Field, IntegratorChoice::Explicit, rtol, 11).rows, &reference);
-        let direct = error(&solve::<SphericalPendulum>(Method::Direct, IntegratorChoice::Explicit, rtol, 11).rows, &reference);
+        let field = error(
+            &solve::<SphericalPendulum>(Method::Field, IntegratorChoice::Explicit, rtol, 11).rows,
+            &reference,
+        );
+        let direct = error(
+            &solve::<SphericalPendulum>(Method::Direct, IntegratorChoice::Explicit, rtol, 11).rows,
+            &reference,
+        );
         eprintln!("spherical rtol {rtol:e}: field {field:.2e}, direct {direct:.2e}");
-        assert!(field <= (10.0 * rtol).max(direct), "field at rtol {rtol}: {field} (direct {direct})");
+        assert!(
+            field <= (10.0 * rtol).max(direct),
+            "field at rtol {rtol}: {field} (direct {direct})"
+        );
     }
 }
 
@@ -158,7 +220,10 @@ fn output_times_never_change_the_steps() {
             assert_eq!(few.steps, many.steps, "{method:?} {choice:?}");
             let common: Vec<(f64, Vec<f64>)> = many.rows.iter().step_by(100).cloned().collect();
             let e = error(&few.rows, &common);
-            assert!(e <= 1e-9, "{method:?} {choice:?}: 11 and 1001 samples differ by {e}");
+            assert!(
+                e <= 1e-9,
+                "{method:?} {choice:?}: 11 and 1001 samples differ by {e}"
+            );
         }
     }
 }

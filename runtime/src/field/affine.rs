@@ -2,7 +2,9 @@
 //! model's symbolic coefficient system integrated window by window, each
 //! window anchored where the last one's conditions degraded.
 
-use super::coefficients::{Augmented, FieldSystem, Iterate, ProjectiveCoefficients, SymbolicCoefficients};
+use super::coefficients::{
+    Augmented, FieldSystem, Iterate, ProjectiveCoefficients, SymbolicCoefficients,
+};
 use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
@@ -75,7 +77,8 @@ impl<M: Model> Solver<M> for AffineField {
 
     fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
         let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
-        let (mut done, mut reanchorings, mut largest) = (Stats::default(), 0, self.largest_condition);
+        let (mut done, mut reanchorings, mut largest) =
+            (Stats::default(), 0, self.largest_condition);
         let members = &mut self.members;
         let result = with_system(model, options.magnus, |system| {
             advance_window(
@@ -99,7 +102,9 @@ impl<M: Model> Solver<M> for AffineField {
 
     fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let window = &mut self.window;
-        with_system(model, self.options.magnus, |system| window.dense(system, t, out))
+        with_system(model, self.options.magnus, |system| {
+            window.dense(system, t, out)
+        })
     }
 
     fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
@@ -125,17 +130,19 @@ impl<M: Model> Solver<M> for AffineField {
     fn members_at(&mut self, model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
         let (window, options) = (&mut self.window, &self.options);
         let anchors = self.members.as_deref().unwrap_or(&[]);
-        with_system(model, options.magnus, |system| window.members_at(system, options, t, anchors))
+        with_system(model, options.magnus, |system| {
+            window.members_at(system, options, t, anchors)
+        })
     }
 
     fn report(&self) -> Report {
         Report {
             method: match self.window.kind() {
                 StepperKind::Stiff => self.method.replace("DOP853", "RODAS4"),
-                StepperKind::Magnus => self
-                    .method
-                    .replace("DOP853", "Magnus-4")
-                    .replace("linear coefficient system", "coefficient system in projective form"),
+                StepperKind::Magnus => self.method.replace("DOP853", "Magnus-4").replace(
+                    "linear coefficient system",
+                    "coefficient system in projective form",
+                ),
                 StepperKind::Explicit => self.method.to_string(),
             },
             stats: self.done + self.window.stats(),
@@ -161,7 +168,11 @@ impl Iterate for AnyState {
 /// system when it is linear (it has no poles), its projective form when
 /// it is of Riccati type or the Magnus integrator is asked for (which
 /// needs the linear projective form).
-fn with_system<M: Model, R>(model: &M, magnus: bool, body: impl FnOnce(&dyn FieldSystem) -> R) -> R {
+fn with_system<M: Model, R>(
+    model: &M,
+    magnus: bool,
+    body: impl FnOnce(&dyn FieldSystem) -> R,
+) -> R {
     if M::COEFFICIENTS_LINEAR && !magnus {
         let source = SymbolicCoefficients::new(model);
         body(&Augmented(&source))

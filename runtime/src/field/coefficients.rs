@@ -507,9 +507,7 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
         let mut y = vec![0.0; (n + 1) * (n + 1)];
         y[0] = c[0];
         y[1] = -1.0;
-        for a in 1..n {
-            y[a + 1] = c[a];
-        }
+        y[2..=n].copy_from_slice(&c[1..]);
         for j in 0..n {
             y[(j + 1) * (n + 1) + Self::slot(j)] = 1.0;
         }
@@ -546,7 +544,11 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
                 s[j * n + i] = -(a - b) / w1_sq;
             }
         }
-        let loss = if value > 0.0 { magnitude / value } else { f64::INFINITY };
+        let loss = if value > 0.0 {
+            magnitude / value
+        } else {
+            f64::INFINITY
+        };
         let loss = loss.max(growth);
         loss.is_finite().then_some(loss)
     }

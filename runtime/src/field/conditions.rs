@@ -155,7 +155,9 @@ mod tests {
         let x0 = [0.5, -1.0, 2.0];
         let base = recover(&f, &s, &x0).unwrap();
         let df = [1e-7, -2e-7, 3e-7];
-        let ds = [2e-7, -1e-7, 0.5e-7, 1e-7, 3e-7, -2e-7, 0.7e-7, -0.4e-7, 1e-7];
+        let ds = [
+            2e-7, -1e-7, 0.5e-7, 1e-7, 3e-7, -2e-7, 0.7e-7, -0.4e-7, 1e-7,
+        ];
         let mut dx = [0.0; 3];
         base.map_error(&f, &x0, &df, &ds, &mut dx);
         let f2: Vec<f64> = f.iter().zip(&df).map(|(a, b)| a + b).collect();

@@ -24,12 +24,12 @@ use super::conditions::recover;
 use super::window::{member_states, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
-use crate::method::{AnyStepper, Integrator};
-use crate::stepper::DenseStep;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
+use crate::method::{AnyStepper, Integrator};
 use crate::model::Model;
 use crate::solver::{Report, Solver};
+use crate::stepper::DenseStep;
 use crate::stepper::Stepper;
 use crate::system::ModelSystem;
 use crate::tolerance::{underflows, Stats, Tolerance};
@@ -59,6 +59,7 @@ struct Predictor<'a, M: Model> {
 }
 
 impl<'a, M: Model> Predictor<'a, M> {
+    #[allow(clippy::too_many_arguments)]
     fn new(
         model: &'a M,
         budget: &'a Budget,
@@ -217,8 +218,7 @@ impl QuasilinearField {
         // Newton's error after one pass is about K·δ² with δ the
         // predictor's error: a predictor near the square root of the
         // tolerance leaves it well below the tolerance.
-        let ratio = (0.1 / options.tol.rtol.sqrt())
-            .clamp(MIN_PREDICTOR_RATIO, MAX_PREDICTOR_RATIO);
+        let ratio = (0.1 / options.tol.rtol.sqrt()).clamp(MIN_PREDICTOR_RATIO, MAX_PREDICTOR_RATIO);
         let stiff = options.stiff;
         QuasilinearField {
             options,
@@ -392,7 +392,11 @@ impl<M: Model> Solver<M> for QuasilinearField {
             }
             self.field_h = Some(pass.field_h);
             self.largest_condition = self.largest_condition.max(pass.largest_condition);
-            let end_state = pass.states.last().cloned().unwrap_or_else(|| self.x.clone());
+            let end_state = pass
+                .states
+                .last()
+                .cloned()
+                .unwrap_or_else(|| self.x.clone());
             let end_time = pass.steps.last().map_or(self.t, StoredStep::t_new);
             let frozen = PredictorPath {
                 t0: predictor.t0,
@@ -567,7 +571,15 @@ impl QuasilinearField {
         };
         source.field(&y, &mut f, &mut s).ok_or_else(singular)?;
         let reference = recover(&f, &s, &window.anchor_x).ok_or_else(singular)?;
-        member_states(&source, &self.options, &window.anchor_x, &reference, &y, anchors, t)
+        member_states(
+            &source,
+            &self.options,
+            &window.anchor_x,
+            &reference,
+            &y,
+            anchors,
+            t,
+        )
     }
 
     /// One pass of the field along `iterate` from the current anchor,

@@ -14,12 +14,12 @@ use super::conditions::{recover, Recovered};
 use super::FieldOptions;
 use crate::budget::Budget;
 use crate::dop853::{hairer_error, Dop853, RawStep};
+use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::magnus::{LinearGenerator, Magnus};
 use crate::rodas4::Rodas4;
 use crate::solution::Segment;
 use crate::stepper::{DenseStep, ErrorMeasure, StepOutcome, Stepper};
-use crate::failure::{Failure, FailureKind};
 use crate::tolerance::{Stats, Tolerance};
 
 /// The free anchor values `c_2..c_N` used at every (re-)anchoring.
@@ -283,7 +283,9 @@ impl Window {
                 },
             ));
         }
-        let magnus_possible = system.generator(t, &mut Matrix::zeros(n + 1, n + 1)).is_some();
+        let magnus_possible = system
+            .generator(t, &mut Matrix::zeros(n + 1, n + 1))
+            .is_some();
         let stepper = match kind {
             StepperKind::Stiff => {
                 WindowStepper::Stiff(Rodas4::new(system, t, &y, options.tol, h_max, h0)?)
@@ -294,7 +296,15 @@ impl Window {
                     None => {
                         let mut slope = vec![0.0; y.len()];
                         system.rhs(t, &y, &mut slope)?;
-                        crate::tolerance::initial_step(system, t, &y, &slope, options.tol, 4, h_max)?
+                        crate::tolerance::initial_step(
+                            system,
+                            t,
+                            &y,
+                            &slope,
+                            options.tol,
+                            4,
+                            h_max,
+                        )?
                     }
                 };
                 WindowStepper::Magnus(Magnus::new(t, &y, h))
@@ -455,7 +465,15 @@ impl Window {
     ) -> Result<Vec<Vec<f64>>, Failure> {
         let y = each!(&self.stepper, s => s.state()).to_vec();
         let reference = self.current.clone();
-        member_states(system, options, &self.anchor_x, &reference, &y, anchors, self.time())
+        member_states(
+            system,
+            options,
+            &self.anchor_x,
+            &reference,
+            &y,
+            anchors,
+            self.time(),
+        )
     }
 
     /// [`Window::members`] at a time `t` within the last step.

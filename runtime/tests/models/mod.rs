@@ -25,7 +25,12 @@ pub fn affine_coefficients<M: Model>(
     Ok(())
 }
 
-pub fn affine_jacobian<M: Model>(model: &M, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+pub fn affine_jacobian<M: Model>(
+    model: &M,
+    t: f64,
+    f: &[f64],
+    jac: &mut Matrix,
+) -> Result<(), Failure> {
     let n = f.len();
     let (a, b) = affine_parts(model, t)?;
     let lambda = a[(0, 0)] - (1..n).map(|k| f[k] * a[(k, 0)]).sum::<f64>();
@@ -73,7 +78,9 @@ impl Model for Oscillator {
         vec![overrides[0].unwrap_or(2.0), overrides[1].unwrap_or(10.0)]
     }
     fn new(params: &[f64]) -> Self {
-        Oscillator { params: params.to_vec() }
+        Oscillator {
+            params: params.to_vec(),
+        }
     }
     fn param_values(&self) -> &[f64] {
         &self.params
@@ -186,7 +193,9 @@ impl Model for SphericalPendulum {
         vec![overrides.first().copied().flatten().unwrap_or(10.0)]
     }
     fn new(params: &[f64]) -> Self {
-        SphericalPendulum { params: params.to_vec() }
+        SphericalPendulum {
+            params: params.to_vec(),
+        }
     }
     fn param_values(&self) -> &[f64] {
         &self.params
@@ -239,7 +248,10 @@ impl StiffDamped {
         let (x0, v0) = (1.0, 0.0);
         let a = (v0 - r2 * x0) / (r1 - r2);
         let b = (r1 * x0 - v0) / (r1 - r2);
-        [a * (r1 * t).exp() + b * (r2 * t).exp(), a * r1 * (r1 * t).exp() + b * r2 * (r2 * t).exp()]
+        [
+            a * (r1 * t).exp() + b * (r2 * t).exp(),
+            a * r1 * (r1 * t).exp() + b * r2 * (r2 * t).exp(),
+        ]
     }
 }
 
@@ -354,7 +366,10 @@ impl Model for ThrownBall {
         Vec::new()
     }
     fn new(_p: &[f64]) -> Self {
-        ThrownBall { params: Vec::new(), rising: true }
+        ThrownBall {
+            params: Vec::new(),
+            rising: true,
+        }
     }
     fn param_values(&self) -> &[f64] {
         &self.params
@@ -429,14 +444,20 @@ impl Model for KnifeEdge {
         Initial::Given,
     ];
     const CONSTRAINTS: &'static [lagc_runtime::model::Candidates] =
-        &[lagc_runtime::model::Candidates { text: "sin(th) * x' = cos(th) * y'", names: &["y'", "x'"] }];
+        &[lagc_runtime::model::Candidates {
+            text: "sin(th) * x' = cos(th) * y'",
+            names: &["y'", "x'"],
+        }];
     const EXACT: bool = true;
 
     fn parameters(_o: &[Option<f64>]) -> Vec<f64> {
         Vec::new()
     }
     fn new(_p: &[f64]) -> Self {
-        KnifeEdge { params: Vec::new(), mode: 0 }
+        KnifeEdge {
+            params: Vec::new(),
+            mode: 0,
+        }
     }
     fn param_values(&self) -> &[f64] {
         &self.params
@@ -518,9 +539,15 @@ impl DoublePendulum {
         let (a, b, ad, bd) = (x[0], x[1], x[2], x[3]);
         let (s, c) = (a - b).sin_cos();
         let m = [[2.0, c], [c, 1.0]];
-        let f = [-s * bd * bd - 2.0 * Self::G * a.sin(), s * ad * ad - Self::G * b.sin()];
+        let f = [
+            -s * bd * bd - 2.0 * Self::G * a.sin(),
+            s * ad * ad - Self::G * b.sin(),
+        ];
         let det = 2.0 - c * c;
-        let z = [(f[0] * m[1][1] - m[0][1] * f[1]) / det, (m[0][0] * f[1] - m[1][0] * f[0]) / det];
+        let z = [
+            (f[0] * m[1][1] - m[0][1] * f[1]) / det,
+            (m[0][0] * f[1] - m[1][0] * f[0]) / det,
+        ];
         (z, m, f)
     }
 
@@ -542,7 +569,9 @@ impl Model for DoublePendulum {
         vec![overrides.first().copied().flatten().unwrap_or(10.0)]
     }
     fn new(params: &[f64]) -> Self {
-        DoublePendulum { params: params.to_vec() }
+        DoublePendulum {
+            params: params.to_vec(),
+        }
     }
     fn param_values(&self) -> &[f64] {
         &self.params
@@ -568,10 +597,23 @@ impl Model for DoublePendulum {
         let (s, c) = (a - b).sin_cos();
         // ∂f/∂x and ∂M/∂x · z, columns a, b, a', b'.
         let df = [
-            [-c * bd * bd - 2.0 * Self::G * a.cos(), c * bd * bd, 0.0, -2.0 * s * bd],
-            [c * ad * ad, -c * ad * ad - Self::G * b.cos(), 2.0 * s * ad, 0.0],
+            [
+                -c * bd * bd - 2.0 * Self::G * a.cos(),
+                c * bd * bd,
+                0.0,
+                -2.0 * s * bd,
+            ],
+            [
+                c * ad * ad,
+                -c * ad * ad - Self::G * b.cos(),
+                2.0 * s * ad,
+                0.0,
+            ],
         ];
-        let dmz = [[-s * z[1], s * z[1], 0.0, 0.0], [-s * z[0], s * z[0], 0.0, 0.0]];
+        let dmz = [
+            [-s * z[1], s * z[1], 0.0, 0.0],
+            [-s * z[0], s * z[0], 0.0, 0.0],
+        ];
         let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
         jac[(0, 2)] = 1.0;
         jac[(1, 3)] = 1.0;
@@ -582,7 +624,13 @@ impl Model for DoublePendulum {
         }
         Ok(())
     }
-    fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+    fn linearize(
+        &self,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut Matrix,
+    ) -> Result<(), Failure> {
         self.rhs(t, x, dx)?;
         self.jacobian(t, x, jac)
     }
