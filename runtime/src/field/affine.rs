@@ -8,7 +8,7 @@ use super::coefficients::{
 use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
-use crate::failure::{Failure, FailureKind};
+use crate::failure::Failure;
 use crate::model::Model;
 use crate::solver::{Report, Solver};
 use crate::tolerance::{underflows, Stats};
@@ -209,11 +209,7 @@ fn advance_window(
                 let h = 0.25 * window.proposed_step();
                 let t = window.time();
                 if shortenings > MAX_SHORTENINGS || underflows(t, h) {
-                    let condition = window.recovered().condition;
-                    return Err(Failure::new(
-                        t,
-                        FailureKind::SingularConditionMatrix { condition },
-                    ));
+                    return Err(window.degraded());
                 }
                 window.propose_step(h);
             }

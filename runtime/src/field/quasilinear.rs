@@ -649,11 +649,7 @@ impl QuasilinearField {
                     shortenings += 1;
                     let h = 0.25 * window.proposed_step();
                     if shortenings > MAX_SHORTENINGS || underflows(self.t, h) {
-                        let condition = window.recovered().condition;
-                        return Err(Failure::new(
-                            self.t,
-                            FailureKind::SingularConditionMatrix { condition },
-                        ));
+                        return Err(window.degraded());
                     }
                     window.propose_step(h);
                 }

@@ -89,7 +89,19 @@ struct StateMeasure<'a, F: FieldSystem + ?Sized> {
     start: &'a [f64],
     /// The recovered state at the last trial's end.
     trial: Option<Recovered>,
+    /// Why the last trial was declined.
+    declined: Option<Decline>,
     b: &'a mut Buffers,
+}
+
+/// Why a window's step was declined.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Decline {
+    /// The conditions are singular or their precision would be lost.
+    Conditions,
+    /// `x_1 = f_1 + Σ f_A x_A` would cancel (`digits` lost beyond the
+    /// tolerance): huge coefficients, from the anchor.
+    Cancellation { digits: f64 },
 }
 
 impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
@@ -104,22 +116,32 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
     ) -> Option<f64> {
         let b = &mut *self.b;
         let Some(loss) = self.system.field(y1, &mut b.f, &mut b.s) else {
+            self.declined = Some(Decline::Conditions);
             self.trial = None;
             return None;
         };
         let Some(rec) = recover(&b.f, &b.s, self.anchor_x) else {
+            self.declined = Some(Decline::Conditions);
             self.trial = None;
             return None;
         };
         // Rounding in S, amplified by the conditions, must stay well below
         // the tolerance.
         let rounding = loss * rec.condition * f64::EPSILON;
+        let cancelled = cancellation(&b.f, &rec.state, self.tol);
         let within = rec.condition <= self.options.max_condition
             && rec.growth <= self.options.max_growth
             && rec.determinant > 0.0
             && rounding <= 0.01 * self.tol.rtol.max(1e-13)
-            && cancellation(&b.f, &rec.state, self.tol) <= 0.1;
+            && cancelled <= 0.1;
         if !within && self.options.reanchor {
+            self.declined = Some(if cancelled > 0.1 {
+                Decline::Cancellation {
+                    digits: (cancelled / 0.1).log10(),
+                }
+            } else {
+                Decline::Conditions
+            });
             self.trial = None;
             return None;
         }
@@ -246,6 +268,7 @@ pub struct Window {
     previous_state: Vec<f64>,
     steps: usize,
     buffers: Buffers,
+    declined: Option<Decline>,
 }
 
 impl Window {
@@ -274,7 +297,14 @@ impl Window {
                 },
             )
         })?;
-        let lost = cancellation(&c, x, options.tol);
+        // The anchor's coefficients against the state's typical size (a
+        // component that is 0 now will not stay 0): what the recovery of
+        // x_1 will cancel once the motion moves.
+        let typical = x.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let moved: Vec<f64> = x.iter().map(|v| v.abs().max(typical)).collect();
+        let lost = cancellation(&c, &moved, options.tol)
+            * (options.tol.atol + options.tol.rtol * moved[0])
+            / (options.tol.atol + options.tol.rtol * x[0].abs());
         if lost > 0.1 {
             return Err(Failure::new(
                 t,
@@ -319,6 +349,7 @@ impl Window {
             current,
             steps: 0,
             buffers: Buffers::new(n),
+            declined: None,
         })
     }
 
@@ -353,6 +384,22 @@ impl Window {
 
     pub fn recovered(&self) -> &Recovered {
         &self.current
+    }
+
+    /// The failure to report when even the shortest first step is declined.
+    pub fn degraded(&self) -> Failure {
+        let t = self.time();
+        match self.declined {
+            Some(Decline::Cancellation { digits }) => {
+                Failure::new(t, FailureKind::AnchorCancels { digits })
+            }
+            _ => Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: self.current.condition,
+                },
+            ),
+        }
     }
 
     /// Accepted steps since the anchor.
@@ -392,9 +439,11 @@ impl Window {
             anchor_x: &self.anchor_x,
             start: &self.current.state,
             trial: None,
+            declined: None,
             b: &mut self.buffers,
         };
         let outcome = each_system!(&mut self.stepper, system, s, sys => s.step_measured(sys, t_limit, budget, &mut measure))?;
+        self.declined = measure.declined;
         match outcome {
             StepOutcome::Declined => Ok(WindowStep::Ended),
             StepOutcome::Accepted => {

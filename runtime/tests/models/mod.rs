@@ -638,3 +638,53 @@ impl Model for DoublePendulum {
         Ok(())
     }
 }
+
+/// `M x'' = −k x` with `M = 10 − t`: the mass reaches zero at t = 10 (the
+/// span runs to 12).
+#[derive(Clone, Debug)]
+pub struct VanishingMass {
+    pub params: Vec<f64>,
+}
+
+impl Model for VanishingMass {
+    const NAME: &'static str = "vanishing_mass";
+    const SOURCE_HASH: &'static str = "test";
+    const PARAMS: &'static [&'static str] = &[];
+    const STATE: &'static [&'static str] = &["x", "x'"];
+    const COORDINATES: usize = 1;
+    const INITIAL: &'static [Initial] = &[Initial::Given, Initial::Given];
+    const MASSES: &'static [&'static str] = &["M"];
+
+    fn parameters(_o: &[Option<f64>]) -> Vec<f64> {
+        Vec::new()
+    }
+    fn new(_p: &[f64]) -> Self {
+        VanishingMass { params: Vec::new() }
+    }
+    fn param_values(&self) -> &[f64] {
+        &self.params
+    }
+    fn time_span(&self) -> (f64, f64) {
+        (0.0, 12.0)
+    }
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+        Ok(vec![given[0].unwrap_or(1.0), given[1].unwrap_or(0.0)])
+    }
+    fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        dx[0] = x[1];
+        dx[1] = -x[0] / (10.0 - t);
+        Ok(())
+    }
+    fn jacobian(&self, t: f64, _x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        jac[(0, 1)] = 1.0;
+        jac[(1, 0)] = -1.0 / (10.0 - t);
+        Ok(())
+    }
+    fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
+        dxdt[1] = -x[0] / (10.0 - t).powi(2);
+        Ok(())
+    }
+    fn masses(&self, t: f64, out: &mut [f64]) {
+        out[0] = 10.0 - t;
+    }
+}

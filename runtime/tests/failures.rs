@@ -1,0 +1,79 @@
+//! Runs that cannot be trusted stop with their physical cause, never with
+//! exit 0 and a wrong answer: a mass reaching zero, the work budget, an
+//! anchor that makes the field cancel.
+
+mod models;
+
+use lagc_runtime::driver::{run, Options};
+use lagc_runtime::failure::FailureKind;
+use lagc_runtime::field::Anchor;
+use lagc_runtime::method::Method;
+use lagc_runtime::model::Model;
+use models::{Oscillator, VanishingMass};
+
+fn fails<M: Model + 'static>(
+    model: &mut M,
+    options: &Options,
+    t1: f64,
+) -> lagc_runtime::failure::Failure {
+    let (t0, _) = model.time_span();
+    let x0 = model.initial_state(&vec![None; M::STATE.len()]).unwrap();
+    run(model, options, t0, t1, &x0, &[t1], |_, _, _| Ok(())).expect_err("the run should fail")
+}
+
+#[test]
+fn a_mass_reaching_zero_is_named_by_every_method() {
+    for method in [Method::Direct, Method::Field] {
+        let failure = fails(
+            &mut VanishingMass::new(&[]),
+            &Options {
+                method,
+                ..Options::default()
+            },
+            12.0,
+        );
+        assert!(
+            matches!(&failure.kind, FailureKind::MassVanishes { mass, .. } if mass == "M"),
+            "{method:?}: {failure}"
+        );
+        assert!(
+            (failure.time - 10.0).abs() < 1e-3,
+            "{method:?}: at {}",
+            failure.time
+        );
+        assert!(failure.to_string().contains("reaches zero"));
+    }
+}
+
+#[test]
+fn every_method_stops_within_its_budget() {
+    for method in [Method::Direct, Method::Field] {
+        let mut model = Oscillator::new(&[2.0, 1e5]);
+        let options = Options {
+            method,
+            max_steps: 10_000,
+            ..Options::default()
+        };
+        let failure = fails(&mut model, &options, 1e5);
+        assert!(
+            matches!(failure.kind, FailureKind::StepBudgetExhausted { steps } if steps <= 10_000),
+            "{method:?}: {failure}"
+        );
+    }
+}
+
+#[test]
+fn an_anchor_that_makes_the_field_cancel_is_refused() {
+    let mut model = Oscillator::new(&[2.0, 10.0]);
+    let options = Options {
+        method: Method::Field,
+        anchor: Anchor::Given(vec![1e300]),
+        ..Options::default()
+    };
+    let failure = fails(&mut model, &options, 10.0);
+    assert!(
+        matches!(failure.kind, FailureKind::AnchorCancels { .. }),
+        "{failure}"
+    );
+    assert_eq!(failure.exit_status(), 2);
+}
