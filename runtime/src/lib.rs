@@ -20,6 +20,7 @@
 // `!(x > 0.0)` is meant: it is true for NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod api;
 pub mod budget;
 pub mod cli;
 pub mod controller;

@@ -1,0 +1,99 @@
+//! The library API of generated crates, model-independent half: options
+//! with a builder, and `solve` returning the whole [`Solution`]. A
+//! generated crate adds its typed `Params` and initial-state structs and
+//! hands them over here.
+//!
+//! ```ignore
+//! let solution = lag_double_pendulum::solve(
+//!     &Params { m2: 2.0, ..Params::default() },
+//!     &Initial::default(),
+//!     &Options::default().rtol(1e-9).method(Method::Direct),
+//! )?;
+//! println!("{:?}", solution.at(2.5));
+//! ```
+
+use crate::driver::{solve as solve_run, Options};
+use crate::failure::{Failure, FailureKind};
+use crate::field::Anchor;
+use crate::method::{IntegratorChoice, Method};
+use crate::model::{Initial, Model};
+use crate::solution::Solution;
+
+impl Options {
+    /// The field method or direct integration.
+    pub fn method(mut self, method: Method) -> Self {
+        self.method = method;
+        self
+    }
+
+    /// The integrator (`None`: the model's `integrator` statement, or auto).
+    pub fn integrator(mut self, choice: IntegratorChoice) -> Self {
+        self.integrator = Some(choice);
+        self
+    }
+
+    /// The relative tolerance (per step; atol stays unless set).
+    pub fn rtol(mut self, rtol: f64) -> Self {
+        self.tol.rtol = rtol;
+        self
+    }
+
+    /// The absolute tolerance.
+    pub fn atol(mut self, atol: f64) -> Self {
+        self.tol.atol = atol;
+        self
+    }
+
+    /// The field's free anchor values `c_2..c_N`.
+    pub fn anchor(mut self, values: Vec<f64>) -> Self {
+        self.anchor = Anchor::Given(values);
+        self
+    }
+
+    /// The work budget (steps of every kind).
+    pub fn max_steps(mut self, steps: usize) -> Self {
+        self.max_steps = steps;
+        self
+    }
+}
+
+/// Solves `M` with these param values and initial values (`given[i]`
+/// replaces the model's value of state component `i` when it is one the
+/// model states; values the constraints fix are checked against them),
+/// with the checks the command line applies.
+pub fn solve<M: Model + 'static>(
+    params: &[f64],
+    given: &[Option<f64>],
+    options: &Options,
+) -> Result<Solution, Failure> {
+    let mut model = M::new(params);
+    let (t0, t1) = model.time_span();
+    if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+        return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
+    }
+    let stated: Vec<Option<f64>> = given
+        .iter()
+        .zip(M::INITIAL)
+        .map(|(g, kind)| if *kind == Initial::Given { *g } else { None })
+        .collect();
+    let x0 = model.initial_state(&stated)?;
+    for (i, (g, kind)) in given.iter().zip(M::INITIAL).enumerate() {
+        if let (Some(stated), false) = (g, *kind == Initial::Given) {
+            if (stated - x0[i]).abs() > 1e-9 * x0[i].abs().max(1.0) {
+                return Err(Failure::new(
+                    t0,
+                    FailureKind::InconsistentInitialValue {
+                        component: M::STATE[i].to_string(),
+                        stated: *stated,
+                        required: x0[i],
+                    },
+                ));
+            }
+        }
+    }
+    let quiet = Options {
+        progress: false,
+        ..options.clone()
+    };
+    solve_run(&mut model, &quiet, t0, t1, &x0)
+}
