@@ -11,7 +11,7 @@ use lagc_runtime::method::{IntegratorChoice, Method};
 use lagc_runtime::model::Model;
 use lagc_runtime::output::sample_times;
 use lagc_runtime::tolerance::Tolerance;
-use models::{MassLossPendulum, Oscillator, SphericalPendulum};
+use models::{DoublePendulum, MassLossPendulum, Oscillator, SphericalPendulum};
 
 struct Run {
     rows: Vec<(f64, Vec<f64>)>,
@@ -167,6 +167,17 @@ fn field_is_of_high_order_on_affine_and_non_affine_motions() {
         &reference,
     );
     eprintln!("field spherical pendulum: order {p:.2} {pts:?}");
+    assert!(p > 6.0, "field order {p}: {pts:?}");
+    // A double pendulum through its mass matrix.
+    let reference =
+        solve::<DoublePendulum>(Method::Direct, IntegratorChoice::Explicit, 1e-14, 11).rows;
+    let (p, pts) = ladder::<DoublePendulum>(
+        Method::Field,
+        IntegratorChoice::Auto,
+        &[1e-5, 1e-7, 1e-9, 1e-11],
+        &reference,
+    );
+    eprintln!("field double pendulum: order {p:.2} {pts:?}");
     assert!(p > 6.0, "field order {p}: {pts:?}");
 }
 
