@@ -17,6 +17,7 @@ pub mod emit;
 pub mod field;
 pub mod frontend;
 pub mod ir;
+pub mod kernel;
 pub mod mechanics;
 pub mod pipeline;
 pub mod report;

@@ -106,53 +106,22 @@ struct BuildArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(disable_help_flag = true)]
 struct RunArgs {
     /// The `.lag` model.
     file: PathBuf,
-    /// Override a param: `--param NAME=VALUE` (repeatable); params
-    /// computed from it are recomputed.
-    #[arg(long = "param", value_name = "NAME=VALUE")]
-    params: Vec<String>,
-    /// The field method or direct integration of (7).
-    #[arg(long, value_enum, default_value_t = Method::Field)]
-    method: Method,
-    /// The integrator: DOP853 (explicit), RODAS4 (stiff), or auto; the
-    /// default is the model's `integrator` statement, or auto.
-    #[arg(long, value_enum, value_name = "CHOICE")]
-    integrator: Option<Integrator>,
-    /// The same as `--integrator stiff`.
-    #[arg(long, conflicts_with = "integrator")]
-    stiff: bool,
-    /// Relative tolerance.
-    #[arg(long, value_name = "R")]
-    rtol: Option<f64>,
-    /// Absolute tolerance.
-    #[arg(long, value_name = "A")]
-    atol: Option<f64>,
-    /// Number of evenly spaced sample times.
-    #[arg(long, value_name = "N")]
-    samples: Option<usize>,
-    /// Every free anchor value c_A of the field method (default 0).
-    #[arg(long, value_name = "VALUE", allow_hyphen_values = true)]
-    anchor: Option<f64>,
-    /// Solve N times (after one warm-up solve when N > 1) and report the
-    /// smallest wall time.
-    #[arg(long, value_name = "N")]
-    repeat: Option<usize>,
-    /// No CSV on stdout.
-    #[arg(long)]
-    quiet: bool,
-    /// The summary on stderr as text or as one JSON object line.
-    #[arg(long, value_enum, value_name = "FORMAT")]
-    summary: Option<SummaryFormat>,
-    /// K initial states around the model's through one field, against K
-    /// direct integrations (affine systems): times and largest difference.
-    #[arg(long, value_name = "K")]
-    ensemble: Option<usize>,
-    /// Field method: stop with a failure when the conditions (13) become
-    /// ill-conditioned instead of re-anchoring.
-    #[arg(long)]
-    no_reanchor: bool,
+    /// The run's options, passed to the model's binary as they are
+    /// (`lagc run FILE --help` lists them): `--method field|direct`,
+    /// `--integrator auto|explicit|stiff|magnus`, `--param NAME=VALUE`,
+    /// `--init NAME=VALUE`, `--rtol R`, `--atol A`, `--samples N`,
+    /// `--times T1,T2,…`, `--estimate-error`, `--plot FILE.svg [--phase X,Y]`,
+    /// `--ensemble K`, `--repeat N`, `--quiet`, `--summary text|json`, …
+    #[arg(
+        trailing_var_arg = true,
+        allow_hyphen_values = true,
+        value_name = "OPTIONS"
+    )]
+    args: Vec<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -317,23 +286,30 @@ fn count(n: usize, noun: &str) -> String {
 
 /// Reads, checks and generates the crate of `file`, printing diagnostics
 /// and notes; `Err(status)` when that fails.
-fn generate(file: &Path) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
+fn generate(file: &Path, runtime_path: &str) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
     let model_name = file
         .file_stem()
         .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
     let stage = |source: &str| {
         let model = lagc::frontend(source)?;
-        lagc::pipeline::generate_crate(&model, &model_name)
+        let options = lagc::emit::EmitOptions {
+            model_name: model_name.clone(),
+            source_hash: cli::source_hash(source),
+            runtime_path: runtime_path.to_string(),
+        };
+        lagc::pipeline::generate_crate(&model, &options)
     };
     compile(file, stage, |generated| generated)
 }
 
 fn build(args: &BuildArgs) -> ExitCode {
-    let generated = match generate(&args.file) {
+    let generated = match generate(&args.file, cli::RUNTIME_IN_CRATE) {
         Ok(generated) => generated,
         Err(status) => return status,
     };
-    match cli::write_crate(&generated, &args.output) {
+    let written = cli::write_crate(&generated, &args.output)
+        .and_then(|()| cli::write_runtime(&args.output.join(cli::RUNTIME_IN_CRATE)));
+    match written {
         Ok(()) => {
             eprintln!(
                 "wrote crate `{}` to {}",
@@ -353,67 +329,32 @@ fn build(args: &BuildArgs) -> ExitCode {
 }
 
 fn run(args: &RunArgs) -> ExitCode {
-    let generated = match generate(&args.file) {
+    let generated = match generate(&args.file, &cli::runtime_path_from_cache()) {
         Ok(generated) => generated,
         Err(status) => return status,
     };
+    // The model's binary parses its options; the same parser checks them
+    // here first, so that bad usage is reported before anything is built.
+    // They are passed on as they came.
+    let params: Vec<&str> = generated.params.iter().map(String::as_str).collect();
+    let state: Vec<&str> = generated.state.iter().map(String::as_str).collect();
+    let parsed = lagc_runtime::cli::parse(&args.args, &params, &state, &[]);
+    match parsed {
+        Err(message) => {
+            eprintln!("error: {message}\n\n{}", lagc_runtime::cli::USAGE);
+            return ExitCode::from(EXIT_USAGE);
+        }
+        Ok(lagc_runtime::cli::Command::Help) => {
+            println!("{}", lagc_runtime::cli::USAGE);
+            return ExitCode::SUCCESS;
+        }
+        Ok(_) => {}
+    }
     let binary = match build_cached(&generated) {
         Ok(binary) => binary,
         Err(status) => return status,
     };
-    let mut passed: Vec<String> = Vec::new();
-    for param in &args.params {
-        passed.extend(["--param".to_string(), param.clone()]);
-    }
-    let method = match args.method {
-        Method::Field => "field",
-        Method::Direct => "direct",
-    };
-    passed.extend(["--method".to_string(), method.to_string()]);
-    let integrator = match (args.integrator, args.stiff) {
-        (_, true) | (Some(Integrator::Stiff), _) => Some("stiff"),
-        (Some(Integrator::Explicit), _) => Some("explicit"),
-        (Some(Integrator::Auto), _) => Some("auto"),
-        (Some(Integrator::Magnus), _) => Some("magnus"),
-        (None, false) => None,
-    };
-    if let Some(integrator) = integrator {
-        passed.extend(["--integrator".to_string(), integrator.to_string()]);
-    }
-    let numbers = [
-        ("--rtol", args.rtol),
-        ("--atol", args.atol),
-        ("--anchor", args.anchor),
-    ];
-    for (flag, value) in numbers {
-        if let Some(v) = value {
-            passed.extend([flag.to_string(), format!("{v:?}")]);
-        }
-    }
-    if args.no_reanchor {
-        passed.push("--no-reanchor".to_string());
-    }
-    let counts = [
-        ("--samples", args.samples),
-        ("--repeat", args.repeat),
-        ("--ensemble", args.ensemble),
-    ];
-    for (flag, value) in counts {
-        if let Some(n) = value {
-            passed.extend([flag.to_string(), n.to_string()]);
-        }
-    }
-    if args.quiet {
-        passed.push("--quiet".to_string());
-    }
-    if let Some(format) = args.summary {
-        let format = match format {
-            SummaryFormat::Text => "text",
-            SummaryFormat::Json => "json",
-        };
-        passed.extend(["--summary".to_string(), format.to_string()]);
-    }
-    match cli::run_binary(&binary, &passed) {
+    match cli::run_binary(&binary, &args.args) {
         Ok(status) => match status.code() {
             Some(code) => ExitCode::from(u8::try_from(code).unwrap_or(1)),
             None => ExitCode::FAILURE,
@@ -433,7 +374,9 @@ fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitC
     };
     let crate_dir = cache.join("crates").join(&generated.package);
     let target_dir = cache.join("target");
-    if let Err(error) = cli::write_crate(generated, &crate_dir) {
+    let written = cli::write_runtime(&cache.join(cli::runtime_dir_name()))
+        .and_then(|()| cli::write_crate(generated, &crate_dir));
+    if let Err(error) = written {
         eprintln!("error: cannot write to `{}`: {error}", crate_dir.display());
         return Err(ExitCode::from(EXIT_USAGE));
     }
@@ -470,7 +413,7 @@ fn report(args: &ReportArgs) -> ExitCode {
         eprintln!("error: `--runs` must be at least 1");
         return ExitCode::from(EXIT_USAGE);
     }
-    let generated = match generate(&args.file) {
+    let generated = match generate(&args.file, &cli::runtime_path_from_cache()) {
         Ok(generated) => generated,
         Err(status) => return status,
     };

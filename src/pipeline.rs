@@ -1,4 +1,5 @@
-//! The stages chained: checked model → derivation → field system → crate.
+//! The stages chained: checked model → derivation → field system → kernel
+//! → crate.
 
 use crate::check::model::Model;
 use crate::diagnostic::Diagnostic;
@@ -9,7 +10,7 @@ use crate::field::{field_system, local_field_note};
 /// (e.g. that the local field method is used).
 pub fn generate_crate(
     model: &Model,
-    model_name: &str,
+    options: &EmitOptions,
 ) -> Result<(GeneratedCrate, Vec<Diagnostic>), Vec<Diagnostic>> {
     let mut derivation = crate::mechanics::derive(model)?;
     let reduced = derivation.reduced.clone();
@@ -17,9 +18,7 @@ pub fn generate_crate(
     let notes: Vec<Diagnostic> = local_field_note(&field, model.lagrangian.span)
         .into_iter()
         .collect();
-    let options = EmitOptions {
-        model_name: model_name.to_string(),
-    };
-    let generated = emit_crate(model, &derivation, &field, &options)?;
+    let kernel = crate::kernel::build(model, &derivation, &field)?;
+    let generated = emit_crate(&kernel, options)?;
     Ok((generated, notes))
 }

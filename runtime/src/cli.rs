@@ -383,11 +383,22 @@ pub fn plan<M: Model>(options: &Options) -> String {
             }
             _ => format!("direct: DOP853, switching to RODAS4 if it detects stiffness ({source})"),
         },
-        Method::Field if M::AFFINE => format!("field: the coefficient system by DOP853 ({source})"),
-        Method::Field => format!(
-            "field: quasilinear windows (the motion linearised along a predictor, each \
-             window's field by DOP853) ({source})"
-        ),
+        Method::Field => {
+            let integrator = match choice {
+                IntegratorChoice::Stiff => "RODAS4",
+                IntegratorChoice::Explicit => "DOP853",
+                IntegratorChoice::Magnus if M::AFFINE => "the Magnus integrator",
+                _ => "DOP853, switching to RODAS4 if it detects stiffness",
+            };
+            if M::AFFINE {
+                format!("field: the coefficient system by {integrator} ({source})")
+            } else {
+                format!(
+                    "field: quasilinear windows (the motion linearised along a predictor, each \
+                     window's field by {integrator}) ({source})"
+                )
+            }
+        }
     }
 }
 

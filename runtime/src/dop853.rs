@@ -400,6 +400,7 @@ impl Dop853 {
         measure: &mut E,
     ) -> Result<StepOutcome, Failure> {
         let mut last_non_finite = false;
+        let mut rate_broken: Option<usize> = None;
         loop {
             budget.draw(self.t)?;
             let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
@@ -407,6 +408,8 @@ impl Dop853 {
                 return Err(if last_non_finite {
                     let i = first_non_finite(&self.y_trial).unwrap_or(0);
                     Failure::non_finite(self.t, system.component_name(i))
+                } else if let Some(i) = rate_broken {
+                    Failure::non_finite_rate(self.t, system.rate_name(i))
                 } else {
                     Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h })
                 });
@@ -437,12 +440,30 @@ impl Dop853 {
                 self.h = self.controller.reject(h, f64::INFINITY);
                 last_non_finite = true;
             } else if err <= 1.0 {
+                let t_new = if reaches_limit { t_limit } else { self.t + h };
+                // The slope at the step's end (kept in k[12] until the
+                // step is taken: it is the next step's first stage).
+                let mut end_slope = std::mem::take(&mut self.k[12]);
+                let evaluated = system.rhs(t_new, &self.y_trial, &mut end_slope);
+                self.k[12] = end_slope;
+                evaluated?;
+                self.stats.rhs_evaluations += 1;
+                if let Some(i) = first_non_finite(&self.k[12]) {
+                    // The step ends where the rates are not defined (a
+                    // force infinite just ahead): retry shorter, so that
+                    // the motion stops at the boundary, not beyond it.
+                    self.stats.rejected_steps += 1;
+                    self.h = 0.25 * h;
+                    rate_broken = Some(i);
+                    last_non_finite = false;
+                    continue;
+                }
                 let h_next = self.controller.accept(h, err);
                 self.y_old.copy_from_slice(&self.y);
                 std::mem::swap(&mut self.y, &mut self.y_trial);
                 self.t_old = self.t;
                 self.h_old = h;
-                self.t = if reaches_limit { t_limit } else { self.t + h };
+                self.t = t_new;
                 // A step cut short to land on `t_limit` says nothing against
                 // the longer step proposed before.
                 self.h = if reaches_limit {
@@ -450,18 +471,11 @@ impl Dop853 {
                 } else {
                     h_next
                 };
-                // Keep X(t_old) for the continuous extension.
+                // k[0] becomes the new slope; X(t_old) moves to k[12] for
+                // the continuous extension.
                 self.k.swap(0, 12);
-                let mut out = std::mem::take(&mut self.k[0]);
-                let evaluated = system.rhs(self.t, &self.y, &mut out);
-                self.k[0] = out;
-                evaluated?;
-                self.stats.rhs_evaluations += 1;
                 self.stats.accepted_steps += 1;
                 self.dense_ready = false;
-                if let Some(i) = first_non_finite(&self.k[0]) {
-                    return Err(Failure::non_finite_rate(self.t, system.rate_name(i)));
-                }
                 self.test_stiffness(h);
                 return Ok(StepOutcome::Accepted);
             } else {

@@ -292,8 +292,9 @@ fn run_with<M: Model + 'static>(
         });
     }
     check_masses(model, t0)?;
+    let scale = MassScale::at(model, t0, x0);
     let mut solver =
-        make_solver(model, options, t0, x0, h_max).map_err(|f| diagnose(model, f, x0))?;
+        make_solver(model, options, t0, x0, h_max).map_err(|f| diagnose(model, f, x0, &scale))?;
     let mut progress = Progress::new(options.progress, t0, t1);
     let mut g_now = vec![0.0; M::SWITCHES];
     let mut x_event = vec![0.0; n];
@@ -301,7 +302,7 @@ fn run_with<M: Model + 'static>(
         if let Err(failure) = solver.advance(model, t1, &budget) {
             let x = solver.state().to_vec();
             progress.finish();
-            return Err(diagnose(model, failure, &x));
+            return Err(diagnose(model, failure, &x, &scale));
         }
         progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
@@ -483,11 +484,27 @@ fn check_masses<M: Model>(model: &M, t: f64) -> Result<(), Failure> {
     }
 }
 
+/// The mass matrix's smallest scale `1/‖M⁻¹‖₁` at the start of a run: a
+/// mass matrix is singular where that has shrunk by many orders of
+/// magnitude (for one coordinate the condition number is always 1).
+pub struct MassScale(Option<f64>);
+
+impl MassScale {
+    pub fn at<M: Model>(model: &M, t: f64, x: &[f64]) -> MassScale {
+        MassScale(model.mass_matrix(t, x).map(|m| smallest_scale(&m)))
+    }
+}
+
+fn smallest_scale(m: &crate::linalg::Matrix) -> f64 {
+    let lu = crate::linalg::Lu::new(m);
+    1.0 / lu.inverse_one_norm_estimate()
+}
+
 /// The physical cause of a failure where the model can see it: a mass
 /// that reaches zero, a mass matrix that becomes singular — the integrator
 /// usually stops first with a step-size underflow or a non-finite value as
 /// the motion blows up toward them.
-pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64]) -> Failure {
+pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64], scale: &MassScale) -> Failure {
     if matches!(
         failure.kind,
         FailureKind::InconsistentInitialValue { .. }
@@ -525,9 +542,16 @@ pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64]) -> Failure {
             | FailureKind::NonFiniteRate { .. }
     ) && x.iter().all(|v| v.is_finite())
     {
-        if let Some(condition) = model.mass_matrix_condition(t, x) {
-            if !(condition < 1e12) {
-                return Failure::new(t, FailureKind::SingularMassMatrix { condition });
+        if let (Some(m), Some(start)) = (model.mass_matrix(t, x), scale.0) {
+            let now = smallest_scale(&m);
+            let condition = crate::highest::mass_condition(&m);
+            if !(now > 1e-6 * start) || !(condition < 1e12) {
+                return Failure::new(
+                    t,
+                    FailureKind::SingularMassMatrix {
+                        condition: condition.max(start / now),
+                    },
+                );
             }
         }
     }

@@ -141,7 +141,8 @@ impl fmt::Display for Failure {
             FailureKind::SingularConditionMatrix { condition } => write!(
                 f,
                 "at t = {t:e}: the field's conditions (13) are singular (condition \
-                 number {condition:.3e}) and re-anchoring did not restore them"
+                 number {condition:.3e}): they no longer determine the motion here \
+                 (re-anchoring, when on, did not restore them)"
             ),
             FailureKind::ConditionMatrixCrossedSingularity { since } => write!(
                 f,

@@ -42,6 +42,41 @@ pub fn solve_linear(t: f64, mass: Matrix, free: &[f64]) -> Result<(Vec<f64>, Lu)
     Ok((z, lu))
 }
 
+/// `z` from `A z = −g` for a fixed-size mass matrix on the stack (the
+/// right side's hot path); a singular or nearly singular `A` stops the run.
+pub fn solve_fixed_checked<const N: usize>(
+    t: f64,
+    a: [[f64; N]; N],
+    g: [f64; N],
+) -> Result<[f64; N], Failure> {
+    // The pivots' spread, as `Lu::pivot_ratio` measures it, from the
+    // diagonal after elimination: `solve_fixed` fails only on an exact zero.
+    let scale = a.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let minus_g = g.map(|v| -v);
+    match crate::linalg::solve_fixed(a, minus_g) {
+        Some(z) if scale > 0.0 => {
+            // Residual check of conditioning: a tiny pivot shows as a huge z
+            // relative to the data.
+            let size = z.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let data = g.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            if size * scale * SINGULAR_PIVOT_RATIO > data.max(f64::MIN_POSITIVE) * 1e2 {
+                let condition = size * scale / data.max(f64::MIN_POSITIVE);
+                return Err(Failure::new(
+                    t,
+                    FailureKind::SingularMassMatrix { condition },
+                ));
+            }
+            Ok(z)
+        }
+        _ => Err(Failure::new(
+            t,
+            FailureKind::SingularMassMatrix {
+                condition: f64::INFINITY,
+            },
+        )),
+    }
+}
+
 /// Newton's method on `G(z) = 0` from `z`: `residual(z, g, g_z)` writes `G`
 /// and `G_z` (zeroed). Returns `z` and the factors of `G_z` at it.
 pub fn newton(

@@ -45,6 +45,17 @@ impl Matrix {
         m
     }
 
+    /// A matrix from a fixed-size array of rows.
+    pub fn from_array<const N: usize>(rows: &[[f64; N]; N]) -> Matrix {
+        let mut m = Matrix::zeros(N, N);
+        for (i, row) in rows.iter().enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                m[(i, j)] = v;
+            }
+        }
+        m
+    }
+
     /// A matrix over column-major `data`.
     pub fn from_column_major(rows: usize, cols: usize, data: Vec<f64>) -> Matrix {
         assert_eq!(data.len(), rows * cols, "matrix data of the wrong length");

@@ -181,11 +181,28 @@ pub trait Model: Clone {
     /// The mass laws' values at `t`, in [`Model::MASSES`] order.
     fn masses(&self, _t: f64, _out: &mut [f64]) {}
 
-    /// The condition number of the mass matrix of the highest derivatives
-    /// at `(t, x)` (models that solve for them numerically), for naming a
-    /// singular mass matrix as the cause of a failure.
-    fn mass_matrix_condition(&self, _t: f64, _x: &[f64]) -> Option<f64> {
+    /// The mass matrix of the highest derivatives at `(t, x)`, for naming
+    /// a singular one as the cause of a failure (evaluated only then, and
+    /// once at the start for scale).
+    fn mass_matrix(&self, _t: f64, _x: &[f64]) -> Option<Matrix> {
         None
+    }
+}
+
+/// Checks a value the model states for a component the constraints fix
+/// (`name`'s `stated` value against the `required` one), after overrides.
+pub fn check_stated(t0: f64, name: &str, stated: f64, required: f64) -> Result<(), Failure> {
+    if (stated - required).abs() <= 1e-9 * required.abs().max(1.0) {
+        Ok(())
+    } else {
+        Err(Failure::new(
+            t0,
+            crate::failure::FailureKind::InconsistentInitialValue {
+                component: name.to_string(),
+                stated,
+                required,
+            },
+        ))
     }
 }
 

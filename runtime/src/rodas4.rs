@@ -278,14 +278,18 @@ impl Rodas4 {
         system.time_partial(self.t, &self.y, &mut self.time_partial)?;
         self.stats.jacobian_evaluations += 1;
         let mut broken: Option<usize> = None;
+        let mut rate_broken: Option<usize> = None;
         let mut estimate = vec![0.0; self.y.len()];
         loop {
             budget.draw(self.t)?;
             let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
             if underflows(self.t, h) && !reaches_limit {
-                return Err(match broken {
-                    Some(i) => Failure::non_finite(self.t, system.component_name(i)),
-                    None => Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h }),
+                return Err(match (broken, rate_broken) {
+                    (Some(i), _) => Failure::non_finite(self.t, system.component_name(i)),
+                    (None, Some(i)) => Failure::non_finite_rate(self.t, system.rate_name(i)),
+                    (None, None) => {
+                        Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h })
+                    }
                 });
             }
             let error = match self.attempt(system, h)? {
@@ -319,22 +323,30 @@ impl Rodas4 {
                     self.dense_d2[i] = d2;
                     self.dense_d3[i] = d3;
                 }
+                let t_new = if reaches_limit { t_limit } else { self.t + h };
+                system.rhs(t_new, &self.y_new, &mut estimate)?;
+                self.stats.rhs_evaluations += 1;
+                if let Some(i) = first_non_finite(&estimate) {
+                    // The step ends where the rates are not defined (a
+                    // force infinite just ahead): retry shorter, so that
+                    // the motion stops at the boundary, not beyond it.
+                    self.stats.rejected_steps += 1;
+                    self.h = 0.25 * h;
+                    rate_broken = Some(i);
+                    continue;
+                }
+                self.slope.copy_from_slice(&estimate);
                 self.y_old.copy_from_slice(&self.y);
                 std::mem::swap(&mut self.y, &mut self.y_new);
                 self.t_old = self.t;
                 self.h_old = h;
-                self.t = if reaches_limit { t_limit } else { self.t + h };
+                self.t = t_new;
                 self.h = if reaches_limit {
                     h_next.max(self.h)
                 } else {
                     h_next
                 };
-                system.rhs(self.t, &self.y, &mut self.slope)?;
-                self.stats.rhs_evaluations += 1;
                 self.stats.accepted_steps += 1;
-                if let Some(i) = first_non_finite(&self.slope) {
-                    return Err(Failure::non_finite_rate(self.t, system.rate_name(i)));
-                }
                 return Ok(StepOutcome::Accepted);
             }
             self.stats.rejected_steps += 1;

@@ -25,6 +25,51 @@ pub fn write_crate(generated: &GeneratedCrate, dir: &Path) -> std::io::Result<()
     Ok(())
 }
 
+/// Where `lagc build -o DIR` puts the runtime's copy, inside DIR.
+pub const RUNTIME_IN_CRATE: &str = "lagc-runtime";
+
+/// The cache's directory of the runtime (one per version of its sources).
+pub fn runtime_dir_name() -> String {
+    format!("runtime-{}", lagc::emit::runtime_version())
+}
+
+/// The runtime's path from a cached crate (`crates/<package>`).
+pub fn runtime_path_from_cache() -> String {
+    format!("../../{}", runtime_dir_name())
+}
+
+/// Writes the runtime crate's sources under `dir` (unchanged files are not
+/// rewritten, so cargo does not rebuild it).
+pub fn write_runtime(dir: &Path) -> std::io::Result<()> {
+    for (path, contents) in lagc::emit::runtime_files() {
+        let target = dir.join(path);
+        if let Some(parent) = target.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        if std::fs::read(&target).is_ok_and(|old| old == contents.as_bytes()) {
+            continue;
+        }
+        std::fs::write(&target, contents)?;
+    }
+    Ok(())
+}
+
+/// A hash of a model's source and of lagc's version (FNV-1a), which the
+/// generated binary reports with `--lagc-source-hash`.
+pub fn source_hash(source: &str) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let version = concat!(env!("CARGO_PKG_VERSION"), "\0");
+    for b in version
+        .bytes()
+        .chain(lagc::emit::runtime_version().bytes())
+        .chain(source.bytes())
+    {
+        hash ^= u64::from(b);
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{hash:016x}")
+}
+
 /// `$LAGC_CACHE_DIR`, or `$XDG_CACHE_HOME/lagc`, or `~/.cache/lagc`.
 pub fn cache_dir() -> Option<PathBuf> {
     let non_empty = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty());
@@ -44,6 +89,9 @@ pub fn cargo_build(crate_dir: &Path, target_dir: &Path) -> std::io::Result<ExitS
     Command::new(cargo)
         .arg("build")
         .arg("--release")
+        // Generated crates depend only on the runtime next to them: no
+        // network, ever.
+        .arg("--offline")
         .arg("--manifest-path")
         .arg(crate_dir.join("Cargo.toml"))
         .env("CARGO_TARGET_DIR", target_dir)

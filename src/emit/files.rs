@@ -1,54 +1,136 @@
-//! The generated crate's fixed files: Cargo.toml, main.rs, and the runtime
-//! modules the system needs (with the modules they `use`).
+//! The generated crate's fixed files — `Cargo.toml`, `Cargo.lock`, the
+//! one-line `main.rs` — and the runtime crate's own sources, which lagc
+//! carries (`include_str!`) so that `lagc build -o DIR` writes a crate
+//! that builds on its own and `lagc run` keeps one shared copy.
 
-/// The runtime, by module name, as lagc holds it.
+/// The runtime crate's files, relative to its root.
 const RUNTIME: &[(&str, &str)] = &[
-    ("conditioned", include_str!("runtime/conditioned.rs")),
-    ("direct", include_str!("runtime/direct.rs")),
-    ("dop853", include_str!("runtime/dop853.rs")),
-    ("ensemble", include_str!("runtime/ensemble.rs")),
-    ("error", include_str!("runtime/error.rs")),
-    ("field", include_str!("runtime/field.rs")),
-    ("local_field", include_str!("runtime/local_field.rs")),
-    ("magnus", include_str!("runtime/magnus.rs")),
-    ("method", include_str!("runtime/method.rs")),
-    ("output", include_str!("runtime/output.rs")),
-    ("rosenbrock", include_str!("runtime/rosenbrock.rs")),
-    ("sensitivity", include_str!("runtime/sensitivity.rs")),
-    ("stepper", include_str!("runtime/stepper.rs")),
-    ("system", include_str!("runtime/system.rs")),
+    ("Cargo.toml", include_str!("../../runtime/Cargo.toml")),
+    ("src/api.rs", include_str!("../../runtime/src/api.rs")),
+    ("src/budget.rs", include_str!("../../runtime/src/budget.rs")),
+    ("src/cli.rs", include_str!("../../runtime/src/cli.rs")),
+    (
+        "src/controller.rs",
+        include_str!("../../runtime/src/controller.rs"),
+    ),
+    ("src/direct.rs", include_str!("../../runtime/src/direct.rs")),
+    ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
+    ("src/driver.rs", include_str!("../../runtime/src/driver.rs")),
+    ("src/events.rs", include_str!("../../runtime/src/events.rs")),
+    (
+        "src/failure.rs",
+        include_str!("../../runtime/src/failure.rs"),
+    ),
+    (
+        "src/field/affine.rs",
+        include_str!("../../runtime/src/field/affine.rs"),
+    ),
+    (
+        "src/field/coefficients.rs",
+        include_str!("../../runtime/src/field/coefficients.rs"),
+    ),
+    (
+        "src/field/conditions.rs",
+        include_str!("../../runtime/src/field/conditions.rs"),
+    ),
+    (
+        "src/field/mod.rs",
+        include_str!("../../runtime/src/field/mod.rs"),
+    ),
+    (
+        "src/field/quasilinear.rs",
+        include_str!("../../runtime/src/field/quasilinear.rs"),
+    ),
+    (
+        "src/field/window.rs",
+        include_str!("../../runtime/src/field/window.rs"),
+    ),
+    (
+        "src/highest.rs",
+        include_str!("../../runtime/src/highest.rs"),
+    ),
+    ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
+    ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
+    ("src/magnus.rs", include_str!("../../runtime/src/magnus.rs")),
+    ("src/method.rs", include_str!("../../runtime/src/method.rs")),
+    ("src/model.rs", include_str!("../../runtime/src/model.rs")),
+    ("src/output.rs", include_str!("../../runtime/src/output.rs")),
+    ("src/plot.rs", include_str!("../../runtime/src/plot.rs")),
+    (
+        "src/progress.rs",
+        include_str!("../../runtime/src/progress.rs"),
+    ),
+    ("src/rodas4.rs", include_str!("../../runtime/src/rodas4.rs")),
+    (
+        "src/solution.rs",
+        include_str!("../../runtime/src/solution.rs"),
+    ),
+    ("src/solver.rs", include_str!("../../runtime/src/solver.rs")),
+    (
+        "src/stepper.rs",
+        include_str!("../../runtime/src/stepper.rs"),
+    ),
+    (
+        "src/summary.rs",
+        include_str!("../../runtime/src/summary.rs"),
+    ),
+    ("src/system.rs", include_str!("../../runtime/src/system.rs")),
+    (
+        "src/tolerance.rs",
+        include_str!("../../runtime/src/tolerance.rs"),
+    ),
 ];
 
-/// The names of the runtime modules lagc can copy (a test checks that they
-/// are every file of `src/emit/runtime/`).
-pub fn runtime_module_names() -> impl Iterator<Item = &'static str> {
-    RUNTIME.iter().map(|(name, _)| *name)
+/// The runtime crate's sources `(path relative to its root, contents)`; a
+/// test checks that they are every file of `runtime/src/`.
+pub fn runtime_files() -> impl Iterator<Item = (&'static str, &'static str)> {
+    RUNTIME.iter().copied()
 }
 
-/// The generated binary: argument parsing, CSV, summary (the same for
-/// every model; the model-specific parts are in the generated library).
-pub const MAIN_RS: &str = include_str!("generated_main.rs");
+/// A hash of the runtime's sources (FNV-1a): a cache keeps one built copy
+/// per version of the runtime.
+pub fn runtime_version() -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for (path, text) in RUNTIME {
+        for b in path.bytes().chain(text.bytes()) {
+            hash ^= u64::from(b);
+            hash = hash.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    format!("{hash:016x}")
+}
 
+/// `lag-<stem>`: the package for a model named `model_name`, safe from any
+/// file stem (lower-case ASCII letters, digits and `-`; never empty, never
+/// starting with a digit).
 pub fn package_name(model_name: &str) -> String {
-    let stem: String = model_name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() {
-                c.to_ascii_lowercase()
-            } else {
-                '-'
-            }
-        })
-        .collect();
-    let stem = stem.trim_matches('-');
+    let mut stem = String::new();
+    for c in model_name.chars() {
+        let c = if c.is_ascii_alphanumeric() {
+            c.to_ascii_lowercase()
+        } else {
+            '-'
+        };
+        if !(c == '-' && (stem.is_empty() || stem.ends_with('-'))) {
+            stem.push(c);
+        }
+    }
+    let stem = stem.trim_end_matches('-');
+    let stem: String = stem.chars().take(60).collect();
     if stem.is_empty() {
-        "lagc-model".to_string()
+        "lag-model".to_string()
     } else {
-        format!("lagc-model-{stem}")
+        format!("lag-{stem}")
     }
 }
 
-pub fn cargo_toml(package: &str) -> String {
+/// The library's name: the package's with `_`.
+pub fn library_name(package: &str) -> String {
+    package.replace('-', "_")
+}
+
+pub fn cargo_toml(package: &str, runtime_path: &str) -> String {
+    let library = library_name(package);
     format!(
         "# Generated by lagc. Do not edit: regenerate with `lagc build`.\n\
          [package]\n\
@@ -58,7 +140,7 @@ pub fn cargo_toml(package: &str) -> String {
          publish = false\n\
          \n\
          [lib]\n\
-         name = \"model\"\n\
+         name = \"{library}\"\n\
          path = \"src/lib.rs\"\n\
          \n\
          [[bin]]\n\
@@ -66,58 +148,37 @@ pub fn cargo_toml(package: &str) -> String {
          path = \"src/main.rs\"\n\
          \n\
          [dependencies]\n\
-         nalgebra = \"0.35\"\n\
+         lagc-runtime = {{ path = \"{runtime_path}\" }}\n\
          \n\
          # A crate of its own: never part of an enclosing workspace.\n\
          [workspace]\n"
     )
 }
 
-/// The runtime modules the system needs: everything the solver entry
-/// points use, with `local_field` only for non-affine systems and
-/// `ensemble` (one field for many initial states) only for affine ones.
-pub fn runtime_files(affine: bool) -> Vec<(String, String)> {
-    let mut wanted: Vec<&str> = vec!["direct", "field", "output", "system", "error", "method"];
-    if affine {
-        wanted.push("ensemble");
-    } else {
-        wanted.push("local_field");
-    }
-    // Close over `use super::<module>` lines.
-    let mut i = 0;
-    while i < wanted.len() {
-        let source = RUNTIME
-            .iter()
-            .find(|(name, _)| *name == wanted[i])
-            .map_or("", |(_, s)| s);
-        for line in source.lines() {
-            if let Some(rest) = line.trim().strip_prefix("use super::") {
-                let module: String = rest
-                    .chars()
-                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                    .collect();
-                if let Some((name, _)) = RUNTIME.iter().find(|(name, _)| *name == module) {
-                    if !wanted.contains(name) {
-                        wanted.push(name);
-                    }
-                }
-            }
-        }
-        i += 1;
-    }
-    wanted.sort_unstable();
-    let mut mod_rs = String::from(
-        "//! The numeric runtime, copied by lagc: only the modules this system needs.\n\n\
-         // A library of parts: this system uses only some items of each.\n\
-         #![allow(dead_code)]\n\n",
-    );
-    let mut files = Vec::new();
-    for name in &wanted {
-        mod_rs.push_str(&format!("pub mod {name};\n"));
-        if let Some((_, source)) = RUNTIME.iter().find(|(n, _)| n == name) {
-            files.push((format!("src/runtime/{name}.rs"), source.to_string()));
-        }
-    }
-    files.insert(0, ("src/runtime/mod.rs".to_string(), mod_rs));
-    files
+/// The lock file: the runtime has no dependencies, so this is all of it,
+/// and the crate builds with `--offline` from the start.
+pub fn cargo_lock(package: &str) -> String {
+    format!(
+        "# This file is automatically @generated by Cargo.\n\
+         # It is not intended for manual editing.\n\
+         version = 4\n\
+         \n\
+         [[package]]\n\
+         name = \"{package}\"\n\
+         version = \"0.1.0\"\n\
+         dependencies = [\n \"lagc-runtime\",\n]\n\
+         \n\
+         [[package]]\n\
+         name = \"lagc-runtime\"\n\
+         version = \"0.1.0\"\n"
+    )
+}
+
+pub fn main_rs(package: &str) -> String {
+    let library = library_name(package);
+    format!(
+        "//! Generated by lagc: the model's command line is the runtime's.\n\n\
+         fn main() -> std::process::ExitCode {{\n    \
+         lagc_runtime::cli::main::<{library}::Model>()\n}}\n"
+    )
 }

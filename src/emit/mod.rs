@@ -1,51 +1,58 @@
-//! Stage 6: the generated crate (SPEC §4). Pure: returns the files as
-//! `(relative path, contents)`; `main.rs` writes them.
+//! Stage 7: the generated crate (SPEC §4). Pure: returns the files as
+//! `(relative path, contents)`; the CLI writes them.
 //!
-//! The system-specific code is built as syntax trees (`quote`), parsed by
-//! `syn` and printed by `prettyplease`, so it is valid, formatted Rust by
-//! construction. The numeric runtime (`runtime/*.rs`) is copied verbatim,
-//! only the modules this system needs.
+//! Emission only prints the kernel (`crate::kernel`): it never
+//! differentiates, substitutes or lowers. The model-specific code is built
+//! as syntax trees (`quote`), parsed by `syn` and printed by
+//! `prettyplease`, so it is valid, formatted Rust by construction. Every
+//! model-independent line lives in the `lagc-runtime` crate, which the
+//! generated crate depends on.
 //!
 //! | file | what |
 //! |---|---|
 //! | `namer.rs` | the one source of generated identifiers |
 //! | `expr.rs` | IR expressions → Rust expressions, shared nodes as `let`s |
 //! | `names.rs` | symbol names and the bindings a function needs |
-//! | `model_items.rs` | params, mass laws, time span, initial state, exact solution |
-//! | `motion.rs` | the reduced system (7) as a `Motion` |
-//! | `coefficients.rs` | the coefficient system as a `CoefficientSystem` |
-//! | `support.rs` | linear solve, Newton, finite differences, `solve` |
-//! | `files.rs` | Cargo.toml, the runtime modules, main.rs |
-//! | `runtime/` | the numeric runtime (not compiled into lagc) |
+//! | `params.rs` | the `Params` struct |
+//! | `model.rs` | consts, time span, initial state, exact solution, masses |
+//! | `motion.rs` | `rhs`, `jacobian`, `time_partial`, `linearize` |
+//! | `coefficients.rs` | the coefficient system |
+//! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
 
 mod coefficients;
 mod expr;
 mod files;
-mod model_items;
+mod model;
 mod motion;
 pub mod namer;
 mod names;
-mod support;
+mod params;
 
-use crate::check::model::Model;
 use crate::diagnostic::Diagnostic;
-use crate::field::FieldSystem;
-use crate::mechanics::Derivation;
-pub use files::runtime_module_names;
+use crate::kernel::Kernel;
+pub use files::{library_name, package_name, runtime_files, runtime_version};
 use names::SymbolNames;
 use quote::quote;
 
 /// Options of the emitter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmitOptions {
-    /// The model's name (its file stem): the package is `lagc-model-<name>`.
+    /// The model's name (its file stem): the package is `lag-<name>`.
     pub model_name: String,
+    /// A hash of the model's source and lagc's version (`Model::SOURCE_HASH`).
+    pub source_hash: String,
+    /// Where the runtime crate is, relative to the generated crate's root.
+    pub runtime_path: String,
 }
 
 /// The generated crate: `(path relative to the crate root, contents)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GeneratedCrate {
     pub package: String,
+    /// The param and state names (the model binary's `--param` and
+    /// `--init` names), for checking a run's options before building.
+    pub params: Vec<String>,
+    pub state: Vec<String>,
     pub files: Vec<(String, String)>,
 }
 
@@ -58,75 +65,30 @@ impl GeneratedCrate {
     }
 }
 
-/// Emits the crate that integrates `derivation`'s reduced system.
+/// Emits the crate that integrates the kernel's system.
 pub fn emit_crate(
-    model: &Model,
-    derivation: &Derivation,
-    field: &FieldSystem,
+    kernel: &Kernel,
     options: &EmitOptions,
 ) -> Result<GeneratedCrate, Vec<Diagnostic>> {
-    let mut arena = derivation.arena.clone();
-    let reduced = &derivation.reduced;
-    let mut names = SymbolNames::new(&arena, &reduced.state);
-    let state_names: Vec<String> = reduced
-        .state
-        .iter()
-        .map(|&s| arena.symbol_name(s))
-        .collect();
-    let n = proc_macro2::Literal::usize_unsuffixed(state_names.len());
-
-    let params = model_items::params_code(&mut arena, &mut names, model);
-    let masses = model_items::mass_code(&mut arena, &mut names, model, reduced);
-    let time = model_items::time_code(&mut arena, &mut names, model);
-    let initial =
-        model_items::initial_code(&mut arena, &mut names, reduced).map_err(|d| vec![d])?;
-    let exact = model_items::exact_code(&mut arena, &mut names, model, reduced);
-    let motion = motion::motion_code(&mut arena, &mut names, reduced);
-    let coefficients = coefficients::coefficient_code(&arena, &mut names, field);
-    let affine = coefficients.is_some();
-    let linear_solve = motion.linear_solve.then(support::linear_solve);
-    let (watch_field, watch_init, explain) = if motion.linear_solve {
-        (
-            quote! { mass_matrix: MassMatrixWatch, },
-            quote! { mass_matrix: MassMatrixWatch::default() },
-            quote! { self.mass_matrix.explain(failure) },
-        )
-    } else {
-        (quote! {}, quote! {}, quote! { failure })
-    };
-    let newton = motion.newton.then(support::newton);
-    let implicit = (motion.linear_solve || motion.newton).then(support::finite_differences);
-    let linear = field
-        .coefficient_system
-        .as_ref()
-        .is_some_and(|system| system.linear);
-    let solve = support::solve(affine, linear, model.integrator.map(|d| d.choice));
-    let motion_items = motion.items;
-    let coefficient_import = if affine {
-        quote! {
-            use runtime::ensemble::solve_ensemble as solve_field_ensemble;
-            use runtime::field::solve_field;
-            use runtime::system::CoefficientSystem;
-        }
-    } else {
-        quote! { use runtime::local_field::solve_local_field; }
-    };
-    let dvector = if motion.linear_solve || motion.newton {
-        quote! { use nalgebra::DVector; }
-    } else {
-        quote! {}
-    };
-    let failure_kind = if motion.linear_solve || motion.newton {
-        quote! { use runtime::error::FailureKind; }
+    let mut names = SymbolNames::new(&kernel.arena, &kernel.state);
+    let params = params::params_code(kernel, &mut names);
+    let masses = model::mass_fns(kernel, &mut names);
+    let consts = model::consts(kernel, &options.model_name, &options.source_hash);
+    let data = model::data_items(kernel, &mut names);
+    let (motion, inherent) = motion::motion_code(kernel, &mut names);
+    let coefficients = coefficients::coefficient_code(kernel, &mut names);
+    let lu_import = if matches!(kernel.motion, crate::kernel::Motion::Implicit(_)) {
+        quote! { use lagc_runtime::linalg::Lu; }
     } else {
         quote! {}
     };
     let doc = format!(
-        " The `{}` model, generated by lagc: the reduced system (7){} and the \
-         run-time choice of method. Do not edit: regenerate with `lagc build`.",
+        " The `{}` model, generated by lagc: the reduced system (7) with its exact \
+         Jacobians{}, as a `lagc_runtime::model::Model`. Do not edit: regenerate with \
+         `lagc build`.",
         options.model_name,
-        if affine {
-            ", the coefficient system of the field method"
+        if kernel.coefficients.is_some() {
+            ", and the coefficient system of the field method"
         } else {
             ""
         }
@@ -136,64 +98,88 @@ pub fn emit_crate(
         // The literals are the model's numbers, written exactly.
         #![allow(clippy::approx_constant, clippy::excessive_precision)]
 
-        pub mod runtime;
-
-        use nalgebra::DMatrix;
-        #dvector
-        use runtime::direct::solve_direct_choice;
-        use runtime::error::Failure;
-        #failure_kind
-        use runtime::field::FieldOptions;
-        pub use runtime::field::Anchor;
-        pub use runtime::output::{sample_times, write_header, write_row, Summary};
-        pub use runtime::stepper::Tolerance;
-        use runtime::system::Motion;
-        #coefficient_import
-
-        /// The state (6), in order: the CSV columns after `t`.
-        pub const STATE_NAMES: [&str; #n] = [#(#state_names),*];
+        use lagc_runtime::failure::Failure;
+        use lagc_runtime::linalg::Matrix;
+        #lu_import
+        use lagc_runtime::model::Initial;
+        pub use lagc_runtime::driver::Options;
+        pub use lagc_runtime::method::{IntegratorChoice, Method};
+        pub use lagc_runtime::solution::Solution;
 
         #params
         #masses
-        #time
-        #initial
-        #exact
 
-        /// The reduced system (7).
-        pub struct System {
-            pub params: Params,
-            #watch_field
+        /// The model with its param values (a `lagc_runtime::model::Model`).
+        #[derive(Clone, Debug)]
+        pub struct Model {
+            params: Params,
+            values: Vec<f64>,
         }
 
-        impl System {
-            pub fn new(params: Params) -> System {
-                System { params, #watch_init }
+        impl Model {
+            /// The model with these params.
+            pub fn with(params: Params) -> Model {
+                let values = params.values();
+                Model { params, values }
             }
 
-            /// A failure of the integrator, with its cause named when the
-            /// system can see it (a mass matrix becoming singular).
-            fn explain(&self, failure: Failure) -> Failure {
-                #explain
+            pub fn params(&self) -> &Params {
+                &self.params
             }
+
+            #inherent
         }
 
-        #motion_items
-        #coefficients
-        #linear_solve
-        #newton
-        #implicit
-        #solve
+        impl lagc_runtime::model::Model for Model {
+            #consts
+
+            fn parameters(overrides: &[Option<f64>]) -> Vec<f64> {
+                Params::with_overrides(overrides).values()
+            }
+
+            fn new(values: &[f64]) -> Model {
+                Model {
+                    params: Params::from_values(values),
+                    values: values.to_vec(),
+                }
+            }
+
+            fn param_values(&self) -> &[f64] {
+                &self.values
+            }
+
+            #data
+            #motion
+            #coefficients
+        }
+
+        /// Solves the model with these params, from its initial state with
+        /// the given values replaced (`initial[i]` for state component `i`,
+        /// in the order of `<Model as lagc_runtime::model::Model>::STATE`):
+        /// the whole motion, `Solution::at(t)`.
+        pub fn solve(params: &Params, initial: &[Option<f64>], options: &Options) -> Result<Solution, Failure> {
+            lagc_runtime::api::solve::<Model>(&params.values(), initial, options)
+        }
     };
     let lib = pretty(lib).map_err(|e| vec![e])?;
     let package = files::package_name(&options.model_name);
-    let mut out = vec![
-        ("Cargo.toml".to_string(), files::cargo_toml(&package)),
+    let out = vec![
+        (
+            "Cargo.toml".to_string(),
+            files::cargo_toml(&package, &options.runtime_path),
+        ),
+        ("Cargo.lock".to_string(), files::cargo_lock(&package)),
         ("src/lib.rs".to_string(), lib),
-        ("src/main.rs".to_string(), files::MAIN_RS.to_string()),
+        ("src/main.rs".to_string(), files::main_rs(&package)),
     ];
-    out.extend(files::runtime_files(affine));
     Ok(GeneratedCrate {
         package,
+        params: kernel.params.iter().map(|p| p.name.clone()).collect(),
+        state: kernel
+            .state
+            .iter()
+            .map(|&s| kernel.arena.symbol_name(s))
+            .collect(),
         files: out,
     })
 }

@@ -1,339 +1,466 @@
-//! The reduced system (7) as a `Motion`: the right side, `∂X/∂x`, `∂X/∂t`.
+//! The reduced system (7) as trait items: `rhs`, `jacobian`,
+//! `time_partial`, `linearize` and `mass_matrix`, printed from
+//! the kernel (no calculus here).
 //!
-//! Explicit systems get symbolic Jacobians. Implicit ones solve for the
-//! highest derivatives at run time — one LU solve when the residual is
-//! affine in them, Newton with the symbolic `∂G/∂z` otherwise — and their
-//! `∂X/∂x`, `∂X/∂t` are central finite differences of the right side
-//! (implicit differentiation would need `∂G/∂x` per entry; the Jacobian is
-//! used only by the stiff integrator and the local field method, which
-//! tolerate its `O(h²)` error).
+//! Explicit systems print their expressions; `linearize` prints `X` and
+//! `∂X/∂x` as one block so they share their subexpressions. Implicit ones
+//! solve `G(t, x, z) = 0` for the highest derivatives — one solve of the
+//! mass matrix on the stack when `G` is affine in `z`, Newton otherwise —
+//! and get `∂z/∂x = −G_z⁻¹ G_x` by implicit differentiation at run time.
 
-use super::names::SymbolNames;
-use crate::ir::{Arena, ExprId, Symbol};
-use crate::mechanics::{Highest, ReducedSystem};
+use super::names::{Source, SymbolNames};
+use crate::ir::{ExprId, Symbol};
+use crate::kernel::{Explicit, Implicit, Kernel, Motion};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
-
-/// What the motion code needs that the emitter reports back.
-pub struct MotionCode {
-    pub items: TokenStream,
-    /// A dense linear solve (nalgebra LU) is emitted.
-    pub linear_solve: bool,
-    /// Newton's method is emitted.
-    pub newton: bool,
-}
 
 fn index(i: usize) -> Literal {
     Literal::usize_unsuffixed(i)
 }
 
-pub fn motion_code(
-    arena: &mut Arena,
-    names: &mut SymbolNames,
-    reduced: &ReducedSystem,
-) -> MotionCode {
-    let n_state = reduced.state.len();
-    let position: HashMap<Symbol, usize> = reduced
+/// `(items of the trait impl, items of the inherent impl)`.
+pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, TokenStream) {
+    let position: HashMap<Symbol, usize> = kernel
         .state
         .iter()
         .enumerate()
         .map(|(i, &s)| (s, i))
         .collect();
-    let coords = n_state / reduced.order.max(1) as usize;
-    let highest_row = |coord: u32| (reduced.order as usize - 1) * coords + coord as usize;
-    let from_x = |s: Symbol| {
+    let from_x = move |s: Symbol| {
         position.get(&s).map(|&i| {
             let i = index(i);
             quote! { x[#i] }
         })
     };
-    let shifts: Vec<TokenStream> = (0..n_state.saturating_sub(coords))
-        .map(|i| {
-            let (row, col) = (index(i), index(i + coords));
-            quote! { dx[#row] = x[#col]; }
+    let n = kernel.state.len();
+    let c = kernel.coordinates;
+    let shifted = n.saturating_sub(c);
+    let shift_rows: Vec<Literal> = (0..shifted).map(index).collect();
+    let shift_cols: Vec<Literal> = (0..shifted).map(|i| index(i + c)).collect();
+    let shifts = quote! { #(dx[#shift_rows] = x[#shift_cols];)* };
+    let shift_jacobian = quote! { #(jac[(#shift_rows, #shift_cols)] = 1.0;)* };
+    let (trait_items, inherent) = match &kernel.motion {
+        Motion::Explicit(e) => (
+            explicit(kernel, names, e, &from_x, &shifts, &shift_jacobian),
+            TokenStream::new(),
+        ),
+        Motion::Implicit(i) => implicit(kernel, names, i, &from_x, &shifts, &shift_jacobian),
+    };
+    let condition = mass_condition(kernel, names, &from_x);
+    (quote! { #trait_items #condition }, inherent)
+}
+
+fn arg(used: bool, name: &str) -> TokenStream {
+    let ident = proc_macro2::Ident::new(
+        &if used {
+            name.to_string()
+        } else {
+            format!("_{name}")
+        },
+        proc_macro2::Span::call_site(),
+    );
+    quote! { #ident }
+}
+
+fn explicit(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    e: &Explicit,
+    from_x: Source,
+    shifts: &TokenStream,
+    shift_jacobian: &TokenStream,
+) -> TokenStream {
+    let arena = &kernel.arena;
+    let rows: Vec<Literal> = (0..e.rhs.len())
+        .map(|j| index(kernel.highest_row(j as u32)))
+        .collect();
+    let rhs = names.code(arena, &e.rhs, from_x);
+    let rhs_statements = rhs.statements(quote! { self.params });
+    let rhs_values = &rhs.roots;
+    let rhs_t = rhs.time_arg();
+
+    let jac_roots: Vec<ExprId> = e.jacobian.iter().map(|&(_, _, d)| d).collect();
+    let jac = names.code(arena, &jac_roots, from_x);
+    let jac_statements = jac.statements(quote! { self.params });
+    let jac_cells: Vec<TokenStream> = e
+        .jacobian
+        .iter()
+        .zip(&jac.roots)
+        .map(|(&(r, c, _), v)| {
+            let (r, c) = (index(r), index(c));
+            quote! { jac[(#r, #c)] = #v; }
         })
         .collect();
-    let shift_jacobian: Vec<TokenStream> = (0..n_state.saturating_sub(coords))
-        .map(|i| {
-            let (row, col) = (index(i), index(i + coords));
-            quote! { jac[(#row, #col)] = 1.0; }
+    let jac_t = jac.time_arg();
+    let jac_x = arg(jac.uses_source, "x");
+
+    let tp_roots: Vec<ExprId> = e.time_partial.iter().map(|&(_, d)| d).collect();
+    let tp = names.code(arena, &tp_roots, from_x);
+    let tp_statements = tp.statements(quote! { self.params });
+    let tp_rows: Vec<Literal> = e.time_partial.iter().map(|&(r, _)| index(r)).collect();
+    let tp_values = &tp.roots;
+    let tp_t = tp.time_arg();
+    let tp_x = arg(tp.uses_source, "x");
+    let tp_out = arg(!tp_rows.is_empty(), "dxdt");
+
+    // X and ∂X/∂x together: one block, shared subexpressions computed once.
+    let mut both = e.rhs.clone();
+    both.extend(&jac_roots);
+    let lin = names.code(arena, &both, from_x);
+    let lin_statements = lin.statements(quote! { self.params });
+    let (lin_rhs, lin_jac) = lin.roots.split_at(e.rhs.len());
+    let lin_cells: Vec<TokenStream> = e
+        .jacobian
+        .iter()
+        .zip(lin_jac)
+        .map(|(&(r, c, _), v)| {
+            let (r, c) = (index(r), index(c));
+            quote! { jac[(#r, #c)] = #v; }
         })
         .collect();
-    match &reduced.highest {
-        Highest::Explicit(highest) => {
-            let rhs = names.code(arena, highest, &from_x);
-            let rows: Vec<TokenStream> = (0..highest.len())
-                .map(|j| {
-                    let row = index(highest_row(j as u32));
-                    quote! { #row }
-                })
-                .collect();
-            let values = &rhs.roots;
-            let rhs_statements = rhs.statements(quote! { &self.params });
-            let t_rhs = rhs.time_arg();
-
-            let mut entries: Vec<(usize, usize, ExprId)> = Vec::new();
-            for (j, &h) in highest.iter().enumerate() {
-                for (k, &s) in reduced.state.iter().enumerate() {
-                    let d = arena.diff(h, s);
-                    if !arena.is_zero(d) {
-                        entries.push((highest_row(j as u32), k, d));
-                    }
-                }
-            }
-            let jacobian = entry_code(arena, names, &entries, &from_x, |r, c| {
-                quote! { jac[(#r, #c)] }
-            });
-            let mut partials: Vec<(usize, usize, ExprId)> = Vec::new();
-            for (j, &h) in highest.iter().enumerate() {
-                let d = arena.diff(h, Symbol::Time);
-                if !arena.is_zero(d) {
-                    partials.push((highest_row(j as u32), 0, d));
-                }
-            }
-            let time_partial = entry_code(arena, names, &partials, &from_x, |r, _| {
-                quote! { dxdt[#r] }
-            });
-            let (jac_t, jac_x, jac_body) = jacobian;
-            let (tp_t, tp_x, tp_body) = time_partial;
-            let dxdt = if partials.is_empty() {
-                quote! { _dxdt }
-            } else {
-                quote! { dxdt }
-            };
-            let items = quote! {
-                impl Motion for System {
-                    fn dim(&self) -> usize { STATE_NAMES.len() }
-
-                    fn rhs(&self, #t_rhs: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
-                        #rhs_statements
-                        #(#shifts)*
-                        #(dx[#rows] = #values;)*
-                        Ok(())
-                    }
-
-                    fn jacobian(&self, #jac_t: f64, #jac_x: &[f64], jac: &mut DMatrix<f64>) -> Result<(), Failure> {
-                        #(#shift_jacobian)*
-                        #jac_body
-                        Ok(())
-                    }
-
-                    fn time_partial(&self, #tp_t: f64, #tp_x: &[f64], #dxdt: &mut [f64]) -> Result<(), Failure> {
-                        #tp_body
-                        Ok(())
-                    }
-
-                    fn component_name(&self, i: usize) -> String {
-                        STATE_NAMES.get(i).map_or_else(|| format!("x{}", i + 1), |s| s.to_string())
-                    }
-                }
-            };
-            MotionCode {
-                items,
-                linear_solve: false,
-                newton: false,
-            }
+    let lin_t = lin.time_arg();
+    quote! {
+        fn rhs(&self, #rhs_t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+            #rhs_statements
+            #shifts
+            #(dx[#rows] = #rhs_values;)*
+            Ok(())
         }
-        Highest::Implicit {
-            unknowns,
-            residual,
-            jacobian,
-            linear,
-            dependent,
-        } => {
-            let unknown_at: HashMap<Symbol, usize> =
-                unknowns.iter().enumerate().map(|(k, &s)| (s, k)).collect();
-            let from_xz = |s: Symbol| {
-                unknown_at
-                    .get(&s)
-                    .map(|&k| {
-                        let k = index(k);
-                        quote! { z[#k] }
-                    })
-                    .or_else(|| from_x(s))
-            };
-            let size = index(unknowns.len());
-            let solve = if *linear {
-                let zero = arena.zero();
-                let at_zero: HashMap<Symbol, ExprId> =
-                    unknowns.iter().map(|&s| (s, zero)).collect();
-                let mut roots: Vec<ExprId> =
-                    residual.iter().map(|&r| arena.subst(r, &at_zero)).collect();
-                let (cells, entries) = nonzero_cells(arena, jacobian);
-                roots.extend(entries);
-                let code = names.code(arena, &roots, &from_x);
-                let statements = code.statements(quote! { &self.params });
-                let free: Vec<TokenStream> = code.roots[..residual.len()].to_vec();
-                let cell_code =
-                    cell_assignments(&quote! { a }, &cells, &code.roots[residual.len()..]);
-                quote! {
-                    /// The independent highest derivatives from `A z = b`
-                    /// (the equations are affine in them): one LU solve.
-                    fn highest(&self, t: f64, x: &[f64]) -> Result<DVector<f64>, Failure> {
-                        #statements
-                        let mut a = DMatrix::<f64>::zeros(#size, #size);
-                        #(#cell_code)*
-                        let b = DVector::from_vec(vec![#(-(#free)),*]);
-                        solve_mass_matrix(t, a, b, &self.mass_matrix)
-                    }
-                }
-            } else {
-                let mut roots: Vec<ExprId> = residual.clone();
-                let (cells, entries) = nonzero_cells(arena, jacobian);
-                roots.extend(entries);
-                let code = names.code(arena, &roots, &from_xz);
-                let statements = code.statements(quote! { &self.params });
-                let residual_values: Vec<TokenStream> = code.roots[..residual.len()].to_vec();
-                let cell_code =
-                    cell_assignments(&quote! { g_z }, &cells, &code.roots[residual.len()..]);
-                let t = code.time_arg();
-                let x = if uses_any(arena, &roots, &reduced.state) {
-                    quote! { x }
-                } else {
-                    quote! { _x }
-                };
-                let z = if uses_any(arena, &roots, unknowns) {
-                    quote! { z }
-                } else {
-                    quote! { _z }
-                };
-                quote! {
-                    /// The residual `G(t, x, z)` of the highest derivatives and
-                    /// its Jacobian `∂G/∂z`.
-                    fn residual(&self, #t: f64, #x: &[f64], #z: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>) {
-                        #statements
-                        let mut g_z = DMatrix::<f64>::zeros(#size, #size);
-                        #(#cell_code)*
-                        (DVector::from_vec(vec![#(#residual_values),*]), g_z)
-                    }
 
-                    /// The independent highest derivatives by Newton's method
-                    /// (they enter the equations non-linearly).
-                    fn highest(&self, t: f64, x: &[f64]) -> Result<DVector<f64>, Failure> {
-                        newton(t, DVector::zeros(#size), |z| self.residual(t, x, z))
-                    }
+        fn jacobian(&self, #jac_t: f64, #jac_x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+            #shift_jacobian
+            #jac_statements
+            #(#jac_cells)*
+            Ok(())
+        }
+
+        fn time_partial(&self, #tp_t: f64, #tp_x: &[f64], #tp_out: &mut [f64]) -> Result<(), Failure> {
+            #tp_statements
+            #(dxdt[#tp_rows] = #tp_values;)*
+            Ok(())
+        }
+
+        fn linearize(&self, #lin_t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+            #lin_statements
+            #shifts
+            #(dx[#rows] = #lin_rhs;)*
+            #shift_jacobian
+            #(#lin_cells)*
+            Ok(())
+        }
+    }
+}
+
+fn implicit(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    i: &Implicit,
+    from_x: Source,
+    shifts: &TokenStream,
+    shift_jacobian: &TokenStream,
+) -> (TokenStream, TokenStream) {
+    let arena = &kernel.arena;
+    let m = i.unknowns.len();
+    let n = kernel.state.len();
+    let size = index(m);
+    let unknown_at: HashMap<Symbol, usize> = i
+        .unknowns
+        .iter()
+        .enumerate()
+        .map(|(k, &s)| (s, k))
+        .collect();
+    let from_xz = |s: Symbol| {
+        unknown_at
+            .get(&s)
+            .map(|&k| {
+                let k = index(k);
+                quote! { z[#k] }
+            })
+            .or_else(|| from_x(s))
+    };
+    let g_z_cells = |target: TokenStream, values: &[TokenStream]| -> Vec<TokenStream> {
+        i.g_z
+            .iter()
+            .zip(values)
+            .map(|(&(r, c, _), v)| {
+                let (r, c) = (index(r), index(c));
+                quote! { #target[#r][#c] = #v; }
+            })
+            .collect()
+    };
+    // Solving for z: the stack path for the right side, the factored path
+    // for the Jacobians.
+    let (solve, factored) = if i.linear {
+        let mut roots = i.free.clone();
+        roots.extend(i.g_z.iter().map(|&(_, _, e)| e));
+        let code = names.code(arena, &roots, from_x);
+        let statements = code.statements(quote! { self.params });
+        let (free, cells) = code.roots.split_at(i.free.len());
+        let cells = g_z_cells(quote! { a }, cells);
+        let t = code.time_arg();
+        let x = arg(code.uses_source, "x");
+        (
+            quote! {
+                /// The mass matrix of the highest derivatives and the
+                /// equations' free part: `a z + g = 0`.
+                fn mass_system(&self, #t: f64, #x: &[f64]) -> ([[f64; #size]; #size], [f64; #size]) {
+                    #statements
+                    let mut a = [[0.0; #size]; #size];
+                    #(#cells)*
+                    (a, [#(#free),*])
                 }
-            };
-            let dependent_exprs: Vec<ExprId> = dependent.iter().map(|&(_, e)| e).collect();
-            let dep_code = names.code(arena, &dependent_exprs, &from_xz);
-            let dep_statements = dep_code.statements(quote! { &self.params });
-            let dep_values = &dep_code.roots;
-            let dep_rows: Vec<Literal> = dependent
-                .iter()
-                .map(|&(c, _)| index(highest_row(c)))
-                .collect();
-            let (ind_rows, ind_k): (Vec<Literal>, Vec<Literal>) = unknowns
+
+                /// The independent highest derivatives: one solve on the stack.
+                fn highest(&self, t: f64, x: &[f64]) -> Result<[f64; #size], Failure> {
+                    let (a, g) = self.mass_system(t, x);
+                    lagc_runtime::highest::solve_fixed_checked(t, a, g)
+                }
+
+                /// The highest derivatives with the factors of the mass matrix.
+                fn highest_factored(&self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Lu), Failure> {
+                    let (a, g) = self.mass_system(t, x);
+                    lagc_runtime::highest::solve_linear(t, Matrix::from_array(&a), &g)
+                }
+
+            },
+            quote! { self.highest_factored(t, x)? },
+        )
+    } else {
+        let mut roots = i.residual.clone();
+        roots.extend(i.g_z.iter().map(|&(_, _, e)| e));
+        let code = names.code(arena, &roots, &from_xz);
+        let statements = code.statements(quote! { self.params });
+        let (residual, cells) = code.roots.split_at(i.residual.len());
+        let cells: Vec<TokenStream> = i
+            .g_z
+            .iter()
+            .zip(cells)
+            .map(|(&(r, c, _), v)| {
+                let (r, c) = (index(r), index(c));
+                quote! { g_z[(#r, #c)] = #v; }
+            })
+            .collect();
+        let rows: Vec<Literal> = (0..residual.len()).map(index).collect();
+        let t = code.time_arg();
+        let uses_state = roots
+            .iter()
+            .any(|&r| kernel.state.iter().any(|&s| arena.depends_on(r, s)));
+        let x = arg(uses_state, "x");
+        (
+            quote! {
+                /// The residual `G(t, x, z)` of the highest derivatives and
+                /// `∂G/∂z` (zeroed by the caller).
+                fn residual(&self, #t: f64, #x: &[f64], z: &[f64], g: &mut [f64], g_z: &mut Matrix) -> Result<(), Failure> {
+                    #statements
+                    #(g[#rows] = #residual;)*
+                    #(#cells)*
+                    Ok(())
+                }
+
+                /// The independent highest derivatives by Newton's method
+                /// (they enter the equations non-linearly), with the
+                /// factors of `∂G/∂z` at the root.
+                fn highest_factored(&self, t: f64, x: &[f64]) -> Result<(Vec<f64>, Lu), Failure> {
+                    lagc_runtime::highest::newton(t, vec![0.0; #size], |z, g, g_z| {
+                        self.residual(t, x, z, g, g_z)
+                    })
+                }
+
+                fn highest(&self, t: f64, x: &[f64]) -> Result<Vec<f64>, Failure> {
+                    Ok(self.highest_factored(t, x)?.0)
+                }
+            },
+            quote! { self.highest_factored(t, x)? },
+        )
+    };
+    // The dependent highest derivatives D(t, x, z), their partials.
+    let dep_roots: Vec<ExprId> = i.dependent.iter().map(|d| d.value).collect();
+    let dep = names.code(arena, &dep_roots, &from_xz);
+    let dep_statements = dep.statements(quote! { self.params });
+    let dep_values = &dep.roots;
+    let dep_rows: Vec<Literal> = i
+        .dependent
+        .iter()
+        .map(|d| index(kernel.highest_row(d.coord)))
+        .collect();
+    let (ind_rows, ind_k): (Vec<Literal>, Vec<Literal>) = i
+        .unknowns
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| match s {
+            Symbol::Jet { coord, .. } => Some((index(kernel.highest_row(*coord)), index(k))),
+            _ => None,
+        })
+        .unzip();
+    let z_binding = quote! { let z = self.highest(t, x)?; };
+    let uses_unknowns = |roots: &[ExprId]| {
+        roots
+            .iter()
+            .any(|&r| i.unknowns.iter().any(|&u| arena.depends_on(r, u)))
+    };
+
+    // ∂G/∂x (with z), then ∂z/∂x; the dependent rows' total derivatives.
+    let gx_roots: Vec<ExprId> = i.g_x.iter().map(|&(_, _, e)| e).collect();
+    let mut d_roots = Vec::new();
+    for d in &i.dependent {
+        d_roots.extend(d.d_x.iter().map(|&(_, e)| e));
+        d_roots.extend(d.d_z.iter().map(|&(_, e)| e));
+    }
+    let mut jac_roots = gx_roots.clone();
+    jac_roots.extend(&d_roots);
+    let jac = names.code(arena, &jac_roots, &from_xz);
+    let jac_statements = jac.statements(quote! { self.params });
+    let (gx_values, d_values) = jac.roots.split_at(gx_roots.len());
+    let gx_cells: Vec<TokenStream> = i
+        .g_x
+        .iter()
+        .zip(gx_values)
+        .map(|(&(r, c, _), v)| {
+            let (r, c) = (index(r), index(c));
+            quote! { g_x[(#r, #c)] = #v; }
+        })
+        .collect();
+    let n_lit = index(n);
+    let mut dep_jac = Vec::new();
+    let mut at = 0;
+    for d in &i.dependent {
+        let row = index(kernel.highest_row(d.coord));
+        let mut d_x = vec![quote! { 0.0 }; n];
+        for &(c, _) in &d.d_x {
+            d_x[c] = d_values[at].clone();
+            at += 1;
+        }
+        let mut d_z = vec![quote! { 0.0 }; m];
+        for &(k, _) in &d.d_z {
+            d_z[k] = d_values[at].clone();
+            at += 1;
+        }
+        dep_jac.push(quote! {
+            {
+                let d_x: [f64; #n_lit] = [#(#d_x),*];
+                let d_z: [f64; #size] = [#(#d_z),*];
+                for c in 0..#n_lit {
+                    jac[(#row, c)] = d_x[c] + (0..#size).map(|k| d_z[k] * g_x[(k, c)]).sum::<f64>();
+                }
+            }
+        });
+    }
+    // ∂G/∂t, then ∂z/∂t; the dependent rows'.
+    let mut tp_roots: Vec<ExprId> = i.g_t.iter().map(|&(_, e)| e).collect();
+    let mut dep_t_roots = Vec::new();
+    for d in &i.dependent {
+        dep_t_roots.push(d.d_t);
+        dep_t_roots.extend(d.d_z.iter().map(|&(_, e)| e));
+    }
+    let g_t_count = tp_roots.len();
+    tp_roots.extend(&dep_t_roots);
+    let tp = names.code(arena, &tp_roots, &from_xz);
+    let tp_statements = tp.statements(quote! { self.params });
+    let (g_t_values, dep_t_values) = tp.roots.split_at(g_t_count);
+    let g_t_rows: Vec<Literal> = i.g_t.iter().map(|&(r, _)| index(r)).collect();
+    let mut dep_tp = Vec::new();
+    let mut at = 0;
+    for d in &i.dependent {
+        let row = index(kernel.highest_row(d.coord));
+        let d_t = dep_t_values[at].clone();
+        at += 1;
+        let mut d_z = vec![quote! { 0.0 }; m];
+        for &(k, _) in &d.d_z {
+            d_z[k] = dep_t_values[at].clone();
+            at += 1;
+        }
+        dep_tp.push(quote! {
+            {
+                let d_z: [f64; #size] = [#(#d_z),*];
+                dxdt[#row] = #d_t + (0..#size).map(|k| d_z[k] * g_t[(k, 0)]).sum::<f64>();
+            }
+        });
+    }
+    let ind_rows_t = ind_rows.clone();
+    let ind_k_t = ind_k.clone();
+    let jac_z = arg(uses_unknowns(&jac_roots), "z");
+    let tp_z = arg(uses_unknowns(&tp_roots), "z");
+    let trait_items = quote! {
+        fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+            #z_binding
+            #dep_statements
+            #shifts
+            #(dx[#ind_rows] = z[#ind_k];)*
+            #(dx[#dep_rows] = #dep_values;)*
+            Ok(())
+        }
+
+        fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+            let (#jac_z, lu) = #factored;
+            #jac_statements
+            let mut g_x = Matrix::zeros(#size, #n_lit);
+            #(#gx_cells)*
+            lagc_runtime::highest::implicit_derivatives(&lu, &mut g_x);
+            #shift_jacobian
+            for c in 0..#n_lit {
+                #(jac[(#ind_rows_t, c)] = g_x[(#ind_k_t, c)];)*
+            }
+            #(#dep_jac)*
+            Ok(())
+        }
+
+        fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
+            let (#tp_z, lu) = #factored;
+            #tp_statements
+            let mut g_t = Matrix::zeros(#size, 1);
+            #(g_t[(#g_t_rows, 0)] = #g_t_values;)*
+            lagc_runtime::highest::implicit_derivatives(&lu, &mut g_t);
+            #(dxdt[#ind_rows] = g_t[(#ind_k, 0)];)*
+            #(#dep_tp)*
+            Ok(())
+        }
+    };
+    let inherent = quote! { #solve };
+    (trait_items, inherent)
+}
+
+/// `mass_matrix`, for diagnosing a failure: the mass matrix is
+/// evaluated only then.
+fn mass_condition(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
+    match &kernel.motion {
+        Motion::Implicit(i) if i.linear => quote! {
+            fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix> {
+                Some(Matrix::from_array(&self.mass_system(t, x).0))
+            }
+        },
+        Motion::Explicit(_) if !kernel.mass_matrix.is_empty() => {
+            let arena = &kernel.arena;
+            // Solved symbolically: the matrix does not hold the unknowns.
+            let cells: Vec<(usize, usize, ExprId)> = kernel
+                .mass_matrix
                 .iter()
                 .enumerate()
-                .filter_map(|(k, s)| match s {
-                    Symbol::Jet { coord, .. } => Some((index(highest_row(*coord)), index(k))),
-                    _ => None,
+                .flat_map(|(r, row)| row.iter().enumerate().map(move |(c, &e)| (r, c, e)))
+                .collect();
+            let roots: Vec<ExprId> = cells.iter().map(|&(_, _, e)| e).collect();
+            let code = names.code(arena, &roots, from_x);
+            let statements = code.statements(quote! { self.params });
+            let size = index(kernel.mass_matrix.len());
+            let assigns: Vec<TokenStream> = cells
+                .iter()
+                .zip(&code.roots)
+                .map(|(&(r, c, _), v)| {
+                    let (r, c) = (index(r), index(c));
+                    quote! { m[(#r, #c)] = #v; }
                 })
-                .unzip();
-            let n = index(n_state);
-            let items = quote! {
-                impl System {
-                    #solve
+                .collect();
+            let t = code.time_arg();
+            let x = arg(code.uses_source, "x");
+            quote! {
+                fn mass_matrix(&self, #t: f64, #x: &[f64]) -> Option<Matrix> {
+                    #statements
+                    let mut m = Matrix::zeros(#size, #size);
+                    #(#assigns)*
+                    Some(m)
                 }
-
-                impl Motion for System {
-                    fn dim(&self) -> usize { STATE_NAMES.len() }
-
-                    fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
-                        let z = self.highest(t, x)?;
-                        #dep_statements
-                        #(#shifts)*
-                        #(dx[#ind_rows] = z[#ind_k];)*
-                        #(dx[#dep_rows] = #dep_values;)*
-                        Ok(())
-                    }
-
-                    fn jacobian(&self, t: f64, x: &[f64], jac: &mut DMatrix<f64>) -> Result<(), Failure> {
-                        finite_difference_jacobian(self, t, x, #n, jac)
-                    }
-
-                    fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
-                        finite_difference_time_partial(self, t, x, #n, dxdt)
-                    }
-
-                    fn component_name(&self, i: usize) -> String {
-                        STATE_NAMES.get(i).map_or_else(|| format!("x{}", i + 1), |s| s.to_string())
-                    }
-                }
-            };
-            MotionCode {
-                items,
-                linear_solve: *linear,
-                newton: !*linear,
             }
         }
+        _ => TokenStream::new(),
     }
-}
-
-/// `target(row, col) = value;` for every entry, with the bindings they
-/// need; returns the names of the time and state arguments (`_t`, `_x`
-/// when unused) and the statements.
-fn entry_code(
-    arena: &Arena,
-    names: &mut SymbolNames,
-    entries: &[(usize, usize, ExprId)],
-    source: super::names::Source,
-    target: impl Fn(Literal, Literal) -> TokenStream,
-) -> (TokenStream, TokenStream, TokenStream) {
-    let roots: Vec<ExprId> = entries.iter().map(|&(_, _, e)| e).collect();
-    let code = names.code(arena, &roots, source);
-    let statements = code.statements(quote! { &self.params });
-    let assignments: Vec<TokenStream> = entries
-        .iter()
-        .zip(&code.roots)
-        .map(|(&(r, c, _), v)| {
-            let place = target(index(r), index(c));
-            quote! { #place = #v; }
-        })
-        .collect();
-    let x = if code.uses_source {
-        quote! { x }
-    } else {
-        quote! { _x }
-    };
-    (code.time_arg(), x, quote! { #statements #(#assignments)* })
-}
-
-fn uses_any(arena: &Arena, roots: &[ExprId], symbols: &[Symbol]) -> bool {
-    roots
-        .iter()
-        .any(|&r| symbols.iter().any(|&s| arena.depends_on(r, s)))
-}
-
-/// The non-zero entries of `matrix`: their `(row, column)`, and their
-/// expressions in the same order.
-fn nonzero_cells(arena: &Arena, matrix: &[Vec<ExprId>]) -> (Vec<(usize, usize)>, Vec<ExprId>) {
-    let mut cells = Vec::new();
-    let mut entries = Vec::new();
-    for (r, row) in matrix.iter().enumerate() {
-        for (c, &entry) in row.iter().enumerate() {
-            if !arena.is_zero(entry) {
-                cells.push((r, c));
-                entries.push(entry);
-            }
-        }
-    }
-    (cells, entries)
-}
-
-/// `matrix[(r, c)] = value;` for every cell and its value's code.
-fn cell_assignments(
-    matrix: &TokenStream,
-    cells: &[(usize, usize)],
-    values: &[TokenStream],
-) -> Vec<TokenStream> {
-    cells
-        .iter()
-        .zip(values)
-        .map(|(&(r, c), v)| {
-            let (r, c) = (index(r), index(c));
-            quote! { #matrix[(#r, #c)] = #v; }
-        })
-        .collect()
 }

@@ -49,6 +49,22 @@ const INTERNAL: &[&str] = &[
     "on_sample",
     "value",
     "values",
+    "g",
+    "g_z",
+    "g_x",
+    "g_t",
+    "c",
+    "k",
+    "m",
+    "d_x",
+    "d_z",
+    "out",
+    "given",
+    "default",
+    "mass_matrix",
+    "highest",
+    "highest_factored",
+    "mass_system",
 ];
 
 #[derive(Debug, Clone)]

@@ -136,17 +136,24 @@ pub struct Code {
 
 impl Code {
     /// The statements before the roots are used: `let p = &self.params;`
-    /// when needed (`params` is how the function reaches the params), the
-    /// bindings and the shared sub-expressions.
+    /// when needed (`params` is the place that holds the params, e.g.
+    /// `self.params`), the bindings and the shared sub-expressions.
     pub fn statements(&self, params: TokenStream) -> TokenStream {
         let prelude = &self.prelude;
         let lets = &self.lets;
         let p = if self.uses_params {
-            quote! { let p = #params; }
+            quote! { let p = &#params; }
         } else {
             TokenStream::new()
         };
         quote! { #p #(#prelude)* #(#lets)* }
+    }
+
+    /// The statements for a function whose params are already `p`.
+    pub fn statements_in_p(&self) -> TokenStream {
+        let prelude = &self.prelude;
+        let lets = &self.lets;
+        quote! { #(#prelude)* #(#lets)* }
     }
 
     /// The statements and the first root as one expression: a block only

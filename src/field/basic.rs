@@ -199,8 +199,9 @@ pub fn local_field_note(
              every state"
         ))
         .with_note(
-            "the generated crate uses the local field method: the field of the system \
-             linearised about the current state, re-anchored on every window",
+            "the generated crate uses the quasilinear field method: on each window, the \
+             field of the system linearised along a predicted motion (Newton–Kantorovich), \
+             re-anchored where the window ends",
         ),
     )
 }

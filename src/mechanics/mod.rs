@@ -32,7 +32,7 @@ mod solve;
 mod star;
 mod symbols;
 mod text;
-mod tidy;
+pub mod tidy;
 
 pub use equations::Equation4;
 pub use multiplier_route::{cross_check, CrossCheck, CrossCheckFailure};
@@ -123,6 +123,7 @@ pub fn derive(model: &Model) -> Result<Derivation, Vec<Diagnostic>> {
         order: u,
         state,
         highest: reduction.highest,
+        mass_matrix: reduction.mass_matrix,
         mass_laws: Vec::new(),
         initial,
         consistency: reduction.consistency,

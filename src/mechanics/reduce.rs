@@ -22,6 +22,8 @@ use std::collections::HashMap;
 #[derive(Debug, Clone)]
 pub struct Reduction {
     pub highest: Highest,
+    /// `∂(4)/∂q_i^(u)`: the mass matrix of the highest derivatives.
+    pub mass_matrix: Vec<Vec<ExprId>>,
     pub consistency: Vec<Consistency>,
 }
 
@@ -66,6 +68,7 @@ pub fn reduce(
         masses,
         lagrangian,
     )?;
+    let mass_matrix = system.jacobian.clone();
     system.solve_symbolically(arena);
     let dependent: Vec<(u32, ExprId)> = model
         .dependent()
@@ -134,6 +137,7 @@ pub fn reduce(
         .collect();
     Ok(Reduction {
         highest,
+        mass_matrix,
         consistency,
     })
 }

@@ -13,6 +13,11 @@ pub struct ReducedSystem {
     pub state: Vec<Symbol>,
     /// How the highest derivatives `q_j^(u)` are obtained.
     pub highest: Highest,
+    /// The mass matrix `∂(4)/∂q_i^(u)` of the independent highest
+    /// derivatives (rows of (4), columns of `Highest`'s unknowns), kept
+    /// for naming a singular one as the cause of a run-time failure.
+    /// (Added by the kernel work.)
+    pub mass_matrix: Vec<Vec<ExprId>>,
     /// Mass laws still present in `highest` after the masses that factor out
     /// were divided out: `(i, law)` with `law` an expression of `t` and params
     /// standing for `Symbol::Mass(i)`.

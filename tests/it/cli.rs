@@ -73,10 +73,11 @@ fn help_exits_0() {
 /// `lagc run` end to end: it builds the paper's crate in the cache, runs
 /// it (CSV with the state's header, the exact motion of SPEC 1.6), and a
 /// second run of the unchanged model does not rebuild. The cache is the
-/// generated-crate tests' (same RUSTFLAGS), so nalgebra builds once.
+/// tests' own `lagc` cache: the generated-crate tests write crates of the
+/// same names with other contents into theirs.
 #[test]
 fn run_reproduces_the_paper_and_does_not_rebuild_an_unchanged_model() {
-    let cache = crate::root().join("target/generated-crates");
+    let cache = crate::root().join("target/lagc-cache");
     let run = || {
         Command::new(env!("CARGO_BIN_EXE_lagc"))
             .args(["run", "examples/paper.lag", "--samples", "3"])

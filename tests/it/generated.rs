@@ -1,8 +1,9 @@
 //! Every example's generated crate: generated, compiled warning-free with
-//! one shared target directory (nalgebra compiles once), run with both
-//! methods at rtol 1e-10, and compared with the model's exact solution.
+//! one shared target directory and one shared copy of the runtime crate
+//! (which compiles once), run with both methods at rtol 1e-10, and
+//! compared with the model's exact solution.
 
-use lagc::emit::GeneratedCrate;
+use lagc::emit::{EmitOptions, GeneratedCrate};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -10,33 +11,51 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn generate(name: &str) -> GeneratedCrate {
+/// Where the tests keep generated crates, their runtime and their target.
+fn base() -> PathBuf {
+    root().join("target/generated-crates")
+}
+
+pub(crate) fn generate(name: &str) -> GeneratedCrate {
     generate_file(&root().join(format!("examples/{name}.lag")))
 }
 
-/// The crate of the model in `path`, named by the file's stem.
-fn generate_file(path: &Path) -> GeneratedCrate {
+/// The crate of the model in `path`, named by the file's stem, laid out
+/// as `lagc run` lays out its cache (`crates/<package>` beside
+/// `runtime`).
+pub(crate) fn generate_file(path: &Path) -> GeneratedCrate {
     let name = path.file_stem().unwrap().to_str().unwrap();
     let source = std::fs::read_to_string(path).unwrap();
     let model = lagc::frontend(&source).unwrap_or_else(|d| panic!("{name}: {d:?}"));
-    let (generated, _notes) =
-        lagc::pipeline::generate_crate(&model, name).unwrap_or_else(|d| panic!("{name}: {d:?}"));
+    let options = EmitOptions {
+        model_name: name.to_string(),
+        source_hash: "test".to_string(),
+        runtime_path: "../../runtime".to_string(),
+    };
+    let (generated, _notes) = lagc::pipeline::generate_crate(&model, &options)
+        .unwrap_or_else(|d| panic!("{name}: {d:?}"));
     generated
+}
+
+fn write_file(target: &Path, contents: &str) {
+    std::fs::create_dir_all(target.parent().unwrap()).unwrap();
+    if std::fs::read(target).is_ok_and(|old| old == contents.as_bytes()) {
+        return;
+    }
+    std::fs::write(target, contents).unwrap();
 }
 
 fn write(generated: &GeneratedCrate, dir: &Path) {
     for (path, contents) in &generated.files {
-        let target = dir.join(path);
-        std::fs::create_dir_all(target.parent().unwrap()).unwrap();
-        if std::fs::read(&target).is_ok_and(|old| old == contents.as_bytes()) {
-            continue;
-        }
-        std::fs::write(&target, contents).unwrap();
+        write_file(&dir.join(path), contents);
+    }
+    for (path, contents) in lagc::emit::runtime_files() {
+        write_file(&base().join("runtime").join(path), contents);
     }
 }
 
 /// Builds the crate (release: the runs below dominate a debug build's
-/// saving, measured) with warnings as errors; returns the binary.
+/// saving, measured) with warnings as errors, offline; returns the binary.
 pub(crate) fn build(name: &str) -> PathBuf {
     build_file(&root().join(format!("examples/{name}.lag")))
 }
@@ -45,13 +64,18 @@ pub(crate) fn build(name: &str) -> PathBuf {
 pub(crate) fn build_file(path: &Path) -> PathBuf {
     let generated = generate_file(path);
     let name = &generated.package;
-    let base = root().join("target/generated-crates");
-    let dir = base.join("crates").join(&generated.package);
+    let dir = base().join("crates").join(&generated.package);
     write(&generated, &dir);
-    let target = base.join("target");
+    let target = base().join("target");
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let output = Command::new(&cargo)
-        .args(["build", "--release", "--quiet", "--manifest-path"])
+        .args([
+            "build",
+            "--release",
+            "--offline",
+            "--quiet",
+            "--manifest-path",
+        ])
         .arg(dir.join("Cargo.toml"))
         .env("CARGO_TARGET_DIR", &target)
         .env("RUSTFLAGS", "-D warnings")
@@ -200,37 +224,51 @@ fn lib_rs(name: &str) -> String {
     generate(name).file("src/lib.rs").unwrap().to_string()
 }
 
-fn runtime_modules(name: &str) -> Vec<String> {
-    generate(name)
-        .files
-        .iter()
-        .filter_map(|(p, _)| p.strip_prefix("src/runtime/").map(str::to_string))
-        .collect()
-}
-
 #[test]
 fn generated_code_holds_only_what_the_system_needs() {
-    // The paper: explicit and affine; no Newton, no linear solve, f1 and f2
-    // folded (F ≡ 0); its reduced system has no mass left (M divides out).
+    // The paper: explicit and affine; no Newton, no mass-matrix solve; its
+    // reduced system has no mass left (M divides out); a linear
+    // coefficient system with f1 and f2 at rest (F ≡ 0).
     let paper = lib_rs("paper");
-    assert!(!paper.contains("fn newton") && !paper.contains("fn solve_mass_matrix"));
-    assert!(paper.contains("df[0] = 0.0;") && paper.contains("df[1] = 0.0;"));
-    assert!(paper.contains("fn is_linear(&self) -> bool {\n        true"));
-    assert!(!paper.contains("fn mass_"));
-    // A mass law that stays in the equations is emitted, one that divides
-    // out or a constant mass is not.
-    assert!(lib_rs("mass_loss_stiff_spring").contains("pub fn mass_m("));
-    assert!(!lib_rs("damped_oscillator").contains("fn mass_"));
+    assert!(!paper.contains("newton") && !paper.contains("mass_system"));
+    assert!(paper.contains("df[0] = 0.0_f64;") && paper.contains("df[1] = 0.0_f64;"));
+    assert!(paper.contains("const COEFFICIENTS_LINEAR: bool = true;"));
+    // A mass law that stays in the equations is evaluated by the right
+    // side; one that divides out is not (it is emitted only to name a mass
+    // that reaches zero).
+    let rhs_body = |lib: &str| {
+        lib.split("fn rhs(")
+            .nth(1)
+            .unwrap()
+            .split("\n    }")
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    assert!(rhs_body(&lib_rs("mass_loss_stiff_spring")).contains("mass_m("));
+    assert!(!rhs_body(&lib_rs("damped_oscillator")).contains("mass_"));
     // The oscillator's coefficient system is Riccati.
-    assert!(lib_rs("damped_oscillator").contains("fn is_linear(&self) -> bool {\n        false"));
+    assert!(lib_rs("damped_oscillator").contains("const COEFFICIENTS_LINEAR: bool = false;"));
     // Non-linear highest derivatives: Newton, no coefficient system.
     let implicit = lib_rs("nonlinear_second_order");
-    assert!(implicit.contains("fn newton") && !implicit.contains("struct Coefficients"));
-    // Non-affine systems get the local field runtime, affine ones do not.
-    assert!(runtime_modules("knife_edge").contains(&"local_field.rs".to_string()));
-    assert!(!runtime_modules("paper").contains(&"local_field.rs".to_string()));
+    assert!(implicit.contains("highest::newton") && !implicit.contains("fn coefficients"));
+    // Non-affine systems have no coefficient system.
+    assert!(!lib_rs("knife_edge").contains("const AFFINE"));
     // Exact-solution code only with `exact`.
-    assert!(paper.contains("fn exact_state"));
+    assert!(paper.contains("fn exact("));
+    // Nothing model-independent: the runtime is a dependency.
+    assert!(
+        paper.lines().count() < 400,
+        "{} lines",
+        paper.lines().count()
+    );
+    let main = generate("paper").file("src/main.rs").unwrap().to_string();
+    assert_eq!(
+        main.lines()
+            .filter(|l| l.contains(';') || l.contains("::main"))
+            .count(),
+        1
+    );
 }
 
 #[test]
@@ -270,8 +308,9 @@ fn generated_crates_pass_clippy() {
 }
 
 /// `--ensemble K`: one field for K initial states agrees with K direct
-/// integrations (a linear and a Riccati coefficient system); a non-affine
-/// system has no ensemble mode (usage error).
+/// integrations (a linear and a Riccati coefficient system) to the
+/// tolerance; a non-affine system's tangent ensemble is first order in the
+/// spread.
 #[test]
 fn ensemble_mode_agrees_with_direct_integrations() {
     for name in ["paper", "damped_oscillator"] {
@@ -294,29 +333,49 @@ fn ensemble_mode_agrees_with_direct_integrations() {
             assert!(stderr.contains(&format!("\"ensemble\":{k},")), "{stderr}");
         }
     }
-    let output = Command::new(build("nonlinear_second_order"))
-        .args(["--ensemble", "2"])
-        .output()
-        .unwrap();
-    assert_eq!(output.status.code(), Some(2));
+    // The knife edge: y' = tan(θ) x', not affine in the state.
+    let binary = build("knife_edge");
+    let difference = |spread: &str| -> f64 {
+        let output = Command::new(&binary)
+            .args(["--ensemble", "4", "--spread", spread, "--summary", "json"])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+        assert!(output.status.success(), "{stderr}");
+        stderr
+            .split("\"largest_difference\":")
+            .nth(1)
+            .and_then(|rest| rest.split([',', '}']).next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("{stderr}"))
+    };
+    let (coarse, fine) = (difference("1e-2"), difference("1e-3"));
+    assert!(
+        fine < coarse / 20.0,
+        "spread 1e-2: {coarse:e}, 1e-3: {fine:e}"
+    );
 }
 
-/// The emitter can copy every runtime module: a module missing from its
-/// list would make generated crates that `use` it fail to compile.
+/// lagc carries every file of the runtime crate: one missing from its
+/// list would make `lagc build -o` write a runtime that does not build.
 #[test]
-fn the_emitter_knows_every_runtime_module() {
-    let mut on_disk: Vec<String> = std::fs::read_dir(root().join("src/emit/runtime"))
-        .unwrap()
-        .filter_map(|entry| {
-            let name = entry.unwrap().file_name().to_string_lossy().into_owned();
-            name.strip_suffix(".rs")
-                .filter(|stem| *stem != "mod")
-                .map(str::to_string)
-        })
-        .collect();
+fn the_emitter_carries_every_runtime_file() {
+    fn walk(dir: &Path, base: &Path, out: &mut Vec<String>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(&path, base, out);
+            } else {
+                out.push(path.strip_prefix(base).unwrap().display().to_string());
+            }
+        }
+    }
+    let runtime = root().join("runtime");
+    let mut on_disk = vec!["Cargo.toml".to_string()];
+    walk(&runtime.join("src"), &runtime, &mut on_disk);
     on_disk.sort();
-    let mut known: Vec<String> = lagc::emit::runtime_module_names()
-        .map(str::to_string)
+    let mut known: Vec<String> = lagc::emit::runtime_files()
+        .map(|(p, _)| p.to_string())
         .collect();
     known.sort();
     assert_eq!(known, on_disk);
@@ -336,8 +395,8 @@ fn implicit_linear_solve_conserves_the_pendulum_energy() {
         .unwrap()
         .1;
     assert!(
-        lib.contains("fn solve_mass_matrix"),
-        "the LU path is emitted"
+        lib.contains("fn mass_system"),
+        "the mass-matrix solve is emitted"
     );
     let g = 9.81;
     // Columns: t, th1, th2, th3, th1', th2', th3'.

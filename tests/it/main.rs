@@ -6,11 +6,12 @@ mod examples;
 mod field;
 mod generated;
 mod ir;
+mod kernel;
+mod mass_law_forms;
 mod mechanics;
 mod parser;
 mod report;
 mod robustness;
-mod runtime;
 mod runtime_failures;
 mod stiff_extreme;
 

@@ -146,10 +146,10 @@ fn ladder_and_references() {
     }
 }
 
-/// `lagc report` with the generated crates' shared target directory (the
-/// same `RUSTFLAGS` as `generated.rs`, so nalgebra is not rebuilt).
+/// `lagc report` with the tests' own `lagc` cache (shared with `cli.rs`;
+/// `generated.rs` writes crates of the same names with other contents).
 fn lagc_report(model: &std::path::Path, out: &std::path::Path, tolerances: &str) -> String {
-    let cache = crate::root().join("target/generated-crates");
+    let cache = crate::root().join("target/lagc-cache");
     let output = Command::new(env!("CARGO_BIN_EXE_lagc"))
         .arg("report")
         .arg(model)

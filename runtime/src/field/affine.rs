@@ -97,7 +97,7 @@ impl<M: Model> Solver<M> for AffineField {
         self.done += done;
         self.reanchorings += reanchorings;
         self.largest_condition = largest;
-        result
+        result.map_err(|f| super::explain(model, f, self.window.time(), self.window.state()))
     }
 
     fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {

@@ -25,6 +25,11 @@ pub struct Recovered {
     pub determinant: f64,
     /// `max |S_ij|`: how far the sensitivities grew since the anchor.
     pub growth: f64,
+    /// How much rounding the forming of the conditions from `S` amplifies:
+    /// their entries `S_BA − S_B1 x_A0` are differences, which cancel when
+    /// the field's sensitivities align (the adjoint of a fast decaying
+    /// mode), and the condition number of the result cannot see that.
+    pub formation: f64,
     /// The factors of `M` (for mapping errors); `None` when `N = 1`.
     lu: Option<Lu>,
 }
@@ -58,6 +63,7 @@ pub fn recover(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Recovered> {
             condition: 1.0,
             determinant: 1.0,
             growth,
+            formation: 1.0,
             lu: None,
         });
     }
@@ -69,6 +75,26 @@ pub fn recover(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Recovered> {
             -(s[a * n] - s[0] * x0[a])
         })
         .collect();
+    // Magnitudes of the terms of each entry against the entries.
+    let (mut terms, mut entries) = (0.0_f64, 0.0_f64);
+    for col in 0..m {
+        let b = col + 1;
+        for row in 0..m {
+            let a = row + 1;
+            terms = terms.max(s[a * n + b].abs() + (s[b] * x0[a]).abs());
+            entries = entries.max(matrix[(row, col)].abs());
+        }
+    }
+    for (row, &value) in z.iter().enumerate() {
+        let a = row + 1;
+        terms = terms.max(s[a * n].abs() + (s[0] * x0[a]).abs());
+        entries = entries.max(value.abs());
+    }
+    let formation = if entries > 0.0 {
+        (terms / entries).max(1.0)
+    } else {
+        f64::INFINITY
+    };
     let lu = Lu::new(&matrix);
     if lu.is_singular() {
         return None;
@@ -87,6 +113,7 @@ pub fn recover(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Recovered> {
         condition,
         determinant,
         growth,
+        formation,
         lu: Some(lu),
     })
 }

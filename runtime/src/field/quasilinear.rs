@@ -355,10 +355,31 @@ impl<M: Model> Solver<M> for QuasilinearField {
             if self.options.auto_stiff && predictor.stiffness_detected() {
                 self.stiff = true;
             }
-            if let Some(failure) = predictor.failure.borrow_mut().take() {
-                return Err(failure);
-            }
-            let pass = pass?;
+            let failure = predictor.failure.borrow_mut().take();
+            let pass = match (failure, pass) {
+                (None, Ok(pass)) => pass,
+                (failure, pass) => {
+                    let failure = failure.or(pass.err()).expect("a failure");
+                    // A loose predictor can leave the motion's domain where
+                    // the motion itself does not (a square root near its
+                    // branch point): predict more tightly before giving up.
+                    let retry = matches!(
+                        failure.kind,
+                        FailureKind::NonFiniteRate { .. }
+                            | FailureKind::NonFiniteState { .. }
+                            | FailureKind::StepSizeUnderflow { .. }
+                            | FailureKind::NewtonNonConvergence { .. }
+                            | FailureKind::SingularMassMatrix { .. }
+                    ) && self.predictor_ratio > MIN_PREDICTOR_RATIO
+                        && retries < 12;
+                    if !retry {
+                        return Err(super::explain(model, failure, self.t, &self.x));
+                    }
+                    retries += 1;
+                    self.predictor_ratio = (self.predictor_ratio * 0.01).max(MIN_PREDICTOR_RATIO);
+                    continue;
+                }
+            };
             self.passes += 1;
             self.stats += pass.stats;
             if pass.steps.is_empty() {

@@ -1,0 +1,232 @@
+//! The model's data as trait items: identity constants, params, the time
+//! span, the initial state (with the stated values of dependent components
+//! checked after overrides), the exact solution and the mass laws.
+
+use super::names::{Source, SymbolNames};
+use crate::ir::Symbol;
+use crate::kernel::{InitialKind, InitialSource, Kernel};
+use proc_macro2::{Literal, TokenStream};
+use quote::quote;
+use std::collections::HashMap;
+
+fn index(i: usize) -> Literal {
+    Literal::usize_unsuffixed(i)
+}
+
+/// One free function per mass law, `mass_<name>(p, t)`.
+pub fn mass_fns(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
+    let mut items = Vec::new();
+    for (i, (name, law)) in kernel.masses.iter().enumerate() {
+        let code = names.code(&kernel.arena, &[*law], &|_| None);
+        let statements = code.statements_in_p();
+        let root = &code.roots[0];
+        let t = code.time_arg();
+        let p = if code.uses_params {
+            quote! { p }
+        } else {
+            quote! { _p }
+        };
+        let f = &names.mass_fns[i];
+        let doc = format!(
+            " The mass law `{name}(t) = {}`.",
+            kernel.arena.display(*law)
+        );
+        items.push(quote! {
+            #[doc = #doc]
+            fn #f(#p: &Params, #t: f64) -> f64 {
+                #statements
+                #root
+            }
+        });
+    }
+    quote! { #(#items)* }
+}
+
+/// `time_span`, `initial_state`, `exact`, `masses`.
+pub fn data_items(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
+    let arena = &kernel.arena;
+    let span = names.code(arena, &[kernel.time_span.0, kernel.time_span.1], &|_| None);
+    let span_statements = span.statements(quote! { self.params });
+    let (t0, t1) = (&span.roots[0], &span.roots[1]);
+    let initial = initial_state(kernel, names);
+    let exact = if kernel.exact.is_empty() {
+        TokenStream::new()
+    } else {
+        let roots: Vec<_> = kernel.exact.iter().map(|&(_, e)| e).collect();
+        let code = names.code(arena, &roots, &|_| None);
+        let statements = code.statements(quote! { self.params });
+        let slots: Vec<Literal> = kernel.exact.iter().map(|&(k, _)| index(k)).collect();
+        let values = &code.roots;
+        let t = code.time_arg();
+        quote! {
+            fn exact(&self, #t: f64, out: &mut [Option<f64>]) {
+                #statements
+                #(out[#slots] = Some(#values);)*
+            }
+        }
+    };
+    let masses = if kernel.masses.is_empty() {
+        TokenStream::new()
+    } else {
+        let fns = &names.mass_fns;
+        let slots: Vec<Literal> = (0..fns.len()).map(index).collect();
+        quote! {
+            fn masses(&self, t: f64, out: &mut [f64]) {
+                #(out[#slots] = #fns(&self.params, t);)*
+            }
+        }
+    };
+    quote! {
+        fn time_span(&self) -> (f64, f64) {
+            #span_statements
+            (#t0, #t1)
+        }
+
+        #initial
+        #exact
+        #masses
+    }
+}
+
+/// `initial_state(given)`: given values (overridable) first, then those the
+/// constraints fix, then the consistency stages for k ≥ 3; then the values
+/// the model states for fixed components are checked against them.
+fn initial_state(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
+    let arena = &kernel.arena;
+    let mut statements = Vec::new();
+    let mut known: HashMap<Symbol, TokenStream> = HashMap::new();
+    let mut uses_time = false;
+    let mut uses_given = false;
+    for source in &kernel.initial.sources {
+        let (symbol, value, given) = match *source {
+            InitialSource::Given { index: k, value } => (kernel.state[k], value, Some(k)),
+            InitialSource::Constraint { index: k, value } => (kernel.state[k], value, None),
+            InitialSource::Solved { symbol, value } => (symbol, value, None),
+        };
+        let lookup: Source = &|s| known.get(&s).cloned();
+        let code = names.code(arena, &[value], lookup);
+        uses_time |= code.uses_time;
+        let value = code.single(quote! { self.params });
+        let name = names.ident(arena, symbol);
+        statements.push(match given {
+            Some(k) => {
+                uses_given = true;
+                let slot = if k == 0 {
+                    quote! { given.first() }
+                } else {
+                    let k = index(k);
+                    quote! { given.get(#k) }
+                };
+                quote! { let #name = #slot.copied().flatten().unwrap_or(#value); }
+            }
+            None => quote! { let #name = #value; },
+        });
+        known.insert(symbol, name);
+    }
+    let mut checks = Vec::new();
+    for &(k, stated) in &kernel.initial.stated {
+        let code = names.code(arena, &[stated], &|_| None);
+        uses_time |= code.uses_time;
+        let value = code.single(quote! { self.params });
+        let label = arena.symbol_name(kernel.state[k]);
+        let required = known
+            .get(&kernel.state[k])
+            .cloned()
+            .unwrap_or_else(|| quote! { f64::NAN });
+        checks.push(quote! {
+            lagc_runtime::model::check_stated(t, #label, #value, #required)?;
+        });
+    }
+    let values: Vec<TokenStream> = kernel
+        .state
+        .iter()
+        .map(|s| known.get(s).cloned().unwrap_or_else(|| quote! { f64::NAN }))
+        .collect();
+    let t = if uses_time || !checks.is_empty() {
+        quote! { let t = self.time_span().0; }
+    } else {
+        TokenStream::new()
+    };
+    let given = if uses_given {
+        quote! { given }
+    } else {
+        quote! { _given }
+    };
+    quote! {
+        fn initial_state(&self, #given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+            #t
+            #(#statements)*
+            #(#checks)*
+            Ok(vec![#(#values),*])
+        }
+    }
+}
+
+/// The consts of the trait impl.
+pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStream {
+    let arena = &kernel.arena;
+    let params: Vec<&str> = kernel.params.iter().map(|p| p.name.as_str()).collect();
+    let state: Vec<String> = kernel.state.iter().map(|&s| arena.symbol_name(s)).collect();
+    let coordinates = index(kernel.coordinates);
+    let initial: Vec<TokenStream> = kernel
+        .initial
+        .kinds
+        .iter()
+        .map(|k| match k {
+            InitialKind::Given => quote! { Initial::Given },
+            InitialKind::Constraint => quote! { Initial::Constraint },
+            InitialKind::Solved => quote! { Initial::Solved },
+        })
+        .collect();
+    let masses: Vec<&str> = kernel.masses.iter().map(|(n, _)| n.as_str()).collect();
+    let masses = if masses.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! { const MASSES: &'static [&'static str] = &[#(#masses),*]; }
+    };
+    let integrator = match kernel.integrator {
+        None => TokenStream::new(),
+        Some(choice) => {
+            let variant = proc_macro2::Ident::new(
+                match choice {
+                    crate::check::model::IntegratorChoice::Auto => "Auto",
+                    crate::check::model::IntegratorChoice::Explicit => "Explicit",
+                    crate::check::model::IntegratorChoice::Stiff => "Stiff",
+                    crate::check::model::IntegratorChoice::Magnus => "Magnus",
+                },
+                proc_macro2::Span::call_site(),
+            );
+            quote! {
+                const DECLARED_INTEGRATOR: Option<lagc_runtime::method::IntegratorChoice> =
+                    Some(lagc_runtime::method::IntegratorChoice::#variant);
+            }
+        }
+    };
+    let affine = match &kernel.coefficients {
+        Some(c) => {
+            let linear = c.linear;
+            quote! {
+                const AFFINE: bool = true;
+                const COEFFICIENTS_LINEAR: bool = #linear;
+            }
+        }
+        None => TokenStream::new(),
+    };
+    let exact = if kernel.exact.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! { const EXACT: bool = true; }
+    };
+    quote! {
+        const NAME: &'static str = #model_name;
+        const SOURCE_HASH: &'static str = #source_hash;
+        const PARAMS: &'static [&'static str] = &[#(#params),*];
+        const STATE: &'static [&'static str] = &[#(#state),*];
+        const COORDINATES: usize = #coordinates;
+        const INITIAL: &'static [Initial] = &[#(#initial),*];
+        #masses
+        #integrator
+        #affine
+        #exact
+    }
+}

@@ -1,0 +1,116 @@
+//! Stage 6: the kernel — every expression the generated crate evaluates,
+//! built from the derivation and the field system (SPEC §1.4–§1.5), so
+//! that emission only prints. Emission never differentiates, substitutes
+//! or lowers: all of that happens here.
+//!
+//! | file | what |
+//! |---|---|
+//! | `time.rs` | the true time partial (mass laws move with `t`) |
+//! | `motion.rs` | `X`, the exact `∂X/∂x` and `∂X/∂t`; implicit systems' residual and its partials |
+//! | `items.rs` | params, time span, initial values, exact solution, mass laws, coefficient system |
+//! | `text.rs` | the kernel's text form (snapshots) |
+
+mod items;
+mod motion;
+mod text;
+pub mod time;
+
+pub use items::{Coefficients, InitialKind, InitialSource, KernelInitial, KernelParam};
+pub use motion::{Explicit, Implicit, Motion};
+
+use crate::check::model::{IntegratorChoice, Model};
+use crate::diagnostic::Diagnostic;
+use crate::field::FieldSystem;
+use crate::ir::{Arena, ExprId, Symbol};
+use crate::mechanics::Derivation;
+use time::TimeDependence;
+
+/// What the generated crate computes, as expressions in one arena.
+#[derive(Debug, Clone)]
+pub struct Kernel {
+    pub arena: Arena,
+    /// The state (6).
+    pub state: Vec<Symbol>,
+    /// `n`, the number of coordinates.
+    pub coordinates: usize,
+    /// `u`: the state holds derivatives of order `0..u`.
+    pub order: u32,
+    pub params: Vec<KernelParam>,
+    /// Every mass law `(name, law)` (for naming a mass that reaches zero),
+    /// and the indices of those the reduced system still holds.
+    pub masses: Vec<(String, ExprId)>,
+    pub remaining_masses: Vec<u32>,
+    pub time_span: (ExprId, ExprId),
+    pub initial: KernelInitial,
+    pub motion: Motion,
+    /// The mass matrix of the highest derivatives (for diagnosis).
+    pub mass_matrix: Vec<Vec<ExprId>>,
+    /// The coefficient system, for affine reduced systems.
+    pub coefficients: Option<Coefficients>,
+    /// `(state index, exact value)`.
+    pub exact: Vec<(usize, ExprId)>,
+    pub integrator: Option<IntegratorChoice>,
+}
+
+/// Builds the kernel of a derived model.
+pub fn build(
+    model: &Model,
+    derivation: &Derivation,
+    field: &FieldSystem,
+) -> Result<Kernel, Vec<Diagnostic>> {
+    let mut arena = derivation.arena.clone();
+    let reduced = &derivation.reduced;
+    let time = TimeDependence::new(&mut arena, &reduced.mass_laws);
+    let params = items::params(&mut arena, model);
+    let masses = items::masses(&mut arena, model);
+    let time_span = items::time_span(&mut arena, model);
+    let initial = items::initial(&mut arena, model, reduced).map_err(|d| vec![d])?;
+    let motion = motion::motion(&mut arena, reduced, &time);
+    let coefficients = items::coefficients(&mut arena, field, &time);
+    let exact = items::exact(&mut arena, model, reduced);
+    let mass_matrix = reduced
+        .mass_matrix
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|&e| crate::mechanics::tidy::simplify(&mut arena, e))
+                .collect()
+        })
+        .collect();
+    Ok(Kernel {
+        arena,
+        state: reduced.state.clone(),
+        coordinates: derivation.coordinates,
+        order: reduced.order,
+        params,
+        masses,
+        remaining_masses: reduced.mass_laws.iter().map(|&(i, _)| i).collect(),
+        time_span,
+        initial,
+        motion,
+        mass_matrix,
+        coefficients,
+        exact,
+        integrator: model.integrator.map(|d| d.choice),
+    })
+}
+
+impl Kernel {
+    /// The row of the state holding `q_coord^(u−1)`'s rate, `q_coord^(u)`.
+    pub fn highest_row(&self, coord: u32) -> usize {
+        (self.order as usize - 1) * self.coordinates + coord as usize
+    }
+
+    /// Every root the right side evaluates (for operation counts).
+    pub fn rhs_roots(&self) -> Vec<ExprId> {
+        match &self.motion {
+            Motion::Explicit(e) => e.rhs.clone(),
+            Motion::Implicit(i) => {
+                let mut roots = i.residual.clone();
+                roots.extend(i.g_z.iter().map(|&(_, _, e)| e));
+                roots.extend(i.dependent.iter().map(|d| d.value));
+                roots
+            }
+        }
+    }
+}
