@@ -100,9 +100,13 @@ struct ReportArgs {
 struct BuildArgs {
     /// The `.lag` model.
     file: PathBuf,
-    /// The directory to write the crate into (created when missing).
+    /// The directory to write the crate into (created when missing). It
+    /// must be empty or hold an earlier `lagc build`'s output.
     #[arg(short = 'o', long = "output", value_name = "DIR")]
     output: PathBuf,
+    /// Write into DIR even when it holds files lagc did not write.
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -199,10 +203,10 @@ fn compile<T, R: Send>(
     then: impl FnOnce(T) -> R + Send,
 ) -> Result<R, ExitCode> {
     let file_name = file.display().to_string();
-    let bytes = match std::fs::read(file) {
+    let bytes = match cli::read_model_file(file) {
         Ok(bytes) => bytes,
-        Err(error) => {
-            eprintln!("error: cannot read `{file_name}`: {error}");
+        Err(message) => {
+            eprintln!("error: cannot read `{file_name}`: {message}");
             return Err(ExitCode::from(EXIT_USAGE));
         }
     };
@@ -286,7 +290,11 @@ fn count(n: usize, noun: &str) -> String {
 
 /// Reads, checks and generates the crate of `file`, printing diagnostics
 /// and notes; `Err(status)` when that fails.
-fn generate(file: &Path, runtime_path: &str) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
+fn generate(
+    file: &Path,
+    runtime_path: &str,
+    package_key: Option<String>,
+) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
     let model_name = file
         .file_stem()
         .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
@@ -296,6 +304,7 @@ fn generate(file: &Path, runtime_path: &str) -> Result<lagc::emit::GeneratedCrat
             model_name: model_name.clone(),
             source_hash: cli::source_hash(source),
             runtime_path: runtime_path.to_string(),
+            package_key: package_key.clone(),
         };
         lagc::pipeline::generate_crate(&model, &options)
     };
@@ -303,12 +312,26 @@ fn generate(file: &Path, runtime_path: &str) -> Result<lagc::emit::GeneratedCrat
 }
 
 fn build(args: &BuildArgs) -> ExitCode {
-    let generated = match generate(&args.file, cli::RUNTIME_IN_CRATE) {
+    let generated = match generate(&args.file, cli::RUNTIME_IN_CRATE, None) {
         Ok(generated) => generated,
         Err(status) => return status,
     };
+    if !args.force && !cli::may_write_into(&args.output) {
+        eprintln!(
+            "error: `{}` is not empty and was not written by `lagc build`: refusing to \
+             overwrite it\n  = help: choose an empty or new directory, or pass --force",
+            args.output.display()
+        );
+        return ExitCode::from(EXIT_USAGE);
+    }
     let written = cli::write_crate(&generated, &args.output)
-        .and_then(|()| cli::write_runtime(&args.output.join(cli::RUNTIME_IN_CRATE)));
+        .and_then(|()| cli::write_runtime(&args.output.join(cli::RUNTIME_IN_CRATE)))
+        .and_then(|()| {
+            std::fs::write(
+                args.output.join(cli::MARKER),
+                "written by `lagc build`; a later `lagc build -o` may overwrite this directory\n",
+            )
+        });
     match written {
         Ok(()) => {
             eprintln!(
@@ -329,7 +352,11 @@ fn build(args: &BuildArgs) -> ExitCode {
 }
 
 fn run(args: &RunArgs) -> ExitCode {
-    let generated = match generate(&args.file, &cli::runtime_path_from_cache()) {
+    let generated = match generate(
+        &args.file,
+        &cli::runtime_path_from_cache(),
+        Some(cli::path_key(&args.file)),
+    ) {
         Ok(generated) => generated,
         Err(status) => return status,
     };
@@ -391,11 +418,40 @@ fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitC
             return Err(ExitCode::FAILURE);
         }
     }
-    Ok(target_dir.join("release").join(format!(
+    let binary = target_dir.join("release").join(format!(
         "{}{}",
         generated.package,
         std::env::consts::EXE_SUFFIX
-    )))
+    ));
+    // The binary must be this model's: a binary copied in, damaged, or
+    // left by another build is removed and built again (cargo rebuilds a
+    // missing output), and refused if it still does not answer.
+    for attempt in 0..2 {
+        if cli::binary_hash(&binary).as_deref() == Some(generated.source_hash.as_str()) {
+            return Ok(binary);
+        }
+        if attempt == 0 {
+            eprintln!(
+                "note: `{}` is not this model's binary (damaged or replaced); rebuilding it",
+                binary.display()
+            );
+            // The uplifted binary may share its inode with cargo's own
+            // copy; a fresh source time makes cargo rebuild both.
+            let _ = std::fs::remove_file(&binary);
+            cli::touch(&crate_dir.join("src/main.rs"));
+            match cli::cargo_build(&crate_dir, &target_dir) {
+                Ok(status) if status.success() => {}
+                _ => break,
+            }
+        }
+    }
+    eprintln!(
+        "error: `{}` does not belong to this model even after a rebuild; remove the cache \
+         directory `{}` and run again",
+        binary.display(),
+        cache.display()
+    );
+    Err(ExitCode::FAILURE)
 }
 
 fn report(args: &ReportArgs) -> ExitCode {
@@ -413,7 +469,11 @@ fn report(args: &ReportArgs) -> ExitCode {
         eprintln!("error: `--runs` must be at least 1");
         return ExitCode::from(EXIT_USAGE);
     }
-    let generated = match generate(&args.file, &cli::runtime_path_from_cache()) {
+    let generated = match generate(
+        &args.file,
+        &cli::runtime_path_from_cache(),
+        Some(cli::path_key(&args.file)),
+    ) {
         Ok(generated) => generated,
         Err(status) => return status,
     };

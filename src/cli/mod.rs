@@ -25,6 +25,41 @@ pub fn write_crate(generated: &GeneratedCrate, dir: &Path) -> std::io::Result<()
     Ok(())
 }
 
+/// The largest model file lagc reads: a 50-link pendulum is 60 KB, so
+/// 16 MiB is no model's limit, and stops a read of `/dev/zero`.
+pub const MAX_MODEL_BYTES: u64 = 16 << 20;
+
+/// A model file's bytes, at most [`MAX_MODEL_BYTES`] of them.
+pub fn read_model_file(file: &Path) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let handle = std::fs::File::open(file).map_err(|e| e.to_string())?;
+    let mut bytes = Vec::new();
+    handle
+        .take(MAX_MODEL_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_MODEL_BYTES {
+        return Err(format!(
+            "it is larger than {} MiB, more than any model",
+            MAX_MODEL_BYTES >> 20
+        ));
+    }
+    Ok(bytes)
+}
+
+/// The file `lagc build -o DIR` leaves in DIR, so that a later build may
+/// overwrite what an earlier one wrote, and nothing else.
+pub const MARKER: &str = ".lagc-generated";
+
+/// Whether `lagc build` may write into `dir`: it does not exist, is
+/// empty, or holds the marker of an earlier build.
+pub fn may_write_into(dir: &Path) -> bool {
+    match std::fs::read_dir(dir) {
+        Err(_) => !dir.exists(),
+        Ok(mut entries) => entries.next().is_none() || dir.join(MARKER).is_file(),
+    }
+}
+
 /// Where `lagc build -o DIR` puts the runtime's copy, inside DIR.
 pub const RUNTIME_IN_CRATE: &str = "lagc-runtime";
 
@@ -99,6 +134,39 @@ pub fn cargo_build(crate_dir: &Path, target_dir: &Path) -> std::io::Result<ExitS
 }
 
 /// Runs the built binary with `args`, its stdout and stderr ours.
+/// The source hash a generated binary reports (`--lagc-source-hash`), or
+/// `None` when it does not run or answers otherwise.
+pub fn binary_hash(binary: &Path) -> Option<String> {
+    let output = Command::new(binary)
+        .arg("--lagc-source-hash")
+        .output()
+        .ok()?;
+    if !output.status.success() {
+        return None;
+    }
+    Some(String::from_utf8(output.stdout).ok()?.trim().to_string())
+}
+
+/// Sets a file's modification time to now (ignoring failure: the rebuild
+/// that follows reports what matters).
+pub fn touch(file: &Path) {
+    if let Ok(handle) = std::fs::OpenOptions::new().append(true).open(file) {
+        let _ = handle.set_modified(std::time::SystemTime::now());
+    }
+}
+
+/// A key for a model file's crate in the cache: a hash of its canonical
+/// path (the file's text may change; its crate is rebuilt in place).
+pub fn path_key(file: &Path) -> String {
+    let path = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in path.to_string_lossy().bytes() {
+        hash ^= u64::from(b);
+        hash = hash.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{:08x}", hash >> 32)
+}
+
 pub fn run_binary(binary: &Path, args: &[String]) -> std::io::Result<ExitStatus> {
     Command::new(binary).args(args).status()
 }

@@ -43,12 +43,19 @@ pub struct EmitOptions {
     pub source_hash: String,
     /// Where the runtime crate is, relative to the generated crate's root.
     pub runtime_path: String,
+    /// Appended to the package name (`lag-<name>-<key>`) when crates of
+    /// several models share one cargo target directory: two files of one
+    /// stem (`a/model.lag`, `b/model.lag`) must not build one binary.
+    pub package_key: Option<String>,
 }
 
 /// The generated crate: `(path relative to the crate root, contents)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GeneratedCrate {
     pub package: String,
+    /// `EmitOptions::source_hash`: what the built binary answers to
+    /// `--lagc-source-hash`.
+    pub source_hash: String,
     /// The param and state names (the model binary's `--param` and
     /// `--init` names), for checking a run's options before building.
     pub params: Vec<String>,
@@ -162,7 +169,10 @@ pub fn emit_crate(
         }
     };
     let lib = pretty(lib).map_err(|e| vec![e])?;
-    let package = files::package_name(&options.model_name);
+    let package = match &options.package_key {
+        Some(key) => format!("{}-{key}", files::package_name(&options.model_name)),
+        None => files::package_name(&options.model_name),
+    };
     let out = vec![
         (
             "Cargo.toml".to_string(),
@@ -174,6 +184,7 @@ pub fn emit_crate(
     ];
     Ok(GeneratedCrate {
         package,
+        source_hash: options.source_hash.clone(),
         params: kernel.params.iter().map(|p| p.name.clone()).collect(),
         state: kernel
             .state

@@ -31,6 +31,7 @@ pub(crate) fn generate_file(path: &Path) -> GeneratedCrate {
         model_name: name.to_string(),
         source_hash: "test".to_string(),
         runtime_path: "../../runtime".to_string(),
+        package_key: None,
     };
     let (generated, _notes) = lagc::pipeline::generate_crate(&model, &options)
         .unwrap_or_else(|d| panic!("{name}: {d:?}"));

@@ -1,5 +1,6 @@
 //! The one integration-test binary.
 
+mod cache;
 mod cli;
 mod errors;
 mod examples;

@@ -1,0 +1,110 @@
+#!/usr/bin/env python3
+"""Field method against direct DOP853 on non-affine models, side by side in
+one run (issue 10): `lagc report` at rtol 1e-5 ... 1e-11 for every model,
+then, per model, the cost of the field at equal error (direct DOP853's time
+interpolated at the field's error, log-log) and the field's measured order
+(the slope of -log(error) against log(right-side evaluations)).
+
+Usage (from the repository root):
+
+    cargo build --release
+    python3 scripts/gen_pendulum.py 2 3 5 8
+    python3 scripts/field_vs_direct.py [MODEL.lag ...] > target/field-vs-direct.md
+
+REUSE=1 re-reads the last reports' CSV instead of running them again.
+
+Writes the reports' CSV and SVG into target/field-vs-direct/. Prints a
+Markdown table (docs/BENCHMARKS.md, "Field against direct").
+"""
+
+import csv
+import math
+import os
+import subprocess
+import sys
+
+MODELS = [
+    "examples/knife_edge.lag",
+    "examples/rolling_disk.lag",
+    "examples/nonlinear_constraint.lag",
+    "benches/data/pendulum_2.lag",
+    "benches/data/pendulum_3.lag",
+    "benches/data/pendulum_5.lag",
+    "benches/data/pendulum_8.lag",
+    "benches/data/double_pendulum_mass_loss.lag",
+    "tests/data/mass_law_forms/sleigh_mass.lag",
+    "tests/data/mass_law_forms/rocket_mass.lag",
+]
+TOLERANCES = "1e-5,1e-6,1e-7,1e-8,1e-9,1e-10,1e-11"
+OUT = "target/field-vs-direct"
+
+
+def rows(model):
+    name = os.path.basename(model)[:-4]
+    if os.environ.get("REUSE") != "1":
+        subprocess.run(
+            ["target/release/lagc", "report", model, "--tolerances", TOLERANCES,
+             "--runs", "3", "--out", OUT],
+            check=True, stdout=subprocess.DEVNULL)
+    with open(os.path.join(OUT, f"{name}.work-precision.csv")) as f:
+        return name, [r for r in csv.DictReader(f) if r["status"] == "ok"]
+
+
+def interpolate(points, error):
+    """log time at log error, linear between the two nearest rungs, or
+    extrapolated from the two nearest ends (marked `~`)."""
+    points = sorted(set(points))
+    if len(points) < 2:
+        return None, ""
+    pairs = list(zip(points, points[1:]))
+    for (e0, t0), (e1, t1) in pairs:
+        if e0 <= error <= e1 and e1 > e0:
+            w = (math.log(error) - math.log(e0)) / (math.log(e1) - math.log(e0))
+            return math.exp(math.log(t0) + w * (math.log(t1) - math.log(t0))), ""
+    (e0, t0), (e1, t1) = pairs[0] if error < points[0][0] else pairs[-1]
+    if e1 <= e0:
+        return None, ""
+    w = (math.log(error) - math.log(e0)) / (math.log(e1) - math.log(e0))
+    return math.exp(math.log(t0) + w * (math.log(t1) - math.log(t0))), "~"
+
+
+def slope(xs, ys):
+    n = len(xs)
+    mx, my = sum(xs) / n, sum(ys) / n
+    sxx = sum((x - mx) ** 2 for x in xs)
+    return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx if sxx else float("nan")
+
+
+def main():
+    models = sys.argv[1:] or MODELS
+    os.makedirs(OUT, exist_ok=True)
+    print("| model | rtol | field error | field time [ms] | DOP853 error | DOP853 time [ms] | field/DOP853 at equal error |")
+    print("|---|---|---|---|---|---|---|")
+    orders = []
+    for model in models:
+        name, data = rows(model)
+        field = [r for r in data if r["method"] == "field"]
+        direct = [r for r in data if r["method"] == "direct DOP853"]
+        dpoints = [(float(r["error"]), float(r["time_s"])) for r in direct if float(r["error"]) > 0]
+        for r, d in zip(field, direct):
+            e, t = float(r["error"]), float(r["time_s"])
+            at, mark = interpolate(dpoints, e) if e > 0 else (None, "")
+            ratio = f"{mark}{t / at:.1f}" if at else "-"
+            print(f"| {name} | {r['rtol']} | {e:.2e} | {1e3 * t:.3f} | "
+                  f"{float(d['error']):.2e} | {1e3 * float(d['time_s']):.3f} | {ratio} |")
+        good = [(math.log(float(r["rhs_evaluations"])), -math.log(float(r["error"])))
+                for r in field if float(r["error"]) > 1e-13]
+        dgood = [(math.log(float(r["rhs_evaluations"])), -math.log(float(r["error"])))
+                 for r in direct if float(r["error"]) > 1e-13]
+        orders.append((name,
+                       slope(*zip(*good)) if len(good) >= 3 else float("nan"),
+                       slope(*zip(*dgood)) if len(dgood) >= 3 else float("nan")))
+    print()
+    print("| model | field order | DOP853 order |")
+    print("|---|---|---|")
+    for name, fo, do in orders:
+        print(f"| {name} | {fo:.1f} | {do:.1f} |")
+
+
+if __name__ == "__main__":
+    main()

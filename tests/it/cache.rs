@@ -1,0 +1,154 @@
+//! The cache and the output directory cannot give another model's answer
+//! or destroy a user's files (issue 15, items 1, 5 and 9).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A scratch directory under `target/`, emptied.
+fn scratch(name: &str) -> PathBuf {
+    let dir = crate::root().join("target/cache-tests").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// An oscillator `x'' = −ω² x` with `x(0) = 1`, `x'(0) = 0` over `0 .. 1`.
+fn oscillator(omega: f64) -> String {
+    format!(
+        "coord x;\nlagrangian = x'^2 / 2 - {}^2 * x^2 / 2;\ninitial x = 1, x' = 0;\ntime 0 .. 1;\n",
+        omega
+    )
+}
+
+fn lagc_run(model: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .arg("run")
+        .arg(model)
+        .args(["--samples", "1"])
+        .env("LAGC_CACHE_DIR", crate::root().join("target/lagc-cache"))
+        .env("RUSTFLAGS", "-D warnings")
+        .output()
+        .unwrap()
+}
+
+/// x(1) from a run's CSV (`t,x,x'`, one row).
+fn final_x(output: &Output) -> f64 {
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        output.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let last = stdout.lines().last().unwrap();
+    last.split(',').nth(1).unwrap().parse().unwrap()
+}
+
+/// `a/model.lag` and `b/model.lag`, two models with one file name, run
+/// at the same time: each prints its own motion, `cos(ω)`.
+#[test]
+fn two_models_of_one_file_name_run_together_give_their_own_answers() {
+    let dir = scratch("same_name");
+    let (a, b) = (dir.join("a/model.lag"), dir.join("b/model.lag"));
+    for (path, omega) in [(&a, 1.0), (&b, 2.0)] {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, oscillator(omega)).unwrap();
+    }
+    let (run_a, run_b) = std::thread::scope(|s| {
+        let ha = s.spawn(|| lagc_run(&a));
+        let hb = s.spawn(|| lagc_run(&b));
+        (ha.join().unwrap(), hb.join().unwrap())
+    });
+    assert!((final_x(&run_a) - 1f64.cos()).abs() < 1e-8);
+    assert!((final_x(&run_b) - 2f64.cos()).abs() < 1e-8);
+}
+
+/// A damaged binary in the cache is noticed and rebuilt, not run.
+#[test]
+fn a_damaged_cached_binary_is_rebuilt() {
+    let dir = scratch("damaged");
+    let model = dir.join("damaged_oscillator.lag");
+    std::fs::write(&model, oscillator(3.0)).unwrap();
+    assert!((final_x(&lagc_run(&model)) - 3f64.cos()).abs() < 1e-8);
+    let release = crate::root().join("target/lagc-cache/target/release");
+    let binary = std::fs::read_dir(&release)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("lag-damaged-oscillator-")
+                && p.extension().is_none()
+        })
+        .expect("the model's binary");
+    std::fs::write(&binary, b"#!/bin/sh\necho 0,0,0\n").unwrap();
+    let rerun = lagc_run(&model);
+    let stderr = String::from_utf8_lossy(&rerun.stderr);
+    assert!(stderr.contains("not this model's binary"), "{stderr}");
+    assert!((final_x(&rerun) - 3f64.cos()).abs() < 1e-8);
+}
+
+fn lagc_build(model: &str, out: &Path, force: bool) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_lagc"));
+    command
+        .current_dir(crate::root())
+        .args(["build", model, "-o"])
+        .arg(out);
+    if force {
+        command.arg("--force");
+    }
+    command.output().unwrap()
+}
+
+/// `lagc build -o DIR` writes into a new or empty directory, or one an
+/// earlier build wrote; it refuses a user's project unless `--force`.
+#[test]
+fn build_refuses_to_overwrite_a_project_it_did_not_write() {
+    let dir = scratch("build_output");
+    let fresh = dir.join("fresh");
+    assert_eq!(
+        lagc_build("examples/paper.lag", &fresh, false)
+            .status
+            .code(),
+        Some(0)
+    );
+    assert!(fresh.join(".lagc-generated").is_file());
+    // Its own output: overwritten without a word.
+    assert_eq!(
+        lagc_build("examples/paper.lag", &fresh, false)
+            .status
+            .code(),
+        Some(0)
+    );
+
+    let project = dir.join("project");
+    std::fs::create_dir_all(project.join("src")).unwrap();
+    std::fs::write(project.join("Cargo.toml"), "[package]\nname = \"mine\"\n").unwrap();
+    let refused = lagc_build("examples/paper.lag", &project, false);
+    assert_eq!(refused.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(stderr.contains("refusing to overwrite"), "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(project.join("Cargo.toml")).unwrap(),
+        "[package]\nname = \"mine\"\n"
+    );
+    assert_eq!(
+        lagc_build("examples/paper.lag", &project, true)
+            .status
+            .code(),
+        Some(0)
+    );
+}
+
+/// A file without end (`/dev/zero`) is refused, not read into memory.
+#[cfg(unix)]
+#[test]
+fn an_endless_input_file_is_refused() {
+    let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .args(["check", "/dev/zero"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("larger than 16 MiB"), "{stderr}");
+}
