@@ -128,33 +128,6 @@ struct RunArgs {
     args: Vec<String>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum SummaryFormat {
-    Text,
-    Json,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum Integrator {
-    /// DOP853; direct integration switches to RODAS4 when it detects
-    /// stiffness.
-    Auto,
-    /// DOP853, explicit, order 8.
-    Explicit,
-    /// RODAS4, linearly implicit, order 4.
-    Stiff,
-    /// Field method: Magnus-4 for a linear coefficient system.
-    Magnus,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum Method {
-    /// Vujanović's field method.
-    Field,
-    /// Direct integration of the reduced system (7).
-    Direct,
-}
-
 #[derive(Debug, Args)]
 struct DeriveArgs {
     /// The `.lag` model.

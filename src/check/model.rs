@@ -138,43 +138,9 @@ pub struct Initial {
     pub span: Span,
 }
 
-/// How a run chooses its one-step integrator (`integrator NAME;`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum IntegratorChoice {
-    /// Explicit, switching to the stiff integrator when stiffness is
-    /// detected.
-    Auto,
-    /// DOP853 only.
-    Explicit,
-    /// RODAS4 from the start: the model is declared stiff.
-    Stiff,
-    /// The field method's Magnus integrator for linear coefficient
-    /// systems (direct integration: as `Auto`).
-    Magnus,
-}
-
-impl IntegratorChoice {
-    pub const ALL: [IntegratorChoice; 4] = [
-        IntegratorChoice::Auto,
-        IntegratorChoice::Explicit,
-        IntegratorChoice::Stiff,
-        IntegratorChoice::Magnus,
-    ];
-
-    /// The word in `.lag` files and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            IntegratorChoice::Auto => "auto",
-            IntegratorChoice::Explicit => "explicit",
-            IntegratorChoice::Stiff => "stiff",
-            IntegratorChoice::Magnus => "magnus",
-        }
-    }
-
-    pub fn from_name(name: &str) -> Option<IntegratorChoice> {
-        IntegratorChoice::ALL.into_iter().find(|c| c.name() == name)
-    }
-}
+/// How a run chooses its one-step integrator (`integrator NAME;`): the
+/// runtime's type, so that the declaration and `--integrator` are one.
+pub use lagc_runtime::method::IntegratorChoice;
 
 /// `integrator NAME;`, with the statement's span.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -201,7 +201,7 @@ impl<'a> Checker<'a> {
             ItemKind::Integrator(name) => Some(name),
             _ => None,
         })?;
-        match IntegratorChoice::from_name(&name.name) {
+        match IntegratorChoice::parse(&name.name) {
             Some(choice) => Some(DeclaredIntegrator { choice, span }),
             None => {
                 let names: Vec<&str> = IntegratorChoice::ALL.iter().map(|c| c.name()).collect();

@@ -187,15 +187,9 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
     let integrator = match kernel.integrator {
         None => TokenStream::new(),
         Some(choice) => {
-            let variant = proc_macro2::Ident::new(
-                match choice {
-                    crate::check::model::IntegratorChoice::Auto => "Auto",
-                    crate::check::model::IntegratorChoice::Explicit => "Explicit",
-                    crate::check::model::IntegratorChoice::Stiff => "Stiff",
-                    crate::check::model::IntegratorChoice::Magnus => "Magnus",
-                },
-                proc_macro2::Span::call_site(),
-            );
+            // The runtime's variant of the same type, by its name.
+            let variant =
+                proc_macro2::Ident::new(&format!("{choice:?}"), proc_macro2::Span::call_site());
             quote! {
                 const DECLARED_INTEGRATOR: Option<lagc_runtime::method::IntegratorChoice> =
                     Some(lagc_runtime::method::IntegratorChoice::#variant);

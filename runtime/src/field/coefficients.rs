@@ -134,16 +134,7 @@ impl<C: CoefficientSource + ?Sized> System for Augmented<'_, C> {
     /// By central differences: used only by the stiff integrator of a
     /// linear coefficient system, once per step.
     fn time_partial(&self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), Failure> {
-        let m = y.len();
-        let h = f64::EPSILON.cbrt() * t.abs().max(1.0);
-        let mut plus = vec![0.0; m];
-        let mut minus = vec![0.0; m];
-        self.rhs(t + h, y, &mut plus)?;
-        self.rhs(t - h, y, &mut minus)?;
-        for i in 0..m {
-            dydt[i] = (plus[i] - minus[i]) / (2.0 * h);
-        }
-        Ok(())
+        central_time_partial(self, t, y, dydt)
     }
 
     /// The coefficients are named for what they are to the motion: a
@@ -492,16 +483,7 @@ impl<M: Model, I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, M, I> 
     }
 
     fn time_partial(&self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), Failure> {
-        let m = y.len();
-        let h = f64::EPSILON.cbrt() * t.abs().max(1.0);
-        let mut plus = vec![0.0; m];
-        let mut minus = vec![0.0; m];
-        self.rhs(t + h, y, &mut plus)?;
-        self.rhs(t - h, y, &mut minus)?;
-        for i in 0..m {
-            dydt[i] = (plus[i] - minus[i]) / (2.0 * h);
-        }
-        Ok(())
+        central_time_partial(self, t, y, dydt)
     }
 
     fn component_name(&self, i: usize) -> String {
@@ -658,4 +640,25 @@ pub fn projective_field(y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool {
         }
     }
     true
+}
+
+/// `∂F/∂t` of a coefficient system by central differences (step
+/// `eps^{1/3}·max(|t|, 1)`, error ~ eps^{2/3}): used only by RODAS4 on
+/// the field's coefficient systems, once per step.
+fn central_time_partial<S: System + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+    dydt: &mut [f64],
+) -> Result<(), Failure> {
+    let m = y.len();
+    let h = f64::EPSILON.cbrt() * t.abs().max(1.0);
+    let mut plus = vec![0.0; m];
+    let mut minus = vec![0.0; m];
+    system.rhs(t + h, y, &mut plus)?;
+    system.rhs(t - h, y, &mut minus)?;
+    for i in 0..m {
+        dydt[i] = (plus[i] - minus[i]) / (2.0 * h);
+    }
+    Ok(())
 }
