@@ -92,16 +92,9 @@ pub fn write_runtime(dir: &Path) -> std::io::Result<()> {
 /// A hash of a model's source and of lagc's version (FNV-1a), which the
 /// generated binary reports with `--lagc-source-hash`.
 pub fn source_hash(source: &str) -> String {
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let version = concat!(env!("CARGO_PKG_VERSION"), "\0");
-    for b in version
-        .bytes()
-        .chain(lagc::emit::runtime_version().bytes())
-        .chain(source.bytes())
-    {
-        hash ^= u64::from(b);
-        hash = hash.wrapping_mul(0x0100_0000_01b3);
-    }
+    let runtime = lagc::emit::runtime_version();
+    let hash = lagc::emit::fnv1a(version.bytes().chain(runtime.bytes()).chain(source.bytes()));
     format!("{hash:016x}")
 }
 
@@ -159,11 +152,7 @@ pub fn touch(file: &Path) {
 /// path (the file's text may change; its crate is rebuilt in place).
 pub fn path_key(file: &Path) -> String {
     let path = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in path.to_string_lossy().bytes() {
-        hash ^= u64::from(b);
-        hash = hash.wrapping_mul(0x0100_0000_01b3);
-    }
+    let hash = lagc::emit::fnv1a(path.to_string_lossy().bytes());
     format!("{:08x}", hash >> 32)
 }
 

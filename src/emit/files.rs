@@ -87,17 +87,21 @@ pub fn runtime_files() -> impl Iterator<Item = (&'static str, &'static str)> {
     RUNTIME.iter().copied()
 }
 
+/// FNV-1a of `bytes`: the cache's keys (stable across builds and
+/// platforms, unlike `std`'s hasher).
+pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |hash, b| {
+        (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
 /// A hash of the runtime's sources (FNV-1a): a cache keeps one built copy
 /// per version of the runtime.
 pub fn runtime_version() -> String {
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
-    for (path, text) in RUNTIME {
-        for b in path.bytes().chain(text.bytes()) {
-            hash ^= u64::from(b);
-            hash = hash.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    format!("{hash:016x}")
+    let bytes = RUNTIME
+        .iter()
+        .flat_map(|(path, text)| path.bytes().chain(text.bytes()));
+    format!("{:016x}", fnv1a(bytes))
 }
 
 /// `lag-<stem>`: the package for a model named `model_name`, safe from any

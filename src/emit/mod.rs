@@ -30,7 +30,7 @@ mod params;
 
 use crate::diagnostic::Diagnostic;
 use crate::kernel::Kernel;
-pub use files::{library_name, package_name, runtime_files, runtime_version};
+pub use files::{fnv1a, library_name, package_name, runtime_files, runtime_version};
 use names::SymbolNames;
 use quote::quote;
 
