@@ -206,6 +206,19 @@ pub mod codes {
     // Added by the stability work (additive):
     /// An `integrator` statement naming none of `auto`, `explicit`, `stiff`.
     pub const UNKNOWN_INTEGRATOR: &str = "E0032";
+    // Language v2 (SPEC §2.2):
+    /// A vector where a number is needed, a condition where a number is
+    /// needed, or the reverse; vectors of different sizes.
+    pub const TYPE_MISMATCH: &str = "E0033";
+    /// A function called with the wrong number of arguments.
+    pub const WRONG_ARGUMENT_COUNT: &str = "E0034";
+    /// `.w`, or `.z` of a 2-vector.
+    pub const UNKNOWN_COMPONENT: &str = "E0035";
+    /// A `let` used before its definition (a cycle included).
+    pub const LET_BEFORE_DEFINITION: &str = "E0036";
+    /// A `for` candidate that is not a derivative of the constraint's order
+    /// occurring in it, or a constraint not linear in its candidate.
+    pub const BAD_CANDIDATE: &str = "E0037";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

@@ -3,7 +3,7 @@
 //! order ≥ k (which would make the constraints implicit).
 
 use super::expressions::Allowed;
-use super::model::{Constraint, Name};
+use super::model::{Constraint, Implicit, Name};
 use super::{Checker, MAX_DERIVATIVE_ORDER};
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
@@ -15,16 +15,39 @@ impl Checker<'_> {
         let mut constraints: Vec<Constraint> = Vec::new();
         let mut right_sides = Vec::new();
         for (item, span) in self.items() {
-            let ItemKind::Constraint { lhs, rhs } = item else {
+            let ItemKind::Constraint {
+                lhs,
+                rhs,
+                candidates,
+            } = item
+            else {
                 continue;
             };
-            let Some((coord, order)) = self.constraint_lhs(lhs) else {
-                self.constraints_incomplete = true;
-                right_sides.push((rhs, span, None));
-                continue;
+            let (coord, order, implicit) = if candidates.is_empty() {
+                let Some((coord, order)) = self.constraint_lhs(lhs) else {
+                    self.constraints_incomplete = true;
+                    right_sides.push((rhs, span, None));
+                    continue;
+                };
+                right_sides.push((rhs, span, Some(order)));
+                (coord, order, None)
+            } else {
+                let Some((order, owned)) = self.candidates(candidates) else {
+                    self.constraints_incomplete = true;
+                    continue;
+                };
+                let implicit = Implicit {
+                    lhs: lhs.clone(),
+                    candidates: owned,
+                };
+                (implicit.candidates[0], order, Some(implicit))
             };
-            right_sides.push((rhs, span, Some(order)));
-            if let Some(first) = constraints.iter().find(|c| c.coord == coord) {
+            let mine = owned_by(coord, implicit.as_ref());
+            if let Some(first) = constraints.iter().find(|c| {
+                owned_by(c.coord, c.implicit.as_ref())
+                    .iter()
+                    .any(|j| mine.contains(j))
+            }) {
                 let name = &self.coords[coord].name;
                 let diagnostic = Diagnostic::error(
                     codes::DOUBLE_CONSTRAINT,
@@ -58,9 +81,15 @@ impl Checker<'_> {
                 order,
                 rhs: rhs.clone(),
                 span,
+                implicit,
             });
         }
         let order = constraints.first().map(|c| c.order);
+        for index in 0..constraints.len() {
+            if let Some(implicit) = constraints[index].implicit.clone() {
+                self.implicit_residual(&constraints[index], &implicit, &constraints);
+            }
+        }
         if let Some(k) = order {
             // A right side is checked against its own constraint's order, so
             // that a constraint of the wrong order gets one error, not two.
@@ -133,7 +162,10 @@ impl Checker<'_> {
             ..Allowed::constants("a constraint")
         };
         for used in self.check_expr(rhs, allowed) {
-            let Some(dependent) = constraints.iter().find(|c| c.coord == used.coord) else {
+            let Some(dependent) = constraints
+                .iter()
+                .find(|c| owned_by(c.coord, c.implicit.as_ref()).contains(&used.coord))
+            else {
                 continue;
             };
             if used.order >= k {
@@ -156,6 +188,108 @@ impl Checker<'_> {
                 self.report(diagnostic);
             }
         }
+    }
+}
+
+impl Checker<'_> {
+    /// The order and coordinates of `for y' or x'`: derivatives of one
+    /// order, of distinct coordinates.
+    fn candidates(&mut self, candidates: &[Expr]) -> Option<(u32, Vec<usize>)> {
+        let mut order = None;
+        let mut owned = Vec::new();
+        for candidate in candidates {
+            let (coord, primes) = self
+                .constraint_lhs(candidate)
+                .or_else(|| None::<(usize, u32)>)?;
+            match order {
+                None => order = Some(primes),
+                Some(k) if k != primes => {
+                    let diagnostic = Diagnostic::error(
+                        codes::BAD_CANDIDATE,
+                        "a constraint's candidates differ in order",
+                    )
+                    .with_primary(candidate.span, format!("of order {primes}"))
+                    .with_secondary(candidates[0].span, format!("of order {k}"))
+                    .with_help("a constraint of order k is solved for a derivative of order k");
+                    self.report(diagnostic);
+                    return None;
+                }
+                Some(_) => {}
+            }
+            if owned.contains(&coord) {
+                let diagnostic =
+                    Diagnostic::error(codes::BAD_CANDIDATE, "a candidate is named twice")
+                        .with_primary(candidate.span, "named again here");
+                self.report(diagnostic);
+                return None;
+            }
+            owned.push(coord);
+        }
+        Some((order?, owned))
+    }
+
+    /// Checks `lhs = rhs` of an implicit constraint: its order is the
+    /// candidates', every candidate occurs in it, and no other constraint's
+    /// dependent derivative of order ≥ k does.
+    fn implicit_residual(&mut self, own: &Constraint, implicit: &Implicit, all: &[Constraint]) {
+        let k = own.order;
+        let allowed = Allowed {
+            time: true,
+            masses: true,
+            coord_order: Some(k),
+            ..Allowed::constants("a constraint")
+        };
+        let errors = self.diagnostics.len();
+        let mut uses = self.check_expr(&implicit.lhs, allowed);
+        uses.extend(self.check_expr(&own.rhs, allowed));
+        if self.diagnostics.len() > errors {
+            return;
+        }
+        for &candidate in &implicit.candidates {
+            if !uses.iter().any(|u| u.coord == candidate && u.order == k) {
+                let name = &self.coords[candidate].name;
+                let diagnostic = Diagnostic::error(
+                    codes::BAD_CANDIDATE,
+                    format!(
+                        "the constraint does not hold `{name}{}`",
+                        "'".repeat(k as usize)
+                    ),
+                )
+                .with_primary(own.span, "solved for a derivative it does not contain")
+                .with_help("name after `for` derivatives that occur in the constraint");
+                self.report(diagnostic);
+            }
+        }
+        for used in uses {
+            if used.order < k || implicit.candidates.contains(&used.coord) {
+                continue;
+            }
+            if let Some(other) = all
+                .iter()
+                .find(|c| owned_by(c.coord, c.implicit.as_ref()).contains(&used.coord))
+            {
+                let name = &self.coords[used.coord].name;
+                let diagnostic = Diagnostic::error(
+                    codes::DEPENDENT_DERIVATIVE_IN_RHS,
+                    format!(
+                        "a constraint holds another constraint's dependent derivative of order {}",
+                        used.order
+                    ),
+                )
+                .with_primary(used.span, format!("`{name}` is dependent"))
+                .with_secondary(other.span, format!("`{name}` is made dependent here"))
+                .with_help("substitute that coordinate's constraint into this one");
+                self.report(diagnostic);
+            }
+        }
+    }
+}
+
+/// The coordinates a constraint may make dependent.
+fn owned_by(coord: usize, implicit: Option<&Implicit>) -> Vec<usize> {
+    match implicit {
+        Some(i) => i.candidates.clone(),
+        None => vec![coord],
     }
 }
 

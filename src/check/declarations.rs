@@ -19,6 +19,8 @@ pub fn kind_name(name: Name) -> &'static str {
         Name::Coord(_) => "a coordinate",
         Name::Mass(_) => "a mass law",
         Name::Point(_) => "a point",
+        Name::Let(_) => "a let",
+        Name::Output(_) => "an output",
     }
 }
 
@@ -27,6 +29,7 @@ impl Checker<'_> {
     /// of a kind, so they match the order of the checked model's vectors.
     pub(super) fn declare(&mut self) {
         let (mut params, mut masses, mut points) = (0, 0, 0);
+        let (mut lets, mut outputs) = (0, 0);
         for (item, _) in self.items() {
             match item {
                 ItemKind::Param { name, .. } => {
@@ -51,6 +54,14 @@ impl Checker<'_> {
                 ItemKind::Point { name, .. } => {
                     self.declare_one(name, Name::Point(points));
                     points += 1;
+                }
+                ItemKind::Let { name, .. } => {
+                    self.declare_one(name, Name::Let(lets));
+                    lets += 1;
+                }
+                ItemKind::Output { name, .. } => {
+                    self.declare_one(name, Name::Output(outputs));
+                    outputs += 1;
                 }
                 _ => {}
             }
@@ -95,7 +106,9 @@ impl Checker<'_> {
                 first.span,
                 format!("first declared here as {}", kind_name(first.name)),
             )
-            .with_help("params, coordinates, mass laws and points share one namespace");
+            .with_help(
+                "params, coordinates, mass laws, points, lets and outputs share one namespace",
+            );
             self.report(diagnostic);
             return false;
         }

@@ -2,10 +2,11 @@
 
 use super::declarations::kind_name;
 use super::model::Name;
+use super::types::{type_mismatch, Ty, Uses};
 use super::{Checker, MAX_DERIVATIVE_ORDER};
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
-use crate::syntax::ast::{Expr, ExprKind, Func};
+use crate::syntax::ast::{Builtin, Expr};
 
 /// What an expression of one kind of statement may refer to.
 #[derive(Debug, Clone, Copy)]
@@ -22,6 +23,9 @@ pub struct Allowed {
     pub coord_order: Option<u32>,
     /// The code for a coordinate where none may appear.
     pub coord_code: &'static str,
+    /// Lets with an index below this may be used (a let may use only
+    /// earlier ones); `usize::MAX` for all.
+    pub lets_before: usize,
 }
 
 impl Allowed {
@@ -34,6 +38,20 @@ impl Allowed {
             masses: false,
             coord_order: None,
             coord_code: codes::NAME_NOT_ALLOWED,
+            lets_before: usize::MAX,
+        }
+    }
+
+    /// Anything: the body of a let, whose uses are checked where it is used.
+    pub const fn anything(what: &'static str, lets_before: usize) -> Allowed {
+        Allowed {
+            what,
+            time: true,
+            params_before: usize::MAX,
+            masses: true,
+            coord_order: Some(MAX_DERIVATIVE_ORDER),
+            coord_code: codes::NAME_NOT_ALLOWED,
+            lets_before,
         }
     }
 }
@@ -48,31 +66,34 @@ pub struct CoordUse {
 
 impl Checker<'_> {
     /// Reports every name in `expr` that `allowed` forbids or that is not
-    /// declared; returns the coordinate derivatives it holds. Walks with an
-    /// explicit stack: no recursion, whatever the expression's depth.
+    /// declared, and every type error; requires a number. Returns the
+    /// coordinate derivatives it holds (those of the lets it uses included).
     pub(super) fn check_expr(&mut self, expr: &Expr, allowed: Allowed) -> Vec<CoordUse> {
-        let mut uses = Vec::new();
-        let mut stack = vec![expr];
-        while let Some(expr) = stack.pop() {
-            match &expr.kind {
-                ExprKind::Number(_) => {}
-                ExprKind::Neg(inner) => stack.push(inner),
-                ExprKind::Call { arg, .. } => stack.push(arg),
-                ExprKind::Binary { lhs, rhs, .. } => {
-                    stack.push(rhs);
-                    stack.push(lhs);
-                }
-                ExprKind::Var { name, primes } => {
-                    if let Some(found) = self.check_var(&name.name, *primes, expr.span, allowed) {
-                        uses.push(found);
-                    }
-                }
-            }
-        }
-        uses
+        self.check_typed(expr, allowed, Ty::Scalar)
     }
 
-    fn check_var(
+    /// [`Checker::check_expr`] for an expression of type `wanted`.
+    pub(super) fn check_typed(
+        &mut self,
+        expr: &Expr,
+        allowed: Allowed,
+        wanted: Ty,
+    ) -> Vec<CoordUse> {
+        let mut uses = Uses::default();
+        if let Some(found) = self.type_of(expr, allowed, &mut uses) {
+            self.expect_type(expr, found, wanted, allowed.what);
+        }
+        uses.coords
+    }
+
+    /// Reports `found` where `wanted` is needed.
+    pub(super) fn expect_type(&mut self, expr: &Expr, found: Ty, wanted: Ty, what: &str) {
+        if found != wanted {
+            self.report(type_mismatch(expr.span, found, wanted, what));
+        }
+    }
+
+    pub(super) fn check_var(
         &mut self,
         name: &str,
         primes: u32,
@@ -164,6 +185,7 @@ impl Checker<'_> {
                 self.report(not_allowed("the mass law"));
                 None
             }
+            Name::Let(_) | Name::Output(_) => None,
             Name::Point(_) => {
                 let diagnostic = not_allowed("the point")
                     .with_note("a point names a body for the reactive forces; it has no value");
@@ -176,7 +198,7 @@ impl Checker<'_> {
     pub(super) fn unknown_name(&self, name: &str, span: Span) -> Diagnostic {
         let diagnostic = Diagnostic::error(codes::UNKNOWN_NAME, format!("unknown name `{name}`"))
             .with_primary(span, "not declared");
-        if Func::from_name(name).is_some() {
+        if Builtin::from_name(name).is_some() {
             return diagnostic.with_help(format!("`{name}` is a function: write `{name}(…)`"));
         }
         match crate::suggest::closest(name, self.known_names()) {

@@ -13,6 +13,9 @@ mod initial;
 pub mod model;
 mod points;
 mod statements;
+mod types;
+
+pub use eval::{axis_index, sign};
 
 use crate::diagnostic::{self, Diagnostic};
 use crate::span::Span;
@@ -31,6 +34,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let mut checker = Checker::new(ast);
     checker.declare();
     let params = checker.params();
+    let lets = checker.lets();
     let masses = checker.masses();
     let (constraint_order, constraints) = checker.constraints();
     let lagrangian = checker.lagrangian();
@@ -40,6 +44,8 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let exact = checker.exact();
     let time = checker.time();
     let integrator = checker.integrator();
+    let outputs = checker.outputs();
+    let stop = checker.stop();
 
     let mut diagnostics = checker.diagnostics;
     let (Some(lagrangian), Some(time), true) = (lagrangian, time, diagnostics.is_empty()) else {
@@ -67,6 +73,9 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
         time,
         exact,
         integrator,
+        lets,
+        outputs,
+        stop,
         names: checker
             .names
             .iter()
@@ -87,6 +96,8 @@ struct Checker<'a> {
     /// Some constraint was rejected: its coordinate now looks independent,
     /// so "missing initial value" errors would be noise.
     constraints_incomplete: bool,
+    /// The lets checked so far, by index.
+    lets: Vec<types::LetInfo>,
     /// Unknown names already reported (each is reported once).
     unknown_reported: HashSet<String>,
     /// A zero-width span just after the last statement, where "missing …"
@@ -103,6 +114,7 @@ impl<'a> Checker<'a> {
             names: HashMap::new(),
             coords: Vec::new(),
             param_defaults: Vec::new(),
+            lets: Vec::new(),
             constraints_incomplete: false,
             unknown_reported: HashSet::new(),
             end_of_file: Span::new(end, end),

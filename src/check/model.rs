@@ -35,7 +35,14 @@ pub struct Model {
     /// The model's `integrator` statement, when it has one: the default of
     /// every run (a command-line `--integrator` overrides it).
     pub integrator: Option<DeclaredIntegrator>,
-    /// Every declared name (params, coordinates, masses, points).
+    /// `let` statements in source order (each uses only earlier ones).
+    pub lets: Vec<Let>,
+    /// `output` statements in source order.
+    pub outputs: Vec<Output>,
+    /// `stop when cond;`: a condition of `t`, the state and params.
+    pub stop: Option<Expr>,
+    /// Every declared name (params, coordinates, masses, points, lets,
+    /// outputs).
     pub names: HashMap<String, Name>,
 }
 
@@ -46,6 +53,8 @@ pub enum Name {
     Coord(usize),
     Mass(usize),
     Point(usize),
+    Let(usize),
+    Output(usize),
 }
 
 impl Model {
@@ -94,13 +103,43 @@ pub struct MassLaw {
     pub law: Expr,
 }
 
-/// `q_dep^(order) = rhs`.
+/// `q_dep^(order) = rhs`, or an implicit constraint `lhs = rhs for …`
+/// solved for the candidate `coord`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Constraint {
     pub coord: usize,
     pub order: u32,
     pub rhs: Expr,
     pub span: Span,
+    /// `Some` for `constraint lhs = rhs for q' [or …];`.
+    pub implicit: Option<Implicit>,
+}
+
+/// An implicit constraint `lhs = rhs` with its candidate dependent
+/// coordinates (all of the constraint's order), as written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Implicit {
+    pub lhs: Expr,
+    pub candidates: Vec<usize>,
+}
+
+/// `let NAME = value;`: `size` 1 for a number, 2 or 3 for a vector.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Let {
+    pub name: String,
+    pub span: Span,
+    pub value: Expr,
+    pub size: usize,
+}
+
+/// `output NAME = value;`: `size` 1 for a number, 2 or 3 for a vector
+/// (columns `NAME.x`, `NAME.y`[, `NAME.z`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Output {
+    pub name: String,
+    pub span: Span,
+    pub value: Expr,
+    pub size: usize,
 }
 
 #[derive(Debug, Clone, PartialEq)]

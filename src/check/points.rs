@@ -3,10 +3,11 @@
 
 use super::expressions::Allowed;
 use super::model::{EjectaVelocity, Point};
+use super::types::{type_mismatch, Ty, Uses};
 use super::Checker;
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
-use crate::syntax::ast::{Expr, Ident, ItemKind, PointField, PointFieldKind};
+use crate::syntax::ast::{Expr, ExprKind, Ident, ItemKind, PointField, PointFieldKind};
 
 const POINT_MASS: Allowed = Allowed {
     time: true,
@@ -40,25 +41,25 @@ impl Checker<'_> {
 
     fn point(&mut self, name: &Ident, fields: &[PointField], span: Span) -> Option<Point> {
         let mut mass: Option<(&Expr, Span)> = None;
-        let mut position: Option<(&Vec<Expr>, Span)> = None;
-        let mut velocity: Option<(EjectaVelocity, &Vec<Expr>, Span)> = None;
+        let mut position: Option<(Vec<Expr>, Span)> = None;
+        let mut velocity: Option<(EjectaVelocity, Vec<Expr>, Span)> = None;
         for field in fields {
             let first = match &field.kind {
                 PointFieldKind::Mass(expr) => {
                     self.check_expr(expr, POINT_MASS);
                     first_or(&mut mass, (expr, field.span)).map(|m| m.1)
                 }
-                PointFieldKind::Position(vector) => {
-                    self.check_vector(vector, POSITION);
+                PointFieldKind::Position(expr) => {
+                    let vector = self.check_vector(expr, POSITION);
                     first_or(&mut position, (vector, field.span)).map(|p| p.1)
                 }
-                PointFieldKind::AbsoluteVelocity(vector) => {
-                    self.check_vector(vector, VELOCITY);
+                PointFieldKind::AbsoluteVelocity(expr) => {
+                    let vector = self.check_vector(expr, VELOCITY);
                     let given = (EjectaVelocity::Absolute(vector.clone()), vector, field.span);
                     first_or(&mut velocity, given).map(|v| v.2)
                 }
-                PointFieldKind::RelativeVelocity(vector) => {
-                    self.check_vector(vector, VELOCITY);
+                PointFieldKind::RelativeVelocity(expr) => {
+                    let vector = self.check_vector(expr, VELOCITY);
                     let given = (EjectaVelocity::Relative(vector.clone()), vector, field.span);
                     first_or(&mut velocity, given).map(|v| v.2)
                 }
@@ -117,14 +118,43 @@ impl Checker<'_> {
             name: name.name.clone(),
             span,
             mass: mass.clone(),
-            position: position.clone(),
+            position,
             velocity,
         })
     }
 
-    fn check_vector(&mut self, vector: &[Expr], allowed: Allowed) {
-        for component in vector {
-            self.check_expr(component, allowed);
+    /// A point's vector, as its components: a vector literal's elements,
+    /// the components of any other vector expression (`p1 + (0, l)`), or
+    /// one number (v1 accepted `(z)`, a 1-vector).
+    fn check_vector(&mut self, expr: &Expr, allowed: Allowed) -> Vec<Expr> {
+        let mut uses = Uses::default();
+        match self.type_of(expr, allowed, &mut uses) {
+            Some(Ty::Scalar) | None => vec![expr.clone()],
+            Some(Ty::Bool) => {
+                self.report(type_mismatch(
+                    expr.span,
+                    Ty::Bool,
+                    Ty::Vector(2),
+                    allowed.what,
+                ));
+                vec![expr.clone()]
+            }
+            Some(Ty::Vector(n)) => match &expr.kind {
+                ExprKind::Vector(elements) => elements.clone(),
+                _ => ["x", "y", "z"][..n]
+                    .iter()
+                    .map(|axis| Expr {
+                        kind: ExprKind::Component {
+                            base: Box::new(expr.clone()),
+                            axis: Ident {
+                                name: (*axis).to_string(),
+                                span: expr.span,
+                            },
+                        },
+                        span: expr.span,
+                    })
+                    .collect(),
+            },
         }
     }
 }

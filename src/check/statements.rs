@@ -3,8 +3,9 @@
 
 use super::expressions::Allowed;
 use super::model::{
-    DeclaredIntegrator, Exact, Force, IntegratorChoice, MassLaw, Name, Param, TimeSpan,
+    DeclaredIntegrator, Exact, Force, IntegratorChoice, MassLaw, Name, Output, Param, TimeSpan,
 };
+use super::types::{type_mismatch, Ty, Uses};
 use super::Checker;
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
@@ -218,6 +219,60 @@ impl<'a> Checker<'a> {
                 None
             }
         }
+    }
+
+    /// `output NAME = expr;`: a number or a vector of `t`, params, mass
+    /// laws and the state (derivatives up to the state's order are checked
+    /// by the mechanics, which knows it).
+    pub(super) fn outputs(&mut self) -> Vec<Output> {
+        let allowed = Allowed {
+            time: true,
+            masses: true,
+            coord_order: Some(super::MAX_DERIVATIVE_ORDER),
+            ..Allowed::constants("an output")
+        };
+        let mut outputs = Vec::new();
+        for (item, span) in self.items() {
+            let ItemKind::Output { name, value } = item else {
+                continue;
+            };
+            let mut uses = Uses::default();
+            let size = match self.type_of(value, allowed, &mut uses) {
+                Some(Ty::Vector(n)) => n,
+                Some(Ty::Bool) => {
+                    self.report(
+                        type_mismatch(value.span, Ty::Bool, Ty::Scalar, "an output")
+                            .with_help("output a number: `if … then 1 else 0`"),
+                    );
+                    1
+                }
+                _ => 1,
+            };
+            outputs.push(Output {
+                name: name.name.clone(),
+                span,
+                value: value.clone(),
+                size,
+            });
+        }
+        outputs
+    }
+
+    /// `stop when cond;` (at most one).
+    pub(super) fn stop(&mut self) -> Option<Expr> {
+        let (cond, _) = self.single("stop when", |item| match item {
+            ItemKind::Stop(cond) => Some(cond),
+            _ => None,
+        })?;
+        let allowed = Allowed {
+            time: true,
+            masses: true,
+            coord_order: Some(super::MAX_DERIVATIVE_ORDER),
+            ..Allowed::constants("a stop condition")
+        };
+        let errors = self.diagnostics.len();
+        self.check_typed(cond, allowed, Ty::Bool);
+        (self.diagnostics.len() == errors).then(|| cond.clone())
     }
 
     /// The only statement that `pick` selects, reporting any repeat.

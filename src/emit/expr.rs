@@ -16,6 +16,8 @@ use std::collections::HashMap;
 /// Binding strength of a generated expression.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Prec {
+    /// `if … { … } else { … }`: parenthesised wherever it is an operand.
+    Conditional,
     Sum,
     Product,
     Unary,
@@ -56,7 +58,7 @@ pub fn lower_exprs(
         if shared
             && matches!(
                 arena.node(e),
-                Node::Add(_) | Node::Mul(_) | Node::Pow(..) | Node::Func(..)
+                Node::Add(_) | Node::Mul(_) | Node::Pow(..) | Node::Func(..) | Node::Select(..)
             )
         {
             let (code, _) = writer.expr(e);
@@ -120,6 +122,16 @@ impl Writer<'_> {
             Node::Pow(b, x) => self.pow(*b, *x),
             Node::Mul(fs) => self.product(fs, false),
             Node::Add(ts) => self.sum(ts),
+            Node::Select(g, a, b) => {
+                let g = wrap(self.expr(*g), Prec::Sum);
+                let a = self.expr(*a).0;
+                let b = self.expr(*b).0;
+                let zero = literal(0.0);
+                (
+                    quote! { if #g < #zero { #a } else { #b } },
+                    Prec::Conditional,
+                )
+            }
         }
     }
 

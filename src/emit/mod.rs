@@ -20,6 +20,7 @@
 //! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
 
 mod coefficients;
+mod events;
 mod expr;
 mod files;
 mod model;
@@ -78,6 +79,15 @@ pub fn emit_crate(
     options: &EmitOptions,
 ) -> Result<GeneratedCrate, Vec<Diagnostic>> {
     let mut names = SymbolNames::new(&kernel.arena, &kernel.state);
+    names.branches = kernel
+        .switches
+        .symbols
+        .iter()
+        .enumerate()
+        .map(|(k, &s)| (s, k))
+        .collect();
+    let (branch_field, branch_init) = events::branch_field(kernel);
+    let event_consts = events::consts(kernel);
     let params = params::params_code(kernel, &mut names);
     let masses = model::mass_fns(kernel, &mut names);
     let consts = model::consts(kernel, &options.model_name, &options.source_hash);
@@ -121,13 +131,14 @@ pub fn emit_crate(
         pub struct Model {
             params: Params,
             values: Vec<f64>,
+            #branch_field
         }
 
         impl Model {
             /// The model with these params.
             pub fn with(params: Params) -> Model {
                 let values = params.values();
-                Model { params, values }
+                Model { params, values, #branch_init }
             }
 
             pub fn params(&self) -> &Params {
@@ -139,6 +150,7 @@ pub fn emit_crate(
 
         impl lagc_runtime::model::Model for Model {
             #consts
+            #event_consts
 
             fn parameters(overrides: &[Option<f64>]) -> Vec<f64> {
                 Params::with_overrides(overrides).values()
@@ -148,6 +160,7 @@ pub fn emit_crate(
                 Model {
                     params: Params::from_values(values),
                     values: values.to_vec(),
+                    #branch_init
                 }
             }
 

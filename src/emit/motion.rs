@@ -48,7 +48,8 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
         Motion::Implicit(i) => implicit(kernel, names, i, &from_x, &shifts, &shift_jacobian),
     };
     let condition = mass_condition(kernel, names, &from_x);
-    (quote! { #trait_items #condition }, inherent)
+    let events = super::events::items(kernel, names, &from_x);
+    (quote! { #trait_items #condition #events }, inherent)
 }
 
 fn arg(used: bool, name: &str) -> TokenStream {

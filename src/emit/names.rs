@@ -16,6 +16,8 @@ pub struct SymbolNames {
     pub masses: Vec<Ident>,
     pub mass_fns: Vec<Ident>,
     symbols: HashMap<Symbol, Ident>,
+    /// The switches' branch symbols: `branch_k` reads `self.branches[k]`.
+    pub branches: HashMap<Symbol, usize>,
     pub namer: Namer,
 }
 
@@ -41,6 +43,7 @@ impl SymbolNames {
             masses,
             mass_fns,
             symbols,
+            branches: HashMap::new(),
             namer,
         }
     }
@@ -88,6 +91,10 @@ impl SymbolNames {
                     uses_time = true;
                     let f = ident_tokens(self.mass_fns.get(i as usize));
                     prelude.push(quote! { let #name = #f(p, t); });
+                }
+                _ if self.branches.contains_key(&s) => {
+                    let k = proc_macro2::Literal::usize_unsuffixed(self.branches[&s]);
+                    prelude.push(quote! { let #name = self.branches[#k]; });
                 }
                 _ => {
                     uses_source = true;

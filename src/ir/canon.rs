@@ -266,6 +266,18 @@ impl Arena {
         }
     }
 
+    /// `if g < 0 then a else b`: one branch when both are equal or `g` is
+    /// a number.
+    pub fn select(&mut self, g: ExprId, a: ExprId, b: ExprId) -> ExprId {
+        if a == b {
+            return a;
+        }
+        if let Some(v) = self.as_const(g) {
+            return if v < 0.0 { a } else { b };
+        }
+        self.intern(Node::Select(g, a, b))
+    }
+
     pub fn neg(&mut self, a: ExprId) -> ExprId {
         let m = self.constant(-1.0);
         self.mul(&[m, a])
@@ -328,6 +340,12 @@ impl Arena {
             (Node::Const(x), Node::Const(y)) => x.total_cmp(y),
             (Node::Sym(s), Node::Sym(t)) => self.cmp_symbol(*s, *t),
             (Node::Func(f, x), Node::Func(g, y)) => f.cmp(g).then_with(|| self.cmp(*x, *y)),
+            (Node::Func(..), Node::Select(..)) => Ordering::Less,
+            (Node::Select(..), Node::Func(..)) => Ordering::Greater,
+            (Node::Select(g1, a1, b1), Node::Select(g2, a2, b2)) => self
+                .cmp(*g1, *g2)
+                .then_with(|| self.cmp(*a1, *a2))
+                .then_with(|| self.cmp(*b1, *b2)),
             (Node::Pow(b1, e1), Node::Pow(b2, e2)) => {
                 self.cmp(*b1, *b2).then_with(|| self.cmp(*e1, *e2))
             }
@@ -349,7 +367,7 @@ impl Arena {
             Node::Sym(Symbol::Jet { .. }) => 7,
             Node::Sym(Symbol::Time) => 2,
             Node::Sym(_) => 1,
-            Node::Func(..) => 3,
+            Node::Func(..) | Node::Select(..) => 3,
             Node::Pow(..) => 4,
             Node::Mul(_) => 5,
             Node::Add(_) => 6,

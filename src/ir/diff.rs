@@ -46,6 +46,12 @@ impl Arena {
                 self.add(&terms)
             }
             Node::Pow(a, b) => self.derive_pow(e, a, b, d),
+            // Away from its switch a selection is one of its branches.
+            Node::Select(g, a, b) => {
+                let da = self.derive(a, d);
+                let db = self.derive(b, d);
+                self.select(g, da, db)
+            }
             Node::Func(f, u) => {
                 let du = self.derive(u, d);
                 let outer = self.func_derivative(f, u);

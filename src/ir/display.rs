@@ -210,6 +210,36 @@ impl<'a> Writer<'a> {
                 }
                 self.func(*f, *a, out);
             }
+            Node::Select(g, a, b) => {
+                if flip {
+                    out.push('-');
+                }
+                self.select(*g, *a, *b, out);
+            }
+        }
+    }
+
+    /// `(if g < 0 then a else b)`; in LaTeX a `cases` block.
+    fn select(&self, g: ExprId, a: ExprId, b: ExprId, out: &mut String) {
+        match self.style {
+            Style::Text => {
+                out.push_str("(if ");
+                self.expr(g, Prec::Sum, out);
+                out.push_str(" < 0 then ");
+                self.expr(a, Prec::Sum, out);
+                out.push_str(" else ");
+                self.expr(b, Prec::Sum, out);
+                out.push(')');
+            }
+            Style::Latex => {
+                out.push_str("\\begin{cases}");
+                self.expr(a, Prec::Sum, out);
+                out.push_str(" & ");
+                self.expr(g, Prec::Sum, out);
+                out.push_str(" < 0 \\\\ ");
+                self.expr(b, Prec::Sum, out);
+                out.push_str(" & \\text{otherwise}\\end{cases}");
+            }
         }
     }
 

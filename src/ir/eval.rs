@@ -40,6 +40,13 @@ impl Arena {
                 pow_value(a, b)
             }
             Node::Func(f, a) => apply_func(*f, self.eval_rec(*a, env, memo)),
+            Node::Select(g, a, b) => {
+                if self.eval_rec(*g, env, memo) < 0.0 {
+                    self.eval_rec(*a, env, memo)
+                } else {
+                    self.eval_rec(*b, env, memo)
+                }
+            }
         };
         memo.insert(e, v);
         v

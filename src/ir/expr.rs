@@ -48,6 +48,10 @@ pub enum Node {
     Mul(Box<[ExprId]>),
     Pow(ExprId, ExprId),
     Func(Func, ExprId),
+    /// `if g < 0 then a else b` (SPEC §2.2's conditionals, `abs`, `sign`,
+    /// `min`, `max`, `atan2` all lower to it): `g` is a switching function,
+    /// and the generated code evaluates the branch of the current regime.
+    Select(ExprId, ExprId, ExprId),
 }
 
 // Constants compare by bits so that nodes can be hash-consed (the
@@ -60,6 +64,7 @@ impl PartialEq for Node {
             (Node::Add(a), Node::Add(b)) | (Node::Mul(a), Node::Mul(b)) => a == b,
             (Node::Pow(a, b), Node::Pow(c, d)) => a == c && b == d,
             (Node::Func(f, a), Node::Func(g, b)) => f == g && a == b,
+            (Node::Select(a, b, c), Node::Select(d, e, f)) => a == d && b == e && c == f,
             _ => false,
         }
     }
@@ -76,6 +81,7 @@ impl Hash for Node {
             Node::Add(ts) | Node::Mul(ts) => ts.hash(state),
             Node::Pow(a, b) => (a, b).hash(state),
             Node::Func(f, a) => (f, a).hash(state),
+            Node::Select(g, a, b) => (g, a, b).hash(state),
         }
     }
 }
@@ -156,6 +162,9 @@ pub struct Arena {
     pub(crate) symbols: Vec<Symbol>,
     symbol_index: FxMap<Symbol, u32>,
     pub(crate) derivatives: FxMap<(ExprId, Derivation), ExprId>,
+    /// Lowered lets by `(index, primes)`: a let is lowered once per arena,
+    /// however often it is used (SPEC §2.2: lets are shared).
+    pub(crate) lets: FxMap<(u32, u32), Box<[ExprId]>>,
     zero: ExprId,
     one: ExprId,
 }
@@ -172,6 +181,7 @@ impl Arena {
             symbols: Vec::new(),
             symbol_index: FxMap::default(),
             derivatives: FxMap::default(),
+            lets: FxMap::default(),
             zero: ExprId(0),
             one: ExprId(0),
         };
@@ -301,6 +311,7 @@ impl Arena {
             Node::Add(ts) | Node::Mul(ts) => ts.to_vec(),
             Node::Pow(a, b) => vec![*a, *b],
             Node::Func(_, a) => vec![*a],
+            Node::Select(g, a, b) => vec![*g, *a, *b],
         }
     }
 
@@ -342,7 +353,7 @@ impl Arena {
             .map(|e| match self.node(e) {
                 Node::Const(_) | Node::Sym(_) => 0,
                 Node::Add(ts) | Node::Mul(ts) => ts.len().saturating_sub(1),
-                Node::Pow(..) | Node::Func(..) => 1,
+                Node::Pow(..) | Node::Func(..) | Node::Select(..) => 1,
             })
             .sum()
     }
@@ -376,6 +387,7 @@ impl Arena {
             Node::Add(ts) | Node::Mul(ts) => self.union_meta(ts),
             Node::Pow(a, b) => self.union_meta(&[*a, *b]),
             Node::Func(_, a) => self.meta[a.index()].clone(),
+            Node::Select(g, a, b) => self.union_meta(&[*g, *a, *b]),
         }
     }
 

@@ -1,9 +1,13 @@
 //! AST expressions of a checked model → IR expressions.
+//!
+//! Vectors, lets and conditions exist only here: a vector lowers to its
+//! components, a let to its (memoised) lowered body, a condition to nested
+//! [`Node::Select`](super::expr::Node) on switching functions `g < 0`.
 
 use super::expr::{Arena, ExprId, Names, Symbol};
 use crate::check::model::{Model, Name};
 use crate::span::Span;
-use crate::syntax::ast::{BinOp, Expr, ExprKind};
+use crate::syntax::ast::{BinOp, Builtin, CmpOp, Expr, ExprKind, Func, LogicOp};
 
 /// A name that `lower` could not turn into a symbol. The checker rules all of
 /// these out; they are reported, not panicked on, in case a caller lowers an
@@ -31,13 +35,119 @@ pub fn lower(arena: &mut Arena, expr: &Expr, model: &Model) -> ExprId {
     try_lower(arena, expr, model).unwrap_or_else(|_| arena.constant(f64::NAN))
 }
 
-/// Lowers `expr`, or names the first name that is not a symbol: an unknown
-/// name, a point, or a derivative mark on `t`, a param or a mass law.
+/// Lowers a number-valued `expr`, or names the first name that is not a
+/// symbol: an unknown name, a point, or a derivative mark on `t`, a param or
+/// a mass law.
 pub fn try_lower(arena: &mut Arena, expr: &Expr, model: &Model) -> Result<ExprId, LowerError> {
-    Ok(match &expr.kind {
-        ExprKind::Number(v) => arena.constant(*v),
+    match lower_value(arena, expr, model)? {
+        Value::Components(c) if c.len() == 1 => Ok(c[0]),
+        _ => Err(not_a_number(expr)),
+    }
+}
+
+/// Lowers a vector-valued (or number-valued) `expr` to its components.
+pub fn try_lower_components(
+    arena: &mut Arena,
+    expr: &Expr,
+    model: &Model,
+) -> Result<Vec<ExprId>, LowerError> {
+    match lower_value(arena, expr, model)? {
+        Value::Components(c) => Ok(c),
+        Value::Cond(_) => Err(not_a_number(expr)),
+    }
+}
+
+/// Lowers a condition to `if cond then 1 else 0`'s selection tree, whose
+/// switching functions are the comparisons' differences.
+pub fn try_lower_condition(
+    arena: &mut Arena,
+    expr: &Expr,
+    model: &Model,
+) -> Result<Cond, LowerError> {
+    match lower_value(arena, expr, model)? {
+        Value::Cond(c) => Ok(c),
+        Value::Components(_) => Err(not_a_number(expr)),
+    }
+}
+
+fn not_a_number(expr: &Expr) -> LowerError {
+    LowerError {
+        name: "(an expression of the wrong type)".to_string(),
+        primes: 0,
+        span: expr.span,
+    }
+}
+
+/// A lowered condition: `Negative(g)` is `g < 0`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cond {
+    Negative(ExprId),
+    Not(Box<Cond>),
+    And(Box<Cond>, Box<Cond>),
+    Or(Box<Cond>, Box<Cond>),
+}
+
+impl Cond {
+    /// Every switching function `g` of the condition, in order.
+    pub fn switches(&self, out: &mut Vec<ExprId>) {
+        match self {
+            Cond::Negative(g) => out.push(*g),
+            Cond::Not(c) => c.switches(out),
+            Cond::And(a, b) | Cond::Or(a, b) => {
+                a.switches(out);
+                b.switches(out);
+            }
+        }
+    }
+}
+
+/// `if cond then a else b`, as selections on the condition's switches.
+pub fn select(arena: &mut Arena, cond: &Cond, a: ExprId, b: ExprId) -> ExprId {
+    match cond {
+        Cond::Negative(g) => arena.select(*g, a, b),
+        Cond::Not(c) => select(arena, c, b, a),
+        Cond::And(c1, c2) => {
+            let inner = select(arena, c2, a, b);
+            select(arena, c1, inner, b)
+        }
+        Cond::Or(c1, c2) => {
+            let inner = select(arena, c2, a, b);
+            select(arena, c1, a, inner)
+        }
+    }
+}
+
+enum Value {
+    /// A number (one component) or a vector.
+    Components(Vec<ExprId>),
+    Cond(Cond),
+}
+
+fn components(value: Value, expr: &Expr) -> Result<Vec<ExprId>, LowerError> {
+    match value {
+        Value::Components(c) => Ok(c),
+        Value::Cond(_) => Err(not_a_number(expr)),
+    }
+}
+
+fn scalar(arena: &mut Arena, expr: &Expr, model: &Model) -> Result<ExprId, LowerError> {
+    try_lower(arena, expr, model)
+}
+
+fn condition(arena: &mut Arena, expr: &Expr, model: &Model) -> Result<Cond, LowerError> {
+    try_lower_condition(arena, expr, model)
+}
+
+fn lower_value(arena: &mut Arena, expr: &Expr, model: &Model) -> Result<Value, LowerError> {
+    let one = |e| Ok(Value::Components(vec![e]));
+    match &expr.kind {
+        ExprKind::Number(v) => one(arena.constant(*v)),
         ExprKind::Var { name, primes } => {
             let symbol = match (name.name.as_str(), model.resolve(&name.name), *primes) {
+                (_, Some(Name::Let(i)), r) => {
+                    return Ok(Value::Components(lower_let(arena, model, i, r, expr)?));
+                }
+                ("pi", None, 0) => return one(arena.constant(std::f64::consts::PI)),
                 ("t", _, 0) => Some(Symbol::Time),
                 (_, Some(Name::Param(i)), 0) => Some(Symbol::Param(i as u32)),
                 (_, Some(Name::Mass(i)), 0) => Some(Symbol::Mass(i as u32)),
@@ -48,34 +158,222 @@ pub fn try_lower(arena: &mut Arena, expr: &Expr, model: &Model) -> Result<ExprId
                 _ => None,
             };
             match symbol {
-                Some(s) => arena.symbol(s),
-                None => {
-                    return Err(LowerError {
-                        name: name.name.clone(),
-                        primes: *primes,
-                        span: expr.span,
-                    })
-                }
+                Some(s) => one(arena.symbol(s)),
+                None => Err(LowerError {
+                    name: name.name.clone(),
+                    primes: *primes,
+                    span: expr.span,
+                }),
             }
         }
         ExprKind::Neg(a) => {
-            let a = try_lower(arena, a, model)?;
-            arena.neg(a)
+            let a = components(lower_value(arena, a, model)?, expr)?;
+            Ok(Value::Components(
+                a.into_iter().map(|x| arena.neg(x)).collect(),
+            ))
         }
         ExprKind::Binary { op, lhs, rhs } => {
-            let a = try_lower(arena, lhs, model)?;
-            let b = try_lower(arena, rhs, model)?;
-            match op {
-                BinOp::Add => arena.add(&[a, b]),
-                BinOp::Sub => arena.sub(a, b),
-                BinOp::Mul => arena.mul(&[a, b]),
-                BinOp::Div => arena.div(a, b),
-                BinOp::Pow => arena.pow(a, b),
+            let a = components(lower_value(arena, lhs, model)?, expr)?;
+            let b = components(lower_value(arena, rhs, model)?, expr)?;
+            binary(arena, *op, &a, &b)
+                .ok_or_else(|| not_a_number(expr))
+                .map(Value::Components)
+        }
+        ExprKind::Call { func, args, .. } => call(arena, *func, args, model, expr),
+        ExprKind::Vector(elements) => {
+            let mut c = Vec::with_capacity(elements.len());
+            for e in elements {
+                c.push(scalar(arena, e, model)?);
+            }
+            Ok(Value::Components(c))
+        }
+        ExprKind::Component { base, axis } => {
+            let v = components(lower_value(arena, base, model)?, expr)?;
+            let i = crate::check::axis_index(&axis.name).ok_or_else(|| not_a_number(expr))?;
+            v.get(i)
+                .map(|&c| Value::Components(vec![c]))
+                .ok_or_else(|| not_a_number(expr))
+        }
+        ExprKind::Compare { op, lhs, rhs } => {
+            let a = scalar(arena, lhs, model)?;
+            let b = scalar(arena, rhs, model)?;
+            Ok(Value::Cond(match op {
+                CmpOp::Less => Cond::Negative(arena.sub(a, b)),
+                CmpOp::Greater => Cond::Negative(arena.sub(b, a)),
+                CmpOp::LessEq => Cond::Not(Box::new(Cond::Negative(arena.sub(b, a)))),
+                CmpOp::GreaterEq => Cond::Not(Box::new(Cond::Negative(arena.sub(a, b)))),
+            }))
+        }
+        ExprKind::Logic { op, lhs, rhs } => {
+            let a = Box::new(condition(arena, lhs, model)?);
+            let b = Box::new(condition(arena, rhs, model)?);
+            Ok(Value::Cond(match op {
+                LogicOp::And => Cond::And(a, b),
+                LogicOp::Or => Cond::Or(a, b),
+            }))
+        }
+        ExprKind::Not(a) => Ok(Value::Cond(Cond::Not(Box::new(condition(
+            arena, a, model,
+        )?)))),
+        ExprKind::If {
+            cond,
+            then,
+            otherwise,
+        } => {
+            let c = condition(arena, cond, model)?;
+            let a = components(lower_value(arena, then, model)?, expr)?;
+            let b = components(lower_value(arena, otherwise, model)?, expr)?;
+            if a.len() != b.len() {
+                return Err(not_a_number(expr));
+            }
+            let selected = a
+                .iter()
+                .zip(&b)
+                .map(|(&x, &y)| select(arena, &c, x, y))
+                .collect();
+            Ok(Value::Components(selected))
+        }
+    }
+}
+
+/// Let `index` differentiated `primes` times by `D` (mass laws frozen),
+/// lowered once per arena.
+fn lower_let(
+    arena: &mut Arena,
+    model: &Model,
+    index: usize,
+    primes: u32,
+    at: &Expr,
+) -> Result<Vec<ExprId>, LowerError> {
+    let key = (index as u32, primes);
+    if let Some(found) = arena.lets.get(&key) {
+        return Ok(found.to_vec());
+    }
+    let value = if primes == 0 {
+        let body = &model.lets.get(index).ok_or_else(|| not_a_number(at))?.value;
+        try_lower_components(arena, body, model)?
+    } else {
+        lower_let(arena, model, index, primes - 1, at)?
+            .into_iter()
+            .map(|c| arena.total_derivative(c))
+            .collect()
+    };
+    arena.lets.insert(key, value.clone().into_boxed_slice());
+    Ok(value)
+}
+
+fn binary(arena: &mut Arena, op: BinOp, a: &[ExprId], b: &[ExprId]) -> Option<Vec<ExprId>> {
+    let each = |arena: &mut Arena, f: &dyn Fn(&mut Arena, ExprId, ExprId) -> ExprId| {
+        if a.len() == b.len() {
+            Some(a.iter().zip(b).map(|(&x, &y)| f(arena, x, y)).collect())
+        } else if a.len() == 1 {
+            Some(b.iter().map(|&y| f(arena, a[0], y)).collect())
+        } else if b.len() == 1 {
+            Some(a.iter().map(|&x| f(arena, x, b[0])).collect())
+        } else {
+            None
+        }
+    };
+    match op {
+        BinOp::Add => each(arena, &|ar, x, y| ar.add(&[x, y])),
+        BinOp::Sub => each(arena, &|ar, x, y| ar.sub(x, y)),
+        BinOp::Mul => each(arena, &|ar, x, y| ar.mul(&[x, y])),
+        BinOp::Div => each(arena, &|ar, x, y| ar.div(x, y)),
+        BinOp::Pow => each(arena, &|ar, x, y| ar.pow(x, y)),
+    }
+}
+
+fn call(
+    arena: &mut Arena,
+    func: Builtin,
+    args: &[Expr],
+    model: &Model,
+    at: &Expr,
+) -> Result<Value, LowerError> {
+    let mut lowered = Vec::with_capacity(args.len());
+    for a in args {
+        lowered.push(components(lower_value(arena, a, model)?, at)?);
+    }
+    let number = |i: usize| -> Result<ExprId, LowerError> {
+        match lowered.get(i) {
+            Some(c) if c.len() == 1 => Ok(c[0]),
+            _ => Err(not_a_number(at)),
+        }
+    };
+    let value = match func {
+        Builtin::Elementary(f) => arena.func(f, number(0)?),
+        Builtin::Abs => {
+            let x = number(0)?;
+            let minus = arena.neg(x);
+            arena.select(x, minus, x)
+        }
+        Builtin::Sign => {
+            let x = number(0)?;
+            match arena.as_const(x) {
+                Some(v) => arena.constant(crate::check::sign(v)),
+                None => {
+                    let (minus_one, one) = (arena.constant(-1.0), arena.one());
+                    arena.select(x, minus_one, one)
+                }
             }
         }
-        ExprKind::Call { func, arg, .. } => {
-            let a = try_lower(arena, arg, model)?;
-            arena.func(*func, a)
+        Builtin::Min | Builtin::Max => {
+            let (a, b) = (number(0)?, number(1)?);
+            let g = arena.sub(a, b);
+            if func == Builtin::Min {
+                arena.select(g, a, b)
+            } else {
+                arena.select(g, b, a)
+            }
         }
-    })
+        Builtin::Atan2 => {
+            // atan(y/x) in the right half-plane, shifted by ±π in the left
+            // one: the switches are x = 0 and, left of it, y = 0 (the cut).
+            let (y, x) = (number(0)?, number(1)?);
+            let ratio = arena.div(y, x);
+            let base = arena.func(Func::Atan, ratio);
+            let pi = arena.constant(std::f64::consts::PI);
+            let minus_pi = arena.constant(-std::f64::consts::PI);
+            let below = arena.add(&[base, minus_pi]);
+            let above = arena.add(&[base, pi]);
+            let left = arena.select(y, below, above);
+            arena.select(x, left, base)
+        }
+        Builtin::Dot | Builtin::Norm => {
+            let u = lowered.first().cloned().unwrap_or_default();
+            let v = if func == Builtin::Dot {
+                lowered.get(1).cloned().unwrap_or_default()
+            } else {
+                u.clone()
+            };
+            if u.len() != v.len() {
+                return Err(not_a_number(at));
+            }
+            let terms: Vec<ExprId> = u
+                .iter()
+                .zip(&v)
+                .map(|(&a, &b)| arena.mul(&[a, b]))
+                .collect();
+            let sum = arena.add(&terms);
+            if func == Builtin::Dot {
+                sum
+            } else {
+                arena.func(Func::Sqrt, sum)
+            }
+        }
+        Builtin::Cross => {
+            let (a, b) = match (lowered.first(), lowered.get(1)) {
+                (Some(a), Some(b)) if a.len() == 3 && b.len() == 3 => (a.clone(), b.clone()),
+                _ => return Err(not_a_number(at)),
+            };
+            let mut c = Vec::with_capacity(3);
+            for (i, j) in [(1, 2), (2, 0), (0, 1)] {
+                let p = arena.mul(&[a[i], b[j]]);
+                let q = arena.mul(&[a[j], b[i]]);
+                c.push(arena.sub(p, q));
+            }
+            return Ok(Value::Components(c));
+        }
+    };
+    Ok(Value::Components(vec![value]))
 }

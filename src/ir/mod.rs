@@ -30,5 +30,8 @@ mod subst;
 pub use crate::syntax::ast::Func;
 pub use canon::{apply_func, pow_value};
 pub use display::ExprDisplay;
+pub(crate) use expr::FxMap;
 pub use expr::{Arena, ExprId, Names, Node, Symbol};
-pub use lower::{lower, names_of, try_lower, LowerError};
+pub use lower::{
+    lower, names_of, select, try_lower, try_lower_components, try_lower_condition, Cond, LowerError,
+};

@@ -65,6 +65,12 @@ impl Arena {
                 let a = self.subst_rec(a, map, slots, memo);
                 self.func(f, a)
             }
+            Node::Select(g, a, b) => {
+                let g = self.subst_rec(g, map, slots, memo);
+                let a = self.subst_rec(a, map, slots, memo);
+                let b = self.subst_rec(b, map, slots, memo);
+                self.select(g, a, b)
+            }
         };
         memo.insert(e, r);
         r
@@ -92,5 +98,64 @@ impl Arena {
             let c = self.diff(e, x);
             vars.iter().all(|&y| !self.depends_on(c, y))
         })
+    }
+}
+
+impl Arena {
+    /// Rebuilds `e` with every selection `Select(g, a, b)` made on
+    /// `switch(g')` instead of `g` (`g'` being `g` rebuilt likewise): the
+    /// kernel's latching of switches to the run's regime. `memo` carries
+    /// the rebuilt nodes across calls, so shared nodes are rebuilt once.
+    pub(crate) fn map_selects(
+        &mut self,
+        e: ExprId,
+        switch: &mut dyn FnMut(&mut Arena, ExprId) -> ExprId,
+        memo: &mut FxMap<ExprId, ExprId>,
+    ) -> ExprId {
+        if let Some(&r) = memo.get(&e) {
+            return r;
+        }
+        let r = match self.node(e).clone() {
+            Node::Const(_) | Node::Sym(_) => e,
+            Node::Add(ts) => {
+                let ts: Vec<ExprId> = ts
+                    .iter()
+                    .map(|&t| self.map_selects(t, switch, memo))
+                    .collect();
+                self.add(&ts)
+            }
+            Node::Mul(fs) => {
+                let fs: Vec<ExprId> = fs
+                    .iter()
+                    .map(|&f| self.map_selects(f, switch, memo))
+                    .collect();
+                self.mul(&fs)
+            }
+            Node::Pow(a, b) => {
+                let a = self.map_selects(a, switch, memo);
+                let b = self.map_selects(b, switch, memo);
+                self.pow(a, b)
+            }
+            Node::Func(f, a) => {
+                let a = self.map_selects(a, switch, memo);
+                self.func(f, a)
+            }
+            Node::Select(g, a, b) => {
+                let g = self.map_selects(g, switch, memo);
+                let a = self.map_selects(a, switch, memo);
+                let b = self.map_selects(b, switch, memo);
+                let key = switch(self, g);
+                self.select(key, a, b)
+            }
+        };
+        memo.insert(e, r);
+        r
+    }
+
+    /// Whether `e` holds a selection.
+    pub fn has_select(&self, e: ExprId) -> bool {
+        self.reachable(&[e])
+            .iter()
+            .any(|&n| matches!(self.node(n), Node::Select(..)))
     }
 }

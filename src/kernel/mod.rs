@@ -12,11 +12,14 @@
 
 mod items;
 mod motion;
+mod outputs;
+pub mod switches;
 mod text;
 pub mod time;
 
 pub use items::{Coefficients, InitialKind, InitialSource, KernelInitial, KernelParam};
 pub use motion::{Explicit, Implicit, Motion};
+pub use switches::{BranchCond, Switches};
 
 use crate::check::model::{IntegratorChoice, Model};
 use crate::diagnostic::Diagnostic;
@@ -50,6 +53,13 @@ pub struct Kernel {
     /// `(state index, exact value)`.
     pub exact: Vec<(usize, ExprId)>,
     pub integrator: Option<IntegratorChoice>,
+    /// `(column, value)` of every `output` (a vector output flattened to
+    /// `p.x`, `p.y`), latched.
+    pub outputs: Vec<(String, ExprId)>,
+    /// `stop when`, on the switches' branches.
+    pub stop: Option<BranchCond>,
+    /// The switching functions of every selection a run evaluates.
+    pub switches: Switches,
 }
 
 /// Builds the kernel of a derived model.
@@ -68,7 +78,7 @@ pub fn build(
     let motion = motion::motion(&mut arena, reduced, &time);
     let coefficients = items::coefficients(&mut arena, field, &time);
     let exact = items::exact(&mut arena, model, reduced);
-    let mass_matrix = reduced
+    let mut mass_matrix: Vec<Vec<ExprId>> = reduced
         .mass_matrix
         .iter()
         .map(|row| {
@@ -77,6 +87,20 @@ pub fn build(
                 .collect()
         })
         .collect();
+    let (outputs, stop) = outputs::outputs(&mut arena, model, &motion, reduced)?;
+    let mut switches = Switches::new(&arena, &masses);
+    let mut motion = motion;
+    let mut coefficients = coefficients;
+    let mut outputs = outputs;
+    switches::latch_kernel(
+        &mut arena,
+        &mut switches,
+        &mut motion,
+        coefficients.as_mut(),
+        &mut mass_matrix,
+        &mut outputs,
+    );
+    let stop = stop.map(|c| switches.condition(&mut arena, &c));
     Ok(Kernel {
         arena,
         state: reduced.state.clone(),
@@ -92,6 +116,9 @@ pub fn build(
         coefficients,
         exact,
         integrator: model.integrator.map(|d| d.choice),
+        outputs,
+        stop,
+        switches,
     })
 }
 

@@ -180,6 +180,13 @@ pub fn eval_scaled(arena: &Arena, roots: &[ExprId], env: &dyn Fn(Symbol) -> f64)
                     scale: value.abs() + through_base + through_exp,
                 }
             }
+            Node::Select(g, a, b) => {
+                if get(&memo, g).value < 0.0 {
+                    get(&memo, a)
+                } else {
+                    get(&memo, b)
+                }
+            }
             Node::Func(f, a) => {
                 let a = get(&memo, a);
                 let value = apply_func(*f, a.value);

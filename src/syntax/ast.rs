@@ -35,11 +35,128 @@ pub enum ExprKind {
         lhs: Box<Expr>,
         rhs: Box<Expr>,
     },
+    /// `f(a, …)`: the parser knows the function and checks its arity.
     Call {
-        func: Func,
+        func: Builtin,
         func_span: Span,
-        arg: Box<Expr>,
+        args: Vec<Expr>,
     },
+    /// `(e1, e2)` or `(e1, e2, e3)` (SPEC §2.2).
+    Vector(Vec<Expr>),
+    /// `u.x`, `u.y`, `u.z`: `check` requires a vector and a known axis.
+    Component {
+        base: Box<Expr>,
+        axis: Ident,
+    },
+    /// `a < b`, …: a truth value.
+    Compare {
+        op: CmpOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
+    /// `a and b`, `a or b`.
+    Logic {
+        op: LogicOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
+    Not(Box<Expr>),
+    /// `if cond then a else b`.
+    If {
+        cond: Box<Expr>,
+        then: Box<Expr>,
+        otherwise: Box<Expr>,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CmpOp {
+    Less,
+    LessEq,
+    Greater,
+    GreaterEq,
+}
+
+impl CmpOp {
+    pub fn symbol(self) -> &'static str {
+        match self {
+            CmpOp::Less => "<",
+            CmpOp::LessEq => "<=",
+            CmpOp::Greater => ">",
+            CmpOp::GreaterEq => ">=",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LogicOp {
+    And,
+    Or,
+}
+
+/// Every function a model may call: v1's elementary functions and SPEC
+/// §2.2's piecewise and vector ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Builtin {
+    Elementary(Func),
+    Abs,
+    Sign,
+    Atan2,
+    Min,
+    Max,
+    Dot,
+    Cross,
+    Norm,
+}
+
+impl Builtin {
+    const OTHERS: [(Builtin, &'static str, usize); 8] = [
+        (Builtin::Abs, "abs", 1),
+        (Builtin::Sign, "sign", 1),
+        (Builtin::Atan2, "atan2", 2),
+        (Builtin::Min, "min", 2),
+        (Builtin::Max, "max", 2),
+        (Builtin::Dot, "dot", 2),
+        (Builtin::Cross, "cross", 2),
+        (Builtin::Norm, "norm", 1),
+    ];
+
+    pub fn from_name(name: &str) -> Option<Builtin> {
+        Func::from_name(name).map(Builtin::Elementary).or_else(|| {
+            Self::OTHERS
+                .iter()
+                .find(|(_, n, _)| *n == name)
+                .map(|&(b, _, _)| b)
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Builtin::Elementary(f) => f.name(),
+            other => Self::OTHERS
+                .iter()
+                .find(|(b, _, _)| *b == other)
+                .map_or("?", |&(_, n, _)| n),
+        }
+    }
+
+    /// The number of arguments.
+    pub fn arity(self) -> usize {
+        match self {
+            Builtin::Elementary(_) => 1,
+            other => Self::OTHERS
+                .iter()
+                .find(|(b, _, _)| *b == other)
+                .map_or(1, |&(_, _, a)| a),
+        }
+    }
+
+    /// Every function name, for suggestions.
+    pub fn names() -> Vec<&'static str> {
+        let mut names: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
+        names.extend(Self::OTHERS.iter().map(|&(_, n, _)| n));
+        names
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -148,8 +265,13 @@ pub enum ItemKind {
     Mass { name: Ident, law: Expr },
     /// `lagrangian = expr;`
     Lagrangian(Expr),
-    /// `constraint lhs = rhs;` — `check` requires `lhs` to be `q'`, `q''`, …
-    Constraint { lhs: Expr, rhs: Expr },
+    /// `constraint lhs = rhs [for y' or x' …];` — without candidates
+    /// `check` requires `lhs` to be `q'`, `q''`, …
+    Constraint {
+        lhs: Expr,
+        rhs: Expr,
+        candidates: Vec<Expr>,
+    },
     /// `point NAME { field; … }`
     Point {
         name: Ident,
@@ -166,6 +288,12 @@ pub enum ItemKind {
     /// `integrator stiff;` — the integrator runs use unless told otherwise;
     /// `check` requires `auto`, `explicit` or `stiff`.
     Integrator(Ident),
+    /// `let NAME = expr;` — a named scalar or vector (SPEC §2.2).
+    Let { name: Ident, value: Expr },
+    /// `output NAME = expr;` — an extra CSV column (or columns).
+    Output { name: Ident, value: Expr },
+    /// `stop when cond;`
+    Stop(Expr),
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -186,10 +314,10 @@ pub struct PointField {
 pub enum PointFieldKind {
     /// `mass = expr;`
     Mass(Expr),
-    /// `position = (x, y[, z]);`
-    Position(Vec<Expr>),
+    /// `position = (x, y[, z]);` — any vector expression.
+    Position(Expr),
     /// `absolute velocity = (…);` — the velocity V of the separated/added particles.
-    AbsoluteVelocity(Vec<Expr>),
+    AbsoluteVelocity(Expr),
     /// `relative velocity = (…);` — u = V − dr/dt.
-    RelativeVelocity(Vec<Expr>),
+    RelativeVelocity(Expr),
 }

@@ -68,10 +68,19 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
             law: expr(children.expect(Rule::expr)?)?,
         },
         Rule::lagrangian => ItemKind::Lagrangian(expr(children.expect(Rule::expr)?)?),
-        Rule::constraint => ItemKind::Constraint {
-            lhs: expr(children.expect(Rule::expr)?)?,
-            rhs: expr(children.expect(Rule::expr)?)?,
-        },
+        Rule::constraint => {
+            let lhs = expr(children.expect(Rule::expr)?)?;
+            let rhs = expr(children.expect(Rule::expr)?)?;
+            let candidates = match children.next() {
+                Some(list) => Children::of(list).map(|v| var(v).expr).collect(),
+                None => Vec::new(),
+            };
+            ItemKind::Constraint {
+                lhs,
+                rhs,
+                candidates,
+            }
+        }
         Rule::point => point(children)?,
         Rule::force => ItemKind::Force {
             coord: ident(children.expect(Rule::ident)?),
@@ -93,6 +102,15 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
             value: expr(children.expect(Rule::expr)?)?,
         },
         Rule::integrator => ItemKind::Integrator(ident(children.expect(Rule::ident)?)),
+        Rule::let_def => ItemKind::Let {
+            name: ident(children.expect(Rule::ident)?),
+            value: expr(children.expect(Rule::expr)?)?,
+        },
+        Rule::output => ItemKind::Output {
+            name: ident(children.expect(Rule::ident)?),
+            value: expr(children.expect(Rule::expr)?)?,
+        },
+        Rule::stop => ItemKind::Stop(expr(children.expect(Rule::expr)?)?),
         _ => return Err(unexpected_tree(span)),
     };
     Ok(Item { kind, span })
@@ -113,20 +131,16 @@ fn point_field(pair: Pair<Rule>) -> Converted<PointField> {
     let mut children = Children::of(pair);
     let kind = match rule {
         Rule::point_mass => PointFieldKind::Mass(expr(children.expect(Rule::expr)?)?),
-        Rule::point_position => PointFieldKind::Position(vector(children.expect(Rule::vector)?)?),
+        Rule::point_position => PointFieldKind::Position(expr(children.expect(Rule::expr)?)?),
         Rule::absolute_velocity => {
-            PointFieldKind::AbsoluteVelocity(vector(children.expect(Rule::vector)?)?)
+            PointFieldKind::AbsoluteVelocity(expr(children.expect(Rule::expr)?)?)
         }
         Rule::relative_velocity => {
-            PointFieldKind::RelativeVelocity(vector(children.expect(Rule::vector)?)?)
+            PointFieldKind::RelativeVelocity(expr(children.expect(Rule::expr)?)?)
         }
         _ => return Err(unexpected_tree(span)),
     };
     Ok(PointField { kind, span })
-}
-
-fn vector(pair: Pair<Rule>) -> Converted<Vec<Expr>> {
-    Children::of(pair).map(expr).collect()
 }
 
 fn initial_value(pair: Pair<Rule>) -> Converted<InitialValue> {
@@ -162,7 +176,118 @@ impl Node {
 }
 
 fn expr(pair: Pair<Rule>) -> Converted<Expr> {
-    sum(pair).map(|node| node.expr)
+    expression(pair).map(|node| node.expr)
+}
+
+/// `conditional | disjunction`.
+fn expression(pair: Pair<Rule>) -> Converted<Node> {
+    let span = Span::from(pair.as_span());
+    let inner = Children::of(pair)
+        .next()
+        .ok_or_else(|| unexpected_tree(span))?;
+    match inner.as_rule() {
+        Rule::conditional => conditional(inner),
+        Rule::disjunction => disjunction(inner),
+        _ => Err(unexpected_tree(span)),
+    }
+}
+
+/// `if cond then a else b`.
+fn conditional(pair: Pair<Rule>) -> Converted<Node> {
+    let span = Span::from(pair.as_span());
+    let keyword = Span::new(span.start, span.start + 2);
+    let mut children = Children::of(pair);
+    let cond = expression(children.expect(Rule::expr)?)?;
+    let then = expression(children.expect(Rule::expr)?)?;
+    let otherwise = expression(children.expect(Rule::expr)?)?;
+    let depth = cond.depth.max(then.depth).max(otherwise.depth);
+    let kind = ExprKind::If {
+        cond: Box::new(cond.expr),
+        then: Box::new(then.expr),
+        otherwise: Box::new(otherwise.expr),
+    };
+    deeper(kind, span, depth, keyword)
+}
+
+/// `conjunction (or conjunction)*`, folded to the left.
+fn disjunction(pair: Pair<Rule>) -> Converted<Node> {
+    logic_chain(pair, Rule::conjunction, LogicOp::Or, conjunction)
+}
+
+/// `negation (and negation)*`, folded to the left.
+fn conjunction(pair: Pair<Rule>) -> Converted<Node> {
+    logic_chain(pair, Rule::negation, LogicOp::And, negation)
+}
+
+fn logic_chain(
+    pair: Pair<Rule>,
+    rule: Rule,
+    op: LogicOp,
+    operand: fn(Pair<Rule>) -> Converted<Node>,
+) -> Converted<Node> {
+    let mut children = Children::of(pair);
+    let mut acc = operand(children.expect(rule)?)?;
+    while let Some(keyword) = children.next() {
+        let op_span = Span::from(keyword.as_span());
+        let rhs = operand(children.expect(rule)?)?;
+        let span = acc.expr.span.to(rhs.expr.span);
+        let depth = acc.depth.max(rhs.depth);
+        let kind = ExprKind::Logic {
+            op,
+            lhs: Box::new(acc.expr),
+            rhs: Box::new(rhs.expr),
+        };
+        acc = deeper(kind, span, depth, op_span)?;
+    }
+    Ok(acc)
+}
+
+/// `not* comparison`.
+fn negation(pair: Pair<Rule>) -> Converted<Node> {
+    let mut nots = Vec::new();
+    for child in Children::of(pair) {
+        if child.as_rule() == Rule::kw_not {
+            nots.push(Span::from(child.as_span()));
+        } else {
+            let mut node = comparison(child)?;
+            for not_span in nots.into_iter().rev() {
+                let span = not_span.to(node.expr.span);
+                node = deeper(
+                    ExprKind::Not(Box::new(node.expr)),
+                    span,
+                    node.depth,
+                    not_span,
+                )?;
+            }
+            return Ok(node);
+        }
+    }
+    Err(unexpected_tree(nots.last().copied().unwrap_or_default()))
+}
+
+/// `sum (cmp_op sum)?`.
+fn comparison(pair: Pair<Rule>) -> Converted<Node> {
+    let mut children = Children::of(pair);
+    let lhs = sum(children.expect(Rule::sum)?)?;
+    let Some(op) = children.next() else {
+        return Ok(lhs);
+    };
+    let op_span = Span::from(op.as_span());
+    let op = match op.as_str() {
+        "<" => CmpOp::Less,
+        "<=" => CmpOp::LessEq,
+        ">" => CmpOp::Greater,
+        _ => CmpOp::GreaterEq,
+    };
+    let rhs = sum(children.expect(Rule::sum)?)?;
+    let span = lhs.expr.span.to(rhs.expr.span);
+    let depth = lhs.depth.max(rhs.depth);
+    let kind = ExprKind::Compare {
+        op,
+        lhs: Box::new(lhs.expr),
+        rhs: Box::new(rhs.expr),
+    };
+    deeper(kind, span, depth, op_span)
 }
 
 /// `product (add_op product)*`, folded to the left.
@@ -226,7 +351,7 @@ fn power(pair: Pair<Rule>) -> Converted<Node> {
                 Some((_, negs)) => negs.push(child.as_span().into()),
                 None => return Err(unexpected_tree(span)),
             },
-            _ => bases.push(primary(child)?),
+            _ => bases.push(postfix(child)?),
         }
     }
     let Some(mut acc) = bases.pop() else {
@@ -239,6 +364,24 @@ fn power(pair: Pair<Rule>) -> Converted<Node> {
     Ok(acc)
 }
 
+/// `primary (. axis)*`.
+fn postfix(pair: Pair<Rule>) -> Converted<Node> {
+    let span = Span::from(pair.as_span());
+    let mut children = Children::of(pair);
+    let mut acc = primary(children.next().ok_or_else(|| unexpected_tree(span))?)?;
+    for component in children {
+        let at = Span::from(component.as_span());
+        let axis = ident(Children::of(component).expect(Rule::ident)?);
+        let span = acc.expr.span.to(at);
+        let kind = ExprKind::Component {
+            base: Box::new(acc.expr),
+            axis,
+        };
+        acc = deeper(kind, span, acc.depth, at)?;
+    }
+    Ok(acc)
+}
+
 fn primary(pair: Pair<Rule>) -> Converted<Node> {
     let span = Span::from(pair.as_span());
     match pair.as_rule() {
@@ -246,9 +389,25 @@ fn primary(pair: Pair<Rule>) -> Converted<Node> {
         Rule::var => Ok(var(pair)),
         Rule::call => call(pair),
         Rule::paren => {
-            let mut node = sum(Children::of(pair).expect(Rule::expr)?)?;
-            node.expr.span = span;
-            Ok(node)
+            let mut elements = Vec::new();
+            for element in Children::of(pair) {
+                elements.push(expression(element)?);
+            }
+            if elements.len() == 1 {
+                let mut node = elements.pop().ok_or_else(|| unexpected_tree(span))?;
+                node.expr.span = span;
+                return Ok(node);
+            }
+            if elements.len() > 3 {
+                return Err(Diagnostic::error(
+                    codes::DIMENSION_MISMATCH,
+                    format!("a vector of {} components", elements.len()),
+                )
+                .with_primary(span, "vectors have 2 or 3 components"));
+            }
+            let depth = elements.iter().map(|e| e.depth).max().unwrap_or(0);
+            let kind = ExprKind::Vector(elements.into_iter().map(|e| e.expr).collect());
+            deeper(kind, span, depth, span)
         }
         _ => Err(unexpected_tree(span)),
     }
@@ -286,16 +445,31 @@ fn call(pair: Pair<Rule>) -> Converted<Node> {
     let span = Span::from(pair.as_span());
     let mut children = Children::of(pair);
     let name = ident(children.expect(Rule::ident)?);
-    let Some(func) = Func::from_name(&name.name) else {
+    let Some(func) = Builtin::from_name(&name.name) else {
         return Err(unknown_function(&name));
     };
-    let arg = sum(children.expect(Rule::expr)?)?;
+    let mut args = Vec::new();
+    for arg in children {
+        args.push(expression(arg)?);
+    }
+    if args.len() != func.arity() {
+        let wanted = match func.arity() {
+            1 => "one argument".to_string(),
+            n => format!("{n} arguments"),
+        };
+        return Err(Diagnostic::error(
+            codes::WRONG_ARGUMENT_COUNT,
+            format!("`{}` takes {wanted}, not {}", name.name, args.len()),
+        )
+        .with_primary(span, format!("{} given here", args.len())));
+    }
+    let depth = args.iter().map(|a| a.depth).max().unwrap_or(0);
     let kind = ExprKind::Call {
         func,
         func_span: name.span,
-        arg: Box::new(arg.expr),
+        args: args.into_iter().map(|a| a.expr).collect(),
     };
-    deeper(kind, span, arg.depth, name.span)
+    deeper(kind, span, depth, name.span)
 }
 
 fn unknown_function(name: &Ident) -> Diagnostic {
@@ -304,7 +478,7 @@ fn unknown_function(name: &Ident) -> Diagnostic {
         format!("unknown function `{}`", name.name),
     )
     .with_primary(name.span, "not a function of the language");
-    let names = Func::ALL.map(Func::name);
+    let names = Builtin::names();
     match crate::suggest::closest(&name.name, names.iter().copied()) {
         Some(close) => diagnostic.with_help(format!("did you mean `{close}`?")),
         None => diagnostic.with_help(format!("the functions are {}", names.join(", "))),
@@ -417,5 +591,15 @@ fn is_punctuation(rule: Rule) -> bool {
             | Rule::kw_absolute
             | Rule::kw_relative
             | Rule::kw_velocity
+            | Rule::kw_let
+            | Rule::kw_output
+            | Rule::kw_stop
+            | Rule::kw_when
+            | Rule::kw_for
+            | Rule::kw_if
+            | Rule::kw_then
+            | Rule::kw_else
+            | Rule::kw_and
+            | Rule::kw_or
     )
 }

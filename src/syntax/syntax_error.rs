@@ -6,7 +6,7 @@ use crate::span::Span;
 use pest::error::{Error, ErrorVariant, InputLocation};
 
 const STATEMENT_KEYWORDS: &str =
-    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact` or `integrator`";
+    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact`, `integrator`, `let`, `output` or `stop`";
 const POINT_FIELDS: &str =
     "`mass = …;`, `position = (…);`, `absolute velocity = (…);` or `relative velocity = (…);`";
 
@@ -44,7 +44,7 @@ fn expected(positives: &[Rule], source: &str, found_span: Span, found: &str) -> 
     // An opening parenthesis is only ever a possibility (of a call); when
     // anything else is expected it just adds noise.
     if words.len() > 1 {
-        words.retain(|&word| word != "`(`");
+        words.retain(|&word| word != "`(`" && word != COMPONENT);
     }
     words.sort_by_key(|&word| WORD_ORDER.iter().position(|&w| w == word));
     let expected = join_or(&words);
@@ -80,6 +80,10 @@ fn expected(positives: &[Rule], source: &str, found_span: Span, found: &str) -> 
     }
 }
 
+/// A vector component: possible after almost any operand, so named only
+/// when nothing else is expected.
+const COMPONENT: &str = "a component (`.x`)";
+
 /// The order in which expected things are listed.
 const WORD_ORDER: &[&str] = &[
     "`;`",
@@ -110,8 +114,23 @@ fn describe(rule: Rule, in_point: bool) -> Option<&'static str> {
         Rule::lbrace => "`{`",
         Rule::rbrace => "`}`",
         Rule::kw_velocity => "`velocity`",
-        Rule::add_op | Rule::mul_op | Rule::pow_op => "an operator",
+        Rule::add_op | Rule::mul_op | Rule::pow_op | Rule::cmp_op => "an operator",
+        Rule::kw_then => "`then`",
+        Rule::kw_else => "`else`",
+        Rule::kw_when => "`when`",
+        Rule::kw_and | Rule::kw_or => "an operator",
+        Rule::candidates | Rule::kw_for => "`for`",
+        Rule::component => COMPONENT,
         Rule::expr
+        | Rule::conditional
+        | Rule::disjunction
+        | Rule::conjunction
+        | Rule::negation
+        | Rule::comparison
+        | Rule::sum
+        | Rule::postfix
+        | Rule::kw_not
+        | Rule::kw_if
         | Rule::product
         | Rule::unary
         | Rule::power
@@ -122,7 +141,6 @@ fn describe(rule: Rule, in_point: bool) -> Option<&'static str> {
         | Rule::neg
         | Rule::initial_value => "an expression",
         Rule::ident => "a name",
-        Rule::vector => "a vector `(…)`",
         Rule::kw_mass | Rule::mass if in_point => "a point field",
         rule if is_point_field(rule) => "a point field",
         rule if is_statement(rule) => "a statement",
@@ -170,6 +188,12 @@ fn is_statement(rule: Rule) -> bool {
             | Rule::kw_time
             | Rule::kw_exact
             | Rule::kw_integrator
+            | Rule::let_def
+            | Rule::output
+            | Rule::stop
+            | Rule::kw_let
+            | Rule::kw_output
+            | Rule::kw_stop
     )
 }
 

@@ -27,7 +27,30 @@ fn show(expr: &Expr) -> String {
             };
             format!("({} {op} {})", show(lhs), show(rhs))
         }
-        ExprKind::Call { func, arg, .. } => format!("{}({})", func.name(), show(arg)),
+        ExprKind::Call { func, args, .. } => {
+            let args: Vec<String> = args.iter().map(show).collect();
+            format!("{}({})", func.name(), args.join(", "))
+        }
+        ExprKind::Vector(elements) => {
+            let elements: Vec<String> = elements.iter().map(show).collect();
+            format!("({})", elements.join(", "))
+        }
+        ExprKind::Component { base, axis } => format!("{}.{}", show(base), axis.name),
+        ExprKind::Compare { op, lhs, rhs } => {
+            format!("({} {} {})", show(lhs), op.symbol(), show(rhs))
+        }
+        ExprKind::Logic { op, lhs, rhs } => format!("({} {op:?} {})", show(lhs), show(rhs)),
+        ExprKind::Not(inner) => format!("(not {})", show(inner)),
+        ExprKind::If {
+            cond,
+            then,
+            otherwise,
+        } => format!(
+            "(if {} then {} else {})",
+            show(cond),
+            show(then),
+            show(otherwise)
+        ),
     }
 }
 

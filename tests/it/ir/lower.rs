@@ -4,7 +4,7 @@ use super::{env_at, q};
 use lagc::check::model::{Coord, MassLaw, Model, Name, Param, TimeSpan};
 use lagc::ir::{lower, names_of, try_lower, Arena, Func, Symbol};
 use lagc::span::Span;
-use lagc::syntax::ast::{BinOp, Expr, ExprKind, Ident};
+use lagc::syntax::ast::{BinOp, Builtin, Expr, ExprKind, Ident};
 use std::collections::HashMap;
 
 fn e(kind: ExprKind) -> Expr {
@@ -38,9 +38,9 @@ fn bin(op: BinOp, lhs: Expr, rhs: Expr) -> Expr {
 
 fn call(func: Func, arg: Expr) -> Expr {
     e(ExprKind::Call {
-        func,
+        func: Builtin::Elementary(func),
         func_span: Span::default(),
-        arg: Box::new(arg),
+        args: vec![arg],
     })
 }
 
@@ -98,6 +98,9 @@ fn paper_model() -> Model {
         },
         exact: Vec::new(),
         integrator: None,
+        lets: Vec::new(),
+        outputs: Vec::new(),
+        stop: None,
         names: HashMap::from([
             ("M0".to_string(), Name::Param(0)),
             ("alpha".to_string(), Name::Param(1)),

@@ -1,0 +1,124 @@
+//! The regime of a run (SPEC §2.2): the switches' branches the right side
+//! reads, the switching functions the runtime watches, `stop when`, and
+//! the `output` columns.
+
+use super::names::{Source, SymbolNames};
+use crate::kernel::{BranchCond, Kernel};
+use proc_macro2::{Literal, TokenStream};
+use quote::quote;
+
+/// The model struct's field and its initial value, when it has switches.
+pub fn branch_field(kernel: &Kernel) -> (TokenStream, TokenStream) {
+    let k = kernel.switches.functions.len();
+    if k == 0 {
+        return (TokenStream::new(), TokenStream::new());
+    }
+    let k = Literal::usize_unsuffixed(k);
+    (
+        quote! {
+            /// The sign (±1) of each switching function on the current
+            /// segment: the branch every selection takes.
+            branches: [f64; #k],
+        },
+        quote! { branches: [1.0; #k], },
+    )
+}
+
+/// `SWITCHES`, `OUTPUTS`.
+pub fn consts(kernel: &Kernel) -> TokenStream {
+    let k = kernel.switches.functions.len();
+    let switches = if k == 0 {
+        TokenStream::new()
+    } else {
+        let k = Literal::usize_unsuffixed(k);
+        quote! { const SWITCHES: usize = #k; }
+    };
+    let outputs = if kernel.outputs.is_empty() {
+        TokenStream::new()
+    } else {
+        let names = kernel.outputs.iter().map(|(n, _)| n.as_str());
+        quote! { const OUTPUTS: &'static [&'static str] = &[#(#names),*]; }
+    };
+    quote! { #switches #outputs }
+}
+
+/// `set_regime`, `switching_functions`, `stop`, `outputs`.
+pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
+    let arena = &kernel.arena;
+    let mut items = Vec::new();
+    if !kernel.switches.functions.is_empty() {
+        items.push(quote! {
+            fn set_regime(&mut self, regime: &lagc_runtime::model::Regime) {
+                for (sign, &positive) in self.branches.iter_mut().zip(&regime.branches) {
+                    *sign = if positive { 1.0 } else { -1.0 };
+                }
+            }
+        });
+        let code = names.code(arena, &kernel.switches.functions, from_x);
+        let statements = code.statements(quote! { self.params });
+        let t = code.time_arg();
+        let x = if code.uses_source {
+            quote! { x }
+        } else {
+            quote! { _x }
+        };
+        let slots = (0..code.roots.len()).map(Literal::usize_unsuffixed);
+        let roots = &code.roots;
+        items.push(quote! {
+            fn switching_functions(&self, #t: f64, #x: &[f64], g: &mut [f64]) {
+                #statements
+                #(g[#slots] = #roots;)*
+            }
+        });
+    }
+    if let Some(stop) = &kernel.stop {
+        let cond = condition(stop);
+        items.push(quote! {
+            fn stop(&self, branches: &[bool]) -> bool {
+                #cond
+            }
+        });
+    }
+    if !kernel.outputs.is_empty() {
+        let roots: Vec<_> = kernel.outputs.iter().map(|&(_, e)| e).collect();
+        let code = names.code(arena, &roots, from_x);
+        let statements = code.statements(quote! { self.params });
+        let t = code.time_arg();
+        let x = if code.uses_source {
+            quote! { x }
+        } else {
+            quote! { _x }
+        };
+        let slots = (0..code.roots.len()).map(Literal::usize_unsuffixed);
+        let roots = &code.roots;
+        items.push(quote! {
+            fn outputs(&self, #t: f64, #x: &[f64], out: &mut [f64]) {
+                #statements
+                #(out[#slots] = #roots;)*
+            }
+        });
+    }
+    quote! { #(#items)* }
+}
+
+/// A condition on the branches (`branches[k]`: `g_k > 0`).
+fn condition(cond: &BranchCond) -> TokenStream {
+    match cond {
+        BranchCond::Negative(k) => {
+            let k = Literal::usize_unsuffixed(*k);
+            quote! { !branches[#k] }
+        }
+        BranchCond::Not(c) => {
+            let c = condition(c);
+            quote! { !(#c) }
+        }
+        BranchCond::And(a, b) => {
+            let (a, b) = (condition(a), condition(b));
+            quote! { (#a && #b) }
+        }
+        BranchCond::Or(a, b) => {
+            let (a, b) = (condition(a), condition(b));
+            quote! { (#a || #b) }
+        }
+    }
+}
