@@ -58,14 +58,26 @@ impl Symbolic {
             .enumerate()
             .map(|(i, &law)| (Symbol::Mass(i as u32), law))
             .collect();
-        let constraints = model
-            .constraints
-            .iter()
-            .map(|c| {
-                let phi = lower(arena, &c.rhs);
-                (c.coord as u32, arena.subst(phi, &masses_to_laws))
-            })
-            .collect();
+        let mut constraints = Vec::new();
+        let mut unsolved = Vec::new();
+        for c in &model.constraints {
+            let rhs = lower(arena, &c.rhs);
+            let phi = match &c.implicit {
+                None => rhs,
+                Some(implicit) => {
+                    let lhs = lower(arena, &implicit.lhs);
+                    match solve_implicit(arena, model, c, lhs, rhs) {
+                        Ok(phi) => phi,
+                        Err(d) => {
+                            unsolved.push(d);
+                            continue;
+                        }
+                    }
+                }
+            };
+            constraints.push((c.coord as u32, arena.subst(phi, &masses_to_laws)));
+        }
+        errors.extend(unsolved);
         if !errors.is_empty() {
             return Err(errors);
         }
@@ -98,6 +110,48 @@ impl Symbolic {
             .map(|&coord| Symbol::Jet { coord, order })
             .collect()
     }
+}
+
+/// `lhs = rhs` solved for its candidate `q_d^(k)`: the constraint must be
+/// linear in it, `h = c·q_d^(k) + r`, and then `q_d^(k) = −r / c` (the
+/// pivot `c` may vanish somewhere; the run watches it).
+fn solve_implicit(
+    arena: &mut Arena,
+    model: &Model,
+    c: &crate::check::model::Constraint,
+    lhs: ExprId,
+    rhs: ExprId,
+) -> Result<ExprId, Diagnostic> {
+    let h = arena.sub(lhs, rhs);
+    let dep = Symbol::Jet {
+        coord: c.coord as u32,
+        order: c.order,
+    };
+    let pivot = arena.diff(h, dep);
+    if arena.depends_on(pivot, dep) {
+        let name = arena.symbol_name(dep);
+        return Err(Diagnostic::error(
+            codes::BAD_CANDIDATE,
+            format!("the constraint is not linear in `{name}`"),
+        )
+        .with_primary(c.span, format!("`{name}` enters non-linearly"))
+        .with_note("lagc solves an implicit constraint for its candidate symbolically, which needs it to enter linearly")
+        .with_help(format!("solve the constraint for `{name}` and write it explicitly: `constraint {name} = …;`")));
+    }
+    if arena.is_zero(pivot) {
+        let name = arena.symbol_name(dep);
+        return Err(Diagnostic::error(
+            codes::BAD_CANDIDATE,
+            format!("the constraint does not depend on `{name}`"),
+        )
+        .with_primary(c.span, "its derivative with respect to the candidate is 0"));
+    }
+    let _ = model;
+    let zero = arena.zero();
+    let at_zero: HashMap<Symbol, ExprId> = [(dep, zero)].into_iter().collect();
+    let free = arena.subst(h, &at_zero);
+    let minus_free = arena.neg(free);
+    Ok(arena.div(minus_free, pivot))
 }
 
 /// Equation (4) is derived for Lagrangians of the first order only: a
