@@ -206,6 +206,9 @@ pub mod codes {
     // Added by the stability work (additive):
     /// An `integrator` statement naming none of `auto`, `explicit`, `stiff`.
     pub const UNKNOWN_INTEGRATOR: &str = "E0032";
+    /// Equations (4) disagree with the multiplier route (or the two cannot
+    /// be compared at enough points): `mechanics::derive_checked`.
+    pub const CROSS_CHECK_FAILED: &str = "E0033";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

@@ -25,10 +25,11 @@ pub fn frontend(source: &str) -> Result<Model, Vec<Diagnostic>> {
 /// The front end and the derivation: every diagnostic a model can have
 /// before code generation (`lagc check` reports exactly these). Some checks
 /// need the symbolic stage: an initial value that violates a constraint, an
-/// identically singular mass matrix.
+/// identically singular mass matrix, equations (4) that fail the
+/// cross-check ([`crate::mechanics::derive_checked`], as every path).
 pub fn check_and_derive(source: &str) -> Checked {
     let model = frontend(source)?;
-    let derivation = crate::mechanics::derive(&model)?;
+    let (derivation, _) = crate::mechanics::derive_checked(&model)?;
     Ok((model, derivation))
 }
 

@@ -224,11 +224,13 @@ fn check(args: &CheckArgs) -> ExitCode {
 }
 
 fn derive(args: &DeriveArgs) -> ExitCode {
+    // The same derivation, cross-check included, as every other path: a
+    // model whose equations (4) fail it is a model with errors (E0033).
     let stage = |source: &str| {
         let model = lagc::frontend(source)?;
-        lagc::mechanics::derive(&model).map(|derivation| (derivation, Vec::new()))
+        lagc::mechanics::derive_checked(&model).map(|checked| (checked, Vec::new()))
     };
-    status(compile(&args.file, stage, |mut derivation| {
+    status(compile(&args.file, stage, |(derivation, check)| {
         match args.format {
             Format::Text => {
                 print!("{}", derivation.text());
@@ -239,19 +241,11 @@ fn derive(args: &DeriveArgs) -> ExitCode {
             }
             Format::Latex => print!("{}", derivation.latex()),
         }
-        match lagc::mechanics::cross_check(&mut derivation) {
-            Ok(check) => {
-                eprintln!(
-                    "cross-check of (4) against the multiplier route: passed at {} points",
-                    check.points
-                );
-                ExitCode::SUCCESS
-            }
-            Err(failure) => {
-                eprintln!("error: cross-check failed: {failure}");
-                ExitCode::from(EXIT_MODEL_ERRORS)
-            }
-        }
+        eprintln!(
+            "cross-check of (4) against the multiplier route: passed at {} points",
+            check.points
+        );
+        ExitCode::SUCCESS
     }))
 }
 

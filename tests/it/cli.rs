@@ -110,3 +110,42 @@ fn run_reproduces_the_paper_and_does_not_rebuild_an_unchanged_model() {
     assert!(!stderr.contains("Compiling"), "rebuilt:\n{stderr}");
     assert_eq!(String::from_utf8(second.stdout).unwrap(), stdout);
 }
+
+/// Issue 15, item 4: every path runs the same derivation checks. A model
+/// whose equations (4) fail the cross-check is refused by `check`,
+/// `derive`, `build`, `run` and `report` alike, with the same message, and
+/// nothing is written, built or integrated.
+#[test]
+fn every_path_refuses_a_model_that_fails_the_cross_check() {
+    let file = "tests/data/errors/cross_check_fails.lag";
+    let out_dir = crate::root().join("target/cross-check-build");
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let out_dir_arg = out_dir.to_string_lossy().into_owned();
+    let cache = crate::root().join("target/lagc-cache");
+    let mut messages = Vec::new();
+    for args in [
+        vec!["check", file],
+        vec!["derive", file],
+        vec!["build", file, "-o", &out_dir_arg],
+        vec!["run", file, "--samples", "3"],
+        vec!["report", file, "--out", &out_dir_arg],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .args(&args)
+            .env("LAGC_CACHE_DIR", &cache)
+            .current_dir(crate::root())
+            .output()
+            .expect("lagc runs");
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(1), "lagc {args:?}:\n{stderr}");
+        assert!(out.stdout.is_empty(), "lagc {args:?} printed a result");
+        assert!(stderr.contains("error[E0033]"), "lagc {args:?}:\n{stderr}");
+        messages.push(stderr);
+    }
+    assert!(
+        messages.iter().all(|m| *m == messages[0]),
+        "the paths report differently:\n{messages:#?}"
+    );
+    assert!(!out_dir.exists(), "build or report wrote {out_dir:?}");
+    insta::assert_snapshot!(messages[0]);
+}
