@@ -71,7 +71,10 @@ enum Command {
     Report(ReportArgs),
 }
 
+/// Negative numbers are values, not flags: `--tolerances -1` gets lagc's
+/// own message about tolerances rather than clap's "unexpected argument".
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 struct ReportArgs {
     /// The `.lag` model.
     file: PathBuf,
@@ -83,7 +86,7 @@ struct ReportArgs {
     #[arg(long, value_name = "N", default_value_t = 5)]
     runs: usize,
     /// Comma-separated relative tolerances (default 1e-3,1e-4,…,1e-12).
-    #[arg(long, value_name = "LIST")]
+    #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     tolerances: Option<String>,
     /// Number of evenly spaced sample times; the error is the largest
     /// over them. The runtime steps onto every sample time (it has no

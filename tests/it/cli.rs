@@ -149,3 +149,58 @@ fn every_path_refuses_a_model_that_fails_the_cross_check() {
     assert!(!out_dir.exists(), "build or report wrote {out_dir:?}");
     insta::assert_snapshot!(messages[0]);
 }
+
+/// Issue 15, item 12: tolerances out of (0, 1) are usage errors (exit 2)
+/// in lagc's own words, negative ones included (not clap's "unexpected
+/// argument"), reported before anything is built; one below the rounding
+/// of f64 is run with a warning.
+#[test]
+fn bad_tolerances_are_refused_in_lagcs_words() {
+    let cache = crate::root().join("target/lagc-cache");
+    let lagc_in_cache = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .args(args)
+            .env("LAGC_CACHE_DIR", &cache)
+            // As in the paper's `run` test, so that the two share one build.
+            .env("RUSTFLAGS", "-D warnings")
+            .current_dir(crate::root())
+            .output()
+            .expect("lagc runs")
+    };
+    let mut rendered = String::new();
+    for args in [
+        &["run", "examples/paper.lag", "--rtol", "10"][..],
+        &["run", "examples/paper.lag", "--rtol", "1"],
+        &["run", "examples/paper.lag", "--rtol", "-1"],
+        &["run", "examples/paper.lag", "--rtol", "0"],
+        &["run", "examples/paper.lag", "--atol", "-1e-9"],
+        &["report", "examples/paper.lag", "--tolerances", "-1"],
+        &["report", "examples/paper.lag", "--tolerances", "-1e-3,1e-4"],
+        &["report", "examples/paper.lag", "--tolerances", "1e-3,10"],
+    ] {
+        let out = lagc_in_cache(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "lagc {args:?}:\n{stderr}");
+        assert!(out.stdout.is_empty(), "lagc {args:?}");
+        assert!(!stderr.contains("unexpected argument"), "{stderr}");
+        assert!(!stderr.contains("Compiling"), "built for {args:?}");
+        let first = stderr.lines().next().unwrap_or_default();
+        rendered.push_str(&format!("lagc {}\n  {first}\n", args.join(" ")));
+    }
+    insta::assert_snapshot!(rendered);
+
+    let out = lagc_in_cache(&[
+        "run",
+        "examples/paper.lag",
+        "--rtol",
+        "1e-300",
+        "--samples",
+        "2",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning: --rtol 1e-300 is below the rounding of f64"),
+        "{stderr}"
+    );
+}
