@@ -34,8 +34,8 @@ pub fn check_and_derive(source: &str) -> Checked {
 }
 
 /// Decodes a file's bytes and runs [`frontend`]. Also returns the text to
-/// render diagnostics against: the source itself, or for invalid UTF-8 a
-/// lossy copy (each invalid sequence replaced by U+FFFD) in which the
+/// render diagnostics against: the source itself (lone `\r` line ends read
+/// as `\n`, byte for byte), or for invalid UTF-8 a lossy copy (each invalid sequence replaced by U+FFFD) in which the
 /// diagnostic's span marks the first replacement character.
 pub fn frontend_bytes(bytes: &[u8]) -> (Cow<'_, str>, Result<Model, Vec<Diagnostic>>) {
     decode_then(bytes, frontend)
@@ -55,7 +55,11 @@ pub fn decode_then<T>(
     stage: impl FnOnce(&str) -> Result<T, Vec<Diagnostic>>,
 ) -> (Cow<'_, str>, Result<T, Vec<Diagnostic>>) {
     match std::str::from_utf8(bytes) {
-        Ok(source) => (Cow::Borrowed(source), stage(source)),
+        Ok(source) => {
+            let source = lone_cr_as_newline(Cow::Borrowed(source));
+            let result = stage(&source);
+            (source, result)
+        }
         Err(error) => {
             let offset = error.valid_up_to();
             let replacement = char::REPLACEMENT_CHARACTER.len_utf8();
@@ -68,9 +72,28 @@ pub fn decode_then<T>(
                 format!("byte {offset} is not UTF-8 (shown as \u{FFFD})"),
             )
             .with_help("save the file as UTF-8 text");
-            (String::from_utf8_lossy(bytes), Err(vec![diagnostic]))
+            let source = lone_cr_as_newline(String::from_utf8_lossy(bytes));
+            (source, Err(vec![diagnostic]))
         }
     }
+}
+
+/// The text with every lone `\r` (old Mac line endings, not part of a
+/// `\r\n`) replaced by `\n`, so that a CR-only file has its lines: for
+/// line numbers in diagnostics (codespan counts `\n`) and for every check
+/// that looks at line ends. The replacement is byte for byte, so spans into
+/// the original text stay valid.
+fn lone_cr_as_newline(source: Cow<'_, str>) -> Cow<'_, str> {
+    let bytes = source.as_bytes();
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    if !(0..bytes.len()).any(lone) {
+        return source;
+    }
+    let mut text = String::with_capacity(source.len());
+    for (i, c) in source.char_indices() {
+        text.push(if lone(i) { '\n' } else { c });
+    }
+    Cow::Owned(text)
 }
 
 /// Runs `job` on a thread with a [`STACK_SIZE`] stack, and returns its
