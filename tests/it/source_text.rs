@@ -43,3 +43,39 @@ fn mixed_line_endings_count_every_line() {
     let rendered = crate::check_bytes(text.as_bytes(), "mixed.lag").expect_err("`k` is unknown");
     assert!(rendered.contains("mixed.lag:4:29"), "{rendered}");
 }
+
+/// Whether `text` holds a control character other than a line end.
+fn has_raw_control(text: &str) -> bool {
+    text.chars().any(|c| c.is_control() && c != '\n')
+}
+
+/// Control characters in the source never reach the terminal raw: the
+/// snippet shows NUL, SOH, ESC, DEL and a C1 control as pictures (`␀`, `␁`,
+/// `␛`, `␡`, U+FFFD), the label still under the right column; the message
+/// quotes them escaped.
+#[test]
+fn control_characters_are_shown_not_echoed() {
+    let comment = "param m = 1;\ncoord x;\n\
+                   lagrangian = m / 2 * x'^2 - k; // \0 \u{1} \u{7f} \u{85} \u{1b}[2J\n\
+                   initial x = 1, x' = 0;\ntime 0 .. 1;\n";
+    let in_comment =
+        crate::check_bytes(comment.as_bytes(), "controls.lag").expect_err("`k` is not declared");
+    assert!(in_comment.contains("controls.lag:3:29"), "{in_comment}");
+    let found = "param m = 1;\ncoord x;\nlagrangian = m / 2 * x'^2\u{1b}[31m;\n";
+    let as_token =
+        crate::check_bytes(found.as_bytes(), "escape.lag").expect_err("ESC is not a token");
+    let nul = "coord x;\nlagrangian = x\0'^2;\n";
+    let as_nul = crate::check_bytes(nul.as_bytes(), "nul.lag").expect_err("NUL is not a token");
+    for rendered in [&in_comment, &as_token, &as_nul] {
+        assert!(!has_raw_control(rendered), "{rendered:?}");
+    }
+    insta::assert_snapshot!(format!("{in_comment}\n{as_token}\n{as_nul}"));
+}
+
+/// A file name with control characters is escaped too.
+#[test]
+fn a_control_character_in_the_file_name_is_escaped() {
+    let rendered = crate::check_bytes(b"coord x;\n", "a\u{1b}[2Jb.lag").expect_err("incomplete");
+    assert!(!has_raw_control(&rendered), "{rendered:?}");
+    assert!(rendered.contains("a\\u{1b}[2Jb.lag:"), "{rendered}");
+}
