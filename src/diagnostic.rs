@@ -290,6 +290,9 @@ pub mod codes {
     /// linear ansatz (10) is not a complete solution, and the generated
     /// crate uses the local field method.
     pub const LOCAL_FIELD_METHOD: &str = "N0001";
+    // Warnings (a model that still compiles) get their own series.
+    /// A number literal too small for f64: it is read as 0.
+    pub const LITERAL_UNDERFLOWS: &str = "W0001";
     /// An internal error of the code generator (a bug, never the model's).
     pub const CODE_GENERATION: &str = "E0900";
 }

@@ -33,6 +33,70 @@ pub fn check_and_derive(source: &str) -> Checked {
     Ok((model, derivation))
 }
 
+/// Warnings about the text that do not stop a model: a number literal
+/// such as `1e-400`, non-zero as written but below the smallest positive
+/// f64, which is read as 0 (W0001). A lexical scan with the grammar's
+/// `number` rule (comments and names skipped), independent of the parse,
+/// so that every command reports the same warnings.
+pub fn literal_warnings(source: &str) -> Vec<Diagnostic> {
+    let bytes = source.as_bytes();
+    let digits = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
+    let mut warnings = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        let b = bytes[i];
+        if b == b'/' && bytes.get(i + 1) == Some(&b'/') {
+            while i < bytes.len() && !matches!(bytes[i], b'\n' | b'\r') {
+                i += 1;
+            }
+        } else if b.is_ascii_alphabetic() || b == b'_' {
+            while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
+                i += 1;
+            }
+        } else if b.is_ascii_digit() {
+            // number = digit+ ("." digit+)? (e ("+"|"-")? digit+)?
+            let start = i;
+            i = digits(i);
+            if bytes.get(i) == Some(&b'.') && bytes.get(i + 1).is_some_and(u8::is_ascii_digit) {
+                i = digits(i + 1);
+            }
+            let mantissa_end = i;
+            if matches!(bytes.get(i), Some(b'e' | b'E')) {
+                let sign = usize::from(matches!(bytes.get(i + 1), Some(b'+' | b'-')));
+                if bytes.get(i + 1 + sign).is_some_and(u8::is_ascii_digit) {
+                    i = digits(i + 1 + sign);
+                }
+            }
+            let text = &source[start..i];
+            let nonzero = source[start..mantissa_end]
+                .bytes()
+                .any(|d| matches!(d, b'1'..=b'9'));
+            if nonzero && text.parse::<f64>() == Ok(0.0) {
+                warnings.push(
+                    Diagnostic::warning(codes::LITERAL_UNDERFLOWS, "this literal underflows to 0")
+                        .with_primary(
+                            Span::new(start, i),
+                            format!("`{text}` is read as 0"),
+                        )
+                        .with_note(format!(
+                            "the smallest positive 64-bit float is about {:e}",
+                            f64::from_bits(1)
+                        ))
+                        .with_help("write 0 if zero is meant, or choose units in which the value is not this small"),
+                );
+            }
+        } else {
+            i += 1;
+        }
+    }
+    warnings
+}
+
 /// Decodes a file's bytes and runs [`frontend`]. Also returns the text to
 /// render diagnostics against: the source itself (lone `\r` line ends read
 /// as `\n`, byte for byte), or for invalid UTF-8 a lossy copy (each invalid sequence replaced by U+FFFD) in which the

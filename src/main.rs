@@ -189,12 +189,16 @@ fn compile<T, R: Send>(
     let color = std::io::stderr().is_terminal();
     lagc::on_big_stack(|| {
         let (source, result) = lagc::decode_then(&bytes, stage);
+        let warnings = lagc::literal_warnings(&source);
         match result {
             Ok((value, notes)) => {
+                eprint!("{}", render(&warnings, &file_name, &source, color));
                 eprint!("{}", render(&notes, &file_name, &source, color));
                 Ok(then(value))
             }
-            Err(diagnostics) => {
+            Err(mut diagnostics) => {
+                diagnostics.extend(warnings);
+                lagc::diagnostic::sort(&mut diagnostics);
                 eprint!("{}", render(&diagnostics, &file_name, &source, color));
                 let errors = diagnostics.iter().filter(|d| d.is_error()).count();
                 eprintln!("error: `{file_name}` has {}", count(errors, "error"));

@@ -204,3 +204,33 @@ fn bad_tolerances_are_refused_in_lagcs_words() {
         "{stderr}"
     );
 }
+
+/// Issue 15, item 10: a literal that underflows to 0 is a warning (the
+/// model still checks, exit 0) located at the literal, on every command;
+/// beside an error it is reported in source order.
+#[test]
+fn a_literal_that_underflows_is_warned_about() {
+    let file = "tests/data/warnings/literal_underflows.lag";
+    let out = lagc(&["check", file]);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert_eq!(stderr.matches("warning[W0001]").count(), 1, "{stderr}");
+    let derive = lagc(&["derive", file]);
+    assert_eq!(derive.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&derive.stderr)
+        .starts_with(&stderr[..stderr.find("\n\n").unwrap()]));
+
+    let with_error =
+        std::env::temp_dir().join(format!("lagc-underflow-{}.lag", std::process::id()));
+    std::fs::write(
+        &with_error,
+        "coord x;\nparam a = 1e-400;\nlagrangian = x'^2 - k;\n",
+    )
+    .unwrap();
+    let out = lagc(&["check", &with_error.to_string_lossy()]);
+    let _ = std::fs::remove_file(&with_error);
+    let errors = String::from_utf8_lossy(&out.stderr)
+        .replace(&*with_error.to_string_lossy(), "with_error.lag");
+    assert_eq!(out.status.code(), Some(1), "{errors}");
+    insta::assert_snapshot!(format!("{stderr}\n{errors}"));
+}
