@@ -111,8 +111,14 @@ pub fn sort(diagnostics: &mut [Diagnostic]) {
 
 /// Renders diagnostics as rustc-style text (`file:line:col`, code, labels,
 /// notes, help). `color` selects ANSI colours; tests render without.
+///
+/// Control characters never reach the terminal raw: in the snippet each is
+/// shown as its picture (`␀` for NUL, U+2400–U+2421; U+FFFD for the C1
+/// controls) and a lone `\r` as a line end, labels moved to match; in the
+/// messages, labels, notes and file name each is escaped (`\0`, `\u{1}`).
 pub fn render(diagnostics: &[Diagnostic], file_name: &str, source: &str, color: bool) -> String {
-    let file = SimpleFile::new(file_name, source);
+    let shown = Shown::new(source);
+    let file = SimpleFile::new(escape_controls(file_name), shown.text.as_str());
     let mut buffer = if color {
         termcolor::Buffer::ansi()
     } else {
@@ -120,7 +126,7 @@ pub fn render(diagnostics: &[Diagnostic], file_name: &str, source: &str, color: 
     };
     let config = term::Config::default();
     for diagnostic in diagnostics {
-        let cs_diagnostic = to_codespan(diagnostic, source.len());
+        let cs_diagnostic = to_codespan(diagnostic, source.len(), &shown);
         // Writing into an in-memory buffer cannot fail for I/O reasons; a
         // failure here would be a span outside the file, which to_codespan clamps.
         let _ = term::emit_to_write_style(&mut buffer, &config, &file, &cs_diagnostic);
@@ -128,7 +134,72 @@ pub fn render(diagnostics: &[Diagnostic], file_name: &str, source: &str, color: 
     String::from_utf8_lossy(buffer.as_slice()).into_owned()
 }
 
-fn to_codespan(diagnostic: &Diagnostic, source_len: usize) -> cs::Diagnostic<()> {
+/// The source as a snippet shows it (see [`render`]), and where each
+/// offset of the source went.
+struct Shown {
+    text: String,
+    /// `(start in the source, bytes added up to and including this
+    /// character)` for every character whose picture is longer than it.
+    shifts: Vec<(usize, usize)>,
+}
+
+impl Shown {
+    fn new(source: &str) -> Self {
+        let bytes = source.as_bytes();
+        let mut text = String::with_capacity(source.len());
+        let mut shifts = Vec::new();
+        let mut added = 0;
+        for (i, c) in source.char_indices() {
+            let picture = match c {
+                '\n' | '\t' => c,
+                '\r' if bytes.get(i + 1) == Some(&b'\n') => c,
+                '\r' => '\n',
+                '\u{0}'..='\u{1f}' => char::from_u32(0x2400 + c as u32).unwrap_or('\u{FFFD}'),
+                '\u{7f}' => '\u{2421}',
+                c if c.is_control() => '\u{FFFD}',
+                c => c,
+            };
+            text.push(picture);
+            if picture.len_utf8() > c.len_utf8() {
+                added += picture.len_utf8() - c.len_utf8();
+                shifts.push((i, added));
+            }
+        }
+        Shown { text, shifts }
+    }
+
+    /// The offset in the shown text of `offset` in the source: after every
+    /// picture of a character that starts before it.
+    fn offset(&self, offset: usize) -> usize {
+        match self.shifts.partition_point(|&(start, _)| start < offset) {
+            0 => offset,
+            n => offset + self.shifts[n - 1].1,
+        }
+    }
+}
+
+/// `text` with every control character but `\n` escaped as in Rust source
+/// (`\0`, `\t`, `\r`, `\u{1b}`), so that quoted source text cannot act on
+/// the terminal.
+fn escape_controls(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(|c| c.is_control() && c != '\n') {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut escaped = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        match c {
+            '\n' => escaped.push(c),
+            '\0' => escaped.push_str("\\0"),
+            '\t' => escaped.push_str("\\t"),
+            '\r' => escaped.push_str("\\r"),
+            c if c.is_control() => escaped.push_str(&format!("\\u{{{:x}}}", c as u32)),
+            c => escaped.push(c),
+        }
+    }
+    std::borrow::Cow::Owned(escaped)
+}
+
+fn to_codespan(diagnostic: &Diagnostic, source_len: usize, shown: &Shown) -> cs::Diagnostic<()> {
     let severity = match diagnostic.severity {
         Severity::Error => cs::Severity::Error,
         Severity::Warning => cs::Severity::Warning,
@@ -145,16 +216,21 @@ fn to_codespan(diagnostic: &Diagnostic, source_len: usize) -> cs::Diagnostic<()>
             } else {
                 cs::LabelStyle::Secondary
             };
-            cs::Label::new(style, (), start..end).with_message(label.message.clone())
+            cs::Label::new(style, (), shown.offset(start)..shown.offset(end))
+                .with_message(escape_controls(&label.message))
         })
         .collect();
-    let mut notes = diagnostic.notes.clone();
+    let mut notes: Vec<String> = diagnostic
+        .notes
+        .iter()
+        .map(|note| escape_controls(note).into_owned())
+        .collect();
     if let Some(help) = &diagnostic.help {
-        notes.push(format!("help: {help}"));
+        notes.push(format!("help: {}", escape_controls(help)));
     }
     cs::Diagnostic::new(severity)
         .with_code(diagnostic.code)
-        .with_message(diagnostic.message.clone())
+        .with_message(escape_controls(&diagnostic.message))
         .with_labels(labels)
         .with_notes(notes)
 }
@@ -206,24 +282,30 @@ pub mod codes {
     // Added by the stability work (additive):
     /// An `integrator` statement naming none of `auto`, `explicit`, `stiff`.
     pub const UNKNOWN_INTEGRATOR: &str = "E0032";
+    /// Equations (4) disagree with the multiplier route (or the two cannot
+    /// be compared at enough points): `mechanics::derive_checked`.
+    pub const CROSS_CHECK_FAILED: &str = "E0033";
     // Language v2 (SPEC §2.2):
     /// A vector where a number is needed, a condition where a number is
     /// needed, or the reverse; vectors of different sizes.
-    pub const TYPE_MISMATCH: &str = "E0033";
+    pub const TYPE_MISMATCH: &str = "E0034";
     /// A function called with the wrong number of arguments.
-    pub const WRONG_ARGUMENT_COUNT: &str = "E0034";
+    pub const WRONG_ARGUMENT_COUNT: &str = "E0035";
     /// `.w`, or `.z` of a 2-vector.
-    pub const UNKNOWN_COMPONENT: &str = "E0035";
+    pub const UNKNOWN_COMPONENT: &str = "E0036";
     /// A `let` used before its definition (a cycle included).
-    pub const LET_BEFORE_DEFINITION: &str = "E0036";
+    pub const LET_BEFORE_DEFINITION: &str = "E0037";
     /// A `for` candidate that is not a derivative of the constraint's order
     /// occurring in it, or a constraint not linear in its candidate.
-    pub const BAD_CANDIDATE: &str = "E0037";
+    pub const BAD_CANDIDATE: &str = "E0038";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated
     /// crate uses the local field method.
     pub const LOCAL_FIELD_METHOD: &str = "N0001";
+    // Warnings (a model that still compiles) get their own series.
+    /// A number literal too small for f64: it is read as 0.
+    pub const LITERAL_UNDERFLOWS: &str = "W0001";
     /// An internal error of the code generator (a bug, never the model's).
     pub const CODE_GENERATION: &str = "E0900";
 }

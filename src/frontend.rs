@@ -25,16 +25,81 @@ pub fn frontend(source: &str) -> Result<Model, Vec<Diagnostic>> {
 /// The front end and the derivation: every diagnostic a model can have
 /// before code generation (`lagc check` reports exactly these). Some checks
 /// need the symbolic stage: an initial value that violates a constraint, an
-/// identically singular mass matrix.
+/// identically singular mass matrix, equations (4) that fail the
+/// cross-check ([`crate::mechanics::derive_checked`], as every path).
 pub fn check_and_derive(source: &str) -> Checked {
     let model = frontend(source)?;
-    let derivation = crate::mechanics::derive(&model)?;
+    let (derivation, _) = crate::mechanics::derive_checked(&model)?;
     Ok((model, derivation))
 }
 
+/// Warnings about the text that do not stop a model: a number literal
+/// such as `1e-400`, non-zero as written but below the smallest positive
+/// f64, which is read as 0 (W0001). A lexical scan with the grammar's
+/// `number` rule (comments and names skipped), independent of the parse,
+/// so that every command reports the same warnings.
+pub fn literal_warnings(source: &str) -> Vec<Diagnostic> {
+    let bytes = source.as_bytes();
+    let digits = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
+    let mut warnings = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        let b = bytes[i];
+        if b == b'/' && bytes.get(i + 1) == Some(&b'/') {
+            while i < bytes.len() && !matches!(bytes[i], b'\n' | b'\r') {
+                i += 1;
+            }
+        } else if b.is_ascii_alphabetic() || b == b'_' {
+            while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
+                i += 1;
+            }
+        } else if b.is_ascii_digit() {
+            // number = digit+ ("." digit+)? (e ("+"|"-")? digit+)?
+            let start = i;
+            i = digits(i);
+            if bytes.get(i) == Some(&b'.') && bytes.get(i + 1).is_some_and(u8::is_ascii_digit) {
+                i = digits(i + 1);
+            }
+            let mantissa_end = i;
+            if matches!(bytes.get(i), Some(b'e' | b'E')) {
+                let sign = usize::from(matches!(bytes.get(i + 1), Some(b'+' | b'-')));
+                if bytes.get(i + 1 + sign).is_some_and(u8::is_ascii_digit) {
+                    i = digits(i + 1 + sign);
+                }
+            }
+            let text = &source[start..i];
+            let nonzero = source[start..mantissa_end]
+                .bytes()
+                .any(|d| matches!(d, b'1'..=b'9'));
+            if nonzero && text.parse::<f64>() == Ok(0.0) {
+                warnings.push(
+                    Diagnostic::warning(codes::LITERAL_UNDERFLOWS, "this literal underflows to 0")
+                        .with_primary(
+                            Span::new(start, i),
+                            format!("`{text}` is read as 0"),
+                        )
+                        .with_note(format!(
+                            "the smallest positive 64-bit float is about {:e}",
+                            f64::from_bits(1)
+                        ))
+                        .with_help("write 0 if zero is meant, or choose units in which the value is not this small"),
+                );
+            }
+        } else {
+            i += 1;
+        }
+    }
+    warnings
+}
+
 /// Decodes a file's bytes and runs [`frontend`]. Also returns the text to
-/// render diagnostics against: the source itself, or for invalid UTF-8 a
-/// lossy copy (each invalid sequence replaced by U+FFFD) in which the
+/// render diagnostics against: the source itself (lone `\r` line ends read
+/// as `\n`, byte for byte), or for invalid UTF-8 a lossy copy (each invalid sequence replaced by U+FFFD) in which the
 /// diagnostic's span marks the first replacement character.
 pub fn frontend_bytes(bytes: &[u8]) -> (Cow<'_, str>, Result<Model, Vec<Diagnostic>>) {
     decode_then(bytes, frontend)
@@ -54,7 +119,11 @@ pub fn decode_then<T>(
     stage: impl FnOnce(&str) -> Result<T, Vec<Diagnostic>>,
 ) -> (Cow<'_, str>, Result<T, Vec<Diagnostic>>) {
     match std::str::from_utf8(bytes) {
-        Ok(source) => (Cow::Borrowed(source), stage(source)),
+        Ok(source) => {
+            let source = lone_cr_as_newline(Cow::Borrowed(source));
+            let result = stage(&source);
+            (source, result)
+        }
         Err(error) => {
             let offset = error.valid_up_to();
             let replacement = char::REPLACEMENT_CHARACTER.len_utf8();
@@ -67,9 +136,28 @@ pub fn decode_then<T>(
                 format!("byte {offset} is not UTF-8 (shown as \u{FFFD})"),
             )
             .with_help("save the file as UTF-8 text");
-            (String::from_utf8_lossy(bytes), Err(vec![diagnostic]))
+            let source = lone_cr_as_newline(String::from_utf8_lossy(bytes));
+            (source, Err(vec![diagnostic]))
         }
     }
+}
+
+/// The text with every lone `\r` (old Mac line endings, not part of a
+/// `\r\n`) replaced by `\n`, so that a CR-only file has its lines: for
+/// line numbers in diagnostics (codespan counts `\n`) and for every check
+/// that looks at line ends. The replacement is byte for byte, so spans into
+/// the original text stay valid.
+fn lone_cr_as_newline(source: Cow<'_, str>) -> Cow<'_, str> {
+    let bytes = source.as_bytes();
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    if !(0..bytes.len()).any(lone) {
+        return source;
+    }
+    let mut text = String::with_capacity(source.len());
+    for (i, c) in source.char_indices() {
+        text.push(if lone(i) { '\n' } else { c });
+    }
+    Cow::Owned(text)
 }
 
 /// Runs `job` on a thread with a [`STACK_SIZE`] stack, and returns its

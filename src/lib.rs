@@ -26,5 +26,6 @@ mod suggest;
 pub mod syntax;
 
 pub use frontend::{
-    check_and_derive, check_and_derive_bytes, decode_then, frontend, frontend_bytes, on_big_stack,
+    check_and_derive, check_and_derive_bytes, decode_then, frontend, frontend_bytes,
+    literal_warnings, on_big_stack,
 };

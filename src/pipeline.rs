@@ -12,7 +12,7 @@ pub fn generate_crate(
     model: &Model,
     options: &EmitOptions,
 ) -> Result<(GeneratedCrate, Vec<Diagnostic>), Vec<Diagnostic>> {
-    let mut derivation = crate::mechanics::derive(model)?;
+    let (mut derivation, _) = crate::mechanics::derive_checked(model)?;
     let reduced = derivation.reduced.clone();
     let field = field_system(&mut derivation.arena, &reduced);
     let notes: Vec<Diagnostic> = local_field_note(&field, model.lagrangian.span)

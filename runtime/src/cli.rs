@@ -182,10 +182,11 @@ pub fn parse(
             }
             "--no-reanchor" => inv.options.reanchor = false,
             "--rtol" => {
-                let r = number(flag, value(flag, &mut args)?)?;
+                let text = value(flag, &mut args)?;
+                let r = number(flag, text)?;
                 if !(r > 0.0 && r < 1.0) {
                     return Err(format!(
-                        "`--rtol {r}`: a relative tolerance must be between 0 and 1"
+                        "`--rtol {text}`: a relative tolerance must be between 0 and 1"
                     ));
                 }
                 if r < 1e-14 {
@@ -198,10 +199,11 @@ pub fn parse(
                 inv.options.tol.rtol = r;
             }
             "--atol" => {
-                let a = number(flag, value(flag, &mut args)?)?;
+                let text = value(flag, &mut args)?;
+                let a = number(flag, text)?;
                 if a <= 0.0 {
                     return Err(format!(
-                        "`--atol {a}`: an absolute tolerance must be positive"
+                        "`--atol {text}`: an absolute tolerance must be positive"
                     ));
                 }
                 inv.options.tol.atol = a;

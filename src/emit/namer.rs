@@ -87,9 +87,12 @@ impl Namer {
     pub fn fresh(&mut self, wanted: &str) -> Ident {
         let base = sanitize(wanted);
         let mut name = base.clone();
+        // `self_` (a keyword's) taken: `self_2`, not `self__2`, which rustc
+        // warns is not snake case.
+        let stem = base.trim_end_matches('_');
         let mut k = 2;
         while self.used.contains(&name) {
-            name = format!("{base}_{k}");
+            name = format!("{stem}_{k}");
             k += 1;
         }
         self.used.insert(name.clone());

@@ -80,6 +80,18 @@ impl Derivation {
     }
 }
 
+/// [`derive`], then the [`cross_check`] of its equations (4) against the
+/// multiplier route, a failure of which is an error (E0033). Every path —
+/// `lagc check`, `derive`, `build`, `run`, `report` — derives through this
+/// one function, so none integrates equations the others would refuse.
+pub fn derive_checked(model: &Model) -> Result<(Derivation, CrossCheck), Vec<Diagnostic>> {
+    let mut derivation = derive(model)?;
+    match cross_check(&mut derivation) {
+        Ok(check) => Ok((derivation, check)),
+        Err(failure) => Err(vec![failure.diagnostic(model.lagrangian.span)]),
+    }
+}
+
 /// Derives equations (4) and the reduced system (7) of a checked model.
 pub fn derive(model: &Model) -> Result<Derivation, Vec<Diagnostic>> {
     let mut arena = Arena::new(names_of(model));

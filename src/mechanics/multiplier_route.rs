@@ -5,7 +5,9 @@
 use super::sample::{eval_scaled, Rng, SamplePoint};
 use super::star::{jet, project, Elimination};
 use super::Derivation;
+use crate::diagnostic::{codes, Diagnostic};
 use crate::ir::ExprId;
+use crate::span::Span;
 use std::fmt;
 
 /// Points at which both routes must agree.
@@ -57,6 +59,27 @@ impl fmt::Display for CrossCheckFailure {
                  (need {CROSS_CHECK_POINTS})"
             ),
         }
+    }
+}
+
+impl CrossCheckFailure {
+    /// The failure as an error located at the Lagrangian (`lagrangian`, its
+    /// span): the equations derived from it cannot be trusted.
+    pub fn diagnostic(&self, lagrangian: Span) -> Diagnostic {
+        Diagnostic::error(
+            codes::CROSS_CHECK_FAILED,
+            format!("the derivation fails its cross-check: {self}"),
+        )
+        .with_primary(lagrangian, "equations (4) derived from this Lagrangian")
+        .with_note(
+            "equations (4) are checked against an independent route (the multiplier form \
+             `E_i + E_d ∂φ_d/∂q_i^(k)`) at random points; when the two cannot be compared \
+             or disagree, the equations cannot be trusted and nothing is integrated",
+        )
+        .with_help(
+            "look for a term that overflows or is not finite at ordinary values (such as \
+             an exponent like `x'^1e300`); if the model is sound, this is a bug in lagc",
+        )
     }
 }
 

@@ -110,3 +110,127 @@ fn run_reproduces_the_paper_and_does_not_rebuild_an_unchanged_model() {
     assert!(!stderr.contains("Compiling"), "rebuilt:\n{stderr}");
     assert_eq!(String::from_utf8(second.stdout).unwrap(), stdout);
 }
+
+/// Issue 15, item 4: every path runs the same derivation checks. A model
+/// whose equations (4) fail the cross-check is refused by `check`,
+/// `derive`, `build`, `run` and `report` alike, with the same message, and
+/// nothing is written, built or integrated.
+#[test]
+fn every_path_refuses_a_model_that_fails_the_cross_check() {
+    let file = "tests/data/errors/cross_check_fails.lag";
+    let out_dir = crate::root().join("target/cross-check-build");
+    let _ = std::fs::remove_dir_all(&out_dir);
+    let out_dir_arg = out_dir.to_string_lossy().into_owned();
+    let cache = crate::root().join("target/lagc-cache");
+    let mut messages = Vec::new();
+    for args in [
+        vec!["check", file],
+        vec!["derive", file],
+        vec!["build", file, "-o", &out_dir_arg],
+        vec!["run", file, "--samples", "3"],
+        vec!["report", file, "--out", &out_dir_arg],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .args(&args)
+            .env("LAGC_CACHE_DIR", &cache)
+            .current_dir(crate::root())
+            .output()
+            .expect("lagc runs");
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(1), "lagc {args:?}:\n{stderr}");
+        assert!(out.stdout.is_empty(), "lagc {args:?} printed a result");
+        assert!(stderr.contains("error[E0033]"), "lagc {args:?}:\n{stderr}");
+        messages.push(stderr);
+    }
+    assert!(
+        messages.iter().all(|m| *m == messages[0]),
+        "the paths report differently:\n{messages:#?}"
+    );
+    assert!(!out_dir.exists(), "build or report wrote {out_dir:?}");
+    insta::assert_snapshot!(messages[0]);
+}
+
+/// Issue 15, item 12: tolerances out of (0, 1) are usage errors (exit 2)
+/// in lagc's own words, negative ones included (not clap's "unexpected
+/// argument"), reported before anything is built; one below the rounding
+/// of f64 is run with a warning.
+#[test]
+fn bad_tolerances_are_refused_in_lagcs_words() {
+    let cache = crate::root().join("target/lagc-cache");
+    let lagc_in_cache = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .args(args)
+            .env("LAGC_CACHE_DIR", &cache)
+            // As in the paper's `run` test, so that the two share one build.
+            .env("RUSTFLAGS", "-D warnings")
+            .current_dir(crate::root())
+            .output()
+            .expect("lagc runs")
+    };
+    let mut rendered = String::new();
+    for args in [
+        &["run", "examples/paper.lag", "--rtol", "10"][..],
+        &["run", "examples/paper.lag", "--rtol", "1"],
+        &["run", "examples/paper.lag", "--rtol", "-1"],
+        &["run", "examples/paper.lag", "--rtol", "0"],
+        &["run", "examples/paper.lag", "--atol", "-1e-9"],
+        &["report", "examples/paper.lag", "--tolerances", "-1"],
+        &["report", "examples/paper.lag", "--tolerances", "-1e-3,1e-4"],
+        &["report", "examples/paper.lag", "--tolerances", "1e-3,10"],
+    ] {
+        let out = lagc_in_cache(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "lagc {args:?}:\n{stderr}");
+        assert!(out.stdout.is_empty(), "lagc {args:?}");
+        assert!(!stderr.contains("unexpected argument"), "{stderr}");
+        assert!(!stderr.contains("Compiling"), "built for {args:?}");
+        let first = stderr.lines().next().unwrap_or_default();
+        rendered.push_str(&format!("lagc {}\n  {first}\n", args.join(" ")));
+    }
+    insta::assert_snapshot!(rendered);
+
+    let out = lagc_in_cache(&[
+        "run",
+        "examples/paper.lag",
+        "--rtol",
+        "1e-300",
+        "--samples",
+        "2",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning: --rtol 1e-300 is below the rounding of f64"),
+        "{stderr}"
+    );
+}
+
+/// Issue 15, item 10: a literal that underflows to 0 is a warning (the
+/// model still checks, exit 0) located at the literal, on every command;
+/// beside an error it is reported in source order.
+#[test]
+fn a_literal_that_underflows_is_warned_about() {
+    let file = "tests/data/warnings/literal_underflows.lag";
+    let out = lagc(&["check", file]);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert_eq!(stderr.matches("warning[W0001]").count(), 1, "{stderr}");
+    let derive = lagc(&["derive", file]);
+    assert_eq!(derive.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&derive.stderr)
+        .starts_with(&stderr[..stderr.find("\n\n").unwrap()]));
+
+    let with_error =
+        std::env::temp_dir().join(format!("lagc-underflow-{}.lag", std::process::id()));
+    std::fs::write(
+        &with_error,
+        "coord x;\nparam a = 1e-400;\nlagrangian = x'^2 - k;\n",
+    )
+    .unwrap();
+    let out = lagc(&["check", &with_error.to_string_lossy()]);
+    let _ = std::fs::remove_file(&with_error);
+    let errors = String::from_utf8_lossy(&out.stderr)
+        .replace(&*with_error.to_string_lossy(), "with_error.lag");
+    assert_eq!(out.status.code(), Some(1), "{errors}");
+    insta::assert_snapshot!(format!("{stderr}\n{errors}"));
+}

@@ -440,3 +440,20 @@ fn implicit_linear_solve_conserves_the_pendulum_energy() {
         "direct and field differ by {difference:e}"
     );
 }
+
+/// Issue 15, item 12: Rust keywords as model names (`self` and `Self`,
+/// which both sanitize to `self_`, `super`, `crate`, `fn`, `type`) give a
+/// crate that builds with warnings as errors and runs, the CSV header
+/// keeping the model's own names.
+#[test]
+fn keyword_names_build_warning_free() {
+    let binary = build_file(&root().join("tests/data/keyword_names.lag"));
+    let run = run(&binary, &["--samples", "3"]).unwrap_or_else(|stderr| panic!("{stderr}"));
+    assert_eq!(run.csv.len(), 3);
+    let output = Command::new(&binary)
+        .args(["--samples", "2"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(stdout.lines().next(), Some("t,self,super,self',super'"));
+}

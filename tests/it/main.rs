@@ -14,6 +14,7 @@ mod parser;
 mod report;
 mod robustness;
 mod runtime_failures;
+mod source_text;
 mod stiff_extreme;
 
 use lagc::diagnostic::{self, Diagnostic};
