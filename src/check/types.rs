@@ -244,7 +244,7 @@ impl Checker<'_> {
     fn binary_type(
         &mut self,
         op: BinOp,
-        expr: &Expr,
+        _expr: &Expr,
         lhs: &Expr,
         rhs: &Expr,
         a: Ty,
@@ -286,9 +286,8 @@ impl Checker<'_> {
                 codes::TYPE_MISMATCH,
                 format!("`{symbol}` of {} and {}", a.describe(), b.describe()),
             )
-            .with_primary(expr.span, "these operands do not combine")
-            .with_secondary(lhs.span, a.describe())
-            .with_secondary(rhs.span, b.describe())
+            .with_primary(rhs.span, format!("this is {}", b.describe()))
+            .with_secondary(lhs.span, format!("this is {}", a.describe()))
             .with_help(help);
             self.report(diagnostic);
         }
