@@ -198,9 +198,17 @@ impl Checker<'_> {
         let mut order = None;
         let mut owned = Vec::new();
         for candidate in candidates {
-            let (coord, primes) = self
-                .constraint_lhs(candidate)
-                .or_else(|| None::<(usize, u32)>)?;
+            if let ExprKind::Var { name, primes: 0 } = &candidate.kind {
+                let diagnostic = Diagnostic::error(
+                    codes::BAD_CANDIDATE,
+                    format!("`for` names `{}`, not a derivative", name.name),
+                )
+                .with_primary(candidate.span, "not a derivative")
+                .with_help("name the derivative the constraint is solved for, e.g. `for y'`");
+                self.report(diagnostic);
+                return None;
+            }
+            let (coord, primes) = self.constraint_lhs(candidate)?;
             match order {
                 None => order = Some(primes),
                 Some(k) if k != primes => {
