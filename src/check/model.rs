@@ -78,6 +78,31 @@ impl Model {
     pub fn dependent(&self) -> Vec<usize> {
         self.constraints.iter().map(|c| c.coord).collect()
     }
+
+    /// The number of modes: combinations of the implicit constraints'
+    /// candidates (1 when none has several).
+    pub fn mode_count(&self) -> usize {
+        self.constraints
+            .iter()
+            .map(|c| c.implicit.as_ref().map_or(1, |i| i.candidates.len()))
+            .product()
+    }
+
+    /// The model of mode `mode`: each implicit constraint solved for the
+    /// candidate of its digit (mixed radix, the first constraint lowest, as
+    /// the runtime counts modes).
+    pub fn in_mode(&self, mode: usize) -> Model {
+        let mut model = self.clone();
+        let mut rest = mode;
+        for c in &mut model.constraints {
+            if let Some(implicit) = &c.implicit {
+                let n = implicit.candidates.len();
+                c.coord = implicit.candidates[rest % n];
+                rest /= n;
+            }
+        }
+        model
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -10,18 +10,25 @@ use quote::quote;
 /// The model struct's field and its initial value, when it has switches.
 pub fn branch_field(kernel: &Kernel) -> (TokenStream, TokenStream) {
     let k = kernel.switches.functions.len();
-    if k == 0 {
-        return (TokenStream::new(), TokenStream::new());
-    }
-    let k = Literal::usize_unsuffixed(k);
-    (
-        quote! {
+    let (mut field, mut init) = (TokenStream::new(), TokenStream::new());
+    if k > 0 {
+        let k = Literal::usize_unsuffixed(k);
+        field.extend(quote! {
             /// The sign (±1) of each switching function on the current
             /// segment: the branch every selection takes.
             branches: [f64; #k],
-        },
-        quote! { branches: [1.0; #k], },
-    )
+        });
+        init.extend(quote! { branches: [1.0; #k], });
+    }
+    if !kernel.modes.is_empty() {
+        field.extend(quote! {
+            /// The reduced system in use: which candidate each implicit
+            /// constraint is solved for.
+            mode: usize,
+        });
+        init.extend(quote! { mode: 0, });
+    }
+    (field, init)
 }
 
 /// `SWITCHES`, `OUTPUTS`.
@@ -39,21 +46,73 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
         let names = kernel.outputs.iter().map(|(n, _)| n.as_str());
         quote! { const OUTPUTS: &'static [&'static str] = &[#(#names),*]; }
     };
-    quote! { #switches #outputs }
+    let constraints = if kernel.candidates.is_empty() {
+        TokenStream::new()
+    } else {
+        let entries = kernel.candidates.iter().map(|c| {
+            let text = &c.text;
+            let names = &c.names;
+            quote! {
+                lagc_runtime::model::Candidates { text: #text, names: &[#(#names),*] }
+            }
+        });
+        quote! {
+            const CONSTRAINTS: &'static [lagc_runtime::model::Candidates] = &[#(#entries),*];
+        }
+    };
+    quote! { #switches #outputs #constraints }
 }
 
 /// `set_regime`, `switching_functions`, `stop`, `outputs`.
 pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
     let arena = &kernel.arena;
     let mut items = Vec::new();
-    if !kernel.switches.functions.is_empty() {
+    let set_branches = if kernel.switches.functions.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! {
+            for (sign, &positive) in self.branches.iter_mut().zip(&regime.branches) {
+                *sign = if positive { 1.0 } else { -1.0 };
+            }
+        }
+    };
+    let set_mode = if kernel.modes.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! { self.mode = regime.mode; }
+    };
+    if !set_branches.is_empty() || !set_mode.is_empty() {
         items.push(quote! {
             fn set_regime(&mut self, regime: &lagc_runtime::model::Regime) {
-                for (sign, &positive) in self.branches.iter_mut().zip(&regime.branches) {
-                    *sign = if positive { 1.0 } else { -1.0 };
-                }
+                #set_mode
+                #set_branches
             }
         });
+    }
+    if !kernel.candidates.is_empty() {
+        let roots: Vec<_> = kernel
+            .candidates
+            .iter()
+            .flat_map(|c| c.pivots.iter().copied())
+            .collect();
+        let code = names.code(arena, &roots, from_x);
+        let statements = code.statements(quote! { self.params });
+        let t = code.time_arg();
+        let x = if code.uses_source {
+            quote! { x }
+        } else {
+            quote! { _x }
+        };
+        let slots = (0..code.roots.len()).map(Literal::usize_unsuffixed);
+        let roots = &code.roots;
+        items.push(quote! {
+            fn pivots(&self, #t: f64, #x: &[f64], out: &mut [f64]) {
+                #statements
+                #(out[#slots] = #roots;)*
+            }
+        });
+    }
+    if !kernel.switches.functions.is_empty() {
         let code = names.code(arena, &kernel.switches.functions, from_x);
         let statements = code.statements(quote! { self.params });
         let t = code.time_arg();

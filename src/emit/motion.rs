@@ -33,6 +33,30 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
             quote! { x[#i] }
         })
     };
+    let (trait_items, inherent) = motion_of(kernel, names, &from_x);
+    let condition = mass_condition(kernel, names, &from_x);
+    let events = super::events::items(kernel, names, &from_x);
+    if kernel.modes.is_empty() {
+        return (quote! { #trait_items #condition #events }, inherent);
+    }
+    // Several modes: each mode's motion as inherent methods `…_modeM`,
+    // the trait's methods dispatching on the current mode.
+    let mut all_inherent = super::modes::renamed(&trait_items, &inherent, 0);
+    for (m, mode) in kernel.modes.iter().enumerate() {
+        let mut mode_names = SymbolNames::new(&mode.arena, &mode.state);
+        let (items, helpers) = motion_of(mode, &mut mode_names, &from_x);
+        all_inherent.extend(super::modes::renamed(&items, &helpers, m + 1));
+    }
+    let dispatch = super::modes::dispatch(&trait_items, kernel.modes.len() + 1);
+    (quote! { #dispatch #condition #events }, all_inherent)
+}
+
+/// The motion's items: `(trait items, inherent helpers)`.
+fn motion_of(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    from_x: Source,
+) -> (TokenStream, TokenStream) {
     let n = kernel.state.len();
     let c = kernel.coordinates;
     let shifted = n.saturating_sub(c);
@@ -40,16 +64,13 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
     let shift_cols: Vec<Literal> = (0..shifted).map(|i| index(i + c)).collect();
     let shifts = quote! { #(dx[#shift_rows] = x[#shift_cols];)* };
     let shift_jacobian = quote! { #(jac[(#shift_rows, #shift_cols)] = 1.0;)* };
-    let (trait_items, inherent) = match &kernel.motion {
+    match &kernel.motion {
         Motion::Explicit(e) => (
-            explicit(kernel, names, e, &from_x, &shifts, &shift_jacobian),
+            explicit(kernel, names, e, from_x, &shifts, &shift_jacobian),
             TokenStream::new(),
         ),
-        Motion::Implicit(i) => implicit(kernel, names, i, &from_x, &shifts, &shift_jacobian),
-    };
-    let condition = mass_condition(kernel, names, &from_x);
-    let events = super::events::items(kernel, names, &from_x);
-    (quote! { #trait_items #condition #events }, inherent)
+        Motion::Implicit(i) => implicit(kernel, names, i, from_x, &shifts, &shift_jacobian),
+    }
 }
 
 fn arg(used: bool, name: &str) -> TokenStream {

@@ -10,6 +10,7 @@
 //! | `items.rs` | params, time span, initial values, exact solution, mass laws, coefficient system |
 //! | `text.rs` | the kernel's text form (snapshots) |
 
+mod candidates;
 mod items;
 mod motion;
 mod outputs;
@@ -17,6 +18,7 @@ pub mod switches;
 mod text;
 pub mod time;
 
+pub use candidates::KernelCandidates;
 pub use items::{Coefficients, InitialKind, InitialSource, KernelInitial, KernelParam};
 pub use motion::{Explicit, Implicit, Motion};
 pub use switches::{BranchCond, Switches};
@@ -60,6 +62,11 @@ pub struct Kernel {
     pub stop: Option<BranchCond>,
     /// The switching functions of every selection a run evaluates.
     pub switches: Switches,
+    /// Every implicit constraint with its candidates' pivots.
+    pub candidates: Vec<KernelCandidates>,
+    /// The kernels of modes 1, 2, …: the same model with other candidates
+    /// (their motion only).
+    pub modes: Vec<Kernel>,
 }
 
 /// Builds the kernel of a derived model.
@@ -68,16 +75,48 @@ pub fn build(
     derivation: &Derivation,
     field: &FieldSystem,
 ) -> Result<Kernel, Vec<Diagnostic>> {
+    build_with(model, derivation, field, true)
+}
+
+/// The kernel of one more mode of a model with implicit constraints (its
+/// motion; the initial state, exact solution, outputs and stop are mode
+/// 0's).
+pub fn build_mode(
+    model: &Model,
+    derivation: &Derivation,
+    field: &FieldSystem,
+) -> Result<Kernel, Vec<Diagnostic>> {
+    build_with(model, derivation, field, false)
+}
+
+fn build_with(
+    model: &Model,
+    derivation: &Derivation,
+    field: &FieldSystem,
+    first_mode: bool,
+) -> Result<Kernel, Vec<Diagnostic>> {
     let mut arena = derivation.arena.clone();
     let reduced = &derivation.reduced;
     let time = TimeDependence::new(&mut arena, &reduced.mass_laws);
     let params = items::params(&mut arena, model);
     let masses = items::masses(&mut arena, model);
     let time_span = items::time_span(&mut arena, model);
-    let initial = items::initial(&mut arena, model, reduced).map_err(|d| vec![d])?;
+    let initial = if first_mode {
+        items::initial(&mut arena, model, reduced).map_err(|d| vec![d])?
+    } else {
+        KernelInitial {
+            kinds: Vec::new(),
+            sources: Vec::new(),
+            stated: Vec::new(),
+        }
+    };
     let motion = motion::motion(&mut arena, reduced, &time);
     let coefficients = items::coefficients(&mut arena, field, &time);
-    let exact = items::exact(&mut arena, model, reduced);
+    let exact = if first_mode {
+        items::exact(&mut arena, model, reduced)
+    } else {
+        Vec::new()
+    };
     let mut mass_matrix: Vec<Vec<ExprId>> = reduced
         .mass_matrix
         .iter()
@@ -87,7 +126,16 @@ pub fn build(
                 .collect()
         })
         .collect();
-    let (outputs, stop) = outputs::outputs(&mut arena, model, &motion, reduced)?;
+    let (outputs, stop) = if first_mode {
+        outputs::outputs(&mut arena, model, &motion, reduced)?
+    } else {
+        (Vec::new(), None)
+    };
+    let candidates = if first_mode {
+        candidates::candidates(&mut arena, model)
+    } else {
+        Vec::new()
+    };
     let mut switches = Switches::new(&arena, &masses);
     let mut motion = motion;
     let mut coefficients = coefficients;
@@ -119,6 +167,8 @@ pub fn build(
         outputs,
         stop,
         switches,
+        candidates,
+        modes: Vec::new(),
     })
 }
 

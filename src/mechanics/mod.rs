@@ -94,6 +94,21 @@ pub fn derive_checked(model: &Model) -> Result<(Derivation, CrossCheck), Vec<Dia
 
 /// Derives equations (4) and the reduced system (7) of a checked model.
 pub fn derive(model: &Model) -> Result<Derivation, Vec<Diagnostic>> {
+    derive_with(model, true)
+}
+
+/// [`derive_checked`] for one more mode of a model with implicit
+/// constraints: the motion only (the initial state is mode 0's, whose
+/// dependent derivatives differ).
+pub fn derive_mode_checked(model: &Model) -> Result<Derivation, Vec<Diagnostic>> {
+    let mut derivation = derive_with(model, false)?;
+    match cross_check(&mut derivation) {
+        Ok(_) => Ok(derivation),
+        Err(failure) => Err(vec![failure.diagnostic(model.lagrangian.span)]),
+    }
+}
+
+fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diagnostic>> {
     let mut arena = Arena::new(names_of(model));
     let symbolic = Symbolic::lower(&mut arena, model)?;
     let mut elimination = Elimination::new(symbolic.k, &symbolic.constraints);
@@ -123,14 +138,18 @@ pub fn derive(model: &Model) -> Result<Derivation, Vec<Diagnostic>> {
             (0..model.coords.len() as u32).map(move |coord| Symbol::Jet { coord, order })
         })
         .collect();
-    let initial = initial::initial_values(
-        &mut arena,
-        model,
-        &symbolic,
-        &mut elimination,
-        &state,
-        &reduction.consistency,
-    )?;
+    let initial = if with_initial {
+        initial::initial_values(
+            &mut arena,
+            model,
+            &symbolic,
+            &mut elimination,
+            &state,
+            &reduction.consistency,
+        )?
+    } else {
+        Vec::new()
+    };
     let mut reduced = ReducedSystem {
         order: u,
         state,

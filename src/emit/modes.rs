@@ -1,0 +1,119 @@
+//! Models with implicit constraints of several candidates (SPEC §2.2) have
+//! one reduced system per mode. Each mode's motion becomes inherent methods
+//! `rhs_mode1`, …, and the trait's methods dispatch on the current mode.
+
+use proc_macro2::{Group, Ident, TokenStream, TokenTree};
+use quote::quote;
+
+/// The motion's methods (trait items and their inherent helpers).
+const METHODS: [&str; 8] = [
+    "rhs",
+    "jacobian",
+    "time_partial",
+    "linearize",
+    "mass_system",
+    "highest",
+    "highest_factored",
+    "residual",
+];
+
+/// The trait methods a mode implements, with their argument lists.
+const DISPATCHED: [(&str, &[&str]); 4] = [
+    ("rhs", &["t", "x", "dx"]),
+    ("jacobian", &["t", "x", "jac"]),
+    ("time_partial", &["t", "x", "dxdt"]),
+    ("linearize", &["t", "x", "dx", "jac"]),
+];
+
+/// Mode `mode`'s items as inherent methods: every definition and every
+/// `self.` call of a motion method renamed `NAME_modeM`.
+pub fn renamed(trait_items: &TokenStream, helpers: &TokenStream, mode: usize) -> TokenStream {
+    let items = rename(trait_items.clone(), mode);
+    let helpers = rename(helpers.clone(), mode);
+    quote! { #items #helpers }
+}
+
+fn rename(tokens: TokenStream, mode: usize) -> TokenStream {
+    let mut out = Vec::new();
+    let mut previous: Vec<String> = Vec::new();
+    for tree in tokens {
+        let tree = match tree {
+            TokenTree::Group(g) => {
+                let mut inner = Group::new(g.delimiter(), rename(g.stream(), mode));
+                inner.set_span(g.span());
+                TokenTree::Group(inner)
+            }
+            TokenTree::Ident(ident) => {
+                let name = ident.to_string();
+                let defined = previous.last().is_some_and(|p| p == "fn");
+                let called = previous.len() >= 2
+                    && previous[previous.len() - 1] == "."
+                    && previous[previous.len() - 2] == "self";
+                if METHODS.contains(&name.as_str()) && (defined || called) {
+                    TokenTree::Ident(Ident::new(&format!("{name}_mode{mode}"), ident.span()))
+                } else {
+                    TokenTree::Ident(ident)
+                }
+            }
+            other => other,
+        };
+        previous.push(tree.to_string());
+        out.push(tree);
+    }
+    out.into_iter().collect()
+}
+
+/// Whether `items` define `fn name`.
+fn defines(items: &TokenStream, name: &str) -> bool {
+    let mut after_fn = false;
+    for tree in items.clone() {
+        if let TokenTree::Ident(ident) = &tree {
+            if after_fn && ident == name {
+                return true;
+            }
+            after_fn = ident == "fn";
+        } else {
+            after_fn = false;
+        }
+    }
+    false
+}
+
+/// The trait methods, each a `match self.mode` over the modes.
+pub fn dispatch(trait_items: &TokenStream, modes: usize) -> TokenStream {
+    let mut items = Vec::new();
+    for (name, args) in DISPATCHED {
+        if !defines(trait_items, name) {
+            continue;
+        }
+        let method = Ident::new(name, proc_macro2::Span::call_site());
+        let arg_idents: Vec<Ident> = args
+            .iter()
+            .map(|a| Ident::new(a, proc_macro2::Span::call_site()))
+            .collect();
+        let arms = (0..modes).map(|m| {
+            let target = Ident::new(&format!("{name}_mode{m}"), proc_macro2::Span::call_site());
+            let pattern = if m + 1 == modes {
+                quote! { _ }
+            } else {
+                let m = proc_macro2::Literal::usize_unsuffixed(m);
+                quote! { #m }
+            };
+            quote! { #pattern => self.#target(#(#arg_idents),*), }
+        });
+        let signature = match name {
+            "rhs" => quote! { t: f64, x: &[f64], dx: &mut [f64] },
+            "jacobian" => quote! { t: f64, x: &[f64], jac: &mut Matrix },
+            "time_partial" => quote! { t: f64, x: &[f64], dxdt: &mut [f64] },
+            _ => quote! { t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix },
+        };
+        items.push(quote! {
+            fn #method(&self, #signature) -> Result<(), Failure> {
+                match self.mode {
+                    #(#arms)*
+                }
+            }
+        });
+    }
+    quote! { #(#items)* }
+}

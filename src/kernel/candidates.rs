@@ -1,0 +1,45 @@
+//! Implicit constraints `h = lhs − rhs = 0` with their candidates (SPEC
+//! §2.2): the pivots `∂h/∂candidate` the run compares to choose (and
+//! switch) the reduced system.
+
+use crate::check::model::Model;
+use crate::ir::{lower, Arena, ExprId, Symbol};
+
+/// One implicit constraint.
+#[derive(Debug, Clone)]
+pub struct KernelCandidates {
+    /// The constraint, `h = 0`, for messages.
+    pub text: String,
+    /// The candidates as written (`y'`).
+    pub names: Vec<String>,
+    /// `∂h/∂candidate`, one per candidate.
+    pub pivots: Vec<ExprId>,
+}
+
+pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
+    let mut found = Vec::new();
+    for c in &model.constraints {
+        let Some(implicit) = &c.implicit else {
+            continue;
+        };
+        let lhs = lower(arena, &implicit.lhs, model);
+        let rhs = lower(arena, &c.rhs, model);
+        let h = arena.sub(lhs, rhs);
+        let mut names = Vec::new();
+        let mut pivots = Vec::new();
+        for &coord in &implicit.candidates {
+            let symbol = Symbol::Jet {
+                coord: coord as u32,
+                order: c.order,
+            };
+            names.push(arena.symbol_name(symbol));
+            pivots.push(arena.diff(h, symbol));
+        }
+        found.push(KernelCandidates {
+            text: format!("{} = 0", arena.display(h)),
+            names,
+            pivots,
+        });
+    }
+    found
+}
