@@ -393,6 +393,13 @@ fn run_with<M: Model + 'static>(
                 solver.restart(model, t_event, &x_event)?;
             }
             None => {
+                // A step across a vanishing pivot is not a solution: it is
+                // taken again with another candidate, or the run stops.
+                if !M::CONSTRAINTS.is_empty()
+                    && pivot_crossed(model, &mut regime, solver.as_mut(), ta, tb)?
+                {
+                    continue;
+                }
                 emit_until(model, solver.as_mut(), &mut next_sample, tb, &mut sample)?;
                 if !M::CONSTRAINTS.is_empty() {
                     switch_candidates(model, &mut regime, solver.as_mut(), tb)?;
@@ -414,6 +421,58 @@ fn run_with<M: Model + 'static>(
         events,
         budget_used: budget.used(),
     })
+}
+
+/// Whether the current candidate's pivot of some constraint changed sign
+/// within the step `[ta, tb]`: then the step divided by a vanishing pivot.
+/// With a better candidate at `ta` the run restarts there in that mode
+/// (true); without one it stops, naming the constraint and the time where
+/// the pivot vanishes.
+fn pivot_crossed<M: Model>(
+    model: &mut M,
+    regime: &mut Regime,
+    solver: &mut dyn Solver<M>,
+    ta: f64,
+    tb: f64,
+) -> Result<bool, Failure> {
+    let total: usize = M::CONSTRAINTS.iter().map(|c| c.names.len()).sum();
+    let n = solver.state().len();
+    let mut x_a = vec![0.0; n];
+    solver.dense(model, ta, &mut x_a)?;
+    let x_b = solver.state().to_vec();
+    let (mut p_a, mut p_b) = (vec![0.0; total], vec![0.0; total]);
+    model.pivots(ta, &x_a, &mut p_a);
+    model.pivots(tb, &x_b, &mut p_b);
+    let digits = mode_digits::<M>(regime.mode);
+    let mut at = 0;
+    for (c, &digit) in M::CONSTRAINTS.iter().zip(&digits) {
+        let (a, b) = (p_a[at + digit], p_b[at + digit]);
+        if a * b < 0.0 {
+            let (best, best_pivot) = p_a[at..at + c.names.len()]
+                .iter()
+                .enumerate()
+                .map(|(j, p)| (j, p.abs()))
+                .fold((0, -1.0), |acc, e| if e.1 > acc.1 { e } else { acc });
+            if best != digit && best_pivot > a.abs() {
+                let (mode, _, _) = best_mode(model, ta, &x_a);
+                regime.mode = mode;
+                model.set_regime(regime);
+                solver.restart(model, ta, &x_a)?;
+                return Ok(true);
+            }
+            // The pivot's zero, by linear interpolation within the step.
+            let t_zero = ta + (tb - ta) * a / (a - b);
+            return Err(Failure::new(
+                t_zero,
+                FailureKind::ConstraintPivotVanishes {
+                    constraint: c.text.to_string(),
+                    pivot: 0.0,
+                },
+            ));
+        }
+        at += c.names.len();
+    }
+    Ok(false)
 }
 
 /// After a step: when a constraint's current candidate has become poor
