@@ -94,10 +94,30 @@ pub fn initial_branches<M: Model>(model: &M, t0: f64, x0: &[f64]) -> Vec<bool> {
     let mut g = vec![0.0; k];
     model.switching_functions(t0, x0, &mut g);
     if g.contains(&0.0) {
+        // The right side reads the branches: give it those already known
+        // (a function exactly zero provisionally positive).
+        let mut model = model.clone();
+        model.set_regime(&Regime {
+            mode: best_mode(&model, t0, x0).0,
+            branches: g.iter().map(|&v| v >= 0.0).collect(),
+        });
+        let model = &model;
+        // A moment later along Heun's second-order step, so that a function
+        // whose first derivative also vanishes (a rocket at rest on the
+        // ground, `stop when z < 0`) takes the sign of its second.
         let mut slope = vec![0.0; x0.len()];
+        let mut slope_ahead = vec![0.0; x0.len()];
+        let h = 1e-6 * t0.abs().max(1.0);
         if model.rhs(t0, x0, &mut slope).is_ok() {
-            let h = 1e-8 * t0.abs().max(1.0);
-            let ahead: Vec<f64> = x0.iter().zip(&slope).map(|(x, s)| x + h * s).collect();
+            let euler: Vec<f64> = x0.iter().zip(&slope).map(|(x, s)| x + h * s).collect();
+            let ahead: Vec<f64> = if model.rhs(t0 + h, &euler, &mut slope_ahead).is_ok() {
+                x0.iter()
+                    .zip(slope.iter().zip(&slope_ahead))
+                    .map(|(x, (s, s1))| x + h / 2.0 * (s + s1))
+                    .collect()
+            } else {
+                euler
+            };
             let mut g_ahead = vec![0.0; k];
             model.switching_functions(t0 + h, &ahead, &mut g_ahead);
             for (v, a) in g.iter_mut().zip(&g_ahead) {

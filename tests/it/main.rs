@@ -8,6 +8,7 @@ mod field;
 mod generated;
 mod ir;
 mod kernel;
+mod language_v2;
 mod mass_law_forms;
 mod mechanics;
 mod parser;

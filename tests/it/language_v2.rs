@@ -1,0 +1,278 @@
+//! SPEC §2.2 through `check`, the derivation, the generated crate and a run
+//! with both methods, against closed forms or conserved quantities: vector
+//! lets and an energy output, a mass law that switches (burnout) and a
+//! landing (`stop when`), a kink (`abs`) located as an event, implicit
+//! constraints that switch candidates, and one that cannot.
+
+use crate::generated::{build, build_file};
+use std::path::Path;
+use std::process::Command;
+
+struct Run {
+    header: Vec<String>,
+    rows: Vec<Vec<f64>>,
+    stderr: String,
+    code: i32,
+}
+
+impl Run {
+    fn column(&self, name: &str) -> usize {
+        self.header
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no column {name} in {:?}", self.header))
+    }
+
+    fn stop_time(&self) -> f64 {
+        let line = self
+            .stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("stopped at t = "))
+            .unwrap_or_else(|| panic!("the run did not stop:\n{}", self.stderr));
+        line.split_whitespace().next().unwrap().parse().unwrap()
+    }
+}
+
+fn run(binary: &Path, args: &[&str]) -> Run {
+    let output = Command::new(binary).args(args).output().unwrap();
+    let stdout = String::from_utf8(output.stdout).unwrap();
+    let mut lines = stdout.lines();
+    let header = lines
+        .next()
+        .map(|h| h.split(',').map(str::to_string).collect())
+        .unwrap_or_default();
+    Run {
+        header,
+        rows: lines
+            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+            .collect(),
+        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+        code: output.status.code().unwrap_or(-1),
+    }
+}
+
+const METHODS: [&str; 2] = ["field", "direct"];
+
+/// The largest change of column `name` along the run, relative to its
+/// first value's size (at least 1).
+fn drift(run: &Run, name: &str) -> f64 {
+    let k = run.column(name);
+    let first = run.rows[0][k];
+    run.rows
+        .iter()
+        .map(|r| (r[k] - first).abs() / first.abs().max(1.0))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_ball_with_quadratic_drag_matches_both_phases_and_lands_on_time() {
+    let (g, c, v0) = (9.81_f64, 0.05_f64, 20.0_f64);
+    let (k, vt) = ((g * c).sqrt(), (g / c).sqrt());
+    let phi = (v0 / vt).atan();
+    let t_top = phi / k;
+    let z_top = (1.0 + c * v0 * v0 / g).ln() / (2.0 * c);
+    let landing = t_top + (c * z_top).exp().acosh() / k;
+    let exact = |t: f64| {
+        if t < t_top {
+            [
+                ((phi - k * t).cos() / phi.cos()).ln() / c,
+                vt * (phi - k * t).tan(),
+            ]
+        } else {
+            let s = k * (t - t_top);
+            [z_top - s.cosh().ln() / c, -vt * s.tanh()]
+        }
+    };
+    let binary = build("thrown_ball_drag");
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "201"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let t_stop = run.stop_time();
+        assert!(
+            (t_stop - landing).abs() < 1e-9,
+            "{method}: landed at {t_stop}, exactly {landing}"
+        );
+        let last = run.rows.last().unwrap();
+        assert_eq!(last[0], t_stop, "{method}: the last row is the landing");
+        assert!(last[1].abs() < 1e-9, "{method}: z at landing {}", last[1]);
+        let error = run
+            .rows
+            .iter()
+            .flat_map(|r| {
+                let e = exact(r[0]);
+                [(r[1] - e[0]).abs(), (r[2] - e[1]).abs()]
+            })
+            .fold(0.0, f64::max);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+        assert!(run.stderr.contains("events: 2"), "{method}: {}", run.stderr);
+    }
+}
+
+#[test]
+fn a_rocket_burns_out_flies_ballistically_and_lands_on_time() {
+    let (m0, mu, w, g, tb) = (1000.0_f64, 10.0_f64, 2000.0_f64, 9.81_f64, 30.0_f64);
+    let u = |t: f64| 1.0 - mu * t / m0;
+    let ub = u(tb);
+    let zb = w * m0 / mu * (ub * ub.ln() - ub + 1.0) - g * tb * tb / 2.0;
+    let vb = -w * ub.ln() - g * tb;
+    let landing = tb + (vb + (vb * vb + 2.0 * g * zb).sqrt()) / g;
+    let exact = |t: f64| {
+        if t < tb {
+            let u = u(t);
+            [
+                w * m0 / mu * (u * u.ln() - u + 1.0) - g * t * t / 2.0,
+                -w * u.ln() - g * t,
+            ]
+        } else {
+            let s = t - tb;
+            [zb + vb * s - g * s * s / 2.0, vb - g * s]
+        }
+    };
+    let binary = build("rocket_burnout_landing");
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "1001"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let t_stop = run.stop_time();
+        assert!(
+            (t_stop - landing).abs() < 1e-9,
+            "{method}: landed at {t_stop}, exactly {landing}"
+        );
+        assert_eq!(run.rows.last().unwrap()[0], t_stop);
+        // Each component's error relative to its size along the flight
+        // (the height reaches 80 km, the speed 650 m/s).
+        let size = |i: usize| {
+            run.rows
+                .iter()
+                .map(|r| exact(r[0])[i].abs())
+                .fold(1.0, f64::max)
+        };
+        let (z_size, v_size) = (size(0), size(1));
+        let error = run
+            .rows
+            .iter()
+            .flat_map(|r| {
+                let e = exact(r[0]);
+                [(r[1] - e[0]).abs() / z_size, (r[2] - e[1]).abs() / v_size]
+            })
+            .fold(0.0, f64::max);
+        assert!(error < 1e-8, "{method}: relative error {error:e}");
+    }
+}
+
+#[test]
+fn a_knife_edge_turns_through_every_heading_by_switching_candidates() {
+    let binary = build("knife_edge_turning");
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "401"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let (x, y, th) = (run.column("x"), run.column("y"), run.column("th"));
+        let error = run
+            .rows
+            .iter()
+            .flat_map(|r| {
+                let t = r[0];
+                [
+                    (r[x] - t.sin()).abs(),
+                    (r[y] - (1.0 - t.cos())).abs(),
+                    (r[th] - t).abs(),
+                ]
+            })
+            .fold(0.0, f64::max);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+        assert!(run.rows.last().unwrap()[th] > 6.0 * std::f64::consts::PI);
+    }
+}
+
+#[test]
+fn a_single_candidate_whose_pivot_vanishes_stops_naming_the_constraint() {
+    let binary = build_file(&crate::root().join("tests/data/v2/knife_edge_one_candidate.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method]);
+        assert_eq!(run.code, 3, "{method}: {}", run.stderr);
+        assert!(
+            run.stderr.contains("sin(th)*x' - cos(th)*y' = 0")
+                && run.stderr.contains("at t = 1.5707963"),
+            "{method}: {}",
+            run.stderr
+        );
+    }
+}
+
+#[test]
+fn a_chaplygin_sleigh_turns_several_times_keeping_its_energy() {
+    let binary = build("chaplygin_sleigh");
+    let mut ends = Vec::new();
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "401"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let energy = drift(&run, "E");
+        assert!(energy < 1e-9, "{method}: energy drifts by {energy:e}");
+        let th = run.column("th");
+        let turns = run.rows.last().unwrap()[th] / (2.0 * std::f64::consts::PI);
+        assert!(turns > 2.5, "{method}: only {turns} turns");
+        ends.push(run.rows.last().unwrap().clone());
+    }
+    let difference = ends[0]
+        .iter()
+        .zip(&ends[1])
+        .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
+        .fold(0.0, f64::max);
+    assert!(
+        difference < 1e-7,
+        "field and direct differ by {difference:e}"
+    );
+}
+
+#[test]
+fn a_double_pendulum_with_vector_lets_keeps_its_energy() {
+    let binary = build("double_pendulum_energy");
+    for method in METHODS {
+        // Regular motion at the default tolerance 1e-10.
+        let run = run(
+            &binary,
+            &["--method", method, "--init", "a=0.5", "--samples", "1001"],
+        );
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let energy = drift(&run, "E");
+        assert!(energy < 1e-9, "{method}: energy drifts by {energy:e}");
+        // The file's chaotic release from the horizontal: the error a step
+        // leaves grows along the motion, so 1e-9 needs rtol 1e-12.
+        let run = run_chaotic(&binary, method);
+        let energy = drift(&run, "E");
+        assert!(
+            energy < 1e-9,
+            "{method}, chaotic: energy drifts by {energy:e}"
+        );
+    }
+}
+
+fn run_chaotic(binary: &Path, method: &str) -> Run {
+    let run = run(
+        binary,
+        &["--method", method, "--rtol", "1e-12", "--samples", "1001"],
+    );
+    assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+    run
+}
+
+/// The right side's operation count of a model, from its kernel.
+fn rhs_operations(path: &Path) -> usize {
+    let source = std::fs::read_to_string(path).unwrap();
+    let model = lagc::frontend(&source).unwrap();
+    let (mut derivation, _) = lagc::mechanics::derive_checked(&model).unwrap();
+    let reduced = derivation.reduced.clone();
+    let field = lagc::field::field_system(&mut derivation.arena, &reduced);
+    let kernel = lagc::kernel::build(&model, &derivation, &field).unwrap();
+    kernel.arena.op_count(&kernel.rhs_roots())
+}
+
+#[test]
+fn lets_derive_no_more_operations_than_the_hand_written_model() {
+    let by_hand = rhs_operations(&crate::root().join("benches/data/pendulum_5.lag"));
+    let with_lets = rhs_operations(&crate::root().join("tests/data/v2/pendulum_5_lets.lag"));
+    eprintln!("5-link pendulum right side: {by_hand} operations by hand, {with_lets} with lets");
+    assert!(
+        (with_lets as f64) <= 1.05 * by_hand as f64,
+        "lets: {with_lets} operations, by hand {by_hand}"
+    );
+}
