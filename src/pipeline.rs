@@ -20,7 +20,19 @@ pub fn generate_crate(
         .collect();
     let mut kernel = crate::kernel::build(model, &derivation, &field)?;
     for mode in 1..model.mode_count() {
-        kernel.modes.push(mode_kernel(&model.in_mode(mode))?);
+        let other = mode_kernel(&model.in_mode(mode))?;
+        // Every mode reads the first mode's branches; a switch only another
+        // mode has would read none (never silently: refuse).
+        if let Some(text) = crate::emit::modes::unshared_switches(&kernel, &other).first() {
+            return Err(vec![Diagnostic::error(
+                crate::diagnostic::codes::CODE_GENERATION,
+                format!("a reduced system of another candidate switches on `{text}`, which the first does not"),
+            )
+            .with_primary(model.lagrangian.span, "this model")
+            .with_note("models whose implicit constraints have several candidates share the first candidate's switches (`if`, `abs`, …)")
+            .with_help("name the candidates in another order, or write the switching expression where every candidate's system holds it")]);
+        }
+        kernel.modes.push(other);
     }
     let generated = emit_crate(&kernel, options)?;
     Ok((generated, notes))

@@ -321,8 +321,8 @@ impl Checker<'_> {
             | Builtin::Min
             | Builtin::Max => {
                 let mut ok = true;
-                for i in 0..types.len() {
-                    ok &= want(self, i, types[i] == Ty::Scalar, "numbers");
+                for (i, ty) in types.iter().enumerate() {
+                    ok &= want(self, i, *ty == Ty::Scalar, "numbers");
                 }
                 ok.then_some(Ty::Scalar)
             }
@@ -331,8 +331,8 @@ impl Checker<'_> {
             }
             Builtin::Dot | Builtin::Cross => {
                 let mut ok = true;
-                for i in 0..2 {
-                    ok &= want(self, i, matches!(types[i], Ty::Vector(_)), "vectors");
+                for (i, ty) in types.iter().enumerate() {
+                    ok &= want(self, i, matches!(ty, Ty::Vector(_)), "vectors");
                 }
                 if !ok {
                     return None;
@@ -428,10 +428,7 @@ impl Checker<'_> {
             .cloned()
             .filter(|_| index < allowed.lets_before)
         else {
-            let (name, defined) = match self.ast_let(index) {
-                Some(found) => found,
-                None => return None,
-            };
+            let (name, defined) = self.ast_let(index)?;
             let diagnostic = Diagnostic::error(
                 codes::LET_BEFORE_DEFINITION,
                 format!("let `{name}` is used before its definition"),

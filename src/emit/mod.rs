@@ -24,7 +24,7 @@ mod events;
 mod expr;
 mod files;
 mod model;
-mod modes;
+pub mod modes;
 mod motion;
 pub mod namer;
 mod names;

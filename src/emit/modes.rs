@@ -2,8 +2,11 @@
 //! one reduced system per mode. Each mode's motion becomes inherent methods
 //! `rhs_mode1`, …, and the trait's methods dispatch on the current mode.
 
+use crate::ir::Symbol;
+use crate::kernel::Kernel;
 use proc_macro2::{Group, Ident, TokenStream, TokenTree};
 use quote::quote;
+use std::collections::HashMap;
 
 /// The motion's methods (trait items and their inherent helpers).
 const METHODS: [&str; 8] = [
@@ -116,4 +119,43 @@ pub fn dispatch(trait_items: &TokenStream, modes: usize) -> TokenStream {
         });
     }
     quote! { #(#items)* }
+}
+
+/// A mode's branch symbols mapped to the first mode's switches: the same
+/// switching function (by its text: every mode lowers the same statements)
+/// reads the same branch. `pipeline` has checked that each one has a match.
+pub fn shared_branches(first: &Kernel, mode: &Kernel) -> HashMap<Symbol, usize> {
+    let index = switch_index(first);
+    mode.switches
+        .symbols
+        .iter()
+        .zip(&mode.switches.functions)
+        .filter_map(|(&s, &g)| {
+            index
+                .get(&mode.arena.display(g).to_string())
+                .map(|&k| (s, k))
+        })
+        .collect()
+}
+
+/// The first mode's switching functions by text.
+pub fn switch_index(kernel: &Kernel) -> HashMap<String, usize> {
+    kernel
+        .switches
+        .functions
+        .iter()
+        .enumerate()
+        .map(|(k, &g)| (kernel.arena.display(g).to_string(), k))
+        .collect()
+}
+
+/// The switching functions of `mode` that the first mode does not have.
+pub fn unshared_switches(first: &Kernel, mode: &Kernel) -> Vec<String> {
+    let index = switch_index(first);
+    mode.switches
+        .functions
+        .iter()
+        .map(|&g| mode.arena.display(g).to_string())
+        .filter(|text| !index.contains_key(text))
+        .collect()
 }

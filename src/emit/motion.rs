@@ -44,6 +44,7 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
     let mut all_inherent = super::modes::renamed(&trait_items, &inherent, 0);
     for (m, mode) in kernel.modes.iter().enumerate() {
         let mut mode_names = SymbolNames::new(&mode.arena, &mode.state);
+        mode_names.branches = super::modes::shared_branches(kernel, mode);
         let (items, helpers) = motion_of(mode, &mut mode_names, &from_x);
         all_inherent.extend(super::modes::renamed(&items, &helpers, m + 1));
     }

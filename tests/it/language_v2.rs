@@ -276,3 +276,70 @@ fn lets_derive_no_more_operations_than_the_hand_written_model() {
         "lets: {with_lets} operations, by hand {by_hand}"
     );
 }
+
+/// Steps and the error against the `exact` lines of one run.
+fn steps_and_error(binary: &Path, method: &str, rtol: &str) -> (f64, f64) {
+    let mut args = vec![
+        "--quiet", "--method", method, "--rtol", rtol, "--atol", "1e-16",
+    ];
+    if method == "direct" {
+        args.extend(["--integrator", "explicit"]);
+    }
+    let run = run(binary, &args);
+    assert_eq!(run.code, 0, "{method} at {rtol}: {}", run.stderr);
+    let find = |prefix: &str| -> f64 {
+        let at = run
+            .stderr
+            .find(prefix)
+            .unwrap_or_else(|| panic!("{}", run.stderr))
+            + prefix.len();
+        let rest = &run.stderr[at..];
+        let end = rest
+            .find(|c: char| !(c.is_ascii_digit() || "e.-+".contains(c)))
+            .unwrap_or(rest.len());
+        rest[..end].parse().unwrap()
+    };
+    (
+        find("steps: "),
+        find("largest error against the exact solution: "),
+    )
+}
+
+#[test]
+fn the_kink_of_abs_costs_no_order() {
+    // Were the switch of |z'| not located, a step across the top would see
+    // a jump in z''' and both methods would fall to low order there.
+    let binary = build("thrown_ball_drag");
+    for method in METHODS {
+        let (steps_loose, error_loose) = steps_and_error(&binary, method, "1e-8");
+        let (steps_tight, error_tight) = steps_and_error(&binary, method, "1e-12");
+        let order = (error_loose / error_tight).ln() / (steps_tight / steps_loose).ln();
+        eprintln!(
+            "{method}: {steps_loose} steps, error {error_loose:e} -> {steps_tight} steps, \
+             error {error_tight:e}: order {order:.1}"
+        );
+        assert!(order >= 6.0, "{method}: order {order:.1} across the kink");
+    }
+}
+
+#[test]
+fn candidates_and_switches_together_agree_between_methods() {
+    let binary = build_file(&crate::root().join("tests/data/v2/sleigh_drag.lag"));
+    let ends: Vec<Vec<f64>> = METHODS
+        .iter()
+        .map(|method| {
+            let run = run(&binary, &["--method", method, "--samples", "2"]);
+            assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+            run.rows.last().unwrap().clone()
+        })
+        .collect();
+    let difference = ends[0]
+        .iter()
+        .zip(&ends[1])
+        .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
+        .fold(0.0, f64::max);
+    assert!(
+        difference < 1e-7,
+        "field and direct differ by {difference:e}"
+    );
+}
