@@ -16,6 +16,7 @@ pub const MAX_EXPR_DEPTH: usize = 1000;
 pub fn check_paren_depth(source: &str) -> Result<(), Diagnostic> {
     let bytes = source.as_bytes();
     let mut depth = 0usize;
+    let mut conditionals = 0usize;
     let mut i = 0;
     while i < bytes.len() {
         match bytes[i] {
@@ -32,11 +33,36 @@ pub fn check_paren_depth(source: &str) -> Result<(), Diagnostic> {
                 }
             }
             b')' => depth = depth.saturating_sub(1),
+            b';' => conditionals = 0,
+            b'i' if is_if_keyword(bytes, i) => {
+                // `if … else if … else …` nests in the grammar as a
+                // parenthesis does; count it with them, per statement.
+                conditionals += 1;
+                if depth + conditionals > MAX_PAREN_DEPTH {
+                    return Err(too_deep_conditionals(Span::new(i, i + 2)));
+                }
+            }
             _ => {}
         }
         i += 1;
     }
     Ok(())
+}
+
+fn is_if_keyword(bytes: &[u8], i: usize) -> bool {
+    let ident = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b == b'\'';
+    bytes.get(i + 1) == Some(&b'f')
+        && !bytes.get(i + 2).copied().is_some_and(ident)
+        && !(i > 0 && ident(bytes[i - 1]))
+}
+
+fn too_deep_conditionals(span: Span) -> Diagnostic {
+    Diagnostic::error(
+        codes::NESTING_TOO_DEEP,
+        format!("conditionals and parentheses are nested more than {MAX_PAREN_DEPTH} levels deep"),
+    )
+    .with_primary(span, format!("this `if` is level {}", MAX_PAREN_DEPTH + 1))
+    .with_help("write a long chain of cases as a sum of shorter ones; lagc limits nesting so that no input can exhaust its stack")
 }
 
 fn too_deep_parens(span: Span) -> Diagnostic {

@@ -93,6 +93,29 @@ const TOKENS: &[&str] = &[
     "\r",
     "_",
     "9999999999999999999999",
+    // Language v2 (SPEC §2.2).
+    "let",
+    "output",
+    "stop",
+    "when",
+    "for",
+    "if",
+    "then",
+    "else",
+    "and",
+    "or",
+    "not",
+    "<",
+    ">=",
+    ".x",
+    ".z",
+    "pi",
+    "dot(",
+    "cross(",
+    "norm(",
+    "abs(",
+    "atan2(",
+    "min(",
 ];
 
 fn corpus() -> Vec<Vec<u8>> {
@@ -181,7 +204,7 @@ fn random_expr(rng: &mut Rng, depth: usize, out: &mut String) {
 }
 
 fn generated(rng: &mut Rng) -> Vec<u8> {
-    let text = match rng.below(6) {
+    let text = match rng.below(7) {
         0 => {
             let mut e = [String::new(), String::new(), String::new()];
             for expr in &mut e {
@@ -217,6 +240,21 @@ fn generated(rng: &mut Rng) -> Vec<u8> {
             rng.word(&["1", "9", "0.", "1e"]),
             "9".repeat(rng.below(800))
         ),
+        5 => {
+            // Chains of conditionals and vectors, around the nesting limit
+            // and rarely far beyond it.
+            let n = if rng.below(200) == 0 {
+                100_000
+            } else {
+                rng.below(400)
+            };
+            let case = rng.word(&[
+                "if q1 < 1 then (q1, q2) else ",
+                "if not q1 >= 0 and t < 1 then 2 else ",
+                "(if q1 > 0 then 1 else ",
+            ]);
+            format!("coord q1, q2;\nlagrangian = {}q1;\n", case.repeat(n))
+        }
         _ => return (0..rng.below(200)).map(|_| rng.next() as u8).collect(),
     };
     text.into_bytes()
