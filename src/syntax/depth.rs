@@ -7,9 +7,13 @@ use crate::span::Span;
 /// (through several rules), so deeper input is rejected before parsing.
 pub const MAX_PAREN_DEPTH: usize = 256;
 
-/// The deepest expression tree accepted (a chain `a+b+…` of n terms is n−1
-/// deep). Later stages recurse over expressions; this bounds their depth.
+/// The deepest nesting accepted: a chain `a + b + …` of one operator is one
+/// level however long (a 50-link pendulum's potential has 1,275 terms).
 pub const MAX_EXPR_DEPTH: usize = 1000;
+
+/// The highest expression tree accepted: later stages recurse over the
+/// tree (a chain of n terms is n high), on the front end's big stack.
+pub const MAX_TREE_HEIGHT: usize = 10_000;
 
 /// Finds the first `(` nested deeper than [`MAX_PAREN_DEPTH`], skipping
 /// `//` comments, and reports it.
@@ -84,6 +88,16 @@ pub fn too_deep_expr(span: Span) -> Diagnostic {
         format!("expression is nested more than {MAX_EXPR_DEPTH} levels deep"),
     )
     .with_primary(span, "the limit is crossed here")
-    .with_note("a chain of n operators nests n levels deep")
+    .with_note("each parenthesis, function call, sign, power and `if` is a level; a chain `a + b + …` of one operator is one")
     .with_help("split the expression; lagc limits nesting so that no input can exhaust its stack")
+}
+
+/// The diagnostic for an expression tree higher than [`MAX_TREE_HEIGHT`].
+pub fn too_long_chain(span: Span) -> Diagnostic {
+    Diagnostic::error(
+        codes::NESTING_TOO_DEEP,
+        format!("expression has more than {MAX_TREE_HEIGHT} terms in a chain"),
+    )
+    .with_primary(span, "the limit is crossed here")
+    .with_help("split the expression with `let`; lagc limits expressions so that no input can exhaust its stack")
 }

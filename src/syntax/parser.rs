@@ -5,7 +5,9 @@
 //! against [`MAX_EXPR_DEPTH`], so no AST deeper than the limit is ever built.
 
 use super::ast::*;
-use super::depth::{check_paren_depth, too_deep_expr, MAX_EXPR_DEPTH};
+use super::depth::{
+    check_paren_depth, too_deep_expr, too_long_chain, MAX_EXPR_DEPTH, MAX_TREE_HEIGHT,
+};
 use super::grammar::{LagParser, Rule};
 use super::syntax_error;
 use crate::diagnostic::{codes, Diagnostic};
@@ -160,10 +162,13 @@ fn ident(pair: Pair<Rule>) -> Ident {
     }
 }
 
-/// An expression with the depth of its tree, for the nesting limit.
+/// An expression with its nesting depth (a chain `a + b + …` of one
+/// operator is one level, however long) and the height of its tree (what
+/// recursive passes descend), for the two limits.
 struct Node {
     expr: Expr,
     depth: usize,
+    height: usize,
 }
 
 impl Node {
@@ -171,6 +176,7 @@ impl Node {
         Node {
             expr: Expr { kind, span },
             depth: 1,
+            height: 1,
         }
     }
 }
@@ -200,13 +206,16 @@ fn conditional(pair: Pair<Rule>) -> Converted<Node> {
     let cond = expression(children.expect(Rule::expr)?)?;
     let then = expression(children.expect(Rule::expr)?)?;
     let otherwise = expression(children.expect(Rule::expr)?)?;
-    let depth = cond.depth.max(then.depth).max(otherwise.depth);
+    let level = (
+        cond.depth.max(then.depth).max(otherwise.depth),
+        cond.height.max(then.height).max(otherwise.height),
+    );
     let kind = ExprKind::If {
         cond: Box::new(cond.expr),
         then: Box::new(then.expr),
         otherwise: Box::new(otherwise.expr),
     };
-    deeper(kind, span, depth, keyword)
+    deeper(kind, span, level, keyword)
 }
 
 /// `conjunction (or conjunction)*`, folded to the left.
@@ -231,13 +240,13 @@ fn logic_chain(
         let op_span = Span::from(keyword.as_span());
         let rhs = operand(children.expect(rule)?)?;
         let span = acc.expr.span.to(rhs.expr.span);
-        let depth = acc.depth.max(rhs.depth);
+        let (depth, height) = (acc.depth.max(rhs.depth + 1), acc.height.max(rhs.height));
         let kind = ExprKind::Logic {
             op,
             lhs: Box::new(acc.expr),
             rhs: Box::new(rhs.expr),
         };
-        acc = deeper(kind, span, depth, op_span)?;
+        acc = node_at(kind, span, depth, height + 1, op_span)?;
     }
     Ok(acc)
 }
@@ -252,12 +261,8 @@ fn negation(pair: Pair<Rule>) -> Converted<Node> {
             let mut node = comparison(child)?;
             for not_span in nots.into_iter().rev() {
                 let span = not_span.to(node.expr.span);
-                node = deeper(
-                    ExprKind::Not(Box::new(node.expr)),
-                    span,
-                    node.depth,
-                    not_span,
-                )?;
+                let level = (node.depth, node.height);
+                node = deeper(ExprKind::Not(Box::new(node.expr)), span, level, not_span)?;
             }
             return Ok(node);
         }
@@ -281,13 +286,13 @@ fn comparison(pair: Pair<Rule>) -> Converted<Node> {
     };
     let rhs = sum(children.expect(Rule::sum)?)?;
     let span = lhs.expr.span.to(rhs.expr.span);
-    let depth = lhs.depth.max(rhs.depth);
+    let level = (lhs.depth.max(rhs.depth), lhs.height.max(rhs.height));
     let kind = ExprKind::Compare {
         op,
         lhs: Box::new(lhs.expr),
         rhs: Box::new(rhs.expr),
     };
-    deeper(kind, span, depth, op_span)
+    deeper(kind, span, level, op_span)
 }
 
 /// `product (add_op product)*`, folded to the left.
@@ -302,7 +307,7 @@ fn sum(pair: Pair<Rule>) -> Converted<Node> {
             BinOp::Sub
         };
         let rhs = product(children.expect(Rule::product)?)?;
-        acc = binary(op, op_span, acc, rhs)?;
+        acc = chain(op, op_span, acc, rhs)?;
     }
     Ok(acc)
 }
@@ -319,7 +324,7 @@ fn product(pair: Pair<Rule>) -> Converted<Node> {
             BinOp::Div
         };
         let rhs = unary(children.expect(Rule::unary)?)?;
-        acc = binary(op, op_span, acc, rhs)?;
+        acc = chain(op, op_span, acc, rhs)?;
     }
     Ok(acc)
 }
@@ -377,7 +382,8 @@ fn postfix(pair: Pair<Rule>) -> Converted<Node> {
             base: Box::new(acc.expr),
             axis,
         };
-        acc = deeper(kind, span, acc.depth, at)?;
+        let level = (acc.depth, acc.height);
+        acc = deeper(kind, span, level, at)?;
     }
     Ok(acc)
 }
@@ -405,9 +411,9 @@ fn primary(pair: Pair<Rule>) -> Converted<Node> {
                 )
                 .with_primary(span, "vectors have 2 or 3 components"));
             }
-            let depth = elements.iter().map(|e| e.depth).max().unwrap_or(0);
+            let level = level_of(&elements);
             let kind = ExprKind::Vector(elements.into_iter().map(|e| e.expr).collect());
-            deeper(kind, span, depth, span)
+            deeper(kind, span, level, span)
         }
         _ => Err(unexpected_tree(span)),
     }
@@ -463,13 +469,13 @@ fn call(pair: Pair<Rule>) -> Converted<Node> {
         )
         .with_primary(span, format!("{} given here", args.len())));
     }
-    let depth = args.iter().map(|a| a.depth).max().unwrap_or(0);
+    let level = level_of(&args);
     let kind = ExprKind::Call {
         func,
         func_span: name.span,
         args: args.into_iter().map(|a| a.expr).collect(),
     };
-    deeper(kind, span, depth, name.span)
+    deeper(kind, span, level, name.span)
 }
 
 fn unknown_function(name: &Ident) -> Diagnostic {
@@ -489,12 +495,8 @@ fn unknown_function(name: &Ident) -> Diagnostic {
 fn negate(negs: Vec<Span>, mut node: Node) -> Converted<Node> {
     for neg_span in negs.into_iter().rev() {
         let span = neg_span.to(node.expr.span);
-        node = deeper(
-            ExprKind::Neg(Box::new(node.expr)),
-            span,
-            node.depth,
-            neg_span,
-        )?;
+        let level = (node.depth, node.height);
+        node = deeper(ExprKind::Neg(Box::new(node.expr)), span, level, neg_span)?;
     }
     Ok(node)
 }
@@ -502,24 +504,56 @@ fn negate(negs: Vec<Span>, mut node: Node) -> Converted<Node> {
 fn binary(op: BinOp, op_span: Span, lhs: Node, rhs: Node) -> Converted<Node> {
     let span = lhs.expr.span.to(rhs.expr.span);
     let depth = lhs.depth.max(rhs.depth);
+    let height = lhs.height.max(rhs.height);
     let kind = ExprKind::Binary {
         op,
         lhs: Box::new(lhs.expr),
         rhs: Box::new(rhs.expr),
     };
-    deeper(kind, span, depth, op_span)
+    node_at(kind, span, depth + 1, height + 1, op_span)
 }
 
-/// A node one level above children of depth `child_depth`, unless that
-/// crosses [`MAX_EXPR_DEPTH`] (reported at `at`).
-fn deeper(kind: ExprKind, span: Span, child_depth: usize, at: Span) -> Converted<Node> {
-    let depth = child_depth + 1;
+/// One more link of a left-folded chain (`acc op rhs`): the chain stays at
+/// its nesting level (the 1,275 terms of a 50-link pendulum's potential are
+/// one level), its tree grows by one.
+fn chain(op: BinOp, op_span: Span, acc: Node, rhs: Node) -> Converted<Node> {
+    let span = acc.expr.span.to(rhs.expr.span);
+    let depth = acc.depth.max(rhs.depth + 1);
+    let height = acc.height.max(rhs.height) + 1;
+    let kind = ExprKind::Binary {
+        op,
+        lhs: Box::new(acc.expr),
+        rhs: Box::new(rhs.expr),
+    };
+    node_at(kind, span, depth, height, op_span)
+}
+
+/// The largest depth and height among `nodes`.
+fn level_of(nodes: &[Node]) -> (usize, usize) {
+    nodes
+        .iter()
+        .fold((0, 0), |(d, h), n| (d.max(n.depth), h.max(n.height)))
+}
+
+/// A node one level above children of depth `child_depth` (and height
+/// `child_height`).
+fn deeper(kind: ExprKind, span: Span, child: (usize, usize), at: Span) -> Converted<Node> {
+    node_at(kind, span, child.0 + 1, child.1 + 1, at)
+}
+
+/// A node of nesting `depth` and tree `height`, unless that crosses
+/// [`MAX_EXPR_DEPTH`] or [`MAX_TREE_HEIGHT`] (reported at `at`).
+fn node_at(kind: ExprKind, span: Span, depth: usize, height: usize, at: Span) -> Converted<Node> {
     if depth > MAX_EXPR_DEPTH {
         return Err(too_deep_expr(at));
+    }
+    if height > MAX_TREE_HEIGHT {
+        return Err(too_long_chain(at));
     }
     Ok(Node {
         expr: Expr { kind, span },
         depth,
+        height,
     })
 }
 

@@ -127,3 +127,24 @@ fn long_chains_are_rejected_not_overflowed() {
     let chain = vec!["1"; lagc::syntax::MAX_EXPR_DEPTH].join("^");
     assert!(parse(&format!("param x = {chain};")).is_ok());
 }
+
+#[test]
+fn a_long_flat_chain_is_one_level_of_nesting() {
+    // The potential of a 50-link pendulum: 1,275 terms in one sum.
+    let terms: Vec<String> = (1..=50)
+        .flat_map(|i| (1..=i).map(|j| format!("cos(q{j})")))
+        .collect();
+    assert_eq!(terms.len(), 1275);
+    let source = format!("param V = 0;\nlagrangian = {};\n", terms.join(" + "));
+    // Like the CLI, on the front end's stack: the tree of a chain is as high
+    // as the chain is long.
+    assert!(lagc::on_big_stack(|| parse(&source).is_ok()));
+    // A chain longer than the tree-height limit is refused, not recursed.
+    let long = format!("lagrangian = {};", vec!["x'"; 25_000].join(" + "));
+    let message = lagc::on_big_stack(|| parse(&long).unwrap_err()[0].message.clone());
+    let limit = lagc::syntax::MAX_TREE_HEIGHT;
+    assert!(
+        message.contains(&format!("more than {limit} terms in a chain")),
+        "{message:?}"
+    );
+}
