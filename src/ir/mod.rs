@@ -26,6 +26,7 @@ mod expr;
 mod jet;
 mod lower;
 mod subst;
+mod trig;
 
 pub use crate::syntax::ast::Func;
 pub use canon::{apply_func, pow_value};

@@ -119,7 +119,12 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         .zip(&generalized)
         .map(|(&r, &q)| arena.add(&[r, q]))
         .collect();
-    let equations = equations::equations(&mut arena, &symbolic, &mut elimination, &forces);
+    let mut equations = equations::equations(&mut arena, &symbolic, &mut elimination, &forces);
+    // sin² + cos² = 1 again: differentiation brings squares of sums apart.
+    for e in &mut equations {
+        e.lhs = arena.pythagoras(e.lhs);
+        e.rhs = arena.pythagoras(e.rhs);
+    }
     let rows: Vec<ExprId> = equations.iter().map(|e| arena.sub(e.lhs, e.rhs)).collect();
     let divided =
         mass_factor::divide_out_masses(&mut arena, &rows, &symbolic.laws, &symbolic.param_defaults);

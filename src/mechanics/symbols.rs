@@ -51,7 +51,10 @@ impl Symbolic {
                 arena.zero()
             }
         };
+        // sin² + cos² = 1 before any derivative: vector kinetic energies
+        // are full of it.
         let lagrangian = lower(arena, &model.lagrangian);
+        let lagrangian = arena.pythagoras(lagrangian);
         let laws: Vec<ExprId> = model.masses.iter().map(|m| lower(arena, &m.law)).collect();
         let masses_to_laws: HashMap<Symbol, ExprId> = laws
             .iter()

@@ -80,7 +80,9 @@ fn affine_jets(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
 /// The smallest (by operation count) of a few equal forms of `e`; on a tie
 /// the form with common factors pulled out wins (`M*(1 + t^2)`).
 pub fn simplify(arena: &mut Arena, e: ExprId) -> ExprId {
+    // Distributing brings `X sin²u` and `X cos²u` side by side: pair them.
     let distributed = distribute(arena, e, DISTRIBUTE_DEPTH);
+    let distributed = arena.pythagoras(distributed);
     let merged = merge_fractions(arena, distributed);
     let candidates = [
         factor_common(arena, merged),
