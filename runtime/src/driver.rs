@@ -337,10 +337,32 @@ fn run_with<M: Model + 'static>(
         // A switch whose function changed sign against its branch.
         let mut event: Option<(f64, Vec<usize>)> = None;
         if M::SWITCHES > 0 {
-            model.switching_functions(tb, solver.state(), &mut g_now);
-            let changed: Vec<usize> = (0..M::SWITCHES)
-                .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
-                .collect();
+            // The step's end and three points inside it: a function that
+            // crosses zero and back within one step is seen at one of them
+            // unless both crossings fall between two neighbours.
+            let mut t_check = tb;
+            let mut changed: Vec<usize> = Vec::new();
+            for fraction in [0.25, 0.5, 0.75, 1.0] {
+                let t = if fraction == 1.0 {
+                    tb
+                } else {
+                    ta + fraction * (tb - ta)
+                };
+                if fraction == 1.0 {
+                    model.switching_functions(tb, solver.state(), &mut g_now);
+                } else {
+                    solver.dense(model, t, &mut x_event)?;
+                    model.switching_functions(t, &x_event, &mut g_now);
+                }
+                changed = (0..M::SWITCHES)
+                    .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
+                    .collect();
+                if !changed.is_empty() {
+                    t_check = t;
+                    break;
+                }
+            }
+            let tb = t_check;
             if !changed.is_empty() {
                 let mut roots = Vec::with_capacity(changed.len());
                 for &k in &changed {

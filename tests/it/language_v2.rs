@@ -343,3 +343,28 @@ fn candidates_and_switches_together_agree_between_methods() {
         "field and direct differ by {difference:e}"
     );
 }
+
+#[test]
+fn every_kink_of_a_rectified_forcing_is_an_event() {
+    let w = 20.0_f64;
+    let exact = |t: f64| {
+        let n = (w * t / std::f64::consts::PI).floor();
+        2.0 * n / w + (1.0 - (w * t - n * std::f64::consts::PI).cos()) / w
+    };
+    let binary = build_file(&crate::root().join("tests/data/v2/rectified_forcing.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "1001"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        assert!(
+            run.stderr.contains("events: 63"),
+            "{method}: {}",
+            run.stderr
+        );
+        let error = run
+            .rows
+            .iter()
+            .map(|r| (r[2] - exact(r[0])).abs())
+            .fold(0.0, f64::max);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+    }
+}
