@@ -377,3 +377,10 @@ fn call(
     };
     Ok(Value::Components(vec![value]))
 }
+
+impl Arena {
+    /// The lets lowered so far, by `(index, primes)`.
+    pub fn lowered_lets(&self) -> std::collections::HashMap<(u32, u32), Vec<ExprId>> {
+        self.lets.iter().map(|(&k, v)| (k, v.to_vec())).collect()
+    }
+}

@@ -69,6 +69,9 @@ pub struct Derivation {
     pub divided_out: Vec<Option<u32>>,
     /// The reduced system (7).
     pub reduced: ReducedSystem,
+    /// The model's lets that the derivation used, by name, as lowered
+    /// (a number or a vector's components), in declaration order.
+    pub lets: Vec<(String, Vec<ExprId>)>,
     /// Param defaults, for numeric checks.
     pub param_defaults: Vec<f64>,
 }
@@ -168,6 +171,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         .into_iter()
         .filter_map(|i| symbolic.laws.get(i as usize).map(|&law| (i, law)))
         .collect();
+    let arena_lets = arena.lowered_lets();
     Ok(Derivation {
         arena,
         coordinates: model.coords.len(),
@@ -181,6 +185,15 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         divided_out: divided.iter().map(|d| d.mass).collect(),
         reduced,
         param_defaults: symbolic.param_defaults,
+        lets: model
+            .lets
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| {
+                let lowered = arena_lets.get(&(i as u32, 0))?;
+                Some((l.name.clone(), lowered.to_vec()))
+            })
+            .collect(),
     })
 }
 

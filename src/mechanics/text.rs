@@ -87,6 +87,18 @@ impl Derivation {
             independent.join(", "),
             self.reduced.order
         );
+        if !self.lets.is_empty() {
+            out.push_str("\nlets:\n");
+            for (name, value) in &self.lets {
+                let parts: Vec<String> = value.iter().map(|&e| sum(a, e, Style::Text)).collect();
+                let shown = if parts.len() == 1 {
+                    parts[0].clone()
+                } else {
+                    format!("({})", parts.join(", "))
+                };
+                let _ = writeln!(out, "  {name} = {shown}");
+            }
+        }
         if !self.constraints.is_empty() {
             out.push_str("\nconstraints:\n");
             for &(d, phi) in &self.constraints {
@@ -174,6 +186,15 @@ impl Derivation {
         let mut arena = self.arena.clone();
         let a = &mut arena;
         let mut out = String::from("\\begin{align*}\n");
+        for (name, value) in &self.lets {
+            let parts: Vec<String> = value.iter().map(|&e| sum(a, e, Style::Latex)).collect();
+            let shown = if parts.len() == 1 {
+                parts[0].clone()
+            } else {
+                format!("\\left({}\\right)", parts.join(",\\ "))
+            };
+            let _ = writeln!(out, "  \\mathit{{{name}}} &= {shown} && \\text{{let}} \\\\");
+        }
         for &(d, phi) in &self.constraints {
             let lhs = name(a, jet(d, self.k), Style::Latex);
             let rhs = sum(a, phi, Style::Latex);
