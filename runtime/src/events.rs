@@ -14,6 +14,18 @@ pub fn locate<E>(
     mut phi: impl FnMut(f64) -> Result<f64, E>,
 ) -> Result<f64, E> {
     debug_assert!(phi_a.signum() != phi_b.signum() || phi_b == 0.0);
+    // The far side's sign. A value exactly 0 belongs to the far side but
+    // must not be compared by its own sign (`signum(0.0)` is +1, which
+    // would send a bracket from a positive side past the root): it is
+    // kept as the far side's smallest value instead.
+    let far = if phi_b != 0.0 {
+        phi_b.signum()
+    } else {
+        -phi_a.signum()
+    };
+    let on_far_side = |v: f64| v == 0.0 || v.signum() == far;
+    let far_value = |v: f64| if v == 0.0 { far * f64::MIN_POSITIVE } else { v };
+    phi_b = far_value(phi_b);
     // Which end was kept twice in a row (Illinois halves its value).
     let mut kept: i8 = 0;
     for _ in 0..200 {
@@ -32,9 +44,9 @@ pub fn locate<E>(
             t = a + 0.5 * width;
         }
         let value = phi(t)?;
-        if value == 0.0 || value.signum() == phi_b.signum() {
+        if on_far_side(value) {
             b = t;
-            phi_b = value;
+            phi_b = far_value(value);
             if kept == -1 {
                 phi_a *= 0.5;
             }
@@ -70,5 +82,17 @@ mod tests {
         })
         .unwrap();
         assert!((root - std::f64::consts::FRAC_PI_2).abs() <= 8.0 * f64::EPSILON * 2.0);
+    }
+
+    #[test]
+    fn a_root_hit_exactly_stays_the_root() {
+        // g = 1 − t from a positive side: the secant lands on t = 1 exactly,
+        // where g is 0 (signum(0) = +1 once sent the bracket back to a).
+        let root = locate(0.871, 0.129, 1.2, -0.2, |t: f64| Ok::<_, ()>(1.0 - t)).unwrap();
+        assert!((root - 1.0).abs() <= 8.0 * f64::EPSILON, "{root}");
+        assert!(root >= 1.0);
+        // And from a negative side.
+        let root = locate(0.5, -0.5, 1.5, 0.5, |t: f64| Ok::<_, ()>(t - 1.0)).unwrap();
+        assert!((root - 1.0).abs() <= 8.0 * f64::EPSILON, "{root}");
     }
 }

@@ -236,9 +236,14 @@ fn logic_chain(
 ) -> Converted<Node> {
     let mut children = Children::of(pair);
     let mut acc = operand(children.expect(rule)?)?;
-    while let Some(keyword) = children.next() {
-        let op_span = Span::from(keyword.as_span());
-        let rhs = operand(children.expect(rule)?)?;
+    // The keywords (`and`, `or`) are punctuation to `Children`: what
+    // follows the first operand is the next operand.
+    for next in children {
+        if next.as_rule() != rule {
+            return Err(unexpected_tree(next.as_span().into()));
+        }
+        let op_span = Span::from(next.as_span());
+        let rhs = operand(next)?;
         let span = acc.expr.span.to(rhs.expr.span);
         let (depth, height) = (acc.depth.max(rhs.depth + 1), acc.height.max(rhs.height));
         let kind = ExprKind::Logic {

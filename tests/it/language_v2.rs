@@ -368,3 +368,58 @@ fn every_kink_of_a_rectified_forcing_is_an_event() {
         assert!(error < 1e-8, "{method}: error {error:e}");
     }
 }
+
+/// The exact-solution error a run reports.
+fn reported_error(run: &Run) -> f64 {
+    run.stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
+        .unwrap_or_else(|| panic!("no exact error in {}", run.stderr))
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+#[test]
+fn every_function_and_operator_runs_and_outputs_what_it_means() {
+    let binary = build_file(&crate::root().join("tests/data/v2/constructs.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "301"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        // min and max in the forces: a kink at t = 1 exactly (a switch
+        // whose root the secant hits exactly once sent the event back to
+        // the step's start).
+        let error = reported_error(&run);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+        let col = |name: &str| run.column(name);
+        let (x, y, xd, yd) = (col("x"), col("y"), col("x'"), col("y'"));
+        for r in &run.rows {
+            let (px, py) = (r[x], r[y]);
+            let sign = if px > 0.0 {
+                1.0
+            } else if px < 0.0 {
+                -1.0
+            } else {
+                0.0
+            };
+            let inside = px > 0.0 && !(py < -1.0 || py >= 2.0);
+            let expected = [
+                ("L", px * r[yd] - py * r[xd]),
+                ("d", px.hypot(py)),
+                ("ang", py.atan2(px)),
+                ("lo", px.min(py)),
+                ("hi", px.max(py)),
+                ("s", sign + py.abs()),
+                ("inside", if inside { 1.0 } else { 0.0 }),
+            ];
+            for (name, value) in expected {
+                let got = r[col(name)];
+                assert!(
+                    (got - value).abs() <= 1e-12 * value.abs().max(1.0),
+                    "{method}: {name} at t = {}: {got}, expected {value}",
+                    r[0]
+                );
+            }
+        }
+    }
+}
