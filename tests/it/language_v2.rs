@@ -402,7 +402,7 @@ fn every_function_and_operator_runs_and_outputs_what_it_means() {
             } else {
                 0.0
             };
-            let inside = px > 0.0 && !(py < -1.0 || py >= 2.0);
+            let inside = px > 0.0 && (-1.0..2.0).contains(&py);
             let expected = [
                 ("L", px * r[yd] - py * r[xd]),
                 ("d", px.hypot(py)),
