@@ -382,14 +382,21 @@ fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitC
         return Err(ExitCode::from(EXIT_USAGE));
     }
     match cli::cargo_build(&crate_dir, &target_dir) {
-        Ok(status) if status.success() => {}
-        Ok(status) => {
-            eprintln!("error: building the generated crate failed ({status})");
-            return Err(ExitCode::FAILURE);
+        Ok(build) if build.status.success() => {}
+        Ok(build) => {
+            // Not the model's fault (exit 1 says that): the machine's.
+            eprintln!(
+                "error: the generated crate could not be built ({}): {}",
+                build.status,
+                cli::cargo::explain(&build.tail, &cache)
+            );
+            return Err(ExitCode::from(EXIT_USAGE));
         }
         Err(error) => {
-            eprintln!("error: cannot run cargo: {error}");
-            return Err(ExitCode::FAILURE);
+            eprintln!(
+                "error: cannot run cargo ({error}); lagc needs Rust's cargo on the PATH (or in $CARGO)"
+            );
+            return Err(ExitCode::from(EXIT_USAGE));
         }
     }
     let binary = target_dir.join("release").join(format!(
@@ -414,7 +421,7 @@ fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitC
             let _ = std::fs::remove_file(&binary);
             cli::touch(&crate_dir.join("src/main.rs"));
             match cli::cargo_build(&crate_dir, &target_dir) {
-                Ok(status) if status.success() => {}
+                Ok(build) if build.status.success() => {}
                 _ => break,
             }
         }

@@ -2,9 +2,11 @@
 //! the build cache, running cargo and the model's binary. Used only by
 //! `main.rs` (the library does no IO).
 
+pub mod cargo;
 pub mod progress;
 pub mod report;
 
+pub use cargo::cargo_build;
 use lagc::emit::GeneratedCrate;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus};
@@ -108,22 +110,6 @@ pub fn cache_dir() -> Option<PathBuf> {
         return Some(PathBuf::from(dir).join("lagc"));
     }
     non_empty("HOME").map(|home| PathBuf::from(home).join(".cache").join("lagc"))
-}
-
-/// `cargo build --release` of the crate in `crate_dir` with the shared
-/// target directory; cargo's progress goes to our stderr.
-pub fn cargo_build(crate_dir: &Path, target_dir: &Path) -> std::io::Result<ExitStatus> {
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    Command::new(cargo)
-        .arg("build")
-        .arg("--release")
-        // Generated crates depend only on the runtime next to them: no
-        // network, ever.
-        .arg("--offline")
-        .arg("--manifest-path")
-        .arg(crate_dir.join("Cargo.toml"))
-        .env("CARGO_TARGET_DIR", target_dir)
-        .status()
 }
 
 /// Runs the built binary with `args`, its stdout and stderr ours.

@@ -234,3 +234,37 @@ fn a_literal_that_underflows_is_warned_about() {
     assert_eq!(out.status.code(), Some(1), "{errors}");
     insta::assert_snapshot!(format!("{stderr}\n{errors}"));
 }
+
+/// A stand-in for cargo that fails the way a machine without a linker does.
+#[cfg(unix)]
+#[test]
+fn a_build_that_fails_for_the_machine_is_explained_in_lagcs_words() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = crate::root().join("target/lagc-cache-fake-cargo");
+    std::fs::create_dir_all(&dir).unwrap();
+    let fake = dir.join("cargo");
+    std::fs::write(
+        &fake,
+        "#!/bin/sh\necho '   Compiling lag-paper v0.1.0' >&2\n\
+         echo 'error: linker `cc` not found' >&2\n\
+         echo '  = note: No such file or directory (os error 2)' >&2\nexit 101\n",
+    )
+    .unwrap();
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .args(["run", "examples/paper.lag"])
+        .current_dir(crate::root())
+        .env("CARGO", &fake)
+        .env("LAGC_CACHE_DIR", dir.join("cache"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("error: linker `cc` not found")
+            && stderr.contains("no C linker (`cc`) was found")
+            && stderr.contains("build-essential"),
+        "{stderr}"
+    );
+    assert!(output.stdout.is_empty());
+}
