@@ -304,3 +304,40 @@ fn no_input_panics() {
         }
     });
 }
+
+/// Mutants through `check` alone (the derivation has its 12,000 above):
+/// 100,000 a run, each with located diagnostics or a clean model.
+const CHECK_INPUTS: usize = 100_000;
+
+#[test]
+fn no_input_panics_the_checker() {
+    let corpus = corpus();
+    lagc::on_big_stack(|| {
+        let mut rng = Rng(SEED ^ 0x5eed_c4ec);
+        for n in 0..CHECK_INPUTS {
+            let input = if n % 8 == 7 {
+                generated(&mut rng)
+            } else {
+                let base = rng.pick(&corpus).clone();
+                mutate(&mut rng, base)
+            };
+            let checked = catch_unwind(AssertUnwindSafe(|| {
+                let (source, result) = lagc::frontend_bytes(&input);
+                if let Err(diagnostics) = result {
+                    assert!(!diagnostics.is_empty(), "Err without diagnostics");
+                    for d in &diagnostics {
+                        for label in &d.labels {
+                            assert!(label.span.end <= source.len(), "{d:?}");
+                        }
+                    }
+                }
+            }));
+            if checked.is_err() {
+                panic!(
+                    "input {n} made the checker fail:\n{:?}",
+                    String::from_utf8_lossy(&input)
+                );
+            }
+        }
+    });
+}
