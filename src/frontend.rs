@@ -22,14 +22,18 @@ pub fn frontend(source: &str) -> Result<Model, Vec<Diagnostic>> {
     check::check(&ast)
 }
 
-/// The front end and the derivation: every diagnostic a model can have
-/// before code generation (`lagc check` reports exactly these). Some checks
+/// The front end, the derivation and the kernel: every diagnostic a model
+/// can have before code generation prints (`lagc check` reports exactly
+/// these, and `lagc build` no others). Some checks
 /// need the symbolic stage: an initial value that violates a constraint, an
 /// identically singular mass matrix, equations (4) that fail the
 /// cross-check ([`crate::mechanics::derive_checked`], as every path).
 pub fn check_and_derive(source: &str) -> Checked {
     let model = frontend(source)?;
     let (derivation, _) = crate::mechanics::derive_checked(&model)?;
+    // What the kernel can still reject (an initial value against a
+    // constraint, an output beyond the state, …): check ≡ build.
+    crate::pipeline::kernel_of(&model, derivation.clone())?;
     Ok((model, derivation))
 }
 

@@ -5,6 +5,8 @@ use crate::check::model::Model;
 use crate::diagnostic::Diagnostic;
 use crate::emit::{emit_crate, EmitOptions, GeneratedCrate};
 use crate::field::{field_system, local_field_note};
+use crate::kernel::Kernel;
+use crate::mechanics::Derivation;
 
 /// The generated crate of `model`, with the notes the build should show
 /// (e.g. that the local field method is used).
@@ -12,7 +14,20 @@ pub fn generate_crate(
     model: &Model,
     options: &EmitOptions,
 ) -> Result<(GeneratedCrate, Vec<Diagnostic>), Vec<Diagnostic>> {
-    let (mut derivation, _) = crate::mechanics::derive_checked(model)?;
+    let (derivation, _) = crate::mechanics::derive_checked(model)?;
+    let (kernel, notes) = kernel_of(model, derivation)?;
+    let generated = emit_crate(&kernel, options)?;
+    Ok((generated, notes))
+}
+
+/// Every stage after the derivation that can reject a model, short of
+/// printing: the field system, the kernel (initial values, outputs, stop)
+/// and the other modes' kernels. `lagc check` runs it too, so that check
+/// and build agree on every model.
+pub fn kernel_of(
+    model: &Model,
+    mut derivation: Derivation,
+) -> Result<(Kernel, Vec<Diagnostic>), Vec<Diagnostic>> {
     let reduced = derivation.reduced.clone();
     let field = field_system(&mut derivation.arena, &reduced);
     let notes: Vec<Diagnostic> = local_field_note(&field, model.lagrangian.span)
@@ -34,8 +49,7 @@ pub fn generate_crate(
         }
         kernel.modes.push(other);
     }
-    let generated = emit_crate(&kernel, options)?;
-    Ok((generated, notes))
+    Ok((kernel, notes))
 }
 
 /// The kernel of one more mode (other candidates of the implicit

@@ -1,6 +1,7 @@
 //! The one integration-test binary.
 
 mod cache;
+mod check_build;
 mod cli;
 mod errors;
 mod examples;
