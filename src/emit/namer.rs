@@ -81,6 +81,14 @@ impl Default for Namer {
 }
 
 impl Namer {
+    /// A namer with nothing taken (for names in their own namespace, such
+    /// as a struct's fields).
+    pub fn empty() -> Namer {
+        Namer {
+            used: HashSet::new(),
+        }
+    }
+
     /// A fresh snake-case identifier close to `wanted`: lower case, primes
     /// as `_d<count>` (`q1''` → `q1_d2`), other characters as `_`, a `_`
     /// suffix for keywords, a number suffix when taken.

@@ -12,7 +12,11 @@ use std::collections::{BTreeSet, HashMap};
 pub type Source<'a> = &'a dyn Fn(Symbol) -> Option<TokenStream>;
 
 pub struct SymbolNames {
+    /// The locals that hold the params in generated functions.
     pub params: Vec<Ident>,
+    /// The params' field names in `Params`: the model's own names (a
+    /// keyword gets a `_`), since fields cannot clash with locals.
+    pub param_fields: Vec<Ident>,
     pub masses: Vec<Ident>,
     pub mass_fns: Vec<Ident>,
     symbols: HashMap<Symbol, Ident>,
@@ -26,6 +30,8 @@ impl SymbolNames {
         let mut namer = Namer::default();
         let names = arena.names().clone();
         let params = names.params.iter().map(|n| namer.fresh(n)).collect();
+        let mut field_namer = Namer::empty();
+        let param_fields = names.params.iter().map(|n| field_namer.fresh(n)).collect();
         let masses = names.masses.iter().map(|n| namer.fresh(n)).collect();
         let mass_fns = names
             .masses
@@ -40,6 +46,7 @@ impl SymbolNames {
         }
         SymbolNames {
             params,
+            param_fields,
             masses,
             mass_fns,
             symbols,
@@ -82,9 +89,10 @@ impl SymbolNames {
             idents.insert(s, name.clone());
             match s {
                 Symbol::Time => uses_time = true,
-                Symbol::Param(_) => {
+                Symbol::Param(i) => {
                     uses_params = true;
-                    prelude.push(quote! { let #name = p.#name; });
+                    let field = ident_tokens(self.param_fields.get(i as usize));
+                    prelude.push(quote! { let #name = p.#field; });
                 }
                 Symbol::Mass(i) => {
                     uses_params = true;
@@ -174,8 +182,12 @@ impl Code {
         // (clippy's `let_and_return`).
         if self.lets.is_empty() && self.prelude.len() == 1 && !self.uses_time {
             let binding = self.prelude[0].to_string();
-            if binding == format!("let {root} = p . {root} ;") {
-                return quote! { #params.#root };
+            let field = binding
+                .strip_prefix(&format!("let {root} = p . "))
+                .and_then(|rest| rest.strip_suffix(" ;"));
+            if let Some(field) = field {
+                let field = proc_macro2::Ident::new(field, proc_macro2::Span::call_site());
+                return quote! { #params.#field };
             }
         }
         let statements = self.statements(params);

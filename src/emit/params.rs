@@ -8,11 +8,25 @@ use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 
 pub fn params_code(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
-    let fields = names.params.clone();
+    let locals = names.params.clone();
+    let fields = names.param_fields.clone();
+    // `Params { k: k_2 }`, or the shorthand where the names agree (clippy's
+    // `redundant_field_names`).
+    let initialisers: Vec<TokenStream> = fields
+        .iter()
+        .zip(&locals)
+        .map(|(f, l)| {
+            if f == l {
+                quote! { #f }
+            } else {
+                quote! { #f: #l }
+            }
+        })
+        .collect();
     let mut statements = Vec::new();
     for (i, param) in kernel.params.iter().enumerate() {
         let code = names.code(&kernel.arena, &[param.value], &|_| None);
-        let name = &fields[i];
+        let name = &locals[i];
         // Earlier params are locals here already: no bindings from `p`.
         let lets = &code.lets;
         let root = &code.roots[0];
@@ -71,7 +85,7 @@ pub fn params_code(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
             /// expressions with the values before them.
             pub fn with_overrides(#overrides: &[Option<f64>]) -> Params {
                 #(#statements)*
-                Params { #(#fields),* }
+                Params { #(#initialisers),* }
             }
 
             /// The params from their values in declaration order.
