@@ -34,6 +34,8 @@ MODELS = [
     "benches/data/double_pendulum_mass_loss.lag",
     "tests/data/mass_law_forms/sleigh_mass.lag",
     "tests/data/mass_law_forms/rocket_mass.lag",
+    "examples/rolling_disk_3d.lag",
+    "examples/ball_on_turntable.lag",
 ]
 TOLERANCES = "1e-5,1e-6,1e-7,1e-8,1e-9,1e-10,1e-11"
 OUT = "target/field-vs-direct"

@@ -15,6 +15,7 @@ mod mechanics;
 mod parser;
 mod report;
 mod robustness;
+mod rolling_bodies;
 mod runtime_failures;
 mod source_text;
 mod stiff_extreme;
