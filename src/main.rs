@@ -110,6 +110,11 @@ struct BuildArgs {
     /// Write into DIR even when it holds files lagc did not write.
     #[arg(long)]
     force: bool,
+    /// Where to write the runtime library the crate depends on (default:
+    /// DIR/lagc-runtime). Give several models' crates one runtime to use
+    /// them together in one program.
+    #[arg(long, value_name = "RUNTIME_DIR")]
+    runtime: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -286,7 +291,24 @@ fn generate(
 }
 
 fn build(args: &BuildArgs) -> ExitCode {
-    let generated = match generate(&args.file, cli::RUNTIME_IN_CRATE, None) {
+    let runtime_dir = args
+        .runtime
+        .clone()
+        .unwrap_or_else(|| args.output.join(cli::RUNTIME_IN_CRATE));
+    // The crate's path to the runtime, relative where both can be placed.
+    let runtime_path = match &args.runtime {
+        None => cli::RUNTIME_IN_CRATE.to_string(),
+        Some(dir) => {
+            let made =
+                std::fs::create_dir_all(dir).and_then(|()| std::fs::create_dir_all(&args.output));
+            if let Err(error) = made {
+                eprintln!("error: cannot create `{}`: {error}", dir.display());
+                return ExitCode::from(EXIT_USAGE);
+            }
+            cli::relative_path(&args.output, dir)
+        }
+    };
+    let generated = match generate(&args.file, &runtime_path, None) {
         Ok(generated) => generated,
         Err(status) => return status,
     };
@@ -299,7 +321,7 @@ fn build(args: &BuildArgs) -> ExitCode {
         return ExitCode::from(EXIT_USAGE);
     }
     let written = cli::write_crate(&generated, &args.output)
-        .and_then(|()| cli::write_runtime(&args.output.join(cli::RUNTIME_IN_CRATE)))
+        .and_then(|()| cli::write_runtime(&runtime_dir))
         .and_then(|()| {
             std::fs::write(
                 args.output.join(cli::MARKER),

@@ -145,3 +145,31 @@ pub fn path_key(file: &Path) -> String {
 pub fn run_binary(binary: &Path, args: &[String]) -> std::io::Result<ExitStatus> {
     Command::new(binary).args(args).status()
 }
+
+/// The path of `to` as seen from the directory `from` (both existing):
+/// relative when they share a root, else `to` made absolute.
+pub fn relative_path(from: &Path, to: &Path) -> String {
+    let (Ok(from), Ok(to)) = (from.canonicalize(), to.canonicalize()) else {
+        return to.display().to_string();
+    };
+    let common = from
+        .components()
+        .zip(to.components())
+        .take_while(|(a, b)| a == b)
+        .count();
+    if common == 0 {
+        return to.display().to_string();
+    }
+    let mut path = PathBuf::new();
+    for _ in from.components().skip(common) {
+        path.push("..");
+    }
+    for part in to.components().skip(common) {
+        path.push(part);
+    }
+    if path.as_os_str().is_empty() {
+        ".".to_string()
+    } else {
+        path.display().to_string()
+    }
+}

@@ -13,6 +13,7 @@ mod language_v2;
 mod mass_law_forms;
 mod mechanics;
 mod parser;
+mod readme_program;
 mod report;
 mod robustness;
 mod rolling_bodies;
