@@ -55,6 +55,12 @@ enum Command {
     /// and the run summary to stderr. Exit status: that of the model's
     /// binary (3 on a numerical failure), or 1/2 as for `build`.
     Run(RunArgs),
+    /// The build cache: list its models, or clean it.
+    ///
+    /// `lagc run` keeps each model's crate and binary in the cache and
+    /// removes the least recently run ones when the cache outgrows
+    /// `$LAGC_CACHE_MAX_BYTES` (default 4 GB).
+    Cache(CacheArgs),
     /// Error against run time: every method at a ladder of tolerances.
     ///
     /// Builds the model's crate (cached, as `run`) and runs it for the
@@ -137,6 +143,22 @@ struct RunArgs {
 }
 
 #[derive(Debug, Args)]
+struct CacheArgs {
+    #[command(subcommand)]
+    action: CacheAction,
+}
+
+#[derive(Debug, Subcommand)]
+enum CacheAction {
+    /// Every cached model: its file, size and when it last ran, least
+    /// recently run first.
+    List,
+    /// Remove every cached model, binary and runtime (the next `lagc run`
+    /// of a model rebuilds it).
+    Clean,
+}
+
+#[derive(Debug, Args)]
 struct DeriveArgs {
     /// The `.lag` model.
     file: PathBuf,
@@ -170,6 +192,7 @@ fn main() -> ExitCode {
         Command::Derive(args) => derive(&args),
         Command::Build(args) => build(&args),
         Command::Run(args) => run(&args),
+        Command::Cache(args) => cache(&args),
         Command::Report(args) => report(&args),
     }
 }
@@ -373,7 +396,7 @@ fn run(args: &RunArgs) -> ExitCode {
         }
         Ok(_) => {}
     }
-    let binary = match build_cached(&generated) {
+    let binary = match build_cached(&generated, &args.file) {
         Ok(binary) => binary,
         Err(status) => return status,
     };
@@ -390,7 +413,10 @@ fn run(args: &RunArgs) -> ExitCode {
 }
 
 /// Writes the crate into the cache and builds it there; the binary's path.
-fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitCode> {
+fn build_cached(
+    generated: &lagc::emit::GeneratedCrate,
+    model_file: &Path,
+) -> Result<PathBuf, ExitCode> {
     let Some(cache) = cli::cache_dir() else {
         eprintln!("error: no cache directory: set LAGC_CACHE_DIR (or XDG_CACHE_HOME or HOME)");
         return Err(ExitCode::from(EXIT_USAGE));
@@ -398,7 +424,17 @@ fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitC
     let crate_dir = cache.join("crates").join(&generated.package);
     let target_dir = cache.join("target");
     let written = cli::write_runtime(&cache.join(cli::runtime_dir_name()))
-        .and_then(|()| cli::write_crate(generated, &crate_dir));
+        .and_then(|()| cli::write_crate(generated, &crate_dir))
+        .and_then(|()| {
+            let source = model_file
+                .canonicalize()
+                .unwrap_or_else(|_| model_file.to_path_buf());
+            std::fs::write(
+                crate_dir.join(cli::cache::SOURCE),
+                source.display().to_string(),
+            )
+        })
+        .and_then(|()| std::fs::write(crate_dir.join(cli::cache::LAST_RUN), ""));
     if let Err(error) = written {
         eprintln!("error: cannot write to `{}`: {error}", crate_dir.display());
         return Err(ExitCode::from(EXIT_USAGE));
@@ -431,6 +467,18 @@ fn build_cached(generated: &lagc::emit::GeneratedCrate) -> Result<PathBuf, ExitC
     // missing output), and refused if it still does not answer.
     for attempt in 0..2 {
         if cli::binary_hash(&binary).as_deref() == Some(generated.source_hash.as_str()) {
+            let removed = cli::cache::evict(
+                &cache,
+                cache_bound(),
+                &cli::runtime_dir_name(),
+                &generated.package,
+            );
+            if !removed.is_empty() {
+                eprintln!(
+                    "note: the cache outgrew its bound; removed the {} least recently run model(s)",
+                    removed.len()
+                );
+            }
             return Ok(binary);
         }
         if attempt == 0 {
@@ -480,7 +528,7 @@ fn report(args: &ReportArgs) -> ExitCode {
         Ok(generated) => generated,
         Err(status) => return status,
     };
-    let binary = match build_cached(&generated) {
+    let binary = match build_cached(&generated, &args.file) {
         Ok(binary) => binary,
         Err(status) => return status,
     };
@@ -531,4 +579,58 @@ fn report(args: &ReportArgs) -> ExitCode {
     println!("work-precision plot: {}", svg_path.display());
     println!("data: {}", csv_path.display());
     ExitCode::SUCCESS
+}
+
+/// The cache's size bound: `$LAGC_CACHE_MAX_BYTES`, or the default.
+fn cache_bound() -> u64 {
+    std::env::var("LAGC_CACHE_MAX_BYTES")
+        .ok()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or(cli::cache::DEFAULT_MAX_BYTES)
+}
+
+fn cache(args: &CacheArgs) -> ExitCode {
+    let Some(cache) = cli::cache_dir() else {
+        eprintln!("error: no cache directory: set LAGC_CACHE_DIR (or XDG_CACHE_HOME or HOME)");
+        return ExitCode::from(EXIT_USAGE);
+    };
+    match args.action {
+        CacheAction::List => {
+            let entries = cli::cache::entries(&cache);
+            println!("cache: {}", cache.display());
+            for e in entries.iter().rev() {
+                println!(
+                    "  {:<40} {:>9}  {:<14} {}",
+                    e.package,
+                    cli::cache::human(e.bytes),
+                    cli::cache::age(e.last_run),
+                    e.source.as_deref().unwrap_or("(model file not recorded)")
+                );
+            }
+            println!(
+                "{} model(s); {} in all (bound {})",
+                entries.len(),
+                cli::cache::human(cli::cache::size(&cache)),
+                cli::cache::human(cache_bound())
+            );
+            ExitCode::SUCCESS
+        }
+        CacheAction::Clean => {
+            let bytes = cli::cache::size(&cache);
+            match std::fs::remove_dir_all(&cache) {
+                Ok(()) => {
+                    eprintln!("removed {} ({})", cache.display(), cli::cache::human(bytes));
+                    ExitCode::SUCCESS
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    eprintln!("the cache {} is empty", cache.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: cannot remove `{}`: {e}", cache.display());
+                    ExitCode::from(EXIT_USAGE)
+                }
+            }
+        }
+    }
 }

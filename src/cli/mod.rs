@@ -2,6 +2,7 @@
 //! the build cache, running cargo and the model's binary. Used only by
 //! `main.rs` (the library does no IO).
 
+pub mod cache;
 pub mod cargo;
 pub mod progress;
 pub mod report;

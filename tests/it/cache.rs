@@ -152,3 +152,52 @@ fn an_endless_input_file_is_refused() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("larger than 16 MiB"), "{stderr}");
 }
+
+fn lagc_in(cache: &Path, args: &[&str], max_bytes: Option<&str>) -> Output {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_lagc"));
+    command
+        .args(args)
+        .current_dir(crate::root())
+        .env("LAGC_CACHE_DIR", cache);
+    if let Some(bound) = max_bytes {
+        command.env("LAGC_CACHE_MAX_BYTES", bound);
+    }
+    command.output().unwrap()
+}
+
+#[test]
+fn the_cache_lists_its_models_evicts_the_least_recently_run_and_cleans() {
+    let cache = scratch("cache-list");
+    let _ = std::fs::remove_dir_all(&cache);
+    let run = |model: &str, bound: Option<&str>| {
+        let output = lagc_in(&cache, &["run", model, "--quiet"], bound);
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    let list = || String::from_utf8(lagc_in(&cache, &["cache", "list"], None).stdout).unwrap();
+    run("examples/paper.lag", None);
+    let listed = list();
+    assert!(
+        listed.contains("lag-paper-") && listed.contains("examples/paper.lag"),
+        "{listed}"
+    );
+    // A bound of one byte: the run keeps its own model and evicts the rest.
+    let stderr = run("examples/damped_oscillator.lag", Some("1"));
+    assert!(
+        stderr.contains("removed the 1 least recently run model"),
+        "{stderr}"
+    );
+    let listed = list();
+    assert!(
+        !listed.contains("lag-paper-") && listed.contains("lag-damped-oscillator-"),
+        "{listed}"
+    );
+    let cleaned = lagc_in(&cache, &["cache", "clean"], None);
+    assert!(cleaned.status.success());
+    assert!(!cache.exists());
+    assert!(list().contains("0 model(s)"));
+}
