@@ -18,6 +18,7 @@ pub mod field;
 pub mod frontend;
 pub mod ir;
 pub mod kernel;
+pub mod latex;
 pub mod mechanics;
 pub mod pipeline;
 pub mod report;

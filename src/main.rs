@@ -274,7 +274,16 @@ fn derive(args: &DeriveArgs) -> ExitCode {
                 let field = lagc::field::field_system(&mut arena, &reduced);
                 print!("{}", field.text(&arena, &reduced.state));
             }
-            Format::Latex => print!("{}", derivation.latex()),
+            Format::Latex => {
+                let reduced = derivation.reduced.clone();
+                let mut arena = derivation.arena.clone();
+                let field = lagc::field::field_system(&mut arena, &reduced);
+                print!(
+                    "\\begin{{align*}}\n{}{}\\end{{align*}}\n",
+                    derivation.latex_lines(),
+                    field.latex_lines(&arena, &reduced.state)
+                );
+            }
         }
         eprintln!(
             "cross-check of (4) against the multiplier route: passed at {} points",

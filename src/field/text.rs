@@ -66,3 +66,46 @@ impl FieldSystem {
         out
     }
 }
+
+impl FieldSystem {
+    /// The field method's lines for the `align*` block of `lagc derive
+    /// --format latex`: the ansatz (10), the basic equation (9) and the
+    /// coefficient system.
+    pub fn latex_lines(&self, arena: &Arena, state: &[Symbol]) -> String {
+        let mut out = String::new();
+        let (Some(basic), Some(&x1)) = (self.basic_equation, state.first()) else {
+            return out;
+        };
+        let symbol = |s: Symbol| {
+            let mut a = arena.clone();
+            let e = a.symbol(s);
+            a.latex(e)
+        };
+        let mut ansatz = symbol(self.coefficients[0]);
+        for (&x, &f) in state.iter().zip(&self.coefficients).skip(1) {
+            ansatz.push_str(&format!(" + {} {}", symbol(f), symbol(x)));
+        }
+        out.push_str(&crate::latex::equation(
+            &symbol(x1),
+            &ansatz,
+            "\\text{ansatz (10)}",
+        ));
+        out.push_str(&crate::latex::equation(
+            &arena.latex(basic),
+            "0",
+            "\\text{(9)}",
+        ));
+        if let Some(system) = &self.coefficient_system {
+            let kind = if system.linear { "linear" } else { "Riccati" };
+            for (&rate, &rhs) in self.coefficient_rates.iter().zip(&system.rhs) {
+                let tag = format!("\\text{{coefficient system ({kind})}}");
+                out.push_str(&crate::latex::equation(
+                    &symbol(rate),
+                    &arena.latex(rhs),
+                    &tag,
+                ));
+            }
+        }
+        out
+    }
+}

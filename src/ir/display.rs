@@ -98,15 +98,61 @@ fn name_or(names: &[String], i: u32, prefix: &str) -> String {
         .unwrap_or_else(|| format!("{prefix}{i}"))
 }
 
-const GREEK: [&str; 24] = [
-    "alpha", "beta", "gamma", "delta", "epsilon", "zeta", "eta", "theta", "iota", "kappa",
-    "lambda", "mu", "nu", "xi", "pi", "rho", "sigma", "tau", "upsilon", "phi", "chi", "psi",
-    "omega", "Omega",
+/// Greek letters LaTeX has commands for (the capitals that look like Latin
+/// ones, `Alpha`, `Beta`, …, have none).
+const GREEK: [&str; 38] = [
+    "alpha",
+    "beta",
+    "gamma",
+    "delta",
+    "epsilon",
+    "varepsilon",
+    "zeta",
+    "eta",
+    "theta",
+    "vartheta",
+    "iota",
+    "kappa",
+    "lambda",
+    "mu",
+    "nu",
+    "xi",
+    "pi",
+    "rho",
+    "sigma",
+    "tau",
+    "upsilon",
+    "phi",
+    "varphi",
+    "chi",
+    "psi",
+    "omega",
+    "Gamma",
+    "Delta",
+    "Theta",
+    "Lambda",
+    "Xi",
+    "Pi",
+    "Sigma",
+    "Upsilon",
+    "Phi",
+    "Psi",
+    "Omega",
+    "ell",
 ];
 
 /// `alpha` → `\alpha`, `q1` → `q_{1}`, `M0` → `M_{0}`, `x_max` → `x_{max}`,
 /// other multi-letter names upright.
 fn latex_name(name: &str) -> String {
+    // `f1'`: the name's primes follow its LaTeX form.
+    let primes = name.len() - name.trim_end_matches('\'').len();
+    if primes > 0 {
+        return format!(
+            "{}{}",
+            latex_name(&name[..name.len() - primes]),
+            "'".repeat(primes)
+        );
+    }
     let (stem, sub) = match name.split_once('_') {
         Some((stem, sub)) if !stem.is_empty() && !sub.is_empty() => (stem, sub),
         _ => {

@@ -183,9 +183,15 @@ impl Derivation {
 
     /// The equations as a LaTeX `align*` block.
     pub fn latex(&self) -> String {
+        format!("\\begin{{align*}}\n{}\\end{{align*}}\n", self.latex_lines())
+    }
+
+    /// The lines of [`Derivation::latex`] without the environment, for
+    /// more lines (the field method's) to follow in one block.
+    pub fn latex_lines(&self) -> String {
         let mut arena = self.arena.clone();
         let a = &mut arena;
-        let mut out = String::from("\\begin{align*}\n");
+        let mut out = String::new();
         for (name, value) in &self.lets {
             let parts: Vec<String> = value.iter().map(|&e| sum(a, e, Style::Latex)).collect();
             let shown = if parts.len() == 1 {
@@ -193,21 +199,25 @@ impl Derivation {
             } else {
                 format!("\\left({}\\right)", parts.join(",\\ "))
             };
-            let _ = writeln!(out, "  \\mathit{{{name}}} &= {shown} && \\text{{let}} \\\\");
+            let lhs = format!("\\mathit{{{name}}}");
+            out.push_str(&crate::latex::equation(&lhs, &shown, "\\text{let}"));
         }
         for &(d, phi) in &self.constraints {
             let lhs = name(a, jet(d, self.k), Style::Latex);
             let rhs = sum(a, phi, Style::Latex);
-            let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{constraint}} \\\\");
+            out.push_str(&crate::latex::equation(&lhs, &rhs, "\\text{constraint}"));
         }
         for eq in &self.equations {
             let lhs = sum(a, eq.lhs, Style::Latex);
             let rhs = sum(a, eq.rhs, Style::Latex);
             let q = name(a, jet(eq.coord, 0), Style::Latex);
-            let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{(4) for }} {q} \\\\");
+            out.push_str(&crate::latex::equation(
+                &lhs,
+                &rhs,
+                &format!("\\text{{(4) for }} {q}"),
+            ));
         }
         self.write_reduced(a, &mut out, Style::Latex);
-        out.push_str("\\end{align*}\n");
         out
     }
 
@@ -225,7 +235,7 @@ impl Derivation {
                 for (j, &e) in exprs.iter().enumerate() {
                     let rhs = sum(a, e, style);
                     let lhs = name(a, jet(j as u32, u), style);
-                    let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{(7)}} \\\\");
+                    out.push_str(&crate::latex::equation(&lhs, &rhs, "\\text{(7)}"));
                 }
             }
             (
@@ -258,7 +268,8 @@ impl Derivation {
                             let _ = writeln!(out, "  0 = {rhs}");
                         }
                         Style::Latex => {
-                            let _ = writeln!(out, "  0 &= {rhs} && \\text{{(7), {how}}} \\\\");
+                            let tag = format!("\\text{{(7), {how}}}");
+                            out.push_str(&crate::latex::equation("0", &rhs, &tag));
                         }
                     }
                 }
@@ -270,7 +281,7 @@ impl Derivation {
                             let _ = writeln!(out, "  {lhs} = {rhs}");
                         }
                         Style::Latex => {
-                            let _ = writeln!(out, "  {lhs} &= {rhs} && \\text{{(7)}} \\\\");
+                            out.push_str(&crate::latex::equation(&lhs, &rhs, "\\text{(7)}"));
                         }
                     }
                 }

@@ -10,6 +10,7 @@ mod generated;
 mod ir;
 mod kernel;
 mod language_v2;
+mod latex;
 mod mass_law_forms;
 mod mechanics;
 mod parser;

@@ -1,0 +1,63 @@
+//! `lagc derive --format latex` goes into a paper: every example's block
+//! compiles with a real TeX engine, and long equations are broken so that
+//! none runs far off the page. Skipped, saying so, where no `pdflatex` is
+//! installed (Debian: texlive-latex-base, texlive-latex-recommended).
+
+use std::process::Command;
+
+/// The widest line allowed past the text width, in TeX points (the 3-D
+/// rolling disk's longest unbreakable factor is 176 pt).
+const OVERFULL_LIMIT_PT: f64 = 200.0;
+
+#[test]
+fn every_examples_latex_compiles_and_fits_the_page() {
+    if Command::new("pdflatex").arg("--version").output().is_err() {
+        eprintln!("SKIPPED: no pdflatex on this machine (install texlive-latex-base)");
+        return;
+    }
+    let root = crate::root();
+    let dir = root.join("target/latex-tests");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut examples: Vec<_> = std::fs::read_dir(root.join("examples"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "lag"))
+        .collect();
+    examples.sort();
+    for path in examples {
+        let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        let derived = Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .args(["derive", "--format", "latex"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(derived.status.success(), "{name}: derive failed");
+        let block = String::from_utf8(derived.stdout).unwrap();
+        assert!(
+            block.contains("(4)") || block.contains("(7)"),
+            "{name}: {block}"
+        );
+        let document = format!(
+            "\\documentclass{{article}}\\usepackage{{amsmath}}\\allowdisplaybreaks\n\
+             \\usepackage[margin=2cm]{{geometry}}\\begin{{document}}\n{block}\\end{{document}}\n"
+        );
+        std::fs::write(dir.join(format!("{name}.tex")), document).unwrap();
+        let tex = Command::new("pdflatex")
+            .args(["-interaction=nonstopmode", "-halt-on-error"])
+            .arg(format!("{name}.tex"))
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let log = String::from_utf8_lossy(&tex.stdout);
+        assert!(tex.status.success(), "{name}: pdflatex failed:\n{log}");
+        let widest = log
+            .lines()
+            .filter_map(|l| l.strip_prefix("Overfull \\hbox ("))
+            .filter_map(|l| l.split("pt").next()?.parse::<f64>().ok())
+            .fold(0.0, f64::max);
+        assert!(
+            widest <= OVERFULL_LIMIT_PT,
+            "{name}: a line runs {widest} pt past the text width"
+        );
+    }
+}
