@@ -65,7 +65,6 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
 
 /// `set_regime`, `switching_functions`, `stop`, `outputs`.
 pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
-    let arena = &kernel.arena;
     let mut items = Vec::new();
     let set_branches = if kernel.switches.functions.is_empty() {
         TokenStream::new()
@@ -95,40 +94,18 @@ pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
             .iter()
             .flat_map(|c| c.pivots.iter().copied())
             .collect();
-        let code = names.code(arena, &roots, from_x);
-        let statements = code.statements(quote! { self.params });
-        let t = code.time_arg();
-        let x = if code.uses_source {
-            quote! { x }
-        } else {
-            quote! { _x }
-        };
-        let slots = (0..code.roots.len()).map(Literal::usize_unsuffixed);
-        let roots = &code.roots;
-        items.push(quote! {
-            fn pivots(&self, #t: f64, #x: &[f64], out: &mut [f64]) {
-                #statements
-                #(out[#slots] = #roots;)*
-            }
-        });
+        items.push(values_fn(kernel, names, from_x, &roots, "pivots", "out"));
     }
     if !kernel.switches.functions.is_empty() {
-        let code = names.code(arena, &kernel.switches.functions, from_x);
-        let statements = code.statements(quote! { self.params });
-        let t = code.time_arg();
-        let x = if code.uses_source {
-            quote! { x }
-        } else {
-            quote! { _x }
-        };
-        let slots = (0..code.roots.len()).map(Literal::usize_unsuffixed);
-        let roots = &code.roots;
-        items.push(quote! {
-            fn switching_functions(&self, #t: f64, #x: &[f64], g: &mut [f64]) {
-                #statements
-                #(g[#slots] = #roots;)*
-            }
-        });
+        let roots = &kernel.switches.functions;
+        items.push(values_fn(
+            kernel,
+            names,
+            from_x,
+            roots,
+            "switching_functions",
+            "g",
+        ));
     }
     if let Some(stop) = &kernel.stop {
         let cond = condition(stop);
@@ -140,22 +117,7 @@ pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
     }
     if !kernel.outputs.is_empty() {
         let roots: Vec<_> = kernel.outputs.iter().map(|&(_, e)| e).collect();
-        let code = names.code(arena, &roots, from_x);
-        let statements = code.statements(quote! { self.params });
-        let t = code.time_arg();
-        let x = if code.uses_source {
-            quote! { x }
-        } else {
-            quote! { _x }
-        };
-        let slots = (0..code.roots.len()).map(Literal::usize_unsuffixed);
-        let roots = &code.roots;
-        items.push(quote! {
-            fn outputs(&self, #t: f64, #x: &[f64], out: &mut [f64]) {
-                #statements
-                #(out[#slots] = #roots;)*
-            }
-        });
+        items.push(values_fn(kernel, names, from_x, &roots, "outputs", "out"));
     }
     quote! { #(#items)* }
 }
@@ -178,6 +140,36 @@ fn condition(cond: &BranchCond) -> TokenStream {
         BranchCond::Or(a, b) => {
             let (a, b) = (condition(a), condition(b));
             quote! { (#a || #b) }
+        }
+    }
+}
+
+/// `fn NAME(&self, t, x, OUT: &mut [f64])` writing `roots` in order: the
+/// shape of the model's pivots, switching functions and outputs.
+fn values_fn(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    from_x: Source,
+    roots: &[crate::ir::ExprId],
+    name: &str,
+    out: &str,
+) -> TokenStream {
+    let code = names.code(&kernel.arena, roots, from_x);
+    let statements = code.statements(quote! { self.params });
+    let t = code.time_arg();
+    let x = if code.uses_source {
+        quote! { x }
+    } else {
+        quote! { _x }
+    };
+    let slots = (0..code.roots.len()).map(Literal::usize_unsuffixed);
+    let values = &code.roots;
+    let name = proc_macro2::Ident::new(name, proc_macro2::Span::call_site());
+    let out = proc_macro2::Ident::new(out, proc_macro2::Span::call_site());
+    quote! {
+        fn #name(&self, #t: f64, #x: &[f64], #out: &mut [f64]) {
+            #statements
+            #(#out[#slots] = #values;)*
         }
     }
 }

@@ -111,12 +111,7 @@ fn run(binary: &Path, args: &[&str]) -> Result<Run, String> {
 }
 
 fn exact_error(run: &Run) -> f64 {
-    let line = run
-        .stderr
-        .lines()
-        .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
-        .unwrap_or_else(|| panic!("no exact error in {}", run.stderr));
-    line.trim().parse().unwrap()
+    crate::exact_error(&run.stderr)
 }
 
 /// Examples whose exact solution both methods must meet to 1e-8.

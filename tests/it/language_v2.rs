@@ -369,17 +369,6 @@ fn every_kink_of_a_rectified_forcing_is_an_event() {
     }
 }
 
-/// The exact-solution error a run reports.
-fn reported_error(run: &Run) -> f64 {
-    run.stderr
-        .lines()
-        .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
-        .unwrap_or_else(|| panic!("no exact error in {}", run.stderr))
-        .trim()
-        .parse()
-        .unwrap()
-}
-
 #[test]
 fn every_function_and_operator_runs_and_outputs_what_it_means() {
     let binary = build_file(&crate::root().join("tests/data/v2/constructs.lag"));
@@ -389,7 +378,7 @@ fn every_function_and_operator_runs_and_outputs_what_it_means() {
         // min and max in the forces: a kink at t = 1 exactly (a switch
         // whose root the secant hits exactly once sent the event back to
         // the step's start).
-        let error = reported_error(&run);
+        let error = crate::exact_error(&run.stderr);
         assert!(error < 1e-8, "{method}: error {error:e}");
         let col = |name: &str| run.column(name);
         let (x, y, xd, yd) = (col("x"), col("y"), col("x'"), col("y'"));

@@ -42,3 +42,15 @@ pub fn check_bytes(bytes: &[u8], file_name: &str) -> Result<lagc::check::model::
 pub fn root() -> std::path::PathBuf {
     std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
+
+/// The error against the model's `exact` lines that a generated binary's
+/// summary reports on stderr.
+pub fn exact_error(stderr: &str) -> f64 {
+    stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
+        .unwrap_or_else(|| panic!("no exact error in {stderr}"))
+        .trim()
+        .parse()
+        .unwrap()
+}

@@ -19,22 +19,12 @@ fn run(binary: &std::path::Path, args: &[&str]) -> (Vec<Vec<f64>>, String) {
     (rows, stderr)
 }
 
-fn reported_error(stderr: &str) -> f64 {
-    stderr
-        .lines()
-        .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
-        .unwrap_or_else(|| panic!("no exact error in {stderr}"))
-        .trim()
-        .parse()
-        .unwrap()
-}
-
 #[test]
 fn a_ball_on_a_turntable_turns_at_two_sevenths_of_the_table() {
     let binary = build("ball_on_turntable");
     for method in ["field", "direct"] {
         let (_, stderr) = run(&binary, &["--method", method, "--quiet"]);
-        let error = reported_error(&stderr);
+        let error = crate::exact_error(&stderr);
         assert!(
             error < 1e-8,
             "{method}: error {error:e} against Routh's closed form"
