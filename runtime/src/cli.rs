@@ -640,7 +640,7 @@ fn ensemble<M: Model + 'static>(
             &members,
             times,
             |_, states| {
-                for (k, s) in states.iter().enumerate() {
+                for (k, s) in states.rows().enumerate() {
                     let at = (i * count + k) * n;
                     field_states[at..at + n].copy_from_slice(s);
                 }

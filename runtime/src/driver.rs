@@ -670,7 +670,7 @@ pub fn run_ensemble<M: Model + 'static>(
     t1: f64,
     members: &[Vec<f64>],
     times: &[f64],
-    mut sample: impl FnMut(f64, &[Vec<f64>]),
+    mut sample: impl FnMut(f64, &crate::ensemble::States),
 ) -> Result<Outcome, Failure> {
     if M::SWITCHES > 0 || !M::CONSTRAINTS.is_empty() {
         return Err(Failure::new(t0, FailureKind::NotAffine));
@@ -682,12 +682,13 @@ pub fn run_ensemble<M: Model + 'static>(
         ..options.clone()
     };
     let mut solver = make_solver(model, &field, t0, &members[0], h_max)?;
-    if !solver.track_members(members.to_vec()) {
+    let initial = crate::ensemble::States::from_rows(members);
+    if !solver.track_members(initial.clone()) {
         return Err(Failure::new(t0, FailureKind::NotAffine));
     }
     let mut next = 0;
     while next < times.len() && times[next] <= t0 {
-        sample(times[next], members);
+        sample(times[next], &initial);
         next += 1;
     }
     while solver.time() < t1 {

@@ -27,6 +27,7 @@ pub mod controller;
 pub mod direct;
 pub mod dop853;
 pub mod driver;
+pub mod ensemble;
 pub mod events;
 pub mod failure;
 pub mod field;

@@ -55,12 +55,12 @@ pub trait Solver<M: Model> {
     /// Follows other initial states through the same field (an ensemble:
     /// exact for affine motions, first order in the spread for others);
     /// `false` when the method cannot.
-    fn track_members(&mut self, _members: Vec<Vec<f64>>) -> bool {
+    fn track_members(&mut self, _members: crate::ensemble::States) -> bool {
         false
     }
 
     /// The tracked members' states at `t` in `[previous_time, time]`.
-    fn members_at(&mut self, _model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
+    fn members_at(&mut self, _model: &M, t: f64) -> Result<crate::ensemble::States, Failure> {
         Err(Failure::new(t, crate::failure::FailureKind::NotAffine))
     }
 }

@@ -64,7 +64,7 @@ fn largest_difference<M: Model + 'static>(spread: f64, count: usize) -> f64 {
     };
     let mut field: Vec<Vec<Vec<f64>>> = Vec::new();
     run_ensemble(&mut model, &options, t0, t1, &all, &times, |_, states| {
-        field.push(states.to_vec())
+        field.push(states.rows().map(<[f64]>::to_vec).collect())
     })
     .unwrap();
     let mut largest = 0.0_f64;

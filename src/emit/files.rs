@@ -16,6 +16,10 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/direct.rs", include_str!("../../runtime/src/direct.rs")),
     ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
     ("src/driver.rs", include_str!("../../runtime/src/driver.rs")),
+    (
+        "src/ensemble.rs",
+        include_str!("../../runtime/src/ensemble.rs"),
+    ),
     ("src/events.rs", include_str!("../../runtime/src/events.rs")),
     (
         "src/failure.rs",

@@ -8,6 +8,7 @@ use super::coefficients::{
 use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
+use crate::ensemble::States;
 use crate::failure::Failure;
 use crate::model::Model;
 use crate::solver::{Report, Solver};
@@ -23,7 +24,7 @@ pub struct AffineField {
     reanchorings: usize,
     largest_condition: f64,
     /// Ensemble members' states at the current window's anchor time.
-    members: Option<Vec<Vec<f64>>>,
+    members: Option<States>,
 }
 
 impl AffineField {
@@ -122,14 +123,15 @@ impl<M: Model> Solver<M> for AffineField {
         with_system(model, self.options.magnus, |system| window.segment(system)).map(|s| vec![s])
     }
 
-    fn track_members(&mut self, members: Vec<Vec<f64>>) -> bool {
+    fn track_members(&mut self, members: States) -> bool {
         self.members = Some(members);
         true
     }
 
-    fn members_at(&mut self, model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
+    fn members_at(&mut self, model: &M, t: f64) -> Result<States, Failure> {
         let (window, options) = (&mut self.window, &self.options);
-        let anchors = self.members.as_deref().unwrap_or(&[]);
+        let empty = States::default();
+        let anchors = self.members.as_ref().unwrap_or(&empty);
         with_system(model, options.magnus, |system| {
             window.members_at(system, options, t, anchors)
         })
@@ -193,7 +195,7 @@ fn advance_window(
     done: &mut Stats,
     reanchorings: &mut usize,
     largest_condition: &mut f64,
-    members: &mut Option<Vec<Vec<f64>>>,
+    members: &mut Option<States>,
 ) -> Result<(), Failure> {
     let mut shortenings = 0;
     loop {

@@ -24,6 +24,7 @@ use super::conditions::recover;
 use super::window::{member_states, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
+use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::method::{AnyStepper, Integrator};
@@ -209,8 +210,8 @@ pub struct QuasilinearField {
     stiff: bool,
     /// Ensemble members' states at the current anchor, and at the accepted
     /// window's anchor.
-    members: Option<Vec<Vec<f64>>>,
-    window_members: Option<Vec<Vec<f64>>>,
+    members: Option<States>,
+    window_members: Option<States>,
 }
 
 impl QuasilinearField {
@@ -519,12 +520,12 @@ impl<M: Model> Solver<M> for QuasilinearField {
         Ok(out)
     }
 
-    fn track_members(&mut self, members: Vec<Vec<f64>>) -> bool {
+    fn track_members(&mut self, members: States) -> bool {
         self.members = Some(members);
         true
     }
 
-    fn members_at(&mut self, model: &M, t: f64) -> Result<Vec<Vec<f64>>, Failure> {
+    fn members_at(&mut self, model: &M, t: f64) -> Result<States, Failure> {
         match self.window_members.take() {
             Some(anchors) => {
                 let states = self.members_of_window(model, t, &anchors);
@@ -562,10 +563,10 @@ impl QuasilinearField {
         &mut self,
         model: &M,
         t: f64,
-        anchors: &[Vec<f64>],
-    ) -> Result<Vec<Vec<f64>>, Failure> {
+        anchors: &States,
+    ) -> Result<States, Failure> {
         let Some(window) = self.accepted.as_mut() else {
-            return Ok(anchors.to_vec());
+            return Ok(anchors.clone());
         };
         let n = window.anchor_x.len();
         let i = window

@@ -14,6 +14,7 @@ use super::conditions::{recover, Recovered};
 use super::FieldOptions;
 use crate::budget::Budget;
 use crate::dop853::{hairer_error, Dop853, RawStep};
+use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::magnus::{LinearGenerator, Magnus};
@@ -522,8 +523,8 @@ impl Window {
         &mut self,
         system: &F,
         options: &FieldOptions,
-        anchors: &[Vec<f64>],
-    ) -> Result<Vec<Vec<f64>>, Failure> {
+        anchors: &States,
+    ) -> Result<States, Failure> {
         let y = each!(&self.stepper, s => s.state()).to_vec();
         let reference = self.current.clone();
         member_states(
@@ -543,8 +544,8 @@ impl Window {
         system: &F,
         options: &FieldOptions,
         t: f64,
-        anchors: &[Vec<f64>],
-    ) -> Result<Vec<Vec<f64>>, Failure> {
+        anchors: &States,
+    ) -> Result<States, Failure> {
         if t >= self.time() || self.steps == 0 {
             return self.members(system, options, anchors);
         }
@@ -648,29 +649,87 @@ pub fn member_states<F: FieldSystem + ?Sized>(
     anchor_x: &[f64],
     reference: &Recovered,
     y: &[f64],
-    anchors: &[Vec<f64>],
+    anchors: &States,
     t: f64,
-) -> Result<Vec<Vec<f64>>, Failure> {
+) -> Result<States, Failure> {
+    let n = anchor_x.len();
+    // The field's system is affine (the model's, or the window's
+    // linearisation), so a member's state is an affine function of its
+    // initial state: x(t) = x_b(t) + Φ(t) (x0 − x_b0). With more members
+    // than N + 1, N + 1 conditioned solutions give x_b and Φ, and every
+    // member then costs N² multiply-adds instead of a field and a solve.
+    if anchors.len() > n + 1 {
+        let base = anchors.row(0);
+        let mut probes = States {
+            n,
+            data: Vec::with_capacity((n + 1) * n),
+        };
+        probes.data.extend_from_slice(base);
+        let mut deltas = Vec::with_capacity(n);
+        for i in 0..n {
+            let delta = base[i].abs().max(1.0);
+            let start = probes.data.len();
+            probes.data.extend_from_slice(base);
+            probes.data[start + i] += delta;
+            deltas.push(delta);
+        }
+        let solved = member_states_each(system, options, anchor_x, reference, y, &probes, t)?;
+        let x_b = solved.row(0);
+        // phi[i * n + j] = ∂x_j(t)/∂x0_i.
+        let mut phi = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                phi[i * n + j] = (solved.row(i + 1)[j] - x_b[j]) / deltas[i];
+            }
+        }
+        let mut data = Vec::with_capacity(anchors.data.len());
+        for x0 in anchors.rows() {
+            let at = data.len();
+            data.extend_from_slice(x_b);
+            let x = &mut data[at..at + n];
+            for i in 0..n {
+                let d = x0[i] - base[i];
+                if d != 0.0 {
+                    for (xj, p) in x.iter_mut().zip(&phi[i * n..(i + 1) * n]) {
+                        *xj += p * d;
+                    }
+                }
+            }
+        }
+        return Ok(States { n, data });
+    }
+    member_states_each(system, options, anchor_x, reference, y, anchors, t)
+}
+
+/// [`member_states`] by one conditioned solution per member.
+fn member_states_each<F: FieldSystem + ?Sized>(
+    system: &F,
+    options: &FieldOptions,
+    anchor_x: &[f64],
+    reference: &Recovered,
+    y: &[f64],
+    anchors: &States,
+    t: f64,
+) -> Result<States, Failure> {
     let n = anchor_x.len();
     let c_ref = anchor_values(&options.anchor, anchor_x)[0];
     let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
     let mut shifted = y.to_vec();
-    anchors
-        .iter()
-        .map(|x0| {
-            shifted.copy_from_slice(y);
-            system.shift_free_term(&mut shifted, anchor_values(&options.anchor, x0)[0] - c_ref);
-            system.field(&shifted, &mut f, &mut s).ok_or_else(|| {
-                Failure::new(
-                    t,
-                    FailureKind::SingularConditionMatrix {
-                        condition: f64::INFINITY,
-                    },
-                )
-            })?;
-            Ok(reference.member(&f, &s, x0))
-        })
-        .collect()
+    let mut data = Vec::with_capacity(anchors.data.len());
+    for x0 in anchors.rows() {
+        shifted.copy_from_slice(y);
+        system.shift_free_term(&mut shifted, anchor_values(&options.anchor, x0)[0] - c_ref);
+        system.field(&shifted, &mut f, &mut s).ok_or_else(|| {
+            Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: f64::INFINITY,
+                },
+            )
+        })?;
+        data.extend(reference.member(&f, &s, x0));
+    }
+    Ok(States { n, data })
 }
 
 /// The length of the step the stepper would try next.
