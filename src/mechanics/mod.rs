@@ -27,6 +27,7 @@ mod reactive_forces;
 mod reduce;
 pub mod reduced;
 mod sample;
+pub use sample::Rng;
 mod singular;
 mod solve;
 mod star;

@@ -5,8 +5,8 @@
 use crate::ir::{apply_func, pow_value, Arena, ExprId, Func, Node, Symbol};
 use std::collections::HashMap;
 
-/// A small deterministic PRNG (SplitMix64): the checks must give the same
-/// verdict on every run.
+/// The one small deterministic PRNG (SplitMix64) of lagc and its tests:
+/// the checks must give the same verdict on every run.
 #[derive(Debug, Clone)]
 pub struct Rng(u64);
 
@@ -26,6 +26,12 @@ impl Rng {
     /// Uniform in `[lo, hi)`.
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform in `0..n` (`n > 0`; the modulo bias is far below what a
+    /// test's choice can notice).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n.max(1) as u64) as usize
     }
 }
 

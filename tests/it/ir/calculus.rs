@@ -88,7 +88,7 @@ fn finite_difference(a: &Arena, e: ExprId, v: Symbol, env: &dyn Fn(Symbol) -> f6
 /// Hundreds of random expressions: `diff` agrees with finite differences.
 #[test]
 fn derivatives_match_finite_differences() {
-    let mut rng = Rng(42);
+    let mut rng = Rng::new(42);
     let mut covered = BTreeSet::new();
     let (mut checked, total) = (0, 400);
     for i in 0..total {
@@ -213,7 +213,7 @@ fn total_derivative_on_jets() {
 /// D agrees with its definition `∂/∂t + Σ q^(r+1) ∂/∂q^(r)` on random expressions.
 #[test]
 fn total_derivative_matches_its_definition() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     for i in 0..200 {
         let mut a = arena();
         let e = random_expr(&mut a, &mut rng, 4, &mut BTreeSet::new());

@@ -33,27 +33,8 @@ pub fn num(a: &mut Arena, v: f64) -> ExprId {
     a.constant(v)
 }
 
-/// A small deterministic PRNG (SplitMix64).
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
+/// The project's one PRNG.
+pub use lagc::mechanics::Rng;
 
 /// Values for every symbol, deterministic per symbol and `seed`.
 pub fn env_at(seed: u64) -> impl Fn(Symbol) -> f64 {
@@ -65,6 +46,6 @@ pub fn env_at(seed: u64) -> impl Fn(Symbol) -> f64 {
             Symbol::Jet { coord, order } => 1000 + 10 * u64::from(coord) + u64::from(order),
             Symbol::Aux(i) => 5000 + u64::from(i),
         };
-        Rng(seed.wrapping_mul(7919).wrapping_add(key)).range(0.2, 1.4)
+        Rng::new(seed.wrapping_mul(7919).wrapping_add(key)).range(0.2, 1.4)
     }
 }

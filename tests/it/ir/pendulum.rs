@@ -102,7 +102,7 @@ fn twelve_link_pendulum() {
 
     // E_i = Σ_j c_ij [cos(θi−θj) θj'' + sin(θi−θj) θj'²] + g c_i sin θi,
     // c_ij = N − max(i, j), c_i = N − i (0-based).
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     for p in 0..3 {
         let base = env_at(p);
         let angles: Vec<f64> = (0..N).map(|_| rng.range(-3.0, 3.0)).collect();

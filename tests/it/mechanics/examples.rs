@@ -36,7 +36,7 @@ fn explicit_reduced_systems_satisfy_equation_four() {
             return;
         }
         let arena = &derivation.arena;
-        let mut rng = Rng(11);
+        let mut rng = Rng::new(11);
         let mut checked = 0;
         for _ in 0..200 {
             let mut values: HashMap<Symbol, f64> = HashMap::new();

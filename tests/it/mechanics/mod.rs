@@ -14,16 +14,5 @@ pub fn derive_source(source: &str) -> Derivation {
     derive(&model).unwrap_or_else(|d| panic!("derive: {d:#?}"))
 }
 
-/// A small deterministic PRNG (SplitMix64).
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^= z >> 31;
-        lo + (hi - lo) * (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+/// The project's one PRNG.
+pub use lagc::mechanics::Rng;

@@ -18,7 +18,7 @@ fn jet(coord: u32, order: u32) -> Symbol {
 
 /// Random values of t, alpha, M and the jets of q1, q2 up to order 3.
 fn points() -> Vec<HashMap<Symbol, f64>> {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     (0..100)
         .map(|_| {
             let mut p = HashMap::new();

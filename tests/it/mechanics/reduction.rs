@@ -122,7 +122,7 @@ fn third_order_constraint() {
     assert!(matches!(d.reduced.initial[4], InitialValue::Solved));
     assert_eq!(d.reduced.consistency.len(), 1);
     let names = d.arena.names().params.clone();
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     for _ in 0..50 {
         let params: Vec<f64> = (0..names.len()).map(|_| rng.range(0.5, 2.0)).collect();
         let jets: Vec<f64> = (0..6).map(|_| rng.range(-1.0, 1.0)).collect();
