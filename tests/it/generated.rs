@@ -68,6 +68,13 @@ pub(crate) fn build_file(path: &Path) -> PathBuf {
     let dir = base().join("crates").join(&generated.package);
     write(&generated, &dir);
     let target = base().join("target");
+    cargo_build(&dir.join("Cargo.toml"), &target, name);
+    target.join("release").join(&generated.package)
+}
+
+/// `cargo build --release --offline` of the crate at `manifest` into the
+/// shared `target`, warnings as errors; panics naming `what` on failure.
+pub(crate) fn cargo_build(manifest: &Path, target: &Path, what: &str) {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let output = Command::new(&cargo)
         .args([
@@ -77,17 +84,16 @@ pub(crate) fn build_file(path: &Path) -> PathBuf {
             "--quiet",
             "--manifest-path",
         ])
-        .arg(dir.join("Cargo.toml"))
-        .env("CARGO_TARGET_DIR", &target)
+        .arg(manifest)
+        .env("CARGO_TARGET_DIR", target)
         .env("RUSTFLAGS", "-D warnings")
         .output()
         .unwrap();
     assert!(
         output.status.success(),
-        "{name}: cargo build failed:\n{}",
+        "{what}: cargo build failed:\n{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    target.join("release").join(&generated.package)
 }
 
 struct Run {

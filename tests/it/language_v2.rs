@@ -212,11 +212,7 @@ fn a_chaplygin_sleigh_turns_several_times_keeping_its_energy() {
         assert!(turns > 2.5, "{method}: only {turns} turns");
         ends.push(run.rows.last().unwrap().clone());
     }
-    let difference = ends[0]
-        .iter()
-        .zip(&ends[1])
-        .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
-        .fold(0.0, f64::max);
+    let difference = crate::largest_difference(&ends[0], &ends[1]);
     assert!(
         difference < 1e-7,
         "field and direct differ by {difference:e}"
@@ -333,11 +329,7 @@ fn candidates_and_switches_together_agree_between_methods() {
             run.rows.last().unwrap().clone()
         })
         .collect();
-    let difference = ends[0]
-        .iter()
-        .zip(&ends[1])
-        .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
-        .fold(0.0, f64::max);
+    let difference = crate::largest_difference(&ends[0], &ends[1]);
     assert!(
         difference < 1e-7,
         "field and direct differ by {difference:e}"

@@ -54,3 +54,13 @@ pub fn exact_error(stderr: &str) -> f64 {
         .parse()
         .unwrap()
 }
+
+/// The largest difference of two states (or rows), each component relative
+/// to the second's size (at least 1).
+pub fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / y.abs().max(1.0))
+        .fold(0.0, f64::max)
+}

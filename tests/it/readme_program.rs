@@ -58,26 +58,8 @@ fn the_readme_program_uses_two_models_together() {
         block_after(&readme, "`models/app/src/main.rs`"),
     )
     .unwrap();
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let target = root.join("target/generated-crates/target");
-    let built = Command::new(&cargo)
-        .args([
-            "build",
-            "--release",
-            "--offline",
-            "--quiet",
-            "--manifest-path",
-        ])
-        .arg(app.join("Cargo.toml"))
-        .env("CARGO_TARGET_DIR", &target)
-        .env("RUSTFLAGS", "-D warnings")
-        .output()
-        .unwrap();
-    assert!(
-        built.status.success(),
-        "{}",
-        String::from_utf8_lossy(&built.stderr)
-    );
+    crate::generated::cargo_build(&app.join("Cargo.toml"), &target, "the README's program");
     let ran = Command::new(target.join("release/two-models"))
         .output()
         .unwrap();

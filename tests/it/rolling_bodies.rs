@@ -47,11 +47,7 @@ fn a_tilting_rolling_disk_keeps_its_energy_and_both_methods_agree() {
         assert!(drift < 1e-9, "{method}: energy drifts by {drift:e}");
         ends.push(rows.last().unwrap().clone());
     }
-    let difference = ends[0]
-        .iter()
-        .zip(&ends[1])
-        .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
-        .fold(0.0, f64::max);
+    let difference = crate::largest_difference(&ends[0], &ends[1]);
     assert!(
         difference < 1e-7,
         "field and direct differ by {difference:e}"
