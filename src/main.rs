@@ -95,9 +95,9 @@ struct ReportArgs {
     #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
     tolerances: Option<String>,
     /// Number of evenly spaced sample times; the error is the largest
-    /// over them. The runtime steps onto every sample time (it has no
-    /// dense output), so many samples cap the step and hide the
-    /// difference between tolerances: the default is 11.
+    /// over them. Samples never change the steps (every method has
+    /// dense output); more samples cost output time and look closer
+    /// between the steps.
     #[arg(long, value_name = "N", default_value_t = 11)]
     samples: usize,
     /// Override a param: `--param NAME=VALUE` (repeatable).

@@ -555,23 +555,18 @@ impl Dop853 {
     /// The continuous extension of the last step (Hairer's `dop853.f`,
     /// `IOUT ≥ 2`): three more stages and the coefficients `cont`.
     fn prepare_dense<S: System + ?Sized>(&mut self, system: &S) -> Result<(), Failure> {
-        let (mut extra, mut state) = (
-            std::mem::take(&mut self.k),
-            std::mem::take(&mut self.stage_state),
-        );
-        let result = continuous_extension(
+        let (stages, extra) = self.k.split_at_mut(13);
+        continuous_extension(
             system,
             self.t_old,
             self.h_old,
             &self.y_old,
             &self.y,
-            &mut extra,
-            &mut state,
+            stages,
+            extra,
+            &mut self.stage_state,
             &mut self.cont,
-        );
-        self.k = extra;
-        self.stage_state = state;
-        result?;
+        )?;
         self.stats.rhs_evaluations += 3;
         self.dense_ready = true;
         Ok(())
@@ -711,21 +706,23 @@ pub(crate) fn eval_contd8(cont: &[f64], s: f64, out: &mut [f64]) {
     contd8(cont, cont.len() / 8, s, out);
 }
 
-/// Stage `j` of a step in Hairer's numbering of the continuous extension
-/// (0: `X(t_old)`, 1..11: the stages, 12: `X(t_new)`, 13..15: the extra
-/// stages), from the storage of [`Dop853`]: `k[0] = X(t_new)` after the
-/// step, `k[12] = X(t_old)`, `k[13..16]` the extra stages.
-fn stage(k: &[Vec<f64>], j: usize, i: usize) -> f64 {
+/// Stage `j` of Hairer's numbering (`0` the rate at the step's start,
+/// `12` at its end, `13..16` the extra stages of the extension) in this
+/// module's storage (`k[0]` the end rate, `k[12]` the start rate).
+fn stage<'a>(k: &'a [Vec<f64>], extra: &'a [Vec<f64>], j: usize) -> &'a [f64] {
     match j {
-        0 => k[12][i],
-        12 => k[0][i],
-        _ => k[j][i],
+        0 => &k[12],
+        12 => &k[0],
+        13.. => &extra[j - 13],
+        _ => &k[j],
     }
 }
 
-/// Computes the three extra stages into `k[13..16]` and the coefficients
-/// `cont` (8 blocks of `n`) of the step from `(t_old, y_old)` of length `h`
-/// to `y`.
+/// Computes the three extra stages into `extra` and the coefficients
+/// `cont` (8 blocks of `n`) of the 7th-order continuous extension, with
+/// `k` the 13 stages of the step as the stepper keeps them. Written as
+/// whole-vector updates (one `axpy` per stage) so that it vectorises: the
+/// field's coefficient systems have `(N+1)²` components.
 #[allow(clippy::too_many_arguments)]
 fn continuous_extension<S: System + ?Sized>(
     system: &S,
@@ -733,37 +730,39 @@ fn continuous_extension<S: System + ?Sized>(
     h: f64,
     y_old: &[f64],
     y: &[f64],
-    k: &mut [Vec<f64>],
+    k: &[Vec<f64>],
+    extra: &mut [Vec<f64>],
     stage_state: &mut [f64],
     cont: &mut [f64],
 ) -> Result<(), Failure> {
     let n = y.len();
     for (e, row) in A_EXTRA.iter().enumerate() {
-        for i in 0..n {
-            let increment: f64 = row.iter().map(|&(j, a)| a * stage(k, j, i)).sum();
-            stage_state[i] = y_old[i] + h * increment;
+        stage_state.copy_from_slice(y_old);
+        for &(j, a) in row.iter() {
+            axpy(h * a, stage(k, extra, j), stage_state);
         }
-        let mut out = std::mem::take(&mut k[13 + e]);
+        let mut out = std::mem::take(&mut extra[e]);
         out.resize(n, 0.0);
         let evaluated = system.rhs(t_old + C_EXTRA[e] * h, stage_state, &mut out);
-        k[13 + e] = out;
+        extra[e] = out;
         evaluated?;
     }
+    let (start_rate, end_rate) = (&k[12], &k[0]);
     for i in 0..n {
         let y_diff = y[i] - y_old[i];
-        let bspl = h * stage(k, 0, i) - y_diff;
+        let bspl = h * start_rate[i] - y_diff;
         cont[i] = y_old[i];
         cont[n + i] = y_diff;
         cont[2 * n + i] = bspl;
-        cont[3 * n + i] = y_diff - h * stage(k, 12, i) - bspl;
-        for (r, row) in D.iter().enumerate() {
-            let mut s = 0.0;
-            for (j, &d) in row.iter().enumerate() {
-                if d != 0.0 {
-                    s += d * stage(k, j, i);
-                }
+        cont[3 * n + i] = y_diff - h * end_rate[i] - bspl;
+    }
+    for (r, row) in D.iter().enumerate() {
+        let block = &mut cont[(4 + r) * n..(5 + r) * n];
+        block.fill(0.0);
+        for (j, &d) in row.iter().enumerate() {
+            if d != 0.0 {
+                axpy(h * d, stage(k, extra, j), block);
             }
-            cont[(4 + r) * n + i] = h * s;
         }
     }
     Ok(())
@@ -791,8 +790,7 @@ impl RawStep {
     /// which must be the system the step was taken on).
     pub fn prepare<S: System + ?Sized>(&self, system: &S) -> Result<DenseStep, Failure> {
         let n = self.y.len();
-        let mut k = self.k.clone();
-        k.resize(16, vec![0.0; n]);
+        let mut extra = vec![vec![0.0; n]; 3];
         let mut stage_state = vec![0.0; n];
         let mut cont = vec![0.0; 8 * n];
         continuous_extension(
@@ -801,7 +799,8 @@ impl RawStep {
             self.h,
             &self.y_old,
             &self.y,
-            &mut k,
+            &self.k,
+            &mut extra,
             &mut stage_state,
             &mut cont,
         )?;

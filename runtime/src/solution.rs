@@ -3,7 +3,7 @@
 //! extension of every step, kept in order.
 
 use crate::driver::{Ending, Outcome};
-use crate::field::conditions::recover;
+use crate::field::conditions::recover_state;
 use crate::stepper::DenseStep;
 
 /// The motion over one step, from its continuous extension.
@@ -54,9 +54,9 @@ impl Segment {
                 let mut v = vec![0.0; n + n * n];
                 y.eval(t, &mut v);
                 let (f, s) = v.split_at(n);
-                match recover(f, s, anchor) {
-                    Some(r) => {
-                        out.copy_from_slice(&r.state);
+                match recover_state(f, s, anchor) {
+                    Some(state) => {
+                        out.copy_from_slice(&state);
                         true
                     }
                     None => false,
@@ -69,9 +69,9 @@ impl Segment {
                 if !crate::field::coefficients::projective_field(&v, &mut f, &mut s) {
                     return false;
                 }
-                match recover(&f, &s, anchor) {
-                    Some(r) => {
-                        out.copy_from_slice(&r.state);
+                match recover_state(&f, &s, anchor) {
+                    Some(state) => {
+                        out.copy_from_slice(&state);
                         true
                     }
                     None => false,

@@ -20,7 +20,7 @@
 //! window is anchored at its end.
 
 use super::coefficients::{FieldSystem, Iterate, ProjectiveCoefficients};
-use super::conditions::recover;
+use super::conditions::{recover, recover_state};
 use super::window::{member_states, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
@@ -483,8 +483,8 @@ impl<M: Model> Solver<M> for QuasilinearField {
         let source = ProjectiveCoefficients::new(model, &window.path);
         let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
         let defined = source.field(&y, &mut f, &mut s).is_some();
-        match recover(&f, &s, &window.anchor_x).filter(|_| defined) {
-            Some(rec) => out.copy_from_slice(&rec.state),
+        match recover_state(&f, &s, &window.anchor_x).filter(|_| defined) {
+            Some(state) => out.copy_from_slice(&state),
             // The conditions were regular at both ends of this step;
             // between them fall back to the nearer end.
             None => out.copy_from_slice(&window.states[i]),

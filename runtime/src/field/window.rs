@@ -10,7 +10,7 @@
 //! the window ends and the caller re-anchors.
 
 use super::coefficients::FieldSystem;
-use super::conditions::{recover, Recovered};
+use super::conditions::{recover, recover_state, Recovered};
 use super::FieldOptions;
 use crate::budget::Budget;
 use crate::dop853::{hairer_error, Dop853, RawStep};
@@ -503,7 +503,7 @@ impl Window {
         if system.field(&y, &mut b.f, &mut b.s).is_none() {
             return Err(singular());
         }
-        let rec = recover(&b.f, &b.s, &self.anchor_x).ok_or_else(|| {
+        let state = recover_state(&b.f, &b.s, &self.anchor_x).ok_or_else(|| {
             Failure::new(
                 t,
                 FailureKind::SingularConditionMatrix {
@@ -511,7 +511,7 @@ impl Window {
                 },
             )
         })?;
-        out.copy_from_slice(&rec.state);
+        out.copy_from_slice(&state);
         Ok(())
     }
 
