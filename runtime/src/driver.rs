@@ -659,16 +659,19 @@ pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64], scale: &MassSc
     failure
 }
 
-/// Integrates `members` (the first is the reference) through one field:
-/// `sample(t, states)` at every time of `times`. Exact for affine models;
-/// for the others the members follow the field of the motion linearised
-/// along the reference, to first order in their distance from it.
+/// Integrates `members` (at least one; the first is the reference)
+/// through one field: `sample(t, states)` at every time of `times`. Exact
+/// for affine models; for the others the members follow the field of the
+/// motion linearised along the reference, to first order in their distance
+/// from it. The members are taken, not copied, and every sample's states
+/// are written into one buffer: with ten thousand members, copies and
+/// fresh allocations would cost more than the field.
 pub fn run_ensemble<M: Model + 'static>(
     model: &mut M,
     options: &Options,
     t0: f64,
     t1: f64,
-    members: &[Vec<f64>],
+    members: crate::ensemble::States,
     times: &[f64],
     mut sample: impl FnMut(f64, &crate::ensemble::States),
 ) -> Result<Outcome, Failure> {
@@ -681,20 +684,21 @@ pub fn run_ensemble<M: Model + 'static>(
         method: Method::Field,
         ..options.clone()
     };
-    let mut solver = make_solver(model, &field, t0, &members[0], h_max)?;
-    let initial = crate::ensemble::States::from_rows(members);
-    if !solver.track_members(initial.clone()) {
-        return Err(Failure::new(t0, FailureKind::NotAffine));
-    }
+    assert!(!members.is_empty(), "an ensemble has a reference member");
+    let mut solver = make_solver(model, &field, t0, members.row(0), h_max)?;
     let mut next = 0;
     while next < times.len() && times[next] <= t0 {
-        sample(times[next], &initial);
+        sample(times[next], &members);
         next += 1;
+    }
+    let mut states = crate::ensemble::States::default();
+    if !solver.track_members(members) {
+        return Err(Failure::new(t0, FailureKind::NotAffine));
     }
     while solver.time() < t1 {
         solver.advance(model, t1, &budget)?;
         while next < times.len() && times[next] <= solver.time() {
-            let states = solver.members_at(model, times[next])?;
+            solver.members_at(model, times[next], &mut states)?;
             sample(times[next], &states);
             next += 1;
         }

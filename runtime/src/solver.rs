@@ -59,8 +59,15 @@ pub trait Solver<M: Model> {
         false
     }
 
-    /// The tracked members' states at `t` in `[previous_time, time]`.
-    fn members_at(&mut self, _model: &M, t: f64) -> Result<crate::ensemble::States, Failure> {
+    /// The tracked members' states at `t` in `[previous_time, time]`, into
+    /// `out` (reused from sample to sample: ten thousand members are a
+    /// buffer that should not be allocated anew at every output time).
+    fn members_at(
+        &mut self,
+        _model: &M,
+        t: f64,
+        _out: &mut crate::ensemble::States,
+    ) -> Result<(), Failure> {
         Err(Failure::new(t, crate::failure::FailureKind::NotAffine))
     }
 }

@@ -63,7 +63,8 @@ fn largest_difference<M: Model + 'static>(spread: f64, count: usize) -> f64 {
         ..Options::default()
     };
     let mut field: Vec<Vec<Vec<f64>>> = Vec::new();
-    run_ensemble(&mut model, &options, t0, t1, &all, &times, |_, states| {
+    let handed = lagc_runtime::ensemble::States::from_rows(&all);
+    run_ensemble(&mut model, &options, t0, t1, handed, &times, |_, states| {
         field.push(states.rows().map(<[f64]>::to_vec).collect())
     })
     .unwrap();

@@ -128,12 +128,12 @@ impl<M: Model> Solver<M> for AffineField {
         true
     }
 
-    fn members_at(&mut self, model: &M, t: f64) -> Result<States, Failure> {
+    fn members_at(&mut self, model: &M, t: f64, out: &mut States) -> Result<(), Failure> {
         let (window, options) = (&mut self.window, &self.options);
         let empty = States::default();
         let anchors = self.members.as_ref().unwrap_or(&empty);
         with_system(model, options.magnus, |system| {
-            window.members_at(system, options, t, anchors)
+            window.members_at(system, options, t, anchors, out)
         })
     }
 
@@ -225,7 +225,9 @@ fn advance_window(
                     window.kind()
                 };
                 if let Some(anchors) = members.as_mut() {
-                    *anchors = window.members(system, options, anchors)?;
+                    let mut ends = States::default();
+                    window.members(system, options, anchors, &mut ends)?;
+                    *anchors = ends;
                 }
                 *done += window.stats();
                 *window = Window::open(system, options, t, &x, Some(h), h_max, kind)?;

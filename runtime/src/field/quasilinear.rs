@@ -439,7 +439,8 @@ impl<M: Model> Solver<M> for QuasilinearField {
                 states: pass.states,
             });
             if let Some(anchors) = self.members.take() {
-                let ends = self.members_of_window(model, end_time, &anchors)?;
+                let mut ends = States::default();
+                self.members_of_window(model, end_time, &anchors, &mut ends)?;
                 self.window_members = Some(anchors);
                 self.members = Some(ends);
             }
@@ -525,14 +526,17 @@ impl<M: Model> Solver<M> for QuasilinearField {
         true
     }
 
-    fn members_at(&mut self, model: &M, t: f64) -> Result<States, Failure> {
+    fn members_at(&mut self, model: &M, t: f64, out: &mut States) -> Result<(), Failure> {
         match self.window_members.take() {
             Some(anchors) => {
-                let states = self.members_of_window(model, t, &anchors);
+                let states = self.members_of_window(model, t, &anchors, out);
                 self.window_members = Some(anchors);
                 states
             }
-            None => Ok(self.members.clone().unwrap_or_default()),
+            None => {
+                out.clone_from(self.members.as_ref().unwrap_or(&States::default()));
+                Ok(())
+            }
         }
     }
 
@@ -564,9 +568,11 @@ impl QuasilinearField {
         model: &M,
         t: f64,
         anchors: &States,
-    ) -> Result<States, Failure> {
+        out: &mut States,
+    ) -> Result<(), Failure> {
         let Some(window) = self.accepted.as_mut() else {
-            return Ok(anchors.clone());
+            out.clone_from(anchors);
+            return Ok(());
         };
         let n = window.anchor_x.len();
         let i = window
@@ -601,6 +607,7 @@ impl QuasilinearField {
             &y,
             anchors,
             t,
+            out,
         )
     }
 

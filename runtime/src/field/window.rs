@@ -524,7 +524,8 @@ impl Window {
         system: &F,
         options: &FieldOptions,
         anchors: &States,
-    ) -> Result<States, Failure> {
+        out: &mut States,
+    ) -> Result<(), Failure> {
         let y = each!(&self.stepper, s => s.state()).to_vec();
         let reference = self.current.clone();
         member_states(
@@ -535,6 +536,7 @@ impl Window {
             &y,
             anchors,
             self.time(),
+            out,
         )
     }
 
@@ -545,9 +547,10 @@ impl Window {
         options: &FieldOptions,
         t: f64,
         anchors: &States,
-    ) -> Result<States, Failure> {
+        out: &mut States,
+    ) -> Result<(), Failure> {
         if t >= self.time() || self.steps == 0 {
-            return self.members(system, options, anchors);
+            return self.members(system, options, anchors, out);
         }
         let mut y = vec![0.0; system.dim()];
         each_system!(&mut self.stepper, system, s, sys => s.dense(sys, t, &mut y))?;
@@ -563,7 +566,16 @@ impl Window {
                     },
                 )
             })?;
-        member_states(system, options, &self.anchor_x, &reference, &y, anchors, t)
+        member_states(
+            system,
+            options,
+            &self.anchor_x,
+            &reference,
+            &y,
+            anchors,
+            t,
+            out,
+        )
     }
 
     /// The last step's continuous extension as a value.
@@ -643,6 +655,7 @@ fn check_without_reanchoring(
 
 /// Every member's state from the shared `y` (of the reference anchored at
 /// `anchor_x`, recovered as `reference`).
+#[allow(clippy::too_many_arguments)]
 pub fn member_states<F: FieldSystem + ?Sized>(
     system: &F,
     options: &FieldOptions,
@@ -651,57 +664,118 @@ pub fn member_states<F: FieldSystem + ?Sized>(
     y: &[f64],
     anchors: &States,
     t: f64,
-) -> Result<States, Failure> {
+    out: &mut States,
+) -> Result<(), Failure> {
     let n = anchor_x.len();
     // The field's system is affine (the model's, or the window's
     // linearisation), so a member's state is an affine function of its
     // initial state: x(t) = x_b(t) + Φ(t) (x0 − x_b0). With more members
     // than N + 1, N + 1 conditioned solutions give x_b and Φ, and every
     // member then costs N² multiply-adds instead of a field and a solve.
-    if anchors.len() > n + 1 {
-        let base = anchors.row(0);
-        let mut probes = States {
-            n,
-            data: Vec::with_capacity((n + 1) * n),
-        };
+    if anchors.len() <= n + 1 {
+        return member_states_each(system, options, anchor_x, reference, y, anchors, t, out);
+    }
+    let base = anchors.row(0);
+    let mut probes = States {
+        n,
+        data: Vec::with_capacity((n + 1) * n),
+    };
+    probes.data.extend_from_slice(base);
+    let mut deltas = Vec::with_capacity(n);
+    for i in 0..n {
+        let delta = base[i].abs().max(1.0);
+        let start = probes.data.len();
         probes.data.extend_from_slice(base);
-        let mut deltas = Vec::with_capacity(n);
-        for i in 0..n {
-            let delta = base[i].abs().max(1.0);
-            let start = probes.data.len();
-            probes.data.extend_from_slice(base);
-            probes.data[start + i] += delta;
-            deltas.push(delta);
+        probes.data[start + i] += delta;
+        deltas.push(delta);
+    }
+    let mut solved = States::default();
+    member_states_each(
+        system,
+        options,
+        anchor_x,
+        reference,
+        y,
+        &probes,
+        t,
+        &mut solved,
+    )?;
+    let x_b = solved.row(0);
+    // phi[i * n + j] = ∂x_j(t)/∂x0_i.
+    let mut phi = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..n {
+            phi[i * n + j] = (solved.row(i + 1)[j] - x_b[j]) / deltas[i];
         }
-        let solved = member_states_each(system, options, anchor_x, reference, y, &probes, t)?;
-        let x_b = solved.row(0);
-        // phi[i * n + j] = ∂x_j(t)/∂x0_i.
-        let mut phi = vec![0.0; n * n];
-        for i in 0..n {
-            for j in 0..n {
-                phi[i * n + j] = (solved.row(i + 1)[j] - x_b[j]) / deltas[i];
+    }
+    out.n = n;
+    out.data.clear();
+    out.data.reserve(anchors.data.len());
+    affine_map(x_b, &phi, base, &anchors.data, &mut out.data);
+    Ok(())
+}
+
+/// `x = x_b + Φᵀ (x0 − base)` for every row `x0` of `from`, appended to
+/// `to` (appended, not written over zeros: the fill would cost as much as
+/// the map); `phi[i·n + j] = ∂x_j/∂x0_i`. Small state dimensions get a
+/// loop of fixed length, which the compiler unrolls and vectorises: this is
+/// all an ensemble member costs.
+fn affine_map(x_b: &[f64], phi: &[f64], base: &[f64], from: &[f64], to: &mut Vec<f64>) {
+    fn fixed<const N: usize>(
+        x_b: &[f64],
+        phi: &[f64],
+        base: &[f64],
+        from: &[f64],
+        to: &mut Vec<f64>,
+    ) {
+        let mut rows = [[0.0; N]; N];
+        for (i, row) in rows.iter_mut().enumerate() {
+            row.copy_from_slice(&phi[i * N..(i + 1) * N]);
+        }
+        // x = (x_b − Φᵀ base) + Φᵀ x0: N² multiply-adds a member.
+        let mut offset: [f64; N] = x_b.try_into().expect("N components");
+        for i in 0..N {
+            for j in 0..N {
+                offset[j] -= rows[i][j] * base[i];
             }
         }
-        let mut data = Vec::with_capacity(anchors.data.len());
-        for x0 in anchors.rows() {
-            let at = data.len();
-            data.extend_from_slice(x_b);
-            let x = &mut data[at..at + n];
-            for i in 0..n {
-                let d = x0[i] - base[i];
-                if d != 0.0 {
+        for x0 in from.chunks_exact(N) {
+            let mut v = offset;
+            for i in 0..N {
+                for j in 0..N {
+                    v[j] += rows[i][j] * x0[i];
+                }
+            }
+            to.extend_from_slice(&v);
+        }
+    }
+    let n = x_b.len();
+    match n {
+        1 => fixed::<1>(x_b, phi, base, from, to),
+        2 => fixed::<2>(x_b, phi, base, from, to),
+        3 => fixed::<3>(x_b, phi, base, from, to),
+        4 => fixed::<4>(x_b, phi, base, from, to),
+        5 => fixed::<5>(x_b, phi, base, from, to),
+        6 => fixed::<6>(x_b, phi, base, from, to),
+        8 => fixed::<8>(x_b, phi, base, from, to),
+        _ => {
+            for x0 in from.chunks_exact(n) {
+                let at = to.len();
+                to.extend_from_slice(x_b);
+                let x = &mut to[at..];
+                for i in 0..n {
+                    let d = x0[i] - base[i];
                     for (xj, p) in x.iter_mut().zip(&phi[i * n..(i + 1) * n]) {
                         *xj += p * d;
                     }
                 }
             }
         }
-        return Ok(States { n, data });
     }
-    member_states_each(system, options, anchor_x, reference, y, anchors, t)
 }
 
 /// [`member_states`] by one conditioned solution per member.
+#[allow(clippy::too_many_arguments)]
 fn member_states_each<F: FieldSystem + ?Sized>(
     system: &F,
     options: &FieldOptions,
@@ -710,12 +784,14 @@ fn member_states_each<F: FieldSystem + ?Sized>(
     y: &[f64],
     anchors: &States,
     t: f64,
-) -> Result<States, Failure> {
+    out: &mut States,
+) -> Result<(), Failure> {
     let n = anchor_x.len();
     let c_ref = anchor_values(&options.anchor, anchor_x)[0];
     let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
     let mut shifted = y.to_vec();
-    let mut data = Vec::with_capacity(anchors.data.len());
+    out.n = n;
+    out.data.clear();
     for x0 in anchors.rows() {
         shifted.copy_from_slice(y);
         system.shift_free_term(&mut shifted, anchor_values(&options.anchor, x0)[0] - c_ref);
@@ -727,12 +803,43 @@ fn member_states_each<F: FieldSystem + ?Sized>(
                 },
             )
         })?;
-        data.extend(reference.member(&f, &s, x0));
+        out.data.extend(reference.member(&f, &s, x0));
     }
-    Ok(States { n, data })
+    Ok(())
 }
 
 /// The length of the step the stepper would try next.
 fn measure_step_length(stepper: &WindowStepper) -> f64 {
     each!(stepper, s => s.proposed_step())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::affine_map;
+
+    /// The unrolled maps of small dimensions and the general loop compute
+    /// the same `x_b + Φᵀ (x0 − base)`, checked against a plain evaluation.
+    #[test]
+    fn affine_map_is_the_same_map_for_every_dimension() {
+        for n in 1..=9 {
+            let x_b: Vec<f64> = (0..n).map(|j| 0.5 + j as f64).collect();
+            let base: Vec<f64> = (0..n).map(|i| 1.0 - 0.25 * i as f64).collect();
+            let phi: Vec<f64> = (0..n * n)
+                .map(|k| ((k * 7 % 11) as f64 - 5.0) / 3.0)
+                .collect();
+            let from: Vec<f64> = (0..3 * n).map(|k| (k as f64 * 0.37).sin()).collect();
+            let mut to = Vec::new();
+            affine_map(&x_b, &phi, &base, &from, &mut to);
+            assert_eq!(to.len(), from.len());
+            for (x0, x) in from.chunks(n).zip(to.chunks(n)) {
+                for j in 0..n {
+                    let expected = x_b[j]
+                        + (0..n)
+                            .map(|i| phi[i * n + j] * (x0[i] - base[i]))
+                            .sum::<f64>();
+                    assert!((x[j] - expected).abs() < 1e-13, "n = {n}, component {j}");
+                }
+            }
+        }
+    }
 }
