@@ -25,8 +25,8 @@ use crate::tolerance::{first_non_finite, step_toward, underflows, Stats};
 const GAUSS_OFFSET: f64 = 0.288_675_134_594_812_9; // √3/6
 const COMMUTATOR_WEIGHT: f64 = 0.144_337_567_297_406_43; // √3/12
 
-/// A linear system `Y' = B(t) Y` with `Y` an `m × m` matrix stored column
-/// by column in the integrator's state.
+/// A linear system `Y' = B(t) Y` with `Y` an `m × k` matrix stored column
+/// by column in the integrator's state (the field's: `k = m − 1`).
 pub trait LinearGenerator {
     /// `m`.
     fn order(&self) -> usize;
@@ -136,7 +136,7 @@ impl Magnus {
                 ));
             }
             let apply = |p: &Matrix, y: &[f64]| -> Vec<f64> {
-                let yy = Matrix::from_column_major(m, m, y.to_vec());
+                let yy = Matrix::from_column_major(m, y.len() / m, y.to_vec());
                 p.mul(&yy).as_slice().to_vec()
             };
             let full = self.propagator(system, self.t, h)?;
@@ -195,7 +195,7 @@ impl Magnus {
         }
         let m = system.order();
         let p = self.propagator(system, self.t_old, t - self.t_old)?;
-        let yy = Matrix::from_column_major(m, m, self.y_old.clone());
+        let yy = Matrix::from_column_major(m, self.y_old.len() / m, self.y_old.clone());
         out.copy_from_slice(p.mul(&yy).as_slice());
         Ok(())
     }

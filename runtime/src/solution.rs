@@ -63,7 +63,7 @@ impl Segment {
                 }
             }
             Segment::Projective { y, anchor } => {
-                let mut v = vec![0.0; (n + 1) * (n + 1)];
+                let mut v = vec![0.0; n * (n + 1)];
                 y.eval(t, &mut v);
                 let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
                 if !crate::field::coefficients::projective_field(&v, &mut f, &mut s) {

@@ -414,8 +414,10 @@ impl<M: Model, I: Iterate + ?Sized> CoefficientSource for LinearizedCoefficients
 /// quotient rule. Where `w_1` nears zero the coefficients grow without
 /// bound and the field is re-anchored, as before.
 ///
-/// Layout: `y = (w, P_1, …, P_N)`, each of length `N + 1`; `P_j = ∂w/∂c_j`
-/// with `c_1` the free term.
+/// Layout: `y = (w, P_2, …, P_N)`, each of length `N + 1`; `P_j = ∂w/∂c_j`
+/// with `c_1` the free term. `P_1` is not stored: the free term enters
+/// `w_0` alone, and `w_0` enters no rate, so `P_1 = e_0` for ever
+/// ([`sensitivity`]). `N(N + 1)` numbers are integrated, not `(N + 1)²`.
 pub struct ProjectiveCoefficients<'a, M: Model, I: Iterate + ?Sized> {
     linear: LinearizedCoefficients<'a, M, I>,
 }
@@ -444,7 +446,7 @@ impl<'a, M: Model, I: Iterate + ?Sized> ProjectiveCoefficients<'a, M, I> {
 impl<M: Model, I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, M, I> {
     fn dim(&self) -> usize {
         let n = M::STATE.len();
-        (n + 1) * (n + 1)
+        n * (n + 1)
     }
 
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
@@ -470,7 +472,7 @@ impl<M: Model, I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, M, I> 
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
         self.linear.linearize(t, sc)?;
-        for k in 0..=n {
+        for k in 0..n {
             let base = k * (n + 1);
             for i in 0..n {
                 jac[(base, base + 1 + i)] = -sc.b[i];
@@ -498,12 +500,12 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
 
     fn anchored(&self, c: &[f64]) -> Vec<f64> {
         let n = c.len();
-        let mut y = vec![0.0; (n + 1) * (n + 1)];
+        let mut y = vec![0.0; n * (n + 1)];
         y[0] = c[0];
         y[1] = -1.0;
         y[2..=n].copy_from_slice(&c[1..]);
-        for j in 0..n {
-            y[(j + 1) * (n + 1) + Self::slot(j)] = 1.0;
+        for j in 1..n {
+            y[j * (n + 1) + Self::slot(j)] = 1.0;
         }
         y
     }
@@ -530,12 +532,11 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
         // the state the conditions recover loses as many digits (measured:
         // without this bound the stiff x'' + 1000x' + x = 0 ended 1e-6 off
         // at rtol 1e-8).
-        let growth = y[n + 1..].iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let growth = y[n + 1..].iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         for j in 0..n {
-            let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
             for i in 0..n {
                 let k = Self::slot(i);
-                let (a, b) = (p[k] * w1, w[k] * p[1]);
+                let (a, b) = (sensitivity(y, n, j, k) * w1, w[k] * sensitivity(y, n, j, 1));
                 magnitude = magnitude.max(a.abs() + b.abs());
                 value = value.max((a - b).abs());
                 s[j * n + i] = -(a - b) / w1_sq;
@@ -565,10 +566,10 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
             *d = 2.0 * f64::EPSILON * v.abs();
         }
         for j in 0..n {
-            let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
             for i in 0..n {
                 let k = Self::slot(i);
-                let terms = (p[k] * w1).abs() + (w[k] * p[1]).abs();
+                let terms =
+                    (sensitivity(y, n, j, k) * w1).abs() + (w[k] * sensitivity(y, n, j, 1)).abs();
                 ds[j * n + i] = 2.0 * f64::EPSILON * (terms / (w1 * w1) + s[j * n + i].abs());
             }
         }
@@ -592,9 +593,8 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
     }
 
     fn shift_free_term(&self, y: &mut [f64], delta: f64) {
-        let n = M::STATE.len();
-        // w_0 moves along P_1 = ∂w/∂c_1, whose only non-zero entry is w_0's.
-        y[0] += delta * y[n + 1];
+        // w_0 moves along P_1 = ∂w/∂c_1 = e_0.
+        y[0] += delta;
     }
 
     fn field_change(&self, y: &[f64], dy: &[f64], df: &mut [f64], ds: &mut [f64]) {
@@ -607,12 +607,13 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
             df[i] = -(dw[k] * w1 - w[k] * dw1) / (w1 * w1);
         }
         for j in 0..n {
-            let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
-            let dp = &dy[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
+            let p = |k: usize| sensitivity(y, n, j, k);
+            // P_1 is constant: its change is zero.
+            let dp = |k: usize| if j == 0 { 0.0 } else { dy[j * (n + 1) + k] };
             for i in 0..n {
                 let k = Self::slot(i);
-                let s = -(p[k] * w1 - w[k] * p[1]) / (w1 * w1);
-                let d_numerator = dp[k] * w1 + p[k] * dw1 - dw[k] * p[1] - w[k] * dp[1];
+                let s = -(p(k) * w1 - w[k] * p(1)) / (w1 * w1);
+                let d_numerator = dp(k) * w1 + p(k) * dw1 - dw[k] * p(1) - w[k] * dp(1);
                 ds[j * n + i] = -d_numerator / (w1 * w1) - 2.0 * s * dw1 / w1;
             }
         }
@@ -633,13 +634,29 @@ pub fn projective_field(y: &[f64], f: &mut [f64], s: &mut [f64]) -> bool {
         f[i] = -w[slot(i)] / w1;
     }
     for j in 0..n {
-        let p = &y[(j + 1) * (n + 1)..(j + 2) * (n + 1)];
         for i in 0..n {
             let k = slot(i);
-            s[j * n + i] = -(p[k] * w1 - w[k] * p[1]) / (w1 * w1);
+            let (p_k, p_1) = (sensitivity(y, n, j, k), sensitivity(y, n, j, 1));
+            s[j * n + i] = -(p_k * w1 - w[k] * p_1) / (w1 * w1);
         }
     }
     true
+}
+
+/// Entry `k` of `P_j = ∂w/∂c_j` (`j` from 0) in the projective layout
+/// `y = (w, P_2, …, P_N)`: `P_1` is the constant `e_0` and not stored
+/// (see [`ProjectiveCoefficients`]).
+#[inline]
+fn sensitivity(y: &[f64], n: usize, j: usize, k: usize) -> f64 {
+    if j == 0 {
+        if k == 0 {
+            1.0
+        } else {
+            0.0
+        }
+    } else {
+        y[j * (n + 1) + k]
+    }
 }
 
 /// `∂F/∂t` of a coefficient system by central differences (step

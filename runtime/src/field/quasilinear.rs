@@ -477,7 +477,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
             window.prepared[i] = Some(dense);
         }
         let n = window.anchor_x.len();
-        let mut y = vec![0.0; (n + 1) * (n + 1)];
+        let mut y = vec![0.0; n * (n + 1)];
         if let Some(dense) = &window.prepared[i] {
             dense.eval(t, &mut y);
         }
@@ -584,7 +584,7 @@ impl QuasilinearField {
         if window.prepared[i].is_none() {
             window.prepared[i] = Some(window.steps[i].prepare(&source)?);
         }
-        let mut y = vec![0.0; (n + 1) * (n + 1)];
+        let mut y = vec![0.0; n * (n + 1)];
         if let Some(dense) = &window.prepared[i] {
             dense.eval(t, &mut y);
         }
