@@ -3,7 +3,8 @@
 //! window anchored where the last one's conditions degraded.
 
 use super::coefficients::{
-    Augmented, FieldSystem, Iterate, ProjectiveCoefficients, SymbolicCoefficients,
+    Augmented, FieldSystem, Iterate, LinearizationScratch, ProjectiveCoefficients,
+    SymbolicCoefficients,
 };
 use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
@@ -13,6 +14,7 @@ use crate::failure::Failure;
 use crate::model::Model;
 use crate::solver::{Report, Solver};
 use crate::tolerance::{underflows, Stats};
+use std::cell::RefCell;
 
 pub struct AffineField {
     method: &'static str,
@@ -25,6 +27,9 @@ pub struct AffineField {
     largest_condition: f64,
     /// Ensemble members' states at the current window's anchor time.
     members: Option<States>,
+    /// The linearisation's buffers, lent to the field system built at
+    /// every step.
+    scratch: RefCell<LinearizationScratch>,
 }
 
 impl AffineField {
@@ -43,7 +48,8 @@ impl AffineField {
             StepperKind::Explicit
         };
         let magnus = options.magnus;
-        let window = with_system(model, magnus, |system| {
+        let scratch = LinearizationScratch::new(M::STATE.len());
+        let window = with_system(model, magnus, &scratch, |system| {
             Window::open(system, &options, t0, x0, None, h_max, kind)
         })?;
         Ok(AffineField {
@@ -59,6 +65,7 @@ impl AffineField {
             reanchorings: 0,
             largest_condition: 1.0,
             members: None,
+            scratch,
         })
     }
 }
@@ -81,7 +88,7 @@ impl<M: Model> Solver<M> for AffineField {
         let (mut done, mut reanchorings, mut largest) =
             (Stats::default(), 0, self.largest_condition);
         let members = &mut self.members;
-        let result = with_system(model, options.magnus, |system| {
+        let result = with_system(model, options.magnus, &self.scratch, |system| {
             advance_window(
                 system,
                 window,
@@ -103,7 +110,7 @@ impl<M: Model> Solver<M> for AffineField {
 
     fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let window = &mut self.window;
-        with_system(model, self.options.magnus, |system| {
+        with_system(model, self.options.magnus, &self.scratch, |system| {
             window.dense(system, t, out)
         })
     }
@@ -112,7 +119,7 @@ impl<M: Model> Solver<M> for AffineField {
         let h = self.window.proposed_step();
         self.done += self.window.stats();
         let (options, h_max, kind) = (&self.options, self.h_max, self.window.kind());
-        self.window = with_system(model, options.magnus, |system| {
+        self.window = with_system(model, options.magnus, &self.scratch, |system| {
             Window::open(system, options, t, x, Some(h), h_max, kind)
         })?;
         Ok(())
@@ -120,7 +127,10 @@ impl<M: Model> Solver<M> for AffineField {
 
     fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure> {
         let window = &mut self.window;
-        with_system(model, self.options.magnus, |system| window.segment(system)).map(|s| vec![s])
+        with_system(model, self.options.magnus, &self.scratch, |system| {
+            window.segment(system)
+        })
+        .map(|s| vec![s])
     }
 
     fn track_members(&mut self, members: States) -> bool {
@@ -132,7 +142,7 @@ impl<M: Model> Solver<M> for AffineField {
         let (window, options) = (&mut self.window, &self.options);
         let empty = States::default();
         let anchors = self.members.as_ref().unwrap_or(&empty);
-        with_system(model, options.magnus, |system| {
+        with_system(model, options.magnus, &self.scratch, |system| {
             window.members_at(system, options, t, anchors, out)
         })
     }
@@ -164,6 +174,10 @@ impl Iterate for AnyState {
         out.fill(0.0);
         Ok(())
     }
+
+    fn is_origin(&self) -> bool {
+        true
+    }
 }
 
 /// Runs `body` on the field system of `model`: the symbolic coefficient
@@ -173,13 +187,14 @@ impl Iterate for AnyState {
 fn with_system<M: Model, R>(
     model: &M,
     magnus: bool,
+    scratch: &RefCell<LinearizationScratch>,
     body: impl FnOnce(&dyn FieldSystem) -> R,
 ) -> R {
     if M::COEFFICIENTS_LINEAR && !magnus {
         let source = SymbolicCoefficients::new(model);
         body(&Augmented(&source))
     } else {
-        let projective = ProjectiveCoefficients::new(model, &AnyState);
+        let projective = ProjectiveCoefficients::with_scratch(model, &AnyState, scratch);
         body(&projective)
     }
 }

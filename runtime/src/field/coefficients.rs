@@ -245,9 +245,18 @@ impl<M: Model> CoefficientSource for SymbolicCoefficients<'_, M> {
 /// An iterate `x^k(t)` of the motion over a window, for the linearisation.
 pub trait Iterate {
     fn eval(&self, t: f64, out: &mut [f64]) -> Result<(), Failure>;
+
+    /// The iterate is `x = 0` at every time (an affine motion's: any state
+    /// serves), so `b = X(t, 0)` needs no product with `A`.
+    fn is_origin(&self) -> bool {
+        false
+    }
 }
 
-struct LinearizationScratch {
+/// The buffers of one linearisation; a solver that builds its field
+/// system at every step keeps one and lends it ([`ProjectiveCoefficients::
+/// with_scratch`]) rather than allocating seven buffers a step.
+pub struct LinearizationScratch {
     x: Vec<f64>,
     rate: Vec<f64>,
     b: Vec<f64>,
@@ -256,28 +265,48 @@ struct LinearizationScratch {
     r: Vec<f64>,
 }
 
+impl LinearizationScratch {
+    pub fn new(n: usize) -> RefCell<LinearizationScratch> {
+        RefCell::new(LinearizationScratch {
+            x: vec![0.0; n],
+            rate: vec![0.0; n],
+            b: vec![0.0; n],
+            a: Matrix::zeros(n, n),
+            g: vec![0.0; n],
+            r: vec![0.0; n],
+        })
+    }
+}
+
+/// A linearisation's buffers, its own or lent.
+enum Scratch<'a> {
+    Owned(RefCell<LinearizationScratch>),
+    Lent(&'a RefCell<LinearizationScratch>),
+}
+
+impl Scratch<'_> {
+    fn borrow_mut(&self) -> std::cell::RefMut<'_, LinearizationScratch> {
+        match self {
+            Scratch::Owned(cell) => cell.borrow_mut(),
+            Scratch::Lent(cell) => cell.borrow_mut(),
+        }
+    }
+}
+
 /// The coefficient system of the motion linearised along an iterate.
 pub struct LinearizedCoefficients<'a, M: Model, I: Iterate + ?Sized> {
     model: &'a M,
     iterate: &'a I,
-    scratch: RefCell<LinearizationScratch>,
+    scratch: Scratch<'a>,
     evaluations: std::cell::Cell<usize>,
 }
 
 impl<'a, M: Model, I: Iterate + ?Sized> LinearizedCoefficients<'a, M, I> {
     pub fn new(model: &'a M, iterate: &'a I) -> Self {
-        let n = M::STATE.len();
         LinearizedCoefficients {
             model,
             iterate,
-            scratch: RefCell::new(LinearizationScratch {
-                x: vec![0.0; n],
-                rate: vec![0.0; n],
-                b: vec![0.0; n],
-                a: Matrix::zeros(n, n),
-                g: vec![0.0; n],
-                r: vec![0.0; n],
-            }),
+            scratch: Scratch::Owned(LinearizationScratch::new(M::STATE.len())),
             evaluations: std::cell::Cell::new(0),
         }
     }
@@ -293,6 +322,10 @@ impl<'a, M: Model, I: Iterate + ?Sized> LinearizedCoefficients<'a, M, I> {
         sc.a.fill(0.0);
         self.model.linearize(t, &sc.x, &mut sc.rate, &mut sc.a)?;
         self.evaluations.set(self.evaluations.get() + 1);
+        if self.iterate.is_origin() {
+            sc.b.copy_from_slice(&sc.rate);
+            return Ok(());
+        }
         // b = X − A x
         sc.a.mul_vec(&sc.x, &mut sc.b);
         for (b, r) in sc.b.iter_mut().zip(&sc.rate) {
@@ -426,6 +459,22 @@ impl<'a, M: Model, I: Iterate + ?Sized> ProjectiveCoefficients<'a, M, I> {
     pub fn new(model: &'a M, iterate: &'a I) -> Self {
         ProjectiveCoefficients {
             linear: LinearizedCoefficients::new(model, iterate),
+        }
+    }
+
+    /// [`ProjectiveCoefficients::new`] on lent buffers (of `M`'s size).
+    pub fn with_scratch(
+        model: &'a M,
+        iterate: &'a I,
+        scratch: &'a RefCell<LinearizationScratch>,
+    ) -> Self {
+        ProjectiveCoefficients {
+            linear: LinearizedCoefficients {
+                model,
+                iterate,
+                scratch: Scratch::Lent(scratch),
+                evaluations: std::cell::Cell::new(0),
+            },
         }
     }
 
