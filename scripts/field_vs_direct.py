@@ -16,8 +16,10 @@ Usage (from the repository root):
 
 REUSE=1 re-reads the last reports' CSV instead of running them again.
 
-Writes the reports' CSV and SVG into target/field-vs-direct/. Prints a
-Markdown table (docs/BENCHMARKS.md, "Field against direct").
+Writes the reports' CSV and SVG into target/field-vs-direct/, and there
+field-vs-direct.svg: every model's field/direct time at equal error over
+2(N+1) against the error (below 1: within the bound). Prints Markdown
+tables (docs/BENCHMARKS.md, section 0).
 """
 
 import csv
@@ -109,12 +111,55 @@ def slope(xs, ys):
     return sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx if sxx else float("nan")
 
 
+def ratio_plot(curves, path):
+    """An SVG of field/direct at equal error over 2(N+1), against the
+    error, one line per model: below 1 is within issue 10's bound."""
+    width, height, left, bottom, top, right = 720, 420, 70, 50, 20, 200
+    lo, hi = -12.0, -3.0          # log10 error
+    ylo, yhi = 0.0, 2.0           # ratio / bound
+    def x(e):
+        return left + (math.log10(e) - lo) / (hi - lo) * (width - left - right)
+    def y(r):
+        r = min(max(r, ylo), yhi)
+        return height - bottom - (r - ylo) / (yhi - ylo) * (height - bottom - top)
+    colours = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b",
+               "#e377c2", "#7f7f7f", "#bcbd22", "#17becf", "#000000", "#aa4499"]
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
+           f'font-family="sans-serif" font-size="12">',
+           f'<rect width="{width}" height="{height}" fill="white"/>']
+    for k in range(int(lo), int(hi) + 1):
+        out.append(f'<line x1="{x(10**k):.1f}" y1="{y(ylo):.1f}" x2="{x(10**k):.1f}" '
+                   f'y2="{y(yhi):.1f}" stroke="#ddd"/>')
+        out.append(f'<text x="{x(10**k):.1f}" y="{height - bottom + 16}" '
+                   f'text-anchor="middle">1e{k}</text>')
+    for r in (0.0, 0.5, 1.0, 1.5, 2.0):
+        out.append(f'<line x1="{left}" y1="{y(r):.1f}" x2="{width - right}" y2="{y(r):.1f}" '
+                   f'stroke="{"#d00" if r == 1.0 else "#ddd"}"/>')
+        out.append(f'<text x="{left - 6}" y="{y(r) + 4:.1f}" text-anchor="end">{r:g}</text>')
+    out.append(f'<text x="{(left + width - right) / 2:.0f}" y="{height - 12}" '
+               f'text-anchor="middle">error (largest over the samples)</text>')
+    out.append(f'<text x="16" y="{(height - bottom + top) / 2:.0f}" text-anchor="middle" '
+               f'transform="rotate(-90 16 {(height - bottom + top) / 2:.0f})">'
+               f'field / DOP853 time at equal error, over 2(N+1)</text>')
+    for i, (name, pts) in enumerate(curves):
+        c = colours[i % len(colours)]
+        path_d = " ".join(f"{x(e):.1f},{y(r):.1f}" for e, r in sorted(pts) if lo <= math.log10(e) <= hi)
+        if path_d:
+            out.append(f'<polyline points="{path_d}" fill="none" stroke="{c}" stroke-width="1.5"/>')
+        out.append(f'<line x1="{width - right + 10}" y1="{top + 10 + 16 * i}" '
+                   f'x2="{width - right + 30}" y2="{top + 10 + 16 * i}" stroke="{c}" stroke-width="2"/>')
+        out.append(f'<text x="{width - right + 36}" y="{top + 14 + 16 * i}">{name}</text>')
+    out.append("</svg>")
+    with open(path, "w") as f:
+        f.write("\n".join(out) + "\n")
+
+
 def main():
     models = sys.argv[1:] or MODELS
     os.makedirs(OUT, exist_ok=True)
     print("| model | rtol | field error | field time [ms] | DOP853 error | DOP853 time [ms] | field/DOP853 at equal error |")
     print("|---|---|---|---|---|---|---|")
-    orders, targets = [], []
+    orders, targets, curves = [], [], []
     for model in models:
         name, data = rows(model)
         field = [r for r in data if r["method"] == "field"]
@@ -128,6 +173,12 @@ def main():
                   f"{float(d['error']):.2e} | {1e3 * float(d['time_s']):.3f} | {ratio} |")
         fpoints = [(float(r["error"]), float(r["time_s"])) for r in field if float(r["error"]) > 0]
         n = state_dimension(model)
+        curve = []
+        for e, t in envelope(fpoints):
+            dt, mark = cost_at(dpoints, e)
+            if dt and not mark:
+                curve.append((e, t / dt / (2 * (n + 1))))
+        curves.append((name, curve))
         for target in (1e-6, 1e-9):
             ft, fmark = cost_at(fpoints, target)
             dt, dmark = cost_at(dpoints, target)
@@ -151,6 +202,7 @@ def main():
             verdict = "" if ft / dt <= 2 * (n + 1) else " (over)"
             print(f"| {name} | {n} | {target:.0e} | {fmark}{1e3 * ft:.3f} | "
                   f"{dmark}{1e3 * dt:.3f} | {ratio}{verdict} | {2 * (n + 1)} |")
+    ratio_plot(curves, os.path.join(OUT, "field-vs-direct.svg"))
     print()
     print("| model | field order | DOP853 order |")
     print("|---|---|---|")

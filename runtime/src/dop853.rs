@@ -435,10 +435,19 @@ impl Dop853 {
             };
             if !finite {
                 // A stage overflowed: the step was too long for a solution
-                // that grows fast; retry shorter.
+                // that grows fast, or it reached past where the rates are
+                // defined (a force infinite at a finite state); retry
+                // shorter, and remember which, for the diagnosis should the
+                // step underflow.
                 self.stats.rejected_steps += 1;
                 self.h = self.controller.reject(h, f64::INFINITY);
-                last_non_finite = true;
+                match self.broken_rate(h) {
+                    Some(i) => {
+                        rate_broken = Some(i);
+                        last_non_finite = false;
+                    }
+                    None => last_non_finite = true,
+                }
             } else if err <= 1.0 {
                 let t_new = if reaches_limit { t_limit } else { self.t + h };
                 // The slope at the step's end (kept in k[12] until the
@@ -511,6 +520,27 @@ impl Dop853 {
                 self.stiff_tests = 0;
             }
         }
+    }
+
+    /// After an attempt of step `h` that was not finite: the component of
+    /// the first stage whose rate is not finite although its state is (a
+    /// force or mass law undefined ahead), `None` when a state overflowed
+    /// first (the motion grows without bound). Recomputes the stage
+    /// states, so it costs nothing on the way of finite steps.
+    fn broken_rate(&mut self, h: f64) -> Option<usize> {
+        for s in 1..STAGES {
+            self.stage_state.copy_from_slice(&self.y);
+            for &(j, a) in A[s] {
+                axpy(h * a, &self.k[j], &mut self.stage_state);
+            }
+            if first_non_finite(&self.stage_state).is_some() {
+                return None;
+            }
+            if let Some(i) = first_non_finite(&self.k[s]) {
+                return Some(i);
+            }
+        }
+        None
     }
 
     /// Computes the stages, `y_trial` and the two error estimates (per

@@ -2,13 +2,14 @@
 //! more than once bound to a `let` first.
 //!
 //! Numbers are exact (`{:?}` is the shortest decimal that reads back to the
-//! same `f64`) with an `_f64` suffix; integer powers become `powi`, `^0.5`
-//! `sqrt`, other powers `powf` — the same choices as `ir::pow_value`, so the
+//! same `f64`) with an `_f64` suffix; integer powers become `powi`, odd
+//! half-integer ones square roots of them (`x^-1.5` is `x.powi(3).sqrt()
+//! .recip()`), other powers `powf` — the same choices as `ir::pow_value`, so the
 //! generated code computes what `Arena::eval` computes. Parentheses are
 //! written only where precedence needs them (rustc warns on the others).
 
 use super::namer::Namer;
-use crate::ir::{Arena, ExprId, Node, Symbol};
+use crate::ir::{half_odd_power, Arena, ExprId, Node, Symbol};
 use proc_macro2::{Ident, Span, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
@@ -142,8 +143,20 @@ impl Writer<'_> {
             return (quote! { #one / #below }, Prec::Product);
         }
         let receiver = wrap(self.expr(base), Prec::Postfix);
+        if let Some(m) = self.arena.as_const(exp).and_then(half_odd_power) {
+            let root = if m.abs() == 1 {
+                quote! { #receiver.sqrt() }
+            } else {
+                let n = proc_macro2::Literal::i32_unsuffixed(m.abs());
+                quote! { #receiver.powi(#n).sqrt() }
+            };
+            return if m < 0 {
+                (quote! { #root.recip() }, Prec::Postfix)
+            } else {
+                (root, Prec::Postfix)
+            };
+        }
         match self.arena.as_const(exp) {
-            Some(0.5) => (quote! { #receiver.sqrt() }, Prec::Postfix),
             Some(v) if v.fract() == 0.0 && v.abs() <= f64::from(i32::MAX) => {
                 let n = proc_macro2::Literal::i32_unsuffixed((v.abs()) as i32);
                 if v < 0.0 {

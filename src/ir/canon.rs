@@ -23,13 +23,33 @@ pub fn apply_func(f: Func, x: f64) -> f64 {
 
 /// `base^exp` as numbers, with `powi`/`sqrt` where they are exact.
 pub fn pow_value(base: f64, exp: f64) -> f64 {
-    if exp == 0.5 {
-        base.sqrt()
+    if let Some(m) = half_odd_power(exp) {
+        // √(x^|m|), inverted for m < 0: a square root and a few products
+        // cost a fraction of `powf`, and drag and gravity laws put
+        // `(v·v)^(-1/2)` and `(r·r)^(-3/2)` into many right sides.
+        let root = if m.abs() == 1 {
+            base.sqrt()
+        } else {
+            base.powi(m.abs()).sqrt()
+        };
+        if m < 0 {
+            root.recip()
+        } else {
+            root
+        }
     } else if exp.fract() == 0.0 && exp.abs() <= f64::from(i32::MAX) {
         base.powi(exp as i32)
     } else {
         base.powf(exp)
     }
+}
+
+/// `m` when `exp = m/2` with `m` odd and `|m| ≤ 9`: the powers computed as
+/// square roots of integer powers (`x^(-3/2) = 1/√(x³)`), by
+/// [`pow_value`] and by the generated code alike.
+pub fn half_odd_power(exp: f64) -> Option<i32> {
+    let twice = 2.0 * exp;
+    (twice.fract() == 0.0 && twice.abs() <= 9.0 && (twice as i32) % 2 != 0).then_some(twice as i32)
 }
 
 fn is_integer(v: f64) -> bool {

@@ -29,7 +29,7 @@ mod subst;
 mod trig;
 
 pub use crate::syntax::ast::Func;
-pub use canon::{apply_func, pow_value};
+pub use canon::{apply_func, half_odd_power, pow_value};
 pub use display::ExprDisplay;
 pub(crate) use expr::FxMap;
 pub use expr::{Arena, ExprId, Names, Node, Symbol};

@@ -188,3 +188,33 @@ fn products_of_sums_are_not_expanded() {
         other => panic!("expected a product, got {other:?}"),
     }
 }
+
+/// Odd half-integer powers are square roots of integer powers (a fraction
+/// of `powf`'s cost in generated right sides: drag's `(v·v)^(-1/2)`,
+/// gravity's `(r·r)^(-3/2)`); they must agree with `powf` to rounding, and
+/// only they take that route.
+#[test]
+fn half_odd_powers_agree_with_powf() {
+    use lagc::ir::{half_odd_power, pow_value};
+    for (exp, m) in [
+        (0.5, Some(1)),
+        (-0.5, Some(-1)),
+        (1.5, Some(3)),
+        (-1.5, Some(-3)),
+        (4.5, Some(9)),
+    ] {
+        assert_eq!(half_odd_power(exp), m, "{exp}");
+    }
+    for exp in [0.25, 1.0, -2.0, 5.5, 0.3] {
+        assert_eq!(half_odd_power(exp), None, "{exp}");
+    }
+    for exp in [0.5, -0.5, 1.5, -1.5, 2.5, -3.5, 4.5] {
+        for base in [1e-6, 0.3, 1.0, 2.7, 1e5] {
+            let (ours, libm) = (pow_value(base, exp), base.powf(exp));
+            assert!(
+                ((ours - libm) / libm).abs() < 4.0 * f64::EPSILON,
+                "{base}^{exp}: {ours} vs {libm}"
+            );
+        }
+    }
+}
