@@ -114,7 +114,7 @@ def slope(xs, ys):
 def ratio_plot(curves, path):
     """An SVG of field/direct at equal error over 2(N+1), against the
     error, one line per model: below 1 is within issue 10's bound."""
-    width, height, left, bottom, top, right = 720, 420, 70, 50, 20, 200
+    width, height, left, bottom, top, right = 760, 420, 70, 50, 20, 240
     lo, hi = -12.0, -3.0          # log10 error
     ylo, yhi = 0.0, 2.0           # ratio / bound
     def x(e):
