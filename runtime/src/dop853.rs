@@ -798,6 +798,57 @@ fn continuous_extension<S: System + ?Sized>(
     Ok(())
 }
 
+/// The 7th-order continuous extension over `[t_old, t_old + h]` of one
+/// DOP853 step of `system` from `y_old`, pinned to the end state `y_new`
+/// given by the caller (a more accurate one than this step's own: the field
+/// method's recovered state). 16 evaluations of `system`. The field method
+/// uses it for its output between steps, on the motion linearised along
+/// its predictor: the coefficients' extension, recovered through the
+/// conditions, was up to 30× less accurate between the steps than at them.
+pub fn dense_step_between<S: System + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y_new: &[f64],
+) -> Result<DenseStep, Failure> {
+    let n = y_old.len();
+    // Hairer's stage numbering: k[0] the start rate, k[1..12] the stages.
+    let mut k = vec![vec![0.0; n]; STAGES + 1];
+    system.rhs(t_old, y_old, &mut k[0])?;
+    let mut stage_state = vec![0.0; n];
+    for s in 1..STAGES {
+        stage_state.copy_from_slice(y_old);
+        for &(j, a) in A[s] {
+            axpy(h * a, &k[j], &mut stage_state);
+        }
+        let mut out = std::mem::take(&mut k[s]);
+        let evaluated = system.rhs(t_old + C[s] * h, &stage_state, &mut out);
+        k[s] = out;
+        evaluated?;
+    }
+    system.rhs(t_old + h, y_new, &mut k[STAGES])?;
+    // This module's storage: k[0] the end rate, k[12] the start rate.
+    k.swap(0, STAGES);
+    let mut extra = vec![vec![0.0; n]; 3];
+    let mut cont = vec![0.0; 8 * n];
+    continuous_extension(
+        system,
+        t_old,
+        h,
+        y_old,
+        y_new,
+        &k,
+        &mut extra,
+        &mut stage_state,
+        &mut cont,
+    )?;
+    if first_non_finite(&cont).is_some() {
+        return Err(Failure::non_finite(t_old, system.component_name(0)));
+    }
+    Ok(DenseStep::dop853(t_old, t_old + h, h, cont))
+}
+
 /// An accepted step as data (see [`Dop853::raw_step`]).
 #[derive(Clone, Debug, Default)]
 pub struct RawStep {

@@ -430,6 +430,59 @@ impl<M: Model, I: Iterate + ?Sized> CoefficientSource for LinearizedCoefficients
     }
 }
 
+/// The motion linearised along an iterate, `x' = A(t) x + b(t)`, as a
+/// system of the state: the field's solution satisfies it exactly, so one
+/// step of it between two recovered states gives the field's output
+/// between them (`dop853::dense_step_between`).
+pub struct LinearizedMotion<'a, M: Model, I: Iterate + ?Sized> {
+    linear: LinearizedCoefficients<'a, M, I>,
+}
+
+impl<'a, M: Model, I: Iterate + ?Sized> LinearizedMotion<'a, M, I> {
+    pub fn new(model: &'a M, iterate: &'a I) -> Self {
+        LinearizedMotion {
+            linear: LinearizedCoefficients::new(model, iterate),
+        }
+    }
+
+    pub fn linearizations(&self) -> usize {
+        self.linear.linearizations()
+    }
+}
+
+impl<M: Model, I: Iterate + ?Sized> System for LinearizedMotion<'_, M, I> {
+    fn dim(&self) -> usize {
+        M::STATE.len()
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+        let mut guard = self.linear.scratch.borrow_mut();
+        let sc = &mut *guard;
+        self.linear.linearize(t, sc)?;
+        sc.a.mul_vec(y, dy);
+        for (d, b) in dy.iter_mut().zip(&sc.b) {
+            *d += b;
+        }
+        Ok(())
+    }
+
+    fn jacobian(&self, t: f64, _y: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        let mut guard = self.linear.scratch.borrow_mut();
+        let sc = &mut *guard;
+        self.linear.linearize(t, sc)?;
+        jac.as_mut_slice().copy_from_slice(sc.a.as_slice());
+        Ok(())
+    }
+
+    fn time_partial(&self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), Failure> {
+        central_time_partial(self, t, y, dydt)
+    }
+
+    fn component_name(&self, i: usize) -> String {
+        crate::system::ModelSystem(self.linear.model).component_name(i)
+    }
+}
+
 /// The coefficient system in projective (linear) form: the field's
 /// hyperplane `f_1 + Σ_A f_A x_A − x_1 = 0` has the homogeneous normal
 /// `w ∝ (f_1, −1, f_2, …, f_N)` (index 0 the constant term), which the

@@ -212,6 +212,19 @@ impl Default for StoredStep {
 }
 
 impl StoredStep {
+    pub fn t_old(&self) -> f64 {
+        match self {
+            StoredStep::Raw(r) => r.t_old,
+            StoredStep::Ready(d) => d.t_old,
+        }
+    }
+
+    /// A step of DOP853 (explicit), whose size the motion's stability does
+    /// not limit beyond an explicit method's.
+    pub fn is_explicit(&self) -> bool {
+        matches!(self, StoredStep::Raw(_))
+    }
+
     pub fn t_new(&self) -> f64 {
         match self {
             StoredStep::Raw(r) => r.t_new,
