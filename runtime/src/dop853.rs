@@ -606,14 +606,9 @@ impl Dop853 {
     /// later (the field method keeps the steps of a window until the window
     /// is accepted, and prepares only those that output asks for).
     pub fn raw_step(&self) -> RawStep {
-        RawStep {
-            t_old: self.t_old,
-            h: self.h_old,
-            t_new: self.t,
-            y_old: self.y_old.clone(),
-            y: self.y.clone(),
-            k: self.k[..13].to_vec(),
-        }
+        let mut step = RawStep::default();
+        self.raw_step_into(&mut step);
+        step
     }
 
     /// [`Dop853::raw_step`] into an existing value, reusing its storage.
@@ -621,11 +616,12 @@ impl Dop853 {
         dst.t_old = self.t_old;
         dst.h = self.h_old;
         dst.t_new = self.t;
-        dst.y_old.clone_from(&self.y_old);
-        dst.y.clone_from(&self.y);
-        dst.k.resize(13, Vec::new());
-        for (d, k) in dst.k.iter_mut().zip(&self.k[..13]) {
-            d.clone_from(k);
+        dst.data.clear();
+        dst.data.reserve(15 * self.y.len());
+        dst.data.extend_from_slice(&self.y_old);
+        dst.data.extend_from_slice(&self.y);
+        for k in &self.k[..13] {
+            dst.data.extend_from_slice(k);
         }
     }
 
@@ -739,12 +735,37 @@ pub(crate) fn eval_contd8(cont: &[f64], s: f64, out: &mut [f64]) {
 /// Stage `j` of Hairer's numbering (`0` the rate at the step's start,
 /// `12` at its end, `13..16` the extra stages of the extension) in this
 /// module's storage (`k[0]` the end rate, `k[12]` the start rate).
-fn stage<'a>(k: &'a [Vec<f64>], extra: &'a [Vec<f64>], j: usize) -> &'a [f64] {
+fn stage<'a, K: Stages + ?Sized>(k: &'a K, extra: &'a [Vec<f64>], j: usize) -> &'a [f64] {
     match j {
-        0 => &k[12],
-        12 => &k[0],
+        0 => k.stage(12),
+        12 => k.stage(0),
         13.. => &extra[j - 13],
-        _ => &k[j],
+        _ => k.stage(j),
+    }
+}
+
+/// The 13 stages of a step as this module stores them (`k[0]` the end
+/// rate, `k[12]` the start rate): the stepper's vectors, or a stored
+/// step's one buffer.
+trait Stages {
+    fn stage(&self, j: usize) -> &[f64];
+}
+
+impl Stages for [Vec<f64>] {
+    fn stage(&self, j: usize) -> &[f64] {
+        &self[j]
+    }
+}
+
+/// Stages stored one after another, `n` numbers each.
+struct FlatStages<'a> {
+    data: &'a [f64],
+    n: usize,
+}
+
+impl Stages for FlatStages<'_> {
+    fn stage(&self, j: usize) -> &[f64] {
+        &self.data[j * self.n..(j + 1) * self.n]
     }
 }
 
@@ -754,13 +775,13 @@ fn stage<'a>(k: &'a [Vec<f64>], extra: &'a [Vec<f64>], j: usize) -> &'a [f64] {
 /// whole-vector updates (one `axpy` per stage) so that it vectorises: the
 /// field's coefficient systems have `(N+1)²` components.
 #[allow(clippy::too_many_arguments)]
-fn continuous_extension<S: System + ?Sized>(
+fn continuous_extension<S: System + ?Sized, K: Stages + ?Sized>(
     system: &S,
     t_old: f64,
     h: f64,
     y_old: &[f64],
     y: &[f64],
-    k: &[Vec<f64>],
+    k: &K,
     extra: &mut [Vec<f64>],
     stage_state: &mut [f64],
     cont: &mut [f64],
@@ -777,7 +798,7 @@ fn continuous_extension<S: System + ?Sized>(
         extra[e] = out;
         evaluated?;
     }
-    let (start_rate, end_rate) = (&k[12], &k[0]);
+    let (start_rate, end_rate) = (k.stage(12), k.stage(0));
     for i in 0..n {
         let y_diff = y[i] - y_old[i];
         let bspl = h * start_rate[i] - y_diff;
@@ -838,7 +859,7 @@ pub fn dense_step_between<S: System + ?Sized>(
         h,
         y_old,
         y_new,
-        &k,
+        k.as_slice(),
         &mut extra,
         &mut stage_state,
         &mut cont,
@@ -849,28 +870,35 @@ pub fn dense_step_between<S: System + ?Sized>(
     Ok(DenseStep::dop853(t_old, t_old + h, h, cont))
 }
 
-/// An accepted step as data (see [`Dop853::raw_step`]).
+/// An accepted step as data (see [`Dop853::raw_step`]): one buffer of
+/// `15 n` numbers, `y_old`, `y` and the 13 stages (`k[0]` the end rate,
+/// `k[1..12]` the stages, `k[12]` the start rate) — one allocation a
+/// stored step, not fifteen.
 #[derive(Clone, Debug, Default)]
 pub struct RawStep {
     pub t_old: f64,
     pub t_new: f64,
     h: f64,
-    y_old: Vec<f64>,
-    y: Vec<f64>,
-    /// `k[0] = X(t_new)`, `k[1..12]` the stages, `k[12] = X(t_old)`.
-    k: Vec<Vec<f64>>,
+    data: Vec<f64>,
 }
 
 impl RawStep {
+    fn n(&self) -> usize {
+        self.data.len() / 15
+    }
+
     /// The state at the step's end.
     pub fn end_state(&self) -> &[f64] {
-        &self.y
+        let n = self.n();
+        &self.data[n..2 * n]
     }
 
     /// The step's continuous extension (three evaluations of `system`,
     /// which must be the system the step was taken on).
     pub fn prepare<S: System + ?Sized>(&self, system: &S) -> Result<DenseStep, Failure> {
-        let n = self.y.len();
+        let n = self.n();
+        let (y_old, rest) = self.data.split_at(n);
+        let (y, stages) = rest.split_at(n);
         let mut extra = vec![vec![0.0; n]; 3];
         let mut stage_state = vec![0.0; n];
         let mut cont = vec![0.0; 8 * n];
@@ -878,9 +906,9 @@ impl RawStep {
             system,
             self.t_old,
             self.h,
-            &self.y_old,
-            &self.y,
-            &self.k,
+            y_old,
+            y,
+            &FlatStages { data: stages, n },
             &mut extra,
             &mut stage_state,
             &mut cont,

@@ -316,12 +316,19 @@ impl<'a, M: Model, I: Iterate + ?Sized> LinearizedCoefficients<'a, M, I> {
         self.evaluations.get()
     }
 
-    /// `A` and `b` at `t`, into the scratch.
-    fn linearize(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
+    /// The iterate `x0`, `X(t, x0)` and `A = ∂X/∂x (t, x0)` at `t`, into
+    /// the scratch.
+    fn evaluate(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
         self.iterate.eval(t, &mut sc.x)?;
         sc.a.fill(0.0);
         self.model.linearize(t, &sc.x, &mut sc.rate, &mut sc.a)?;
         self.evaluations.set(self.evaluations.get() + 1);
+        Ok(())
+    }
+
+    /// `A` and `b` at `t`, into the scratch.
+    fn linearize(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
+        self.evaluate(t, sc)?;
         if self.iterate.is_origin() {
             sc.b.copy_from_slice(&sc.rate);
             return Ok(());
@@ -458,10 +465,14 @@ impl<M: Model, I: Iterate + ?Sized> System for LinearizedMotion<'_, M, I> {
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
-        self.linear.linearize(t, sc)?;
-        sc.a.mul_vec(y, dy);
-        for (d, b) in dy.iter_mut().zip(&sc.b) {
-            *d += b;
+        self.linear.evaluate(t, sc)?;
+        // X(t, x0) + A (x − x0): one product, not two (b = X − A x0 first).
+        for ((g, x), x0) in sc.g.iter_mut().zip(y).zip(&sc.x) {
+            *g = x - x0;
+        }
+        sc.a.mul_vec(&sc.g, dy);
+        for (d, r) in dy.iter_mut().zip(&sc.rate) {
+            *d += r;
         }
         Ok(())
     }
@@ -469,7 +480,7 @@ impl<M: Model, I: Iterate + ?Sized> System for LinearizedMotion<'_, M, I> {
     fn jacobian(&self, t: f64, _y: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
-        self.linear.linearize(t, sc)?;
+        self.linear.evaluate(t, sc)?;
         jac.as_mut_slice().copy_from_slice(sc.a.as_slice());
         Ok(())
     }
