@@ -331,6 +331,18 @@ fn build(args: &BuildArgs) -> ExitCode {
     let runtime_path = match &args.runtime {
         None => cli::RUNTIME_IN_CRATE.to_string(),
         Some(dir) => {
+            // The runtime's sources are written over whatever is there: a
+            // folder lagc did not write (the runtime's own source tree, a
+            // project) must not lose its files to them.
+            if !args.force && !cli::may_write_into(dir) {
+                eprintln!(
+                    "error: `{}` is not empty and was not written by `lagc build`: refusing \
+                     to write the runtime over it\n  = help: give --runtime an empty or new \
+                     directory, or one an earlier `lagc build --runtime` wrote, or pass --force",
+                    dir.display()
+                );
+                return ExitCode::from(EXIT_USAGE);
+            }
             let made =
                 std::fs::create_dir_all(dir).and_then(|()| std::fs::create_dir_all(&args.output));
             if let Err(error) = made {
@@ -352,14 +364,11 @@ fn build(args: &BuildArgs) -> ExitCode {
         );
         return ExitCode::from(EXIT_USAGE);
     }
+    let marker = "written by `lagc build`; a later `lagc build` may overwrite this directory\n";
     let written = cli::write_crate(&generated, &args.output)
         .and_then(|()| cli::write_runtime(&runtime_dir))
-        .and_then(|()| {
-            std::fs::write(
-                args.output.join(cli::MARKER),
-                "written by `lagc build`; a later `lagc build -o` may overwrite this directory\n",
-            )
-        });
+        .and_then(|()| std::fs::write(args.output.join(cli::MARKER), marker))
+        .and_then(|()| std::fs::write(runtime_dir.join(cli::MARKER), marker));
     match written {
         Ok(()) => {
             eprintln!(

@@ -140,6 +140,50 @@ fn build_refuses_to_overwrite_a_project_it_did_not_write() {
     );
 }
 
+/// `lagc build --runtime RDIR` writes the runtime's sources into RDIR: it
+/// refuses a folder it did not write (there, once, the runtime's own
+/// source tree lost its uncommitted changes to an older copy), and shares
+/// one it wrote between several crates.
+#[test]
+fn build_refuses_to_write_the_runtime_over_a_folder_it_did_not_write() {
+    let dir = scratch("build_runtime");
+    let sources = dir.join("my-runtime");
+    std::fs::create_dir_all(sources.join("src")).unwrap();
+    std::fs::write(sources.join("src/lib.rs"), "// my changes\n").unwrap();
+    let build = |out: &str, runtime: &Path, force: bool| {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_lagc"));
+        command
+            .current_dir(crate::root())
+            .args(["build", "examples/paper.lag", "-o"])
+            .arg(dir.join(out))
+            .arg("--runtime")
+            .arg(runtime);
+        if force {
+            command.arg("--force");
+        }
+        command.output().unwrap()
+    };
+    let refused = build("a", &sources, false);
+    assert_eq!(refused.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("refusing to write the runtime over it"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(sources.join("src/lib.rs")).unwrap(),
+        "// my changes\n"
+    );
+    assert!(!dir.join("a").exists(), "nothing written on refusal");
+    // A new folder, then shared by a second crate.
+    let shared = dir.join("shared-runtime");
+    assert_eq!(build("a", &shared, false).status.code(), Some(0));
+    assert!(shared.join(".lagc-generated").is_file());
+    assert_eq!(build("b", &shared, false).status.code(), Some(0));
+    // --force writes over the user's folder, as it does for -o.
+    assert_eq!(build("c", &sources, true).status.code(), Some(0));
+}
+
 /// A file without end (`/dev/zero`) is refused, not read into memory.
 #[cfg(unix)]
 #[test]
