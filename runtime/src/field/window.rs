@@ -528,7 +528,6 @@ impl Window {
         Ok(())
     }
 
-    /// The last step as data (its continuous extension built later).
     /// The states of other initial states through this field at the
     /// window's current time: `anchors[m]` is member `m`'s state at the
     /// window's anchor time.
@@ -539,18 +538,8 @@ impl Window {
         anchors: &States,
         out: &mut States,
     ) -> Result<(), Failure> {
-        let y = each!(&self.stepper, s => s.state()).to_vec();
-        let reference = self.current.clone();
-        member_states(
-            system,
-            options,
-            &self.anchor_x,
-            &reference,
-            &y,
-            anchors,
-            self.time(),
-            out,
-        )
+        let t = self.time();
+        self.members_at(system, options, t, anchors, out)
     }
 
     /// [`Window::members`] at a time `t` within the last step.
@@ -562,23 +551,26 @@ impl Window {
         anchors: &States,
         out: &mut States,
     ) -> Result<(), Failure> {
-        if t >= self.time() || self.steps == 0 {
-            return self.members(system, options, anchors, out);
-        }
-        let mut y = vec![0.0; system.dim()];
-        each_system!(&mut self.stepper, system, s, sys => s.dense(sys, t, &mut y))?;
-        let b = &mut self.buffers;
-        let reference = system
-            .field(&y, &mut b.f, &mut b.s)
-            .and_then(|_| recover(&b.f, &b.s, &self.anchor_x))
-            .ok_or_else(|| {
-                Failure::new(
-                    t,
-                    FailureKind::SingularConditionMatrix {
-                        condition: f64::INFINITY,
-                    },
-                )
-            })?;
+        let (y, reference, t) = if t >= self.time() || self.steps == 0 {
+            let y = each!(&self.stepper, s => s.state()).to_vec();
+            (y, self.current.clone(), self.time())
+        } else {
+            let mut y = vec![0.0; system.dim()];
+            each_system!(&mut self.stepper, system, s, sys => s.dense(sys, t, &mut y))?;
+            let b = &mut self.buffers;
+            let reference = system
+                .field(&y, &mut b.f, &mut b.s)
+                .and_then(|_| recover(&b.f, &b.s, &self.anchor_x))
+                .ok_or_else(|| {
+                    Failure::new(
+                        t,
+                        FailureKind::SingularConditionMatrix {
+                            condition: f64::INFINITY,
+                        },
+                    )
+                })?;
+            (y, reference, t)
+        };
         member_states(
             system,
             options,
