@@ -224,7 +224,7 @@ pub fn equation(lhs: &str, rhs: &str, tag: &str) -> String {
     let right = lines(rhs);
     let mut out = String::new();
     if left.len() == 1 {
-        out.push_str(&format!("  {}", left[0]));
+        out.push_str(&format!("  {} ", left[0]));
     } else {
         for (i, line) in left.iter().enumerate() {
             if i == 0 {
@@ -271,7 +271,7 @@ mod tests {
         let out = equation("y", &rhs, "\\text{(7)}");
         assert!(out.lines().count() > 1, "{out}");
         assert!(out.lines().last().unwrap().ends_with("&& \\text{(7)} \\\\"));
-        assert!(out.starts_with("  y&= x_{0}"));
+        assert!(out.starts_with("  y &= x_{0}"));
         assert_eq!(equation("y", "x", "t"), "  y &= x && t \\\\\n");
     }
 

@@ -441,18 +441,44 @@ fn build_cached(
     };
     let crate_dir = cache.join("crates").join(&generated.package);
     let target_dir = cache.join("target");
-    let written = cli::write_runtime(&cache.join(cli::runtime_dir_name()))
-        .and_then(|()| cli::write_crate(generated, &crate_dir))
+    // Other lagc processes may run this model, or others, right now: the
+    // runtime is written under its lock, and this crate is written, built
+    // and checked under its own (held until this function returns).
+    let runtime = cli::runtime_dir_name();
+    let waiting = |what: String| {
+        move || eprintln!("note: waiting for another lagc process that is building {what}")
+    };
+    let written =
+        cli::cache::lock(&cache, &runtime, waiting("the runtime".to_string())).and_then(|_lock| {
+            cli::cache::remove_temporaries(&cache.join(&runtime));
+            cli::write_runtime(&cache.join(&runtime))
+        });
+    let locked = written.and_then(|()| {
+        cli::cache::lock(
+            &cache,
+            &generated.package,
+            waiting(format!("`{}`", generated.package)),
+        )
+    });
+    let _lock = match locked {
+        Ok(lock) => lock,
+        Err(error) => {
+            eprintln!("error: cannot write to `{}`: {error}", cache.display());
+            return Err(ExitCode::from(EXIT_USAGE));
+        }
+    };
+    cli::cache::remove_temporaries(&crate_dir);
+    let source = model_file
+        .canonicalize()
+        .unwrap_or_else(|_| model_file.to_path_buf());
+    let written = cli::write_crate(generated, &crate_dir)
         .and_then(|()| {
-            let source = model_file
-                .canonicalize()
-                .unwrap_or_else(|_| model_file.to_path_buf());
-            std::fs::write(
-                crate_dir.join(cli::cache::SOURCE),
-                source.display().to_string(),
+            cli::cache::write_if_changed(
+                &crate_dir.join(cli::cache::SOURCE),
+                source.display().to_string().as_bytes(),
             )
         })
-        .and_then(|()| std::fs::write(crate_dir.join(cli::cache::LAST_RUN), ""));
+        .and_then(|_| std::fs::write(crate_dir.join(cli::cache::LAST_RUN), ""));
     if let Err(error) = written {
         eprintln!("error: cannot write to `{}`: {error}", crate_dir.display());
         return Err(ExitCode::from(EXIT_USAGE));

@@ -1,12 +1,24 @@
 //! The library API of generated crates, model-independent half: options
 //! with a builder, and `solve` returning the whole [`Solution`]. A
-//! generated crate adds its typed `Params` and initial-state structs and
-//! hands them over here.
+//! generated crate adds, by the model's own names,
+//!
+//! - `Params`: one `f64` field per param, `Default` the file's values;
+//! - `Initial`: one `Option<f64>` field per state component, a coordinate
+//!   `q` as `q`, its derivatives `q'`, `q''`, `q'''` as `q_dot`, `q_ddot`,
+//!   `q_d3` (a clash numbered: `q_dot_2`); `Default` is all `None`, the
+//!   model's own initial state. Each field's doc comment says whether the
+//!   model states the value or the constraints (or, for constraints of
+//!   order k ≥ 3, the equations of motion) fix it; a fixed value may stay
+//!   `None` and is checked, not imposed, when given;
+//! - `solve(&Params, &Initial, &Options)`, which hands them over to
+//!   [`solve`] by index.
 //!
 //! ```ignore
-//! let solution = lag_double_pendulum::solve(
+//! use lag_double_pendulum_energy::{solve, Initial, Method, Options, Params};
+//!
+//! let solution = solve(
 //!     &Params { m2: 2.0, ..Params::default() },
-//!     &Initial::default(),
+//!     &Initial { a_dot: Some(0.5), ..Initial::default() },
 //!     &Options::default().rtol(1e-9).method(Method::Direct),
 //! )?;
 //! println!("{:?}", solution.at(2.5));
@@ -57,10 +69,12 @@ impl Options {
     }
 }
 
-/// Solves `M` with these param values and initial values (`given[i]`
-/// replaces the model's value of state component `i` when it is one the
-/// model states; values the constraints fix are checked against them),
-/// with the checks the command line applies.
+/// Solves `M` with these param values (in [`Model::PARAMS`] order) and
+/// initial values (`given[i]` replaces the model's value of state
+/// component `i`, in [`Model::STATE`] order, when it is one the model
+/// states; values the constraints fix are checked against them), with the
+/// checks the command line applies. Generated crates call it from their
+/// typed `solve(&Params, &Initial, &Options)`.
 pub fn solve<M: Model + 'static>(
     params: &[f64],
     given: &[Option<f64>],

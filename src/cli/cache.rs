@@ -2,7 +2,18 @@
 //! under `crates/`, its binary and artifacts in the shared `target/`, one
 //! runtime per lagc version. The least recently run models go first when
 //! the cache outgrows its bound.
+//!
+//! Several `lagc` processes may use one cache at once. Each cached crate
+//! (and each runtime) has a lock file under `locks/`, held exclusively
+//! (`File::lock`, released by the OS when a process dies, so a killed
+//! build leaves no stale lock) while the crate is written, built and its
+//! binary checked; eviction skips a crate whose lock another process holds.
+//! Every file is written to a temporary file and renamed over the old one,
+//! and every run compares each file with what it should hold, so a run
+//! killed half-way leaves files that are wholly old or wholly new, and the
+//! next run rewrites whatever differs and lets cargo rebuild.
 
+use std::fs::{File, TryLockError};
 use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
@@ -12,6 +23,91 @@ pub const LAST_RUN: &str = ".lagc-last-run";
 pub const SOURCE: &str = ".lagc-source";
 /// The default bound on the cache's size (`LAGC_CACHE_MAX_BYTES` overrides).
 pub const DEFAULT_MAX_BYTES: u64 = 4_000_000_000;
+
+/// The directory of the lock files, beside `crates/`.
+pub const LOCKS: &str = "locks";
+
+/// An exclusive lock on one cached crate or runtime, held until dropped.
+#[derive(Debug)]
+pub struct Lock {
+    _file: File,
+}
+
+fn lock_file(cache: &Path, name: &str) -> std::io::Result<File> {
+    let dir = cache.join(LOCKS);
+    std::fs::create_dir_all(&dir)?;
+    std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(dir.join(format!("{name}.lock")))
+}
+
+/// The lock on `name` (a package, or the runtime's directory name),
+/// waiting for another process that holds it; `waiting` is called once
+/// when it must wait.
+pub fn lock(cache: &Path, name: &str, waiting: impl FnOnce()) -> std::io::Result<Lock> {
+    let file = lock_file(cache, name)?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(TryLockError::WouldBlock) => {
+            waiting();
+            file.lock()?;
+        }
+        Err(TryLockError::Error(e)) => return Err(e),
+    }
+    Ok(Lock { _file: file })
+}
+
+/// The lock on `name` if no other process holds it.
+pub fn try_lock(cache: &Path, name: &str) -> Option<Lock> {
+    let file = lock_file(cache, name).ok()?;
+    file.try_lock().ok()?;
+    Some(Lock { _file: file })
+}
+
+/// Writes `contents` to `target` unless it holds them already, through a
+/// temporary file renamed over it: a reader (cargo in another process)
+/// and a run killed half-way never see a half-written file. Returns
+/// whether it wrote.
+pub fn write_if_changed(target: &Path, contents: &[u8]) -> std::io::Result<bool> {
+    if std::fs::read(target).is_ok_and(|old| old == contents) {
+        return Ok(false);
+    }
+    if let Some(parent) = target.parent() {
+        std::fs::create_dir_all(parent)?;
+    }
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let temporary = target.with_file_name(format!(".{name}.lagc-tmp-{}", std::process::id()));
+    let written =
+        std::fs::write(&temporary, contents).and_then(|()| std::fs::rename(&temporary, target));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    written.map(|()| true)
+}
+
+/// Removes the temporary files a killed writer left in `dir` and its
+/// subdirectories (the caller holds the lock, so no writer is alive).
+pub fn remove_temporaries(dir: &Path) {
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if entry.file_type().is_ok_and(|t| t.is_dir()) {
+                stack.push(entry.path());
+            } else if name.starts_with('.') && name.contains(".lagc-tmp-") {
+                let _ = std::fs::remove_file(entry.path());
+            }
+        }
+    }
+}
 
 /// The bytes under `path` (0 if it is missing).
 pub fn size(path: &Path) -> u64 {
@@ -109,7 +205,7 @@ pub fn entries(cache: &Path) -> Vec<Entry> {
     entries
 }
 
-/// Removes one model's crate and artifacts.
+/// Removes one model's crate and artifacts (the caller holds its lock).
 pub fn remove(cache: &Path, package: &str) -> std::io::Result<()> {
     for path in artifacts(cache, package) {
         let removed = if path.is_dir() {
@@ -150,7 +246,11 @@ pub fn evict(cache: &Path, max_bytes: u64, current_runtime: &str, keep: &str) ->
         return removed;
     }
     for stale in stale_runtimes(cache, current_runtime) {
-        let _ = std::fs::remove_dir_all(stale);
+        // Another lagc version may be building with it right now.
+        let name = stale.file_name().map(|n| n.to_string_lossy().into_owned());
+        if let Some(_lock) = name.and_then(|n| try_lock(cache, &n)) {
+            let _ = std::fs::remove_dir_all(stale);
+        }
     }
     for entry in entries(cache) {
         if size(cache) <= max_bytes {
@@ -159,6 +259,10 @@ pub fn evict(cache: &Path, max_bytes: u64, current_runtime: &str, keep: &str) ->
         if entry.package == keep {
             continue;
         }
+        // Another process is writing or building it: not ours to remove.
+        let Some(_lock) = try_lock(cache, &entry.package) else {
+            continue;
+        };
         if remove(cache, &entry.package).is_ok() {
             removed.push(entry.package);
         }

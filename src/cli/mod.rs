@@ -14,16 +14,10 @@ use std::process::{Command, ExitStatus};
 
 /// Writes the crate under `dir`, leaving files whose contents are already
 /// right untouched (so cargo sees no change and does not rebuild).
+/// Each file is replaced whole (`cache::write_if_changed`).
 pub fn write_crate(generated: &GeneratedCrate, dir: &Path) -> std::io::Result<()> {
     for (path, contents) in &generated.files {
-        let target = dir.join(path);
-        if let Some(parent) = target.parent() {
-            std::fs::create_dir_all(parent)?;
-        }
-        if std::fs::read(&target).is_ok_and(|old| old == contents.as_bytes()) {
-            continue;
-        }
-        std::fs::write(&target, contents)?;
+        cache::write_if_changed(&dir.join(path), contents.as_bytes())?;
     }
     Ok(())
 }
@@ -80,14 +74,7 @@ pub fn runtime_path_from_cache() -> String {
 /// rewritten, so cargo does not rebuild it).
 pub fn write_runtime(dir: &Path) -> std::io::Result<()> {
     for (path, contents) in lagc::emit::runtime_files() {
-        let target = dir.join(path);
-        if let Some(parent) = target.parent() {
-            std::fs::create_dir_all(parent)?;
-        }
-        if std::fs::read(&target).is_ok_and(|old| old == contents.as_bytes()) {
-            continue;
-        }
-        std::fs::write(&target, contents)?;
+        cache::write_if_changed(&dir.join(path), contents.as_bytes())?;
     }
     Ok(())
 }

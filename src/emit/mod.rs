@@ -14,6 +14,7 @@
 //! | `expr.rs` | IR expressions → Rust expressions, shared nodes as `let`s |
 //! | `names.rs` | symbol names and the bindings a function needs |
 //! | `params.rs` | the `Params` struct |
+//! | `initial.rs` | the `Initial` struct (initial values by name) |
 //! | `model.rs` | consts, time span, initial state, exact solution, masses |
 //! | `motion.rs` | `rhs`, `jacobian`, `time_partial`, `linearize` |
 //! | `coefficients.rs` | the coefficient system |
@@ -23,6 +24,7 @@ mod coefficients;
 mod events;
 mod expr;
 mod files;
+mod initial;
 mod model;
 pub mod modes;
 mod motion;
@@ -90,6 +92,7 @@ pub fn emit_crate(
     let (branch_field, branch_init) = events::branch_field(kernel);
     let event_consts = events::consts(kernel);
     let params = params::params_code(kernel, &mut names);
+    let initial = initial::initial_code(kernel);
     let masses = model::mass_fns(kernel, &mut names);
     let consts = model::consts(kernel, &options.model_name, &options.source_hash);
     let data = model::data_items(kernel, &mut names);
@@ -119,12 +122,12 @@ pub fn emit_crate(
         use lagc_runtime::failure::Failure;
         use lagc_runtime::linalg::Matrix;
         #lu_import
-        use lagc_runtime::model::Initial;
         pub use lagc_runtime::driver::Options;
         pub use lagc_runtime::method::{IntegratorChoice, Method};
         pub use lagc_runtime::solution::Solution;
 
         #params
+        #initial
         #masses
 
         /// The model with its param values (a `lagc_runtime::model::Model`).
@@ -174,12 +177,11 @@ pub fn emit_crate(
             #coefficients
         }
 
-        /// Solves the model with these params, from its initial state with
-        /// the given values replaced (`initial[i]` for state component `i`,
-        /// in the order of `<Model as lagc_runtime::model::Model>::STATE`):
-        /// the whole motion, `Solution::at(t)`.
-        pub fn solve(params: &Params, initial: &[Option<f64>], options: &Options) -> Result<Solution, Failure> {
-            lagc_runtime::api::solve::<Model>(&params.values(), initial, options)
+        /// Solves the model with these params from its initial state with
+        /// the values `initial` gives replaced (those the constraints fix
+        /// are checked against them): the whole motion, `Solution::at(t)`.
+        pub fn solve(params: &Params, initial: &Initial, options: &Options) -> Result<Solution, Failure> {
+            lagc_runtime::api::solve::<Model>(&params.values(), &initial.values(), options)
         }
     };
     let lib = pretty(lib).map_err(|e| vec![e])?;

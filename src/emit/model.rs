@@ -173,9 +173,9 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
         .kinds
         .iter()
         .map(|k| match k {
-            InitialKind::Given => quote! { Initial::Given },
-            InitialKind::Constraint => quote! { Initial::Constraint },
-            InitialKind::Solved => quote! { Initial::Solved },
+            InitialKind::Given => quote! { lagc_runtime::model::Initial::Given },
+            InitialKind::Constraint => quote! { lagc_runtime::model::Initial::Constraint },
+            InitialKind::Solved => quote! { lagc_runtime::model::Initial::Solved },
         })
         .collect();
     let masses: Vec<&str> = kernel.masses.iter().map(|(n, _)| n.as_str()).collect();
@@ -217,7 +217,7 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
         const PARAMS: &'static [&'static str] = &[#(#params),*];
         const STATE: &'static [&'static str] = &[#(#state),*];
         const COORDINATES: usize = #coordinates;
-        const INITIAL: &'static [Initial] = &[#(#initial),*];
+        const INITIAL: &'static [lagc_runtime::model::Initial] = &[#(#initial),*];
         #masses
         #integrator
         #affine

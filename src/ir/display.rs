@@ -390,8 +390,17 @@ impl<'a> Writer<'a> {
             _ => {
                 let mut b = String::new();
                 self.expr(base, Prec::Power, &mut b);
-                if self.style == Style::Latex && b.ends_with('\'') {
-                    b = format!("{{{b}}}");
+                // A derivative as a base: `{q'}^{2}`, and `{q^{(4)}}^{2}`
+                // (TeX refuses a double superscript); `(q^(4))^2` in text,
+                // where `q^(4)^2` would read as a power of a power.
+                let higher = matches!(
+                    self.arena.node(base),
+                    Node::Sym(Symbol::Jet { order, .. }) if *order > 3
+                );
+                match self.style {
+                    Style::Latex if higher || b.ends_with('\'') => b = format!("{{{b}}}"),
+                    Style::Text if higher => b = format!("({b})"),
+                    _ => {}
                 }
                 out.push_str(&b);
                 out.push('^');

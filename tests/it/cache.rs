@@ -229,6 +229,18 @@ fn the_cache_lists_its_models_evicts_the_least_recently_run_and_cleans() {
         listed.contains("lag-paper-") && listed.contains("examples/paper.lag"),
         "{listed}"
     );
+    // A model another process is building (its lock held) is not evicted.
+    let package = listed
+        .split_whitespace()
+        .find(|w| w.starts_with("lag-paper-"))
+        .unwrap()
+        .to_string();
+    let held = std::fs::File::open(cache.join("locks").join(format!("{package}.lock"))).unwrap();
+    held.lock().unwrap();
+    let stderr = run("examples/damped_oscillator.lag", Some("1"));
+    assert!(!stderr.contains("least recently run"), "{stderr}");
+    assert!(list().contains("lag-paper-"));
+    drop(held);
     // A bound of one byte: the run keeps its own model and evicts the rest.
     let stderr = run("examples/damped_oscillator.lag", Some("1"));
     assert!(
@@ -244,4 +256,81 @@ fn the_cache_lists_its_models_evicts_the_least_recently_run_and_cleans() {
     assert!(cleaned.status.success());
     assert!(!cache.exists());
     assert!(list().contains("0 model(s)"));
+}
+
+/// A model whose text no earlier run built (a comment with the time), so
+/// that every process that runs it must write and build its crate.
+fn unique_oscillator(omega: f64) -> String {
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_nanos();
+    format!("// built at {now}\n{}", oscillator(omega))
+}
+
+/// The cached crate directory of the package whose name starts with
+/// `prefix`, in the tests' shared cache.
+fn cached_crate(prefix: &str) -> PathBuf {
+    std::fs::read_dir(crate::root().join("target/lagc-cache/crates"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.file_name().unwrap().to_string_lossy().starts_with(prefix))
+        .expect("the model's cached crate")
+}
+
+/// Issue 13: two `lagc run` of one model at once (its crate new to the
+/// cache, so both write and build it) both succeed with identical output.
+#[test]
+fn two_concurrent_runs_of_one_model_agree() {
+    let dir = scratch("concurrent");
+    let model = dir.join("concurrent_oscillator.lag");
+    std::fs::write(&model, unique_oscillator(1.5)).unwrap();
+    let (first, second) = std::thread::scope(|s| {
+        let a = s.spawn(|| lagc_run(&model));
+        let b = s.spawn(|| lagc_run(&model));
+        (a.join().unwrap(), b.join().unwrap())
+    });
+    assert!((final_x(&first) - 1.5f64.cos()).abs() < 1e-8);
+    assert!((final_x(&second) - 1.5f64.cos()).abs() < 1e-8);
+    assert_eq!(first.stdout, second.stdout);
+    // No temporary file is left behind.
+    let crate_dir = cached_crate("lag-concurrent-oscillator-");
+    for dir in [crate_dir.clone(), crate_dir.join("src")] {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(!name.contains("lagc-tmp"), "{name}");
+        }
+    }
+}
+
+/// Issue 13: a run killed half-way (simulated: the crate's source cut in
+/// half, its `main.rs` and `Cargo.lock` missing, a temporary file left,
+/// the binary gone) leaves a cache that the next run repairs.
+#[test]
+fn a_half_written_cached_crate_is_rebuilt() {
+    let dir = scratch("half_written");
+    let model = dir.join("half_written_oscillator.lag");
+    std::fs::write(&model, unique_oscillator(2.5)).unwrap();
+    let first = lagc_run(&model);
+    assert!((final_x(&first) - 2.5f64.cos()).abs() < 1e-8);
+    let crate_dir = cached_crate("lag-half-written-oscillator-");
+    let lib = crate_dir.join("src/lib.rs");
+    let text = std::fs::read_to_string(&lib).unwrap();
+    std::fs::write(&lib, &text[..text.len() / 2]).unwrap();
+    std::fs::remove_file(crate_dir.join("src/main.rs")).unwrap();
+    std::fs::remove_file(crate_dir.join("Cargo.lock")).unwrap();
+    std::fs::write(crate_dir.join("src/.lib.rs.lagc-tmp-1"), "fn broken(").unwrap();
+    let package = crate_dir
+        .file_name()
+        .unwrap()
+        .to_string_lossy()
+        .into_owned();
+    let binary = crate::root()
+        .join("target/lagc-cache/target/release")
+        .join(format!("{package}{}", std::env::consts::EXE_SUFFIX));
+    std::fs::remove_file(&binary).unwrap();
+    let second = lagc_run(&model);
+    assert_eq!(first.stdout, second.stdout);
+    assert_eq!(std::fs::read_to_string(&lib).unwrap(), text);
+    assert!(!crate_dir.join("src/.lib.rs.lagc-tmp-1").exists());
 }

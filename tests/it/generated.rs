@@ -458,3 +458,65 @@ fn keyword_names_build_warning_free() {
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert_eq!(stdout.lines().next(), Some("t,self,super,self',super'"));
 }
+
+/// Issue 13: `Initial` names the state by the model's names (a derivative
+/// `q'` as `q_dot`, `q''` as `q_ddot`; a clash numbered, coordinates
+/// first; keywords as the namer writes them), and each field's doc says
+/// where its value comes from: the model's value, the constraints, or the
+/// equations of motion.
+#[test]
+fn initial_fields_name_the_state() {
+    let paper = lib_rs("paper");
+    for field in ["q1", "q2", "q1_dot", "q2_dot"] {
+        assert!(
+            paper.contains(&format!("pub {field}: Option<f64>,")),
+            "{field}"
+        );
+    }
+    assert!(paper.contains("/// `q1'` at `t0`; `None`: the model's value, `1`."));
+    assert!(paper.contains("fixed by the constraints as `q2' = t*q1'`"));
+    assert!(paper.contains("vec![self.q1, self.q2, self.q1_dot, self.q2_dot]"));
+    assert!(paper.contains("pub fn solve(\n    params: &Params,\n    initial: &Initial,"));
+
+    let third = lib_rs("third_order_constraint");
+    assert!(third.contains("pub x_ddot: Option<f64>,"));
+    assert!(third.contains("pub y_ddot: Option<f64>,"));
+    assert!(third.contains("fixed by the equations of motion"));
+
+    let clash = generate_file(&root().join("tests/data/initial_name_clash.lag"));
+    let clash = clash.file("src/lib.rs").unwrap();
+    assert!(clash.contains("vec![self.a, self.a_dot, self.a_dot_2, self.a_dot_dot]"));
+
+    let keywords = generate_file(&root().join("tests/data/keyword_names.lag"));
+    let keywords = keywords.file("src/lib.rs").unwrap();
+    assert!(keywords.contains("vec![self.self_, self.super_, self.self_dot, self.super_dot]"));
+}
+
+/// Issue 13: `cargo doc` of a generated crate (its runtime included) gives
+/// no warning: the library API a user reads.
+#[test]
+fn generated_crates_document_without_warnings() {
+    for path in [
+        root().join("examples/paper.lag"),
+        root().join("examples/third_order_constraint.lag"),
+        root().join("tests/data/initial_name_clash.lag"),
+    ] {
+        let generated = generate_file(&path);
+        let dir = base().join("crates").join(&generated.package);
+        write(&generated, &dir);
+        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+        let output = Command::new(&cargo)
+            .args(["doc", "--offline", "--quiet", "--manifest-path"])
+            .arg(dir.join("Cargo.toml"))
+            .env("CARGO_TARGET_DIR", base().join("target"))
+            .env("RUSTDOCFLAGS", "-D warnings")
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success() && output.stderr.is_empty(),
+            "{}: cargo doc:\n{}",
+            path.display(),
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+}

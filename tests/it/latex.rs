@@ -61,3 +61,49 @@ fn every_examples_latex_compiles_and_fits_the_page() {
         );
     }
 }
+
+/// `lagc derive` of `path` in `format`.
+fn derive(path: &std::path::Path, format: &str) -> String {
+    let derived = Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .args(["derive", "--format", format])
+        .arg(path)
+        .output()
+        .unwrap();
+    assert!(
+        derived.status.success(),
+        "{}: derive failed",
+        path.display()
+    );
+    String::from_utf8(derived.stdout).unwrap()
+}
+
+/// Issue 13: one notation for time derivatives, the language's own
+/// (Lagrange's): primes through the third (`q'`, `q''`, `q'''`, the
+/// coefficients' `f_{2}'` too), `q^{(n)}` from the fourth, never a dot; a
+/// derivative raised to a power is braced (`{a'}^{2}`, `{x^{(4)}}^{2}`),
+/// and every line's `&=` stands apart from its left side.
+#[test]
+fn latex_writes_derivatives_one_way() {
+    let root = crate::root();
+    let mut files: Vec<_> = std::fs::read_dir(root.join("examples"))
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "lag"))
+        .collect();
+    files.sort();
+    files.push(root.join("tests/data/fourth_order_constraint.lag"));
+    for path in &files {
+        let block = derive(path, "latex");
+        for wrong in ["\\dot", "\\ddot", "''''", ")}^{", "'^", "}&="] {
+            assert!(
+                !block.contains(wrong),
+                "{}: {wrong} in\n{block}",
+                path.display()
+            );
+        }
+    }
+    let fourth = root.join("tests/data/fourth_order_constraint.lag");
+    insta::assert_snapshot!("fourth_order_latex", derive(&fourth, "latex"));
+    insta::assert_snapshot!("fourth_order_text", derive(&fourth, "text"));
+    // The examples' blocks are snapshots of `mechanics::examples`.
+}

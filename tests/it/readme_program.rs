@@ -70,7 +70,10 @@ fn the_readme_program_uses_two_models_together() {
         String::from_utf8_lossy(&ran.stderr)
     );
     assert_eq!(
-        stdout, "paper: q1(5) = 7.267018147514\nrocket: z(80) = 88136.104378\n",
+        stdout,
+        "paper: q1(5) = 7.267018147514\n\
+         paper, q1'(0) = 2: q1(5) = 14.534036295027\n\
+         rocket: z(80) = 88136.104378\n",
         "the README's stated output"
     );
 }

@@ -514,7 +514,7 @@ impl<M: Model, I: Iterate + ?Sized> System for LinearizedMotion<'_, M, I> {
 /// Layout: `y = (w, P_2, …, P_N)`, each of length `N + 1`; `P_j = ∂w/∂c_j`
 /// with `c_1` the free term. `P_1` is not stored: the free term enters
 /// `w_0` alone, and `w_0` enters no rate, so `P_1 = e_0` for ever
-/// ([`sensitivity`]). `N(N + 1)` numbers are integrated, not `(N + 1)²`.
+/// (`sensitivity`). `N(N + 1)` numbers are integrated, not `(N + 1)²`.
 pub struct ProjectiveCoefficients<'a, M: Model, I: Iterate + ?Sized> {
     linear: LinearizedCoefficients<'a, M, I>,
 }
