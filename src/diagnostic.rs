@@ -298,6 +298,11 @@ pub mod codes {
     /// A `for` candidate that is not a derivative of the constraint's order
     /// occurring in it, or a constraint not linear in its candidate.
     pub const BAD_CANDIDATE: &str = "E0038";
+    /// A constraint of order k ≥ 3 whose derivative with respect to the
+    /// highest derivatives holds derivatives above the second: (4) is then
+    /// of order above 2, and differentiating it k − 2 times (SPEC §1.4)
+    /// passes the state.
+    pub const UNSUPPORTED_REDUCTION: &str = "E0039";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

@@ -139,6 +139,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         &mut elimination,
         &rows,
         model.lagrangian.span,
+        model.constraints.first().map(|c| c.span),
     )
     .map_err(|d| vec![d])?;
     let u = symbolic.u();

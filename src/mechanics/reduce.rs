@@ -14,10 +14,63 @@ use super::solve::System;
 use super::star::Elimination;
 use super::symbols::Symbolic;
 use super::tidy::tidy;
-use crate::diagnostic::Diagnostic;
+use crate::diagnostic::{codes, Diagnostic};
 use crate::ir::{Arena, ExprId, Symbol};
 use crate::span::Span;
 use std::collections::HashMap;
+
+/// For k ≥ 3 the rows of (4) must be of second order in the independent
+/// coordinates: they are differentiated k − 2 times to reach order k. A
+/// constraint whose derivative with respect to its highest derivatives
+/// holds higher ones (`y^(4) = a·x^(4)²`: `∂φ/∂x^(4) = 2a·x^(4)`) puts
+/// them into (4), and the same differentiation would pass the state
+/// (`x^(6)` in a state that ends at `x^(3)`): refused, not derived wrongly.
+fn refuse_rows_above_second_order(
+    arena: &Arena,
+    model: &Symbolic,
+    rows: &[ExprId],
+    constraint: Span,
+) -> Result<(), Diagnostic> {
+    let highest = rows
+        .iter()
+        .flat_map(|&row| arena.free_symbols(row))
+        .filter_map(|s| match s {
+            Symbol::Jet { coord, order } if model.independent.contains(&coord) => {
+                Some((order, coord))
+            }
+            _ => None,
+        })
+        .max();
+    match highest {
+        Some((order, coord)) if order > 2 => {
+            let name = arena.symbol_name(Symbol::Jet { coord, order: 0 });
+            let k = model.k;
+            Err(Diagnostic::error(
+                codes::UNSUPPORTED_REDUCTION,
+                format!(
+                    "with this constraint the equations of motion (4) hold a derivative of \
+                     order {order} of `{name}`"
+                ),
+            )
+            .with_primary(
+                constraint,
+                "its derivative with respect to its highest derivatives holds derivatives \
+                 above the second",
+            )
+            .with_note(format!(
+                "for a constraint of order k = {k} ≥ 3, lagc differentiates (4) k − 2 times \
+                 to reach order k (SPEC §1.4); from order {order} that reaches order {} and \
+                 passes the state, and the reduction of such systems is not implemented",
+                order + k - 2,
+            ))
+            .with_help(
+                "write the constraint linear in its highest derivatives, with coefficients \
+                 free of derivatives above the second",
+            ))
+        }
+        _ => Ok(()),
+    }
+}
 
 #[derive(Debug, Clone)]
 pub struct Reduction {
@@ -35,8 +88,12 @@ pub fn reduce(
     elimination: &mut Elimination,
     rows: &[ExprId],
     lagrangian: Span,
+    constraint: Option<Span>,
 ) -> Result<Reduction, Diagnostic> {
     let (k, u) = (model.k, model.u());
+    if k >= 3 {
+        refuse_rows_above_second_order(arena, model, rows, constraint.unwrap_or(lagrangian))?;
+    }
     let masses = model.laws.len();
     let defaults = &model.param_defaults;
     // For k ≥ 3 the rows are differentiated in time: D must see the masses

@@ -127,4 +127,9 @@ fn latex_forms() {
     assert_eq!(a.latex(e), "M {q_{1}'}^{2}");
     let c = a.func(Func::Cos, q1d);
     assert_eq!(a.latex(c), "\\cos\\left(q_{1}'\\right)");
+    // A power of a fourth derivative is braced: TeX refuses x^{(4)}^{2}.
+    let q4 = sym(&mut a, q(0, 4));
+    let q4_sq = a.powi(q4, 2);
+    assert_eq!(a.latex(q4_sq), "{q_{1}^{(4)}}^{2}");
+    assert_eq!(a.display(q4_sq).to_string(), "(q1^(4))^2");
 }
