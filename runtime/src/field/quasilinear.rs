@@ -21,7 +21,7 @@
 
 use super::coefficients::{FieldSystem, Iterate, LinearizedMotion, ProjectiveCoefficients};
 use super::conditions::{recover, recover_state};
-use super::window::{member_states, StepperKind, StoredStep, Window, WindowStep};
+use super::window::{member_states, SharedField, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
 use crate::dop853::dense_step_between;
@@ -650,16 +650,15 @@ impl QuasilinearField {
         };
         source.field(&y, &mut f, &mut s).ok_or_else(singular)?;
         let reference = recover(&f, &s, &window.anchor_x).ok_or_else(singular)?;
-        member_states(
-            &source,
-            &self.options,
-            &window.anchor_x,
-            &reference,
-            &y,
-            anchors,
+        let shared = SharedField {
+            system: &source,
+            options: &self.options,
+            anchor_x: &window.anchor_x,
+            reference: &reference,
+            y: &y,
             t,
-            out,
-        )
+        };
+        member_states(&shared, anchors, out)
     }
 
     /// One pass of the field along `iterate` from the current anchor,

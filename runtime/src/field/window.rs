@@ -571,16 +571,15 @@ impl Window {
                 })?;
             (y, reference, t)
         };
-        member_states(
+        let shared = SharedField {
             system,
             options,
-            &self.anchor_x,
-            &reference,
-            &y,
-            anchors,
+            anchor_x: &self.anchor_x,
+            reference: &reference,
+            y: &y,
             t,
-            out,
-        )
+        };
+        member_states(&shared, anchors, out)
     }
 
     /// The last step's continuous extension as a value.
@@ -658,27 +657,31 @@ fn check_without_reanchoring(
     Ok(())
 }
 
-/// Every member's state from the shared `y` (of the reference anchored at
-/// `anchor_x`, recovered as `reference`).
-#[allow(clippy::too_many_arguments)]
+/// What every ensemble member's state is computed from: the field `y` of
+/// the reference anchored at `anchor_x`, recovered as `reference`, at `t`.
+pub struct SharedField<'a, F: FieldSystem + ?Sized> {
+    pub system: &'a F,
+    pub options: &'a FieldOptions,
+    pub anchor_x: &'a [f64],
+    pub reference: &'a Recovered,
+    pub y: &'a [f64],
+    pub t: f64,
+}
+
+/// Every member's state through the shared field, into `out`.
 pub fn member_states<F: FieldSystem + ?Sized>(
-    system: &F,
-    options: &FieldOptions,
-    anchor_x: &[f64],
-    reference: &Recovered,
-    y: &[f64],
+    shared: &SharedField<'_, F>,
     anchors: &States,
-    t: f64,
     out: &mut States,
 ) -> Result<(), Failure> {
-    let n = anchor_x.len();
+    let n = shared.anchor_x.len();
     // The field's system is affine (the model's, or the window's
     // linearisation), so a member's state is an affine function of its
     // initial state: x(t) = x_b(t) + Φ(t) (x0 − x_b0). With more members
     // than N + 1, N + 1 conditioned solutions give x_b and Φ, and every
     // member then costs N² multiply-adds instead of a field and a solve.
     if anchors.len() <= n + 1 {
-        return member_states_each(system, options, anchor_x, reference, y, anchors, t, out);
+        return member_states_each(shared, anchors, out);
     }
     let base = anchors.row(0);
     let mut probes = States {
@@ -695,16 +698,7 @@ pub fn member_states<F: FieldSystem + ?Sized>(
         deltas.push(delta);
     }
     let mut solved = States::default();
-    member_states_each(
-        system,
-        options,
-        anchor_x,
-        reference,
-        y,
-        &probes,
-        t,
-        &mut solved,
-    )?;
+    member_states_each(shared, &probes, &mut solved)?;
     let x_b = solved.row(0);
     // phi[i * n + j] = ∂x_j(t)/∂x0_i.
     let mut phi = vec![0.0; n * n];
@@ -780,17 +774,19 @@ fn affine_map(x_b: &[f64], phi: &[f64], base: &[f64], from: &[f64], to: &mut Vec
 }
 
 /// [`member_states`] by one conditioned solution per member.
-#[allow(clippy::too_many_arguments)]
 fn member_states_each<F: FieldSystem + ?Sized>(
-    system: &F,
-    options: &FieldOptions,
-    anchor_x: &[f64],
-    reference: &Recovered,
-    y: &[f64],
+    shared: &SharedField<'_, F>,
     anchors: &States,
-    t: f64,
     out: &mut States,
 ) -> Result<(), Failure> {
+    let SharedField {
+        system,
+        options,
+        anchor_x,
+        reference,
+        y,
+        t,
+    } = *shared;
     let n = anchor_x.len();
     let c_ref = anchor_values(&options.anchor, anchor_x)[0];
     let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
