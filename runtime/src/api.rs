@@ -28,7 +28,7 @@ use crate::driver::{solve as solve_run, Options};
 use crate::failure::{Failure, FailureKind};
 use crate::field::Anchor;
 use crate::method::{IntegratorChoice, Method};
-use crate::model::{Initial, Model};
+use crate::model::{DynModel, Initial, Model};
 use crate::solution::Solution;
 
 impl Options {
@@ -80,24 +80,32 @@ pub fn solve<M: Model + 'static>(
     given: &[Option<f64>],
     options: &Options,
 ) -> Result<Solution, Failure> {
-    let mut model = M::new(params);
+    solve_model(&mut M::new(params), given, options)
+}
+
+/// [`solve`] for a model made already: the work, compiled once here.
+pub fn solve_model(
+    model: &mut dyn DynModel,
+    given: &[Option<f64>],
+    options: &Options,
+) -> Result<Solution, Failure> {
     let (t0, t1) = model.time_span();
     if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
         return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
     }
     let stated: Vec<Option<f64>> = given
         .iter()
-        .zip(M::INITIAL)
+        .zip(model.initial_kinds())
         .map(|(g, kind)| if *kind == Initial::Given { *g } else { None })
         .collect();
     let x0 = model.initial_state(&stated)?;
-    for (i, (g, kind)) in given.iter().zip(M::INITIAL).enumerate() {
+    for (i, (g, kind)) in given.iter().zip(model.initial_kinds()).enumerate() {
         if let (Some(stated), false) = (g, *kind == Initial::Given) {
             if (stated - x0[i]).abs() > 1e-9 * x0[i].abs().max(1.0) {
                 return Err(Failure::new(
                     t0,
                     FailureKind::InconsistentInitialValue {
-                        component: M::STATE[i].to_string(),
+                        component: model.state_names()[i].to_string(),
                         stated: *stated,
                         required: x0[i],
                     },
@@ -109,5 +117,5 @@ pub fn solve<M: Model + 'static>(
         progress: false,
         ..options.clone()
     };
-    solve_run(&mut model, &quiet, t0, t1, &x0)
+    solve_run(model, &quiet, t0, t1, &x0)
 }

@@ -10,7 +10,7 @@ use crate::driver::{run, Ending, Options};
 use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
 use crate::field::Anchor;
 use crate::method::{IntegratorChoice, Method};
-use crate::model::{Initial, Model};
+use crate::model::{DynModel, Initial, Model};
 use crate::output::{sample_times, write_header, write_row};
 use crate::plot::{write_plot, PlotRequest};
 use crate::summary::{json_string, Summary};
@@ -305,10 +305,18 @@ pub fn parse(
     Ok(Command::Run(Box::new(inv)))
 }
 
-/// The generated binary's `main`.
+/// The generated binary's `main`: the model with its file's param values
+/// hands over to [`command_line`], compiled once here.
 pub fn main<M: Model + 'static>() -> ExitCode {
+    command_line(&M::new(&M::parameters(&vec![None; M::PARAMS.len()])))
+}
+
+/// The command line of `prototype`'s model (its param values are the
+/// file's; `--param` makes another with [`DynModel::with_params`]).
+pub fn command_line(prototype: &dyn DynModel) -> ExitCode {
+    let model = prototype;
     let args: Vec<String> = std::env::args().skip(1).collect();
-    match parse(&args, M::PARAMS, M::STATE, M::OUTPUTS) {
+    match parse(&args, model.param_names(), model.state_names(), model.output_names()) {
         Err(message) => {
             eprintln!("error: {message}\n\n{USAGE}");
             ExitCode::from(USAGE_EXIT_STATUS)
@@ -318,29 +326,32 @@ pub fn main<M: Model + 'static>() -> ExitCode {
             ExitCode::SUCCESS
         }
         Ok(Command::SourceHash) => {
-            println!("{}", M::SOURCE_HASH);
+            println!("{}", model.source_hash());
             ExitCode::SUCCESS
         }
-        Ok(Command::Run(invocation)) => execute::<M>(&invocation),
+        Ok(Command::Run(invocation)) => execute(prototype, &invocation),
     }
 }
 
 /// The model, its span and initial state for an invocation, with every
 /// check the file's own values get.
-pub fn prepare<M: Model>(inv: &Invocation) -> Result<(M, f64, f64, Vec<f64>), Failure> {
-    let mut overrides = vec![None; M::PARAMS.len()];
+pub fn prepare(
+    prototype: &dyn DynModel,
+    inv: &Invocation,
+) -> Result<(Box<dyn DynModel>, f64, f64, Vec<f64>), Failure> {
+    let mut overrides = vec![None; prototype.param_names().len()];
     for &(i, v) in &inv.params {
         overrides[i] = Some(v);
     }
-    let params = M::parameters(&overrides);
-    let model = M::new(&params);
+    let params = prototype.parameters(&overrides);
+    let model = prototype.with_params(&params);
     let (t0, t1) = model.time_span();
     if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
         return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
     }
-    let mut given = vec![None; M::STATE.len()];
+    let mut given = vec![None; model.dim()];
     for &(i, v) in &inv.inits {
-        if M::INITIAL.get(i) == Some(&Initial::Given) {
+        if model.initial_kinds().get(i) == Some(&Initial::Given) {
             given[i] = Some(v);
         }
     }
@@ -350,20 +361,20 @@ pub fn prepare<M: Model>(inv: &Invocation) -> Result<(M, f64, f64, Vec<f64>), Fa
             return Err(Failure::new(
                 t0,
                 FailureKind::NonFiniteInitialValue {
-                    component: M::STATE[i].to_string(),
+                    component: model.state_names()[i].to_string(),
                 },
             ));
         }
     }
     // A value the constraints fix may be stated, if it agrees.
     for &(i, stated) in &inv.inits {
-        if M::INITIAL.get(i) != Some(&Initial::Given) {
+        if model.initial_kinds().get(i) != Some(&Initial::Given) {
             let required = x0[i];
             if (stated - required).abs() > 1e-9 * required.abs().max(1.0) {
                 return Err(Failure::new(
                     t0,
                     FailureKind::InconsistentInitialValue {
-                        component: M::STATE[i].to_string(),
+                        component: model.state_names()[i].to_string(),
                         stated,
                         required,
                     },
@@ -375,8 +386,8 @@ pub fn prepare<M: Model>(inv: &Invocation) -> Result<(M, f64, f64, Vec<f64>), Fa
 }
 
 /// The line a run prints first: the method and integrator, and why.
-pub fn plan<M: Model>(options: &Options) -> String {
-    let (choice, source) = options.choice::<M>();
+pub fn plan(model: &dyn DynModel, options: &Options) -> String {
+    let (choice, source) = options.choice(model);
     match options.method {
         Method::Direct => match choice {
             IntegratorChoice::Stiff => format!("direct: RODAS4 ({source})"),
@@ -389,10 +400,10 @@ pub fn plan<M: Model>(options: &Options) -> String {
             let integrator = match choice {
                 IntegratorChoice::Stiff => "RODAS4",
                 IntegratorChoice::Explicit => "DOP853",
-                IntegratorChoice::Magnus if M::AFFINE => "the Magnus integrator",
+                IntegratorChoice::Magnus if model.affine() => "the Magnus integrator",
                 _ => "DOP853, switching to RODAS4 if it detects stiffness",
             };
-            if M::AFFINE {
+            if model.affine() {
                 format!("field: the coefficient system by {integrator} ({source})")
             } else {
                 format!(
@@ -413,11 +424,11 @@ fn fail(json: bool, failure: &Failure) -> ExitCode {
     ExitCode::from(failure.exit_status())
 }
 
-fn execute<M: Model + 'static>(inv: &Invocation) -> ExitCode {
+fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     for warning in &inv.warnings {
         eprintln!("warning: {warning}");
     }
-    let (mut model, t0, t1, x0) = match prepare::<M>(inv) {
+    let (mut model, t0, t1, x0) = match prepare(prototype, inv) {
         Ok(prepared) => prepared,
         Err(failure) => return fail(inv.json, &failure),
     };
@@ -432,31 +443,31 @@ fn execute<M: Model + 'static>(inv: &Invocation) -> ExitCode {
         None => sample_times(t0, t1, inv.samples),
     };
     if let Some(count) = inv.ensemble {
-        return ensemble::<M>(&mut model, inv, t0, t1, &x0, &times, count);
+        return ensemble(&mut *model, inv, t0, t1, &x0, &times, count);
     }
-    eprintln!("{}", plan::<M>(&inv.options));
+    eprintln!("{}", plan(&*model, &inv.options));
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
-    let columns = M::STATE.len() + M::OUTPUTS.len();
+    let columns = model.dim() + model.output_names().len();
     let mut written: Result<(), std::io::Error> = Ok(());
     if !inv.quiet {
-        written = write_header(&mut out, M::STATE, M::OUTPUTS);
+        written = write_header(&mut out, model.state_names(), model.output_names());
     }
-    let mut exact_error: Option<f64> = M::EXACT.then_some(0.0);
+    let mut exact_error: Option<f64> = model.states_exact().then_some(0.0);
     let mut plotted: Vec<(f64, Vec<f64>)> = Vec::new();
-    let mut outputs = vec![0.0; M::OUTPUTS.len()];
-    let mut exact = vec![None; M::STATE.len()];
+    let mut outputs = vec![0.0; model.output_names().len()];
+    let mut exact = vec![None; model.dim()];
     let first_start = Instant::now();
     // The first solve streams the CSV; `--repeat N` then times N more
     // solves without output and reports the fastest.
     let first = run(
-        &mut model,
+        &mut *model,
         &inv.options,
         t0,
         t1,
         &x0,
         &times,
-        |model: &M, t, x| {
+        |model: &dyn DynModel, t, x| {
             model.outputs(t, x, &mut outputs);
             if written.is_ok() && !inv.quiet {
                 written = write_row(&mut out, t, x, &outputs);
@@ -499,14 +510,14 @@ fn execute<M: Model + 'static>(inv: &Invocation) -> ExitCode {
                 progress: false,
                 ..inv.options.clone()
             };
-            if let Err(failure) = run(&mut model, &quiet, t0, t1, &x0, &times, |_, _, _| Ok(())) {
+            if let Err(failure) = run(&mut *model, &quiet, t0, t1, &x0, &times, |_, _, _| Ok(())) {
                 return fail(inv.json, &failure);
             }
             fastest = fastest.min(start.elapsed());
         }
     }
     let estimated_error = if inv.estimate_error {
-        match estimate(&mut model, inv, t0, t1, &x0, &plotted) {
+        match estimate(&mut *model, inv, t0, t1, &x0, &plotted) {
             Ok(e) => Some(e),
             Err(failure) => {
                 eprintln!("warning: the error estimate failed: {failure}");
@@ -518,9 +529,9 @@ fn execute<M: Model + 'static>(inv: &Invocation) -> ExitCode {
     };
     if let Some(request) = &inv.plot {
         let mut names: Vec<&str> = vec!["t"];
-        names.extend(M::STATE);
-        names.extend(M::OUTPUTS);
-        if let Err(error) = write_plot(request, M::NAME, &names, &plotted) {
+        names.extend(model.state_names());
+        names.extend(model.output_names());
+        if let Err(error) = write_plot(request, model.name(), &names, &plotted) {
             eprintln!("error: cannot write the plot `{}`: {error}", request.file);
             return ExitCode::FAILURE;
         }
@@ -546,8 +557,8 @@ fn execute<M: Model + 'static>(inv: &Invocation) -> ExitCode {
 
 /// The largest difference (relative to `max(|x|, 1)`) between the samples
 /// of the run and those of a run at a 100× tighter tolerance.
-fn estimate<M: Model + 'static>(
-    model: &mut M,
+fn estimate(
+    model: &mut dyn DynModel,
     inv: &Invocation,
     t0: f64,
     t1: f64,
@@ -558,7 +569,7 @@ fn estimate<M: Model + 'static>(
     options.tol = options.tol.scaled(0.01);
     options.progress = false;
     let times: Vec<f64> = samples.iter().map(|(t, _)| *t).collect();
-    let n = M::STATE.len();
+    let n = model.dim();
     let mut largest = 0.0_f64;
     let mut i = 0;
     run(model, &options, t0, t1, x0, &times, |_, t, x| {
@@ -597,8 +608,8 @@ pub fn ensemble_member(x0: &[f64], k: usize, spread: f64) -> Vec<f64> {
 
 /// `--ensemble K`: one field for K initial states against K direct
 /// integrations, each timed as the smallest of `--repeat` runs.
-fn ensemble<M: Model + 'static>(
-    model: &mut M,
+fn ensemble(
+    model: &mut dyn DynModel,
     inv: &Invocation,
     t0: f64,
     t1: f64,

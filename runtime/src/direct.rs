@@ -6,7 +6,7 @@
 use crate::budget::Budget;
 use crate::failure::Failure;
 use crate::method::{AnyStepper, Integrator, IntegratorChoice};
-use crate::model::Model;
+use crate::model::DynModel;
 use crate::solver::{Report, Solver};
 use crate::stepper::Stepper;
 use crate::system::ModelSystem;
@@ -32,8 +32,8 @@ pub struct Direct {
 }
 
 impl Direct {
-    pub fn new<M: Model>(
-        model: &M,
+    pub fn new(
+        model: &dyn DynModel,
         choice: IntegratorChoice,
         tol: Tolerance,
         t0: f64,
@@ -81,7 +81,7 @@ impl Direct {
     }
 }
 
-impl<M: Model> Solver<M> for Direct {
+impl Solver for Direct {
     fn time(&self) -> f64 {
         self.stepper.time()
     }
@@ -94,7 +94,7 @@ impl<M: Model> Solver<M> for Direct {
         self.stepper.state()
     }
 
-    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
         // A switch decided after the last step happens now: the driver has
         // used that step's (DOP853) dense output by the time it asks for
         // the next step.
@@ -120,11 +120,11 @@ impl<M: Model> Solver<M> for Direct {
         Ok(())
     }
 
-    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+    fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         self.stepper.dense(&ModelSystem(model), t, out)
     }
 
-    fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
+    fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         let h = self.stepper.proposed_step();
         let integrator = self.stepper.integrator();
         self.done += self.stepper.stats();
@@ -140,7 +140,7 @@ impl<M: Model> Solver<M> for Direct {
         Ok(())
     }
 
-    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure> {
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure> {
         let dense = self.stepper.dense_step(&ModelSystem(model))?;
         Ok(vec![crate::solution::Segment::State(dense)])
     }
@@ -179,7 +179,7 @@ impl Direct {
     /// steps are clearly longer than DOP853's stability-limited ones, go
     /// back (the mass-loss spring at loose tolerances: stiff by Hairer's
     /// test, yet RODAS4 took ten times the work).
-    fn judge_the_switch<M: Model>(&mut self, model: &M, before: f64) -> Result<(), Failure> {
+    fn judge_the_switch(&mut self, model: &dyn DynModel, before: f64) -> Result<(), Failure> {
         const TRIAL_STEPS: usize = 20;
         const REQUIRED_GAIN: f64 = 2.0;
         if self.stepper.integrator() != Integrator::Stiff {
@@ -208,7 +208,7 @@ impl Direct {
     }
 
     /// Performs a pending switch to RODAS4.
-    fn switch_if_stiff<M: Model>(&mut self, model: &M) -> Result<(), Failure> {
+    fn switch_if_stiff(&mut self, model: &dyn DynModel) -> Result<(), Failure> {
         if self.switched_at.is_some()
             && self.switched_back_at.is_none()
             && self.stepper.integrator() == Integrator::Explicit

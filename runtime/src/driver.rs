@@ -13,7 +13,7 @@ use crate::field::affine::AffineField;
 use crate::field::quasilinear::QuasilinearField;
 use crate::field::{Anchor, FieldOptions};
 use crate::method::{IntegratorChoice, Method};
-use crate::model::{Model, Regime};
+use crate::model::{DynModel, Regime};
 use crate::progress::Progress;
 use crate::solution::{Piece, Solution};
 use crate::solver::{Report, Solver};
@@ -51,8 +51,8 @@ impl Default for Options {
 impl Options {
     /// The integrator choice: the option, else the model's statement,
     /// else `Auto`; with where it came from, in words.
-    pub fn choice<M: Model>(&self) -> (IntegratorChoice, String) {
-        match (self.integrator, M::DECLARED_INTEGRATOR) {
+    pub fn choice(&self, model: &dyn DynModel) -> (IntegratorChoice, String) {
+        match (self.integrator, model.declared_integrator()) {
             (Some(c), _) => (c, format!("--integrator {}", c.name())),
             (None, Some(c)) => (c, format!("declared {} in the model", c.name())),
             (None, None) => (IntegratorChoice::Auto, "auto, the default".to_string()),
@@ -61,7 +61,7 @@ impl Options {
 }
 
 /// A sample callback: `(model, t, x)`.
-type Sample<'a, M> = dyn FnMut(&M, f64, &[f64]) -> Result<(), Failure> + 'a;
+type Sample<'a> = dyn FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure> + 'a;
 
 /// Why the run ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,8 +86,8 @@ pub struct Outcome {
 /// The initial regime at `(t0, x0)`: branches from the switching
 /// functions' signs (a function exactly zero takes the sign it has a moment
 /// later along the initial slope).
-pub fn initial_branches<M: Model>(model: &M, t0: f64, x0: &[f64]) -> Vec<bool> {
-    let k = M::SWITCHES;
+pub fn initial_branches(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Vec<bool> {
+    let k = model.switches();
     if k == 0 {
         return Vec::new();
     }
@@ -96,12 +96,12 @@ pub fn initial_branches<M: Model>(model: &M, t0: f64, x0: &[f64]) -> Vec<bool> {
     if g.contains(&0.0) {
         // The right side reads the branches: give it those already known
         // (a function exactly zero provisionally positive).
-        let mut model = model.clone();
+        let mut model = model.boxed_clone();
         model.set_regime(&Regime {
-            mode: best_mode(&model, t0, x0).0,
+            mode: best_mode(&*model, t0, x0).0,
             branches: g.iter().map(|&v| v >= 0.0).collect(),
         });
-        let model = &model;
+        let model = &*model;
         // A moment later along Heun's second-order step, so that a function
         // whose first derivative also vanishes (a rocket at rest on the
         // ground, `stop when z < 0`) takes the sign of its second.
@@ -132,8 +132,8 @@ pub fn initial_branches<M: Model>(model: &M, t0: f64, x0: &[f64]) -> Vec<bool> {
 
 /// The mode whose candidates have the largest pivots at `(t, x)`, with
 /// the worst ratio of a chosen pivot to the best of its constraint.
-pub fn best_mode<M: Model>(model: &M, t: f64, x: &[f64]) -> (usize, Vec<usize>, f64) {
-    let constraints = M::CONSTRAINTS;
+pub fn best_mode(model: &dyn DynModel, t: f64, x: &[f64]) -> (usize, Vec<usize>, f64) {
+    let constraints = model.constraints();
     if constraints.is_empty() {
         return (0, Vec::new(), 1.0);
     }
@@ -154,24 +154,24 @@ pub fn best_mode<M: Model>(model: &M, t: f64, x: &[f64]) -> (usize, Vec<usize>, 
         best_pivot = best_pivot.min(p);
         at += c.names.len();
     }
-    (mode_index::<M>(&choice), choice, best_pivot)
+    (mode_index(model, &choice), choice, best_pivot)
 }
 
 /// The mode of a choice of candidates (mixed radix, first constraint
 /// lowest).
-pub fn mode_index<M: Model>(choice: &[usize]) -> usize {
+pub fn mode_index(model: &dyn DynModel, choice: &[usize]) -> usize {
     let mut mode = 0;
     let mut radix = 1;
-    for (c, &j) in M::CONSTRAINTS.iter().zip(choice) {
+    for (c, &j) in model.constraints().iter().zip(choice) {
         mode += j * radix;
         radix *= c.names.len();
     }
     mode
 }
 
-fn mode_digits<M: Model>(mode: usize) -> Vec<usize> {
+fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
     let mut rest = mode;
-    M::CONSTRAINTS
+    model.constraints()
         .iter()
         .map(|c| {
             let d = rest % c.names.len();
@@ -186,14 +186,14 @@ fn mode_digits<M: Model>(mode: usize) -> Vec<usize> {
 const POOR_PIVOT: f64 = 0.1;
 
 /// Makes the solver of `options` for `model` from `(t0, x0)`.
-pub fn make_solver<M: Model + 'static>(
-    model: &M,
+pub fn make_solver(
+    model: &dyn DynModel,
     options: &Options,
     t0: f64,
     x0: &[f64],
     h_max: f64,
-) -> Result<Box<dyn Solver<M>>, Failure> {
-    let (choice, _) = options.choice::<M>();
+) -> Result<Box<dyn Solver>, Failure> {
+    let (choice, _) = options.choice(model);
     Ok(match options.method {
         Method::Direct => Box::new(Direct::new(model, choice, options.tol, t0, x0, h_max)?),
         Method::Field => {
@@ -206,7 +206,7 @@ pub fn make_solver<M: Model + 'static>(
                 magnus: choice == IntegratorChoice::Magnus,
                 ..FieldOptions::default()
             };
-            if M::AFFINE {
+            if model.affine() {
                 Box::new(AffineField::new(model, field, t0, x0, h_max)?)
             } else {
                 Box::new(QuasilinearField::new(field, t0, x0, h_max))
@@ -218,22 +218,22 @@ pub fn make_solver<M: Model + 'static>(
 /// Integrates `model` from `(t0, x0)` to `t1`, calling `sample(t, x)` at
 /// every time of `times` (ascending, within `[t0, t1]`) and, when `stop
 /// when` ends the run early, at the stop time.
-pub fn run<M: Model + 'static>(
-    model: &mut M,
+pub fn run(
+    model: &mut dyn DynModel,
     options: &Options,
     t0: f64,
     t1: f64,
     x0: &[f64],
     times: &[f64],
-    sample: impl FnMut(&M, f64, &[f64]) -> Result<(), Failure>,
+    sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
 ) -> Result<Outcome, Failure> {
     run_with(model, options, t0, t1, x0, times, sample, None)
 }
 
 /// The whole solution as a value: [`run`], keeping every step's continuous
 /// extension (memory grows with the number of steps).
-pub fn solve<M: Model + 'static>(
-    model: &mut M,
+pub fn solve(
+    model: &mut dyn DynModel,
     options: &Options,
     t0: f64,
     t1: f64,
@@ -259,14 +259,14 @@ pub fn solve<M: Model + 'static>(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn run_with<M: Model + 'static>(
-    model: &mut M,
+fn run_with(
+    model: &mut dyn DynModel,
     options: &Options,
     t0: f64,
     t1: f64,
     x0: &[f64],
     times: &[f64],
-    mut sample: impl FnMut(&M, f64, &[f64]) -> Result<(), Failure>,
+    mut sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
     mut pieces: Option<&mut Vec<Piece>>,
 ) -> Result<Outcome, Failure> {
     let n = x0.len();
@@ -280,11 +280,11 @@ fn run_with<M: Model + 'static>(
     model.set_regime(&regime);
     let mut next_sample = 0;
     let mut events = 0;
-    let emit_until = |model: &M,
-                      solver: &mut dyn Solver<M>,
+    let emit_until = |model: &dyn DynModel,
+                      solver: &mut dyn Solver,
                       next: &mut usize,
                       until: f64,
-                      sample: &mut Sample<'_, M>|
+                      sample: &mut Sample<'_>|
      -> Result<(), Failure> {
         let mut x = vec![0.0; n];
         while *next < times.len() && times[*next] <= until {
@@ -300,7 +300,7 @@ fn run_with<M: Model + 'static>(
         sample(model, times[next_sample], x0)?;
         next_sample += 1;
     }
-    if M::SWITCHES > 0 && model.stop(&regime.branches) {
+    if model.switches() > 0 && model.stop(&regime.branches) {
         if times.last().is_none_or(|&t| t > t0) {
             sample(model, t0, x0)?;
         }
@@ -316,7 +316,7 @@ fn run_with<M: Model + 'static>(
     let mut solver =
         make_solver(model, options, t0, x0, h_max).map_err(|f| diagnose(model, f, x0, &scale))?;
     let mut progress = Progress::new(options.progress, t0, t1);
-    let mut g_now = vec![0.0; M::SWITCHES];
+    let mut g_now = vec![0.0; model.switches()];
     let mut x_event = vec![0.0; n];
     while solver.time() < t1 {
         if let Err(failure) = solver.advance(model, t1, &budget) {
@@ -336,7 +336,7 @@ fn run_with<M: Model + 'static>(
         }
         // A switch whose function changed sign against its branch.
         let mut event: Option<(f64, Vec<usize>)> = None;
-        if M::SWITCHES > 0 {
+        if model.switches() > 0 {
             // The step's end and three points inside it: a function that
             // crosses zero and back within one step is seen at one of them
             // unless both crossings fall between two neighbours.
@@ -354,7 +354,7 @@ fn run_with<M: Model + 'static>(
                     solver.dense(model, t, &mut x_event)?;
                     model.switching_functions(t, &x_event, &mut g_now);
                 }
-                changed = (0..M::SWITCHES)
+                changed = (0..model.switches())
                     .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
                     .collect();
                 if !changed.is_empty() {
@@ -367,7 +367,7 @@ fn run_with<M: Model + 'static>(
                 let mut roots = Vec::with_capacity(changed.len());
                 for &k in &changed {
                     let mut x = vec![0.0; n];
-                    let mut g = vec![0.0; M::SWITCHES];
+                    let mut g = vec![0.0; model.switches()];
                     let mut phi = |t: f64| -> Result<f64, Failure> {
                         solver.dense(model, t, &mut x)?;
                         model.switching_functions(t, &x, &mut g);
@@ -437,13 +437,13 @@ fn run_with<M: Model + 'static>(
             None => {
                 // A step across a vanishing pivot is not a solution: it is
                 // taken again with another candidate, or the run stops.
-                if !M::CONSTRAINTS.is_empty()
+                if !model.constraints().is_empty()
                     && pivot_crossed(model, &mut regime, solver.as_mut(), ta, tb)?
                 {
                     continue;
                 }
                 emit_until(model, solver.as_mut(), &mut next_sample, tb, &mut sample)?;
-                if !M::CONSTRAINTS.is_empty() {
+                if !model.constraints().is_empty() {
                     switch_candidates(model, &mut regime, solver.as_mut(), tb)?;
                 }
             }
@@ -470,14 +470,14 @@ fn run_with<M: Model + 'static>(
 /// With a better candidate at `ta` the run restarts there in that mode
 /// (true); without one it stops, naming the constraint and the time where
 /// the pivot vanishes.
-fn pivot_crossed<M: Model>(
-    model: &mut M,
+fn pivot_crossed(
+    model: &mut dyn DynModel,
     regime: &mut Regime,
-    solver: &mut dyn Solver<M>,
+    solver: &mut dyn Solver,
     ta: f64,
     tb: f64,
 ) -> Result<bool, Failure> {
-    let total: usize = M::CONSTRAINTS.iter().map(|c| c.names.len()).sum();
+    let total: usize = model.constraints().iter().map(|c| c.names.len()).sum();
     let n = solver.state().len();
     let mut x_a = vec![0.0; n];
     solver.dense(model, ta, &mut x_a)?;
@@ -485,9 +485,9 @@ fn pivot_crossed<M: Model>(
     let (mut p_a, mut p_b) = (vec![0.0; total], vec![0.0; total]);
     model.pivots(ta, &x_a, &mut p_a);
     model.pivots(tb, &x_b, &mut p_b);
-    let digits = mode_digits::<M>(regime.mode);
+    let digits = mode_digits(model, regime.mode);
     let mut at = 0;
-    for (c, &digit) in M::CONSTRAINTS.iter().zip(&digits) {
+    for (c, &digit) in model.constraints().iter().zip(&digits) {
         let (a, b) = (p_a[at + digit], p_b[at + digit]);
         if a * b < 0.0 {
             let (best, best_pivot) = p_a[at..at + c.names.len()]
@@ -520,20 +520,20 @@ fn pivot_crossed<M: Model>(
 /// After a step: when a constraint's current candidate has become poor
 /// against its best one, continue with the best (the field re-anchors);
 /// when every candidate of a constraint has vanished, stop.
-fn switch_candidates<M: Model>(
-    model: &mut M,
+fn switch_candidates(
+    model: &mut dyn DynModel,
     regime: &mut Regime,
-    solver: &mut dyn Solver<M>,
+    solver: &mut dyn Solver,
     t: f64,
 ) -> Result<(), Failure> {
     let x = solver.state().to_vec();
-    let total: usize = M::CONSTRAINTS.iter().map(|c| c.names.len()).sum();
+    let total: usize = model.constraints().iter().map(|c| c.names.len()).sum();
     let mut pivots = vec![0.0; total];
     model.pivots(t, &x, &mut pivots);
-    let mut digits = mode_digits::<M>(regime.mode);
+    let mut digits = mode_digits(model, regime.mode);
     let mut changed = false;
     let mut at = 0;
-    for (c, digit) in M::CONSTRAINTS.iter().zip(digits.iter_mut()) {
+    for (c, digit) in model.constraints().iter().zip(digits.iter_mut()) {
         let slice = &pivots[at..at + c.names.len()];
         let (best, best_pivot) = slice
             .iter()
@@ -558,7 +558,7 @@ fn switch_candidates<M: Model>(
         at += c.names.len();
     }
     if changed {
-        regime.mode = mode_index::<M>(&digits);
+        regime.mode = mode_index(model, &digits);
         model.set_regime(regime);
         solver.restart(model, t, &x)?;
     }
@@ -567,17 +567,17 @@ fn switch_candidates<M: Model>(
 
 /// A mass law at or below zero at `t` stops the run (the equations divide
 /// by it).
-fn check_masses<M: Model>(model: &M, t: f64) -> Result<(), Failure> {
-    if M::MASSES.is_empty() {
+fn check_masses(model: &dyn DynModel, t: f64) -> Result<(), Failure> {
+    if model.mass_names().is_empty() {
         return Ok(());
     }
-    let mut masses = vec![0.0; M::MASSES.len()];
+    let mut masses = vec![0.0; model.mass_names().len()];
     model.masses(t, &mut masses);
     match masses.iter().position(|&m| !(m > 0.0)) {
         Some(i) => Err(Failure::new(
             t,
             FailureKind::MassVanishes {
-                mass: M::MASSES[i].to_string(),
+                mass: model.mass_names()[i].to_string(),
                 value: masses[i],
             },
         )),
@@ -591,7 +591,7 @@ fn check_masses<M: Model>(model: &M, t: f64) -> Result<(), Failure> {
 pub struct MassScale(Option<f64>);
 
 impl MassScale {
-    pub fn at<M: Model>(model: &M, t: f64, x: &[f64]) -> MassScale {
+    pub fn at(model: &dyn DynModel, t: f64, x: &[f64]) -> MassScale {
         MassScale(model.mass_matrix(t, x).map(|m| smallest_scale(&m)))
     }
 }
@@ -605,7 +605,7 @@ fn smallest_scale(m: &crate::linalg::Matrix) -> f64 {
 /// that reaches zero, a mass matrix that becomes singular — the integrator
 /// usually stops first with a step-size underflow or a non-finite value as
 /// the motion blows up toward them.
-pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64], scale: &MassScale) -> Failure {
+pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassScale) -> Failure {
     if matches!(
         failure.kind,
         FailureKind::InconsistentInitialValue { .. }
@@ -617,9 +617,9 @@ pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64], scale: &MassSc
         return failure;
     }
     let t = failure.time;
-    if !M::MASSES.is_empty() {
-        let mut now = vec![0.0; M::MASSES.len()];
-        let mut ahead = vec![0.0; M::MASSES.len()];
+    if !model.mass_names().is_empty() {
+        let mut now = vec![0.0; model.mass_names().len()];
+        let mut ahead = vec![0.0; model.mass_names().len()];
         model.masses(t, &mut now);
         // The integrator gives up just before the mass reaches zero.
         let dt = 1e-6 * t.abs().max(1e-3);
@@ -629,7 +629,7 @@ pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64], scale: &MassSc
                 return Failure::new(
                     t,
                     FailureKind::MassVanishes {
-                        mass: M::MASSES[i].to_string(),
+                        mass: model.mass_names()[i].to_string(),
                         value: m,
                     },
                 );
@@ -666,8 +666,8 @@ pub fn diagnose<M: Model>(model: &M, failure: Failure, x: &[f64], scale: &MassSc
 /// from it. The members are taken, not copied, and every sample's states
 /// are written into one buffer: with ten thousand members, copies and
 /// fresh allocations would cost more than the field.
-pub fn run_ensemble<M: Model + 'static>(
-    model: &mut M,
+pub fn run_ensemble(
+    model: &mut dyn DynModel,
     options: &Options,
     t0: f64,
     t1: f64,
@@ -675,7 +675,7 @@ pub fn run_ensemble<M: Model + 'static>(
     times: &[f64],
     mut sample: impl FnMut(f64, &crate::ensemble::States),
 ) -> Result<Outcome, Failure> {
-    if M::SWITCHES > 0 || !M::CONSTRAINTS.is_empty() {
+    if model.switches() > 0 || !model.constraints().is_empty() {
         return Err(Failure::new(t0, FailureKind::NotAffine));
     }
     let budget = Budget::new(options.max_steps);

@@ -210,3 +210,209 @@ pub fn check_stated(t0: f64, name: &str, stated: f64, required: f64) -> Result<(
 pub fn dimension<M: Model>() -> usize {
     M::STATE.len()
 }
+
+/// The object-safe face of a [`Model`]: its constants as methods, so that
+/// every method, the driver and the command line take `&dyn DynModel` and
+/// are compiled once, in this crate. A generated crate then compiles only
+/// its model's own functions and this thin forwarding impl: a new model
+/// builds in about a second instead of instantiating the whole runtime
+/// again (the `lagc run` latency of a model never built before).
+pub trait DynModel {
+    /// [`Model::NAME`].
+    fn name(&self) -> &'static str;
+    /// [`Model::SOURCE_HASH`].
+    fn source_hash(&self) -> &'static str;
+    /// [`Model::PARAMS`].
+    fn param_names(&self) -> &'static [&'static str];
+    /// [`Model::STATE`].
+    fn state_names(&self) -> &'static [&'static str];
+    /// The state's dimension `N`.
+    fn dim(&self) -> usize {
+        self.state_names().len()
+    }
+    /// [`Model::COORDINATES`].
+    fn coordinates(&self) -> usize;
+    /// [`Model::INITIAL`].
+    fn initial_kinds(&self) -> &'static [Initial];
+    /// [`Model::OUTPUTS`].
+    fn output_names(&self) -> &'static [&'static str];
+    /// [`Model::MASSES`].
+    fn mass_names(&self) -> &'static [&'static str];
+    /// [`Model::DECLARED_INTEGRATOR`].
+    fn declared_integrator(&self) -> Option<IntegratorChoice>;
+    /// [`Model::SWITCHES`].
+    fn switches(&self) -> usize;
+    /// [`Model::CONSTRAINTS`].
+    fn constraints(&self) -> &'static [Candidates];
+    /// [`Model::AFFINE`].
+    fn affine(&self) -> bool;
+    /// [`Model::COEFFICIENTS_LINEAR`].
+    fn coefficients_linear(&self) -> bool;
+    /// [`Model::EXACT`].
+    fn states_exact(&self) -> bool;
+
+    /// [`Model::parameters`].
+    fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64>;
+    /// The same model with other param values ([`Model::new`]).
+    fn with_params(&self, params: &[f64]) -> Box<dyn DynModel>;
+    /// A copy (the model in another regime).
+    fn boxed_clone(&self) -> Box<dyn DynModel>;
+
+    /// [`Model::param_values`].
+    fn param_values(&self) -> &[f64];
+    /// [`Model::time_span`].
+    fn time_span(&self) -> (f64, f64);
+    /// [`Model::initial_state`].
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure>;
+    /// [`Model::set_regime`].
+    fn set_regime(&mut self, regime: &Regime);
+    /// [`Model::rhs`].
+    fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure>;
+    /// [`Model::jacobian`].
+    fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+    /// [`Model::time_partial`].
+    fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure>;
+    /// [`Model::linearize`].
+    fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix)
+        -> Result<(), Failure>;
+    /// [`Model::coefficients`].
+    fn coefficients(&self, t: f64, f: &[f64], df: &mut [f64]) -> Result<(), Failure>;
+    /// [`Model::coefficient_jacobian`].
+    fn coefficient_jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+    /// [`Model::coefficient_time_partial`].
+    fn coefficient_time_partial(&self, t: f64, f: &[f64], dfdt: &mut [f64])
+        -> Result<(), Failure>;
+    /// [`Model::exact`].
+    fn exact(&self, t: f64, out: &mut [Option<f64>]);
+    /// [`Model::outputs`].
+    fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]);
+    /// [`Model::switching_functions`].
+    fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]);
+    /// [`Model::stop`].
+    fn stop(&self, branches: &[bool]) -> bool;
+    /// [`Model::pivots`].
+    fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]);
+    /// [`Model::masses`].
+    fn masses(&self, t: f64, out: &mut [f64]);
+    /// [`Model::mass_matrix`].
+    fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix>;
+}
+
+impl<M: Model + 'static> DynModel for M {
+    fn name(&self) -> &'static str {
+        M::NAME
+    }
+    fn source_hash(&self) -> &'static str {
+        M::SOURCE_HASH
+    }
+    fn param_names(&self) -> &'static [&'static str] {
+        M::PARAMS
+    }
+    fn state_names(&self) -> &'static [&'static str] {
+        M::STATE
+    }
+    fn coordinates(&self) -> usize {
+        M::COORDINATES
+    }
+    fn initial_kinds(&self) -> &'static [Initial] {
+        M::INITIAL
+    }
+    fn output_names(&self) -> &'static [&'static str] {
+        M::OUTPUTS
+    }
+    fn mass_names(&self) -> &'static [&'static str] {
+        M::MASSES
+    }
+    fn declared_integrator(&self) -> Option<IntegratorChoice> {
+        M::DECLARED_INTEGRATOR
+    }
+    fn switches(&self) -> usize {
+        M::SWITCHES
+    }
+    fn constraints(&self) -> &'static [Candidates] {
+        M::CONSTRAINTS
+    }
+    fn affine(&self) -> bool {
+        M::AFFINE
+    }
+    fn coefficients_linear(&self) -> bool {
+        M::COEFFICIENTS_LINEAR
+    }
+    fn states_exact(&self) -> bool {
+        M::EXACT
+    }
+    fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
+        M::parameters(overrides)
+    }
+    fn with_params(&self, params: &[f64]) -> Box<dyn DynModel> {
+        Box::new(M::new(params))
+    }
+    fn boxed_clone(&self) -> Box<dyn DynModel> {
+        Box::new(self.clone())
+    }
+    fn param_values(&self) -> &[f64] {
+        Model::param_values(self)
+    }
+    fn time_span(&self) -> (f64, f64) {
+        Model::time_span(self)
+    }
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+        Model::initial_state(self, given)
+    }
+    fn set_regime(&mut self, regime: &Regime) {
+        Model::set_regime(self, regime);
+    }
+    fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        Model::rhs(self, t, x, dx)
+    }
+    fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        Model::jacobian(self, t, x, jac)
+    }
+    fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
+        Model::time_partial(self, t, x, dxdt)
+    }
+    fn linearize(
+        &self,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut Matrix,
+    ) -> Result<(), Failure> {
+        Model::linearize(self, t, x, dx, jac)
+    }
+    fn coefficients(&self, t: f64, f: &[f64], df: &mut [f64]) -> Result<(), Failure> {
+        Model::coefficients(self, t, f, df)
+    }
+    fn coefficient_jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        Model::coefficient_jacobian(self, t, f, jac)
+    }
+    fn coefficient_time_partial(
+        &self,
+        t: f64,
+        f: &[f64],
+        dfdt: &mut [f64],
+    ) -> Result<(), Failure> {
+        Model::coefficient_time_partial(self, t, f, dfdt)
+    }
+    fn exact(&self, t: f64, out: &mut [Option<f64>]) {
+        Model::exact(self, t, out);
+    }
+    fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::outputs(self, t, x, out);
+    }
+    fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]) {
+        Model::switching_functions(self, t, x, g);
+    }
+    fn stop(&self, branches: &[bool]) -> bool {
+        Model::stop(self, branches)
+    }
+    fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::pivots(self, t, x, out);
+    }
+    fn masses(&self, t: f64, out: &mut [f64]) {
+        Model::masses(self, t, out);
+    }
+    fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix> {
+        Model::mass_matrix(self, t, x)
+    }
+}

@@ -4,7 +4,7 @@
 
 use crate::budget::Budget;
 use crate::failure::Failure;
-use crate::model::Model;
+use crate::model::DynModel;
 use crate::tolerance::Stats;
 
 /// What a method did, for the run summary.
@@ -31,7 +31,7 @@ pub struct Report {
 }
 
 /// A method advancing a model's motion step by step.
-pub trait Solver<M: Model> {
+pub trait Solver {
     /// The time of the last accepted step's end.
     fn time(&self) -> f64;
     /// The time of the last accepted step's start.
@@ -40,17 +40,17 @@ pub trait Solver<M: Model> {
     fn state(&self) -> &[f64];
     /// Takes one step (never past `t_limit`, landing on it exactly when
     /// reached), drawing on `budget`.
-    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure>;
+    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure>;
     /// The state at `t` in `[previous_time, time]`.
-    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure>;
+    fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure>;
     /// Starts afresh from `(t, x)` (after an event changed the regime).
-    fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure>;
+    fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
     /// The work so far.
     fn report(&self) -> Report;
 
     /// The continuous extension of the last advance, as values that outlive
     /// the solver (for [`crate::solution::Solution`]).
-    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure>;
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure>;
 
     /// Follows other initial states through the same field (an ensemble:
     /// exact for affine motions, first order in the spread for others);
@@ -64,7 +64,7 @@ pub trait Solver<M: Model> {
     /// buffer that should not be allocated anew at every output time).
     fn members_at(
         &mut self,
-        _model: &M,
+        _model: &dyn DynModel,
         t: f64,
         _out: &mut crate::ensemble::States,
     ) -> Result<(), Failure> {

@@ -5,7 +5,7 @@
 
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::model::Model;
+use crate::model::DynModel;
 
 pub trait System {
     /// The number of components.
@@ -32,11 +32,11 @@ pub trait System {
 }
 
 /// A model's reduced system (7) in its current regime.
-pub struct ModelSystem<'a, M: Model>(pub &'a M);
+pub struct ModelSystem<'a>(pub &'a dyn DynModel);
 
-impl<M: Model> System for ModelSystem<'_, M> {
+impl System for ModelSystem<'_> {
     fn dim(&self) -> usize {
-        M::STATE.len()
+        self.0.dim()
     }
 
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
@@ -52,7 +52,7 @@ impl<M: Model> System for ModelSystem<'_, M> {
     }
 
     fn component_name(&self, i: usize) -> String {
-        M::STATE
+        self.0.state_names()
             .get(i)
             .map_or_else(|| format!("x{}", i + 1), |s| (*s).to_string())
     }

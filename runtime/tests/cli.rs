@@ -5,7 +5,7 @@
 mod models;
 
 use lagc_runtime::cli::{parse, prepare, Command, Invocation, MAX_SAMPLES};
-use lagc_runtime::failure::FailureKind;
+use lagc_runtime::failure::{Failure, FailureKind};
 use lagc_runtime::model::Model;
 use models::{KnifeEdge, Oscillator};
 
@@ -68,28 +68,35 @@ fn good_arguments_parse() {
     assert_eq!(parse(&args("--help"), &[], &[], &[]), Ok(Command::Help));
 }
 
+/// [`prepare`] for a model type with its file's param values: the
+/// initial state it prepares.
+fn prepared<M: Model + 'static>(inv: &Invocation) -> Result<Vec<f64>, Failure> {
+    let prototype = M::new(&M::parameters(&vec![None; M::PARAMS.len()]));
+    prepare(&prototype, inv).map(|(_, _, _, x0)| x0)
+}
+
 #[test]
 fn overrides_get_the_checks_the_file_gets() {
     // A reversed span after `--param T=-1`.
     let inv = invocation::<Oscillator>("--param T=-1");
-    let failure = prepare::<Oscillator>(&inv).unwrap_err();
+    let failure = prepared::<Oscillator>(&inv).unwrap_err();
     assert!(
         matches!(failure.kind, FailureKind::BadTimeSpan { .. }),
         "{failure}"
     );
     assert_eq!(failure.exit_status(), 2);
     let inv = invocation::<Oscillator>("--param T=0");
-    assert!(prepare::<Oscillator>(&inv).is_err());
+    assert!(prepared::<Oscillator>(&inv).is_err());
     // An initial value the constraint fixes: stated consistently, it is
     // accepted; otherwise refused, naming the component.
     let inv = invocation::<KnifeEdge>("--init y'=0");
-    assert!(prepare::<KnifeEdge>(&inv).is_ok());
+    assert!(prepared::<KnifeEdge>(&inv).is_ok());
     let inv = invocation::<KnifeEdge>("--init y'=5");
-    let failure = prepare::<KnifeEdge>(&inv).unwrap_err();
+    let failure = prepared::<KnifeEdge>(&inv).unwrap_err();
     assert!(failure.to_string().contains("y'"), "{failure}");
     assert_eq!(failure.exit_status(), 2);
     // A given value is overridden.
     let inv = invocation::<Oscillator>("--init x=2");
-    let (_, _, _, x0) = prepare::<Oscillator>(&inv).unwrap();
+    let x0 = prepared::<Oscillator>(&inv).unwrap();
     assert_eq!(x0[0], 2.0);
 }

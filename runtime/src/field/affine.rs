@@ -11,7 +11,7 @@ use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
 use crate::ensemble::States;
 use crate::failure::Failure;
-use crate::model::Model;
+use crate::model::DynModel;
 use crate::solver::{Report, Solver};
 use crate::tolerance::{underflows, Stats};
 use std::cell::RefCell;
@@ -33,8 +33,8 @@ pub struct AffineField {
 }
 
 impl AffineField {
-    pub fn new<M: Model>(
-        model: &M,
+    pub fn new(
+        model: &dyn DynModel,
         options: FieldOptions,
         t0: f64,
         x0: &[f64],
@@ -48,12 +48,12 @@ impl AffineField {
             StepperKind::Explicit
         };
         let magnus = options.magnus;
-        let scratch = LinearizationScratch::new(M::STATE.len());
+        let scratch = LinearizationScratch::new(model.dim());
         let window = with_system(model, magnus, &scratch, |system| {
             Window::open(system, &options, t0, x0, None, h_max, kind)
         })?;
         Ok(AffineField {
-            method: if M::COEFFICIENTS_LINEAR {
+            method: if model.coefficients_linear() {
                 "field (linear coefficient system, DOP853)"
             } else {
                 "field (Riccati coefficient system in projective form, DOP853)"
@@ -70,7 +70,7 @@ impl AffineField {
     }
 }
 
-impl<M: Model> Solver<M> for AffineField {
+impl Solver for AffineField {
     fn time(&self) -> f64 {
         self.window.time()
     }
@@ -83,7 +83,7 @@ impl<M: Model> Solver<M> for AffineField {
         self.window.state()
     }
 
-    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
         let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
         let (mut done, mut reanchorings, mut largest) =
             (Stats::default(), 0, self.largest_condition);
@@ -108,14 +108,14 @@ impl<M: Model> Solver<M> for AffineField {
         result.map_err(|f| super::explain(model, f, self.window.time(), self.window.state()))
     }
 
-    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+    fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let window = &mut self.window;
         with_system(model, self.options.magnus, &self.scratch, |system| {
             window.dense(system, t, out)
         })
     }
 
-    fn restart(&mut self, model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
+    fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         let h = self.window.proposed_step();
         self.done += self.window.stats();
         let (options, h_max, kind) = (&self.options, self.h_max, self.window.kind());
@@ -125,7 +125,7 @@ impl<M: Model> Solver<M> for AffineField {
         Ok(())
     }
 
-    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure> {
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure> {
         let window = &mut self.window;
         with_system(model, self.options.magnus, &self.scratch, |system| {
             window.segment(system)
@@ -138,7 +138,7 @@ impl<M: Model> Solver<M> for AffineField {
         true
     }
 
-    fn members_at(&mut self, model: &M, t: f64, out: &mut States) -> Result<(), Failure> {
+    fn members_at(&mut self, model: &dyn DynModel, t: f64, out: &mut States) -> Result<(), Failure> {
         let (window, options) = (&mut self.window, &self.options);
         let empty = States::default();
         let anchors = self.members.as_ref().unwrap_or(&empty);
@@ -184,13 +184,13 @@ impl Iterate for AnyState {
 /// system when it is linear (it has no poles), its projective form when
 /// it is of Riccati type or the Magnus integrator is asked for (which
 /// needs the linear projective form).
-fn with_system<M: Model, R>(
-    model: &M,
+fn with_system<R>(
+    model: &dyn DynModel,
     magnus: bool,
     scratch: &RefCell<LinearizationScratch>,
     body: impl FnOnce(&dyn FieldSystem) -> R,
 ) -> R {
-    if M::COEFFICIENTS_LINEAR && !magnus {
+    if model.coefficients_linear() && !magnus {
         let source = SymbolicCoefficients::new(model);
         body(&Augmented(&source))
     } else {

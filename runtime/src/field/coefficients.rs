@@ -14,7 +14,7 @@
 
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::model::Model;
+use crate::model::DynModel;
 use crate::system::System;
 use std::cell::RefCell;
 
@@ -181,14 +181,14 @@ impl<C: CoefficientSource + ?Sized> FieldSystem for Augmented<'_, C> {
 }
 
 /// The model's symbolic coefficient system (affine models).
-pub struct SymbolicCoefficients<'a, M: Model> {
-    model: &'a M,
+pub struct SymbolicCoefficients<'a> {
+    model: &'a dyn DynModel,
     scratch: RefCell<Matrix>,
 }
 
-impl<'a, M: Model> SymbolicCoefficients<'a, M> {
-    pub fn new(model: &'a M) -> Self {
-        let n = M::STATE.len();
+impl<'a> SymbolicCoefficients<'a> {
+    pub fn new(model: &'a dyn DynModel) -> Self {
+        let n = model.dim();
         SymbolicCoefficients {
             model,
             scratch: RefCell::new(Matrix::zeros(n, n)),
@@ -196,9 +196,9 @@ impl<'a, M: Model> SymbolicCoefficients<'a, M> {
     }
 }
 
-impl<M: Model> CoefficientSource for SymbolicCoefficients<'_, M> {
+impl CoefficientSource for SymbolicCoefficients<'_> {
     fn dim(&self) -> usize {
-        M::STATE.len()
+        self.model.dim()
     }
 
     fn augmented(
@@ -238,7 +238,7 @@ impl<M: Model> CoefficientSource for SymbolicCoefficients<'_, M> {
     }
 
     fn is_linear(&self) -> bool {
-        M::COEFFICIENTS_LINEAR
+        self.model.coefficients_linear()
     }
 }
 
@@ -294,19 +294,19 @@ impl Scratch<'_> {
 }
 
 /// The coefficient system of the motion linearised along an iterate.
-pub struct LinearizedCoefficients<'a, M: Model, I: Iterate + ?Sized> {
-    model: &'a M,
+pub struct LinearizedCoefficients<'a, I: Iterate + ?Sized> {
+    model: &'a dyn DynModel,
     iterate: &'a I,
     scratch: Scratch<'a>,
     evaluations: std::cell::Cell<usize>,
 }
 
-impl<'a, M: Model, I: Iterate + ?Sized> LinearizedCoefficients<'a, M, I> {
-    pub fn new(model: &'a M, iterate: &'a I) -> Self {
+impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
+    pub fn new(model: &'a dyn DynModel, iterate: &'a I) -> Self {
         LinearizedCoefficients {
             model,
             iterate,
-            scratch: Scratch::Owned(LinearizationScratch::new(M::STATE.len())),
+            scratch: Scratch::Owned(LinearizationScratch::new(model.dim())),
             evaluations: std::cell::Cell::new(0),
         }
     }
@@ -361,9 +361,9 @@ fn transpose_times(a: &Matrix, g: &[f64], shift: usize, out: &mut [f64]) {
     }
 }
 
-impl<M: Model, I: Iterate + ?Sized> CoefficientSource for LinearizedCoefficients<'_, M, I> {
+impl<I: Iterate + ?Sized> CoefficientSource for LinearizedCoefficients<'_, I> {
     fn dim(&self) -> usize {
-        M::STATE.len()
+        self.model.dim()
     }
 
     fn augmented(
@@ -375,7 +375,7 @@ impl<M: Model, I: Iterate + ?Sized> CoefficientSource for LinearizedCoefficients
         ds: &mut [f64],
     ) -> Result<(), Failure> {
         let n = f.len();
-        let shift = M::COORDINATES;
+        let shift = self.model.coordinates();
         let mut guard = self.scratch.borrow_mut();
         let sc = &mut *guard;
         self.linearize(t, sc)?;
@@ -441,12 +441,12 @@ impl<M: Model, I: Iterate + ?Sized> CoefficientSource for LinearizedCoefficients
 /// system of the state: the field's solution satisfies it exactly, so one
 /// step of it between two recovered states gives the field's output
 /// between them (`dop853::dense_step_between`).
-pub struct LinearizedMotion<'a, M: Model, I: Iterate + ?Sized> {
-    linear: LinearizedCoefficients<'a, M, I>,
+pub struct LinearizedMotion<'a, I: Iterate + ?Sized> {
+    linear: LinearizedCoefficients<'a, I>,
 }
 
-impl<'a, M: Model, I: Iterate + ?Sized> LinearizedMotion<'a, M, I> {
-    pub fn new(model: &'a M, iterate: &'a I) -> Self {
+impl<'a, I: Iterate + ?Sized> LinearizedMotion<'a, I> {
+    pub fn new(model: &'a dyn DynModel, iterate: &'a I) -> Self {
         LinearizedMotion {
             linear: LinearizedCoefficients::new(model, iterate),
         }
@@ -457,9 +457,9 @@ impl<'a, M: Model, I: Iterate + ?Sized> LinearizedMotion<'a, M, I> {
     }
 }
 
-impl<M: Model, I: Iterate + ?Sized> System for LinearizedMotion<'_, M, I> {
+impl<I: Iterate + ?Sized> System for LinearizedMotion<'_, I> {
     fn dim(&self) -> usize {
-        M::STATE.len()
+        self.linear.model.dim()
     }
 
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
@@ -515,20 +515,20 @@ impl<M: Model, I: Iterate + ?Sized> System for LinearizedMotion<'_, M, I> {
 /// with `c_1` the free term. `P_1` is not stored: the free term enters
 /// `w_0` alone, and `w_0` enters no rate, so `P_1 = e_0` for ever
 /// (`sensitivity`). `N(N + 1)` numbers are integrated, not `(N + 1)²`.
-pub struct ProjectiveCoefficients<'a, M: Model, I: Iterate + ?Sized> {
-    linear: LinearizedCoefficients<'a, M, I>,
+pub struct ProjectiveCoefficients<'a, I: Iterate + ?Sized> {
+    linear: LinearizedCoefficients<'a, I>,
 }
 
-impl<'a, M: Model, I: Iterate + ?Sized> ProjectiveCoefficients<'a, M, I> {
-    pub fn new(model: &'a M, iterate: &'a I) -> Self {
+impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
+    pub fn new(model: &'a dyn DynModel, iterate: &'a I) -> Self {
         ProjectiveCoefficients {
             linear: LinearizedCoefficients::new(model, iterate),
         }
     }
 
-    /// [`ProjectiveCoefficients::new`] on lent buffers (of `M`'s size).
+    /// [`ProjectiveCoefficients::new`] on lent buffers (of the model's size).
     pub fn with_scratch(
-        model: &'a M,
+        model: &'a dyn DynModel,
         iterate: &'a I,
         scratch: &'a RefCell<LinearizationScratch>,
     ) -> Self {
@@ -556,15 +556,15 @@ impl<'a, M: Model, I: Iterate + ?Sized> ProjectiveCoefficients<'a, M, I> {
     }
 }
 
-impl<M: Model, I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, M, I> {
+impl<I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, I> {
     fn dim(&self) -> usize {
-        let n = M::STATE.len();
+        let n = self.linear.model.dim();
         n * (n + 1)
     }
 
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
-        let n = M::STATE.len();
-        let shift = M::COORDINATES;
+        let n = self.linear.model.dim();
+        let shift = self.linear.model.coordinates();
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
         self.linear.linearize(t, sc)?;
@@ -581,7 +581,7 @@ impl<M: Model, I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, M, I> 
     }
 
     fn jacobian(&self, t: f64, _y: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
-        let n = M::STATE.len();
+        let n = self.linear.model.dim();
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
         self.linear.linearize(t, sc)?;
@@ -606,9 +606,9 @@ impl<M: Model, I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, M, I> 
     }
 }
 
-impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M, I> {
+impl<I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, I> {
     fn coefficients(&self) -> usize {
-        M::STATE.len()
+        self.linear.model.dim()
     }
 
     fn anchored(&self, c: &[f64]) -> Vec<f64> {
@@ -690,7 +690,7 @@ impl<M: Model, I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, M
 
     /// `Y = (w, P_1, …, P_N)` column by column obeys `Y' = −Ãᵀ Y`.
     fn generator(&self, t: f64, b: &mut Matrix) -> Option<Result<(), Failure>> {
-        let n = M::STATE.len();
+        let n = self.linear.model.dim();
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
         if let Err(failure) = self.linear.linearize(t, sc) {

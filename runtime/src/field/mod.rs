@@ -63,7 +63,7 @@ impl Default for FieldOptions {
 pub(crate) const MAX_SHORTENINGS: usize = 40;
 
 use crate::failure::{Failure, FailureKind};
-use crate::model::Model;
+use crate::model::DynModel;
 
 /// A failure met while the field looked ahead of the motion, said in
 /// terms of the motion. The field evaluates the equations at trial times
@@ -76,7 +76,7 @@ use crate::model::Model;
 /// coefficients, their sensitivities) is named as the rate it comes
 /// from, or else as the motion blowing up. Internal names never reach
 /// the user.
-pub(crate) fn explain<M: Model>(model: &M, failure: Failure, t_reached: f64, x: &[f64]) -> Failure {
+pub(crate) fn explain(model: &dyn DynModel, failure: Failure, t_reached: f64, x: &[f64]) -> Failure {
     let internal = match &failure.kind {
         FailureKind::NonFiniteState { component } | FailureKind::NonFiniteRate { component } => {
             component.starts_with("the field")
@@ -90,7 +90,7 @@ pub(crate) fn explain<M: Model>(model: &M, failure: Failure, t_reached: f64, x: 
         match model.rhs(t, x, &mut rate) {
             Err(failure) => Some(failure),
             Ok(()) => crate::tolerance::first_non_finite(&rate).map(|i| {
-                let name = M::STATE.get(i).map_or("x", |s| s);
+                let name = model.state_names().get(i).map_or("x", |s| s);
                 Failure::non_finite_rate(t, format!("{name}'"))
             }),
         }

@@ -29,7 +29,7 @@ use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::method::{AnyStepper, Integrator};
-use crate::model::Model;
+use crate::model::DynModel;
 use crate::solver::{Report, Solver};
 use crate::stepper::DenseStep;
 use crate::stepper::Stepper;
@@ -48,8 +48,8 @@ const MIN_PREDICTOR_RATIO: f64 = 1.0;
 
 /// The predictor: DOP853 on the motion at a looser tolerance, extended
 /// step by step as the field asks for later times.
-struct Predictor<'a, M: Model> {
-    model: &'a M,
+struct Predictor<'a> {
+    model: &'a dyn DynModel,
     budget: &'a Budget,
     t0: f64,
     x0: Vec<f64>,
@@ -60,10 +60,10 @@ struct Predictor<'a, M: Model> {
     failure: RefCell<Option<Failure>>,
 }
 
-impl<'a, M: Model> Predictor<'a, M> {
+impl<'a> Predictor<'a> {
     #[allow(clippy::too_many_arguments)]
     fn new(
-        model: &'a M,
+        model: &'a dyn DynModel,
         budget: &'a Budget,
         t0: f64,
         x0: &[f64],
@@ -144,12 +144,12 @@ impl Iterate for PredictorPath {
 }
 
 /// A window's span of time for the lazily extended predictor.
-struct LivePath<'p, 'a, M: Model> {
-    predictor: &'p Predictor<'a, M>,
+struct LivePath<'p, 'a> {
+    predictor: &'p Predictor<'a>,
     t_limit: f64,
 }
 
-impl<M: Model> Iterate for LivePath<'_, '_, M> {
+impl Iterate for LivePath<'_, '_> {
     fn eval(&self, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let p = self.predictor;
         if t <= p.t0 {
@@ -185,7 +185,7 @@ impl AcceptedWindow {
     /// The state's continuous extension over explicit step `i`: one DOP853
     /// step of the motion linearised along the window's predictor, between
     /// the two recovered states. Returns the linearisations it took.
-    fn build_output<M: Model>(&mut self, model: &M, i: usize) -> Result<usize, Failure> {
+    fn build_output(&mut self, model: &dyn DynModel, i: usize) -> Result<usize, Failure> {
         if self.outputs[i].is_some() {
             return Ok(0);
         }
@@ -281,9 +281,9 @@ impl QuasilinearField {
     }
 
     /// The defect of `x1` at `t` in tolerance units (RMS).
-    fn defect<M: Model>(
+    fn defect(
         &self,
-        model: &M,
+        model: &dyn DynModel,
         t: f64,
         x0: &[f64],
         x1: &[f64],
@@ -340,7 +340,7 @@ struct Pass {
     field_h: f64,
 }
 
-impl<M: Model> Solver<M> for QuasilinearField {
+impl Solver for QuasilinearField {
     fn time(&self) -> f64 {
         self.t
     }
@@ -353,7 +353,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
         &self.x
     }
 
-    fn advance(&mut self, model: &M, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
         let n = self.x.len();
         let mut retries = 0;
         loop {
@@ -480,7 +480,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
         }
     }
 
-    fn dense(&mut self, model: &M, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+    fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let Some(window) = self.accepted.as_mut() else {
             out.copy_from_slice(&self.x);
             return Ok(());
@@ -535,7 +535,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
         Ok(())
     }
 
-    fn restart(&mut self, _model: &M, t: f64, x: &[f64]) -> Result<(), Failure> {
+    fn restart(&mut self, _model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         self.t = t;
         self.t_prev = t;
         self.x = x.to_vec();
@@ -543,7 +543,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
         Ok(())
     }
 
-    fn segments(&mut self, model: &M) -> Result<Vec<crate::solution::Segment>, Failure> {
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure> {
         let Some(window) = self.accepted.as_mut() else {
             return Ok(Vec::new());
         };
@@ -577,7 +577,7 @@ impl<M: Model> Solver<M> for QuasilinearField {
         true
     }
 
-    fn members_at(&mut self, model: &M, t: f64, out: &mut States) -> Result<(), Failure> {
+    fn members_at(&mut self, model: &dyn DynModel, t: f64, out: &mut States) -> Result<(), Failure> {
         match self.window_members.take() {
             Some(anchors) => {
                 let states = self.members_of_window(model, t, &anchors, out);
@@ -614,9 +614,9 @@ impl QuasilinearField {
     /// The members' states at `t` within the accepted window, from their
     /// states at its anchor: through the field of the motion linearised
     /// along the reference (first order in their distance from it).
-    fn members_of_window<M: Model>(
+    fn members_of_window(
         &mut self,
-        model: &M,
+        model: &dyn DynModel,
         t: f64,
         anchors: &States,
         out: &mut States,
@@ -663,9 +663,9 @@ impl QuasilinearField {
 
     /// One pass of the field along `iterate` from the current anchor,
     /// until the window ends.
-    fn pass<M: Model, I: Iterate>(
+    fn pass<I: Iterate>(
         &mut self,
-        model: &M,
+        model: &dyn DynModel,
         iterate: &I,
         t_limit: f64,
         budget: &Budget,
