@@ -316,7 +316,12 @@ pub fn main<M: Model + 'static>() -> ExitCode {
 pub fn command_line(prototype: &dyn DynModel) -> ExitCode {
     let model = prototype;
     let args: Vec<String> = std::env::args().skip(1).collect();
-    match parse(&args, model.param_names(), model.state_names(), model.output_names()) {
+    match parse(
+        &args,
+        model.param_names(),
+        model.state_names(),
+        model.output_names(),
+    ) {
         Err(message) => {
             eprintln!("error: {message}\n\n{USAGE}");
             ExitCode::from(USAGE_EXIT_STATUS)

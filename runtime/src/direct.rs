@@ -94,7 +94,12 @@ impl Solver for Direct {
         self.stepper.state()
     }
 
-    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+    fn advance(
+        &mut self,
+        model: &dyn DynModel,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure> {
         // A switch decided after the last step happens now: the driver has
         // used that step's (DOP853) dense output by the time it asks for
         // the next step.

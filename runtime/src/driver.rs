@@ -171,7 +171,8 @@ pub fn mode_index(model: &dyn DynModel, choice: &[usize]) -> usize {
 
 fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
     let mut rest = mode;
-    model.constraints()
+    model
+        .constraints()
         .iter()
         .map(|c| {
             let d = rest % c.names.len();

@@ -280,8 +280,7 @@ pub trait DynModel {
     /// [`Model::coefficient_jacobian`].
     fn coefficient_jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
     /// [`Model::coefficient_time_partial`].
-    fn coefficient_time_partial(&self, t: f64, f: &[f64], dfdt: &mut [f64])
-        -> Result<(), Failure>;
+    fn coefficient_time_partial(&self, t: f64, f: &[f64], dfdt: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::exact`].
     fn exact(&self, t: f64, out: &mut [Option<f64>]);
     /// [`Model::outputs`].
@@ -386,12 +385,7 @@ impl<M: Model + 'static> DynModel for M {
     fn coefficient_jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
         Model::coefficient_jacobian(self, t, f, jac)
     }
-    fn coefficient_time_partial(
-        &self,
-        t: f64,
-        f: &[f64],
-        dfdt: &mut [f64],
-    ) -> Result<(), Failure> {
+    fn coefficient_time_partial(&self, t: f64, f: &[f64], dfdt: &mut [f64]) -> Result<(), Failure> {
         Model::coefficient_time_partial(self, t, f, dfdt)
     }
     fn exact(&self, t: f64, out: &mut [Option<f64>]) {

@@ -40,7 +40,12 @@ pub trait Solver {
     fn state(&self) -> &[f64];
     /// Takes one step (never past `t_limit`, landing on it exactly when
     /// reached), drawing on `budget`.
-    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure>;
+    fn advance(
+        &mut self,
+        model: &dyn DynModel,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure>;
     /// The state at `t` in `[previous_time, time]`.
     fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure>;
     /// Starts afresh from `(t, x)` (after an event changed the regime).

@@ -52,7 +52,8 @@ impl System for ModelSystem<'_> {
     }
 
     fn component_name(&self, i: usize) -> String {
-        self.0.state_names()
+        self.0
+            .state_names()
             .get(i)
             .map_or_else(|| format!("x{}", i + 1), |s| (*s).to_string())
     }

@@ -83,7 +83,12 @@ impl Solver for AffineField {
         self.window.state()
     }
 
-    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+    fn advance(
+        &mut self,
+        model: &dyn DynModel,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure> {
         let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
         let (mut done, mut reanchorings, mut largest) =
             (Stats::default(), 0, self.largest_condition);
@@ -138,7 +143,12 @@ impl Solver for AffineField {
         true
     }
 
-    fn members_at(&mut self, model: &dyn DynModel, t: f64, out: &mut States) -> Result<(), Failure> {
+    fn members_at(
+        &mut self,
+        model: &dyn DynModel,
+        t: f64,
+        out: &mut States,
+    ) -> Result<(), Failure> {
         let (window, options) = (&mut self.window, &self.options);
         let empty = States::default();
         let anchors = self.members.as_ref().unwrap_or(&empty);

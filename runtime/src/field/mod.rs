@@ -76,7 +76,12 @@ use crate::model::DynModel;
 /// coefficients, their sensitivities) is named as the rate it comes
 /// from, or else as the motion blowing up. Internal names never reach
 /// the user.
-pub(crate) fn explain(model: &dyn DynModel, failure: Failure, t_reached: f64, x: &[f64]) -> Failure {
+pub(crate) fn explain(
+    model: &dyn DynModel,
+    failure: Failure,
+    t_reached: f64,
+    x: &[f64],
+) -> Failure {
     let internal = match &failure.kind {
         FailureKind::NonFiniteState { component } | FailureKind::NonFiniteRate { component } => {
             component.starts_with("the field")

@@ -353,7 +353,12 @@ impl Solver for QuasilinearField {
         &self.x
     }
 
-    fn advance(&mut self, model: &dyn DynModel, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+    fn advance(
+        &mut self,
+        model: &dyn DynModel,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure> {
         let n = self.x.len();
         let mut retries = 0;
         loop {
@@ -577,7 +582,12 @@ impl Solver for QuasilinearField {
         true
     }
 
-    fn members_at(&mut self, model: &dyn DynModel, t: f64, out: &mut States) -> Result<(), Failure> {
+    fn members_at(
+        &mut self,
+        model: &dyn DynModel,
+        t: f64,
+        out: &mut States,
+    ) -> Result<(), Failure> {
         match self.window_members.take() {
             Some(anchors) => {
                 let states = self.members_of_window(model, t, &anchors, out);
