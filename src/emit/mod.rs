@@ -20,6 +20,7 @@
 //! | `coefficients.rs` | the coefficient system |
 //! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
 
+mod bodies;
 mod coefficients;
 mod events;
 mod expr;

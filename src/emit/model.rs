@@ -2,16 +2,13 @@
 //! span, the initial state (with the stated values of dependent components
 //! checked after overrides), the exact solution and the mass laws.
 
+use super::bodies::index;
 use super::names::{Source, SymbolNames};
 use crate::ir::Symbol;
 use crate::kernel::{InitialKind, InitialSource, Kernel};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
-
-fn index(i: usize) -> Literal {
-    Literal::usize_unsuffixed(i)
-}
 
 /// One free function per mass law, `mass_<name>(p, t)`.
 pub fn mass_fns(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {

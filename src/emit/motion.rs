@@ -8,16 +8,13 @@
 //! mass matrix on the stack when `G` is affine in `z`, Newton otherwise —
 //! and get `∂z/∂x = −G_z⁻¹ G_x` by implicit differentiation at run time.
 
+use super::bodies::{self, arg, index};
 use super::names::{Source, SymbolNames};
 use crate::ir::{ExprId, Symbol};
 use crate::kernel::{Explicit, Implicit, Kernel, Motion};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
-
-fn index(i: usize) -> Literal {
-    Literal::usize_unsuffixed(i)
-}
 
 /// `(items of the trait impl, items of the inherent impl)`.
 pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, TokenStream) {
@@ -74,18 +71,6 @@ fn motion_of(
     }
 }
 
-fn arg(used: bool, name: &str) -> TokenStream {
-    let ident = proc_macro2::Ident::new(
-        &if used {
-            name.to_string()
-        } else {
-            format!("_{name}")
-        },
-        proc_macro2::Span::call_site(),
-    );
-    quote! { #ident }
-}
-
 fn explicit(
     kernel: &Kernel,
     names: &mut SymbolNames,
@@ -95,37 +80,20 @@ fn explicit(
     shift_jacobian: &TokenStream,
 ) -> TokenStream {
     let arena = &kernel.arena;
-    let rows: Vec<Literal> = (0..e.rhs.len())
-        .map(|j| index(kernel.highest_row(j as u32)))
+    let rows: Vec<usize> = (0..e.rhs.len())
+        .map(|j| kernel.highest_row(j as u32))
         .collect();
-    let rhs = names.code(arena, &e.rhs, from_x);
-    let rhs_statements = rhs.statements(quote! { self.params });
-    let rhs_values = &rhs.roots;
-    let rhs_t = rhs.time_arg();
-
+    let rates: Vec<(usize, ExprId)> = rows.iter().copied().zip(e.rhs.iter().copied()).collect();
+    let rhs = bodies::vector(names, arena, &rates, from_x, "x", "dx");
+    let (rhs_t, rhs_statements, rhs_rows) = (&rhs.t, &rhs.statements, &rhs.assignments);
+    let jac = bodies::matrix(names, arena, &e.jacobian, from_x, "x", "jac");
+    let (jac_t, jac_x, jac_statements, jac_cells) =
+        (&jac.t, &jac.source, &jac.statements, &jac.assignments);
+    let tp = bodies::vector(names, arena, &e.time_partial, from_x, "x", "dxdt");
+    let (tp_t, tp_x, tp_out, tp_statements, tp_rows) =
+        (&tp.t, &tp.source, &tp.out, &tp.statements, &tp.assignments);
+    let rows: Vec<Literal> = rows.into_iter().map(index).collect();
     let jac_roots: Vec<ExprId> = e.jacobian.iter().map(|&(_, _, d)| d).collect();
-    let jac = names.code(arena, &jac_roots, from_x);
-    let jac_statements = jac.statements(quote! { self.params });
-    let jac_cells: Vec<TokenStream> = e
-        .jacobian
-        .iter()
-        .zip(&jac.roots)
-        .map(|(&(r, c, _), v)| {
-            let (r, c) = (index(r), index(c));
-            quote! { jac[(#r, #c)] = #v; }
-        })
-        .collect();
-    let jac_t = jac.time_arg();
-    let jac_x = arg(jac.uses_source, "x");
-
-    let tp_roots: Vec<ExprId> = e.time_partial.iter().map(|&(_, d)| d).collect();
-    let tp = names.code(arena, &tp_roots, from_x);
-    let tp_statements = tp.statements(quote! { self.params });
-    let tp_rows: Vec<Literal> = e.time_partial.iter().map(|&(r, _)| index(r)).collect();
-    let tp_values = &tp.roots;
-    let tp_t = tp.time_arg();
-    let tp_x = arg(tp.uses_source, "x");
-    let tp_out = arg(!tp_rows.is_empty(), "dxdt");
 
     // X and ∂X/∂x together: one block, shared subexpressions computed once.
     let mut both = e.rhs.clone();
@@ -133,21 +101,13 @@ fn explicit(
     let lin = names.code(arena, &both, from_x);
     let lin_statements = lin.statements(quote! { self.params });
     let (lin_rhs, lin_jac) = lin.roots.split_at(e.rhs.len());
-    let lin_cells: Vec<TokenStream> = e
-        .jacobian
-        .iter()
-        .zip(lin_jac)
-        .map(|(&(r, c, _), v)| {
-            let (r, c) = (index(r), index(c));
-            quote! { jac[(#r, #c)] = #v; }
-        })
-        .collect();
+    let lin_cells = bodies::cells(&quote! { jac }, &e.jacobian, lin_jac);
     let lin_t = lin.time_arg();
     quote! {
         fn rhs(&self, #rhs_t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
             #rhs_statements
             #shifts
-            #(dx[#rows] = #rhs_values;)*
+            #(#rhs_rows)*
             Ok(())
         }
 
@@ -160,7 +120,7 @@ fn explicit(
 
         fn time_partial(&self, #tp_t: f64, #tp_x: &[f64], #tp_out: &mut [f64]) -> Result<(), Failure> {
             #tp_statements
-            #(dxdt[#tp_rows] = #tp_values;)*
+            #(#tp_rows)*
             Ok(())
         }
 
@@ -255,15 +215,7 @@ fn implicit(
         let code = names.code(arena, &roots, &from_xz);
         let statements = code.statements(quote! { self.params });
         let (residual, cells) = code.roots.split_at(i.residual.len());
-        let cells: Vec<TokenStream> = i
-            .g_z
-            .iter()
-            .zip(cells)
-            .map(|(&(r, c, _), v)| {
-                let (r, c) = (index(r), index(c));
-                quote! { g_z[(#r, #c)] = #v; }
-            })
-            .collect();
+        let cells = bodies::cells(&quote! { g_z }, &i.g_z, cells);
         let rows: Vec<Literal> = (0..residual.len()).map(index).collect();
         let t = code.time_arg();
         let uses_state = roots
