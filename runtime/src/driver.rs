@@ -145,16 +145,22 @@ pub fn best_mode(model: &dyn DynModel, t: f64, x: &[f64]) -> (usize, Vec<usize>,
     let mut best_pivot = f64::INFINITY;
     for c in constraints {
         let slice = &pivots[at..at + c.names.len()];
-        let (j, p) = slice
-            .iter()
-            .enumerate()
-            .map(|(j, p)| (j, p.abs()))
-            .fold((0, -1.0), |b, c| if c.1 > b.1 { c } else { b });
+        let (j, p) = largest_pivot(slice);
         choice.push(j);
         best_pivot = best_pivot.min(p);
         at += c.names.len();
     }
     (mode_index(model, &choice), choice, best_pivot)
+}
+
+/// The candidate with the largest pivot among one constraint's, and that
+/// pivot's magnitude (the first of equals).
+fn largest_pivot(pivots: &[f64]) -> (usize, f64) {
+    pivots
+        .iter()
+        .enumerate()
+        .map(|(j, p)| (j, p.abs()))
+        .fold((0, -1.0), |best, c| if c.1 > best.1 { c } else { best })
 }
 
 /// The mode of a choice of candidates (mixed radix, first constraint
@@ -491,11 +497,7 @@ fn pivot_crossed(
     for (c, &digit) in model.constraints().iter().zip(&digits) {
         let (a, b) = (p_a[at + digit], p_b[at + digit]);
         if a * b < 0.0 {
-            let (best, best_pivot) = p_a[at..at + c.names.len()]
-                .iter()
-                .enumerate()
-                .map(|(j, p)| (j, p.abs()))
-                .fold((0, -1.0), |acc, e| if e.1 > acc.1 { e } else { acc });
+            let (best, best_pivot) = largest_pivot(&p_a[at..at + c.names.len()]);
             if best != digit && best_pivot > a.abs() {
                 let (mode, _, _) = best_mode(model, ta, &x_a);
                 regime.mode = mode;
@@ -536,11 +538,7 @@ fn switch_candidates(
     let mut at = 0;
     for (c, digit) in model.constraints().iter().zip(digits.iter_mut()) {
         let slice = &pivots[at..at + c.names.len()];
-        let (best, best_pivot) = slice
-            .iter()
-            .enumerate()
-            .map(|(j, p)| (j, p.abs()))
-            .fold((0, -1.0), |b, c| if c.1 > b.1 { c } else { b });
+        let (best, best_pivot) = largest_pivot(slice);
         let current = slice[*digit].abs();
         let scale = x.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
         if best_pivot <= 1e-12 * scale || !best_pivot.is_finite() {
