@@ -8,6 +8,17 @@ use crate::field::{field_system, local_field_note};
 use crate::kernel::Kernel;
 use crate::mechanics::Derivation;
 
+/// The compiler as one call: `.lag` text → the generated crate and the
+/// notes to show, or every diagnostic. `lagc build`, `run` and `report`
+/// and the tests call this, so they compile exactly alike.
+pub fn compile(
+    source: &str,
+    options: &EmitOptions,
+) -> Result<(GeneratedCrate, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let model = crate::frontend::frontend(source)?;
+    generate_crate(&model, options)
+}
+
 /// The generated crate of `model`, with the notes the build should show
 /// (e.g. that the local field method is used).
 pub fn generate_crate(

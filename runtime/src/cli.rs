@@ -338,12 +338,18 @@ pub fn command_line(prototype: &dyn DynModel) -> ExitCode {
     }
 }
 
+/// A run made ready: the model with the invocation's params, its span and
+/// its initial state.
+pub struct Prepared {
+    pub model: Box<dyn DynModel>,
+    pub t0: f64,
+    pub t1: f64,
+    pub x0: Vec<f64>,
+}
+
 /// The model, its span and initial state for an invocation, with every
 /// check the file's own values get.
-pub fn prepare(
-    prototype: &dyn DynModel,
-    inv: &Invocation,
-) -> Result<(Box<dyn DynModel>, f64, f64, Vec<f64>), Failure> {
+pub fn prepare(prototype: &dyn DynModel, inv: &Invocation) -> Result<Prepared, Failure> {
     let mut overrides = vec![None; prototype.param_names().len()];
     for &(i, v) in &inv.params {
         overrides[i] = Some(v);
@@ -387,7 +393,7 @@ pub fn prepare(
             }
         }
     }
-    Ok((model, t0, t1, x0))
+    Ok(Prepared { model, t0, t1, x0 })
 }
 
 /// The line a run prints first: the method and integrator, and why.
@@ -433,7 +439,12 @@ fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     for warning in &inv.warnings {
         eprintln!("warning: {warning}");
     }
-    let (mut model, t0, t1, x0) = match prepare(prototype, inv) {
+    let Prepared {
+        mut model,
+        t0,
+        t1,
+        x0,
+    } = match prepare(prototype, inv) {
         Ok(prepared) => prepared,
         Err(failure) => return fail(inv.json, &failure),
     };

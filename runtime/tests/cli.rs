@@ -72,7 +72,7 @@ fn good_arguments_parse() {
 /// initial state it prepares.
 fn prepared<M: Model + 'static>(inv: &Invocation) -> Result<Vec<f64>, Failure> {
     let prototype = M::new(&M::parameters(&vec![None; M::PARAMS.len()]));
-    prepare(&prototype, inv).map(|(_, _, _, x0)| x0)
+    prepare(&prototype, inv).map(|prepared| prepared.x0)
 }
 
 #[test]

@@ -2,8 +2,10 @@
 //! the build cache, running cargo and the model's binary. Used only by
 //! `main.rs` (the library does no IO).
 
+pub mod args;
 pub mod cache;
 pub mod cargo;
+pub mod commands;
 pub mod progress;
 pub mod report;
 

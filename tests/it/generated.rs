@@ -26,15 +26,14 @@ pub(crate) fn generate(name: &str) -> GeneratedCrate {
 pub(crate) fn generate_file(path: &Path) -> GeneratedCrate {
     let name = path.file_stem().unwrap().to_str().unwrap();
     let source = std::fs::read_to_string(path).unwrap();
-    let model = lagc::frontend(&source).unwrap_or_else(|d| panic!("{name}: {d:?}"));
     let options = EmitOptions {
         model_name: name.to_string(),
         source_hash: "test".to_string(),
         runtime_path: "../../runtime".to_string(),
         package_key: None,
     };
-    let (generated, _notes) = lagc::pipeline::generate_crate(&model, &options)
-        .unwrap_or_else(|d| panic!("{name}: {d:?}"));
+    let (generated, _notes) =
+        lagc::compile(&source, &options).unwrap_or_else(|d| panic!("{name}: {d:?}"));
     generated
 }
 

@@ -1,0 +1,173 @@
+//! The command line's arguments (clap): one struct per subcommand.
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+/// lagc compiles a `.lag` model of a mechanical system with variable mass
+/// and non-holonomic constraints into the generalized Lagrange equations of
+/// the second kind, and integrates them with the field method.
+#[derive(Debug, Parser)]
+#[command(name = "lagc", version, about, long_about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Check a model and report every problem; prints nothing else.
+    ///
+    /// Runs the front end and the derivation, so that mistakes only the
+    /// symbolic stage can see (an initial value that violates a constraint,
+    /// an identically singular mass matrix) are reported too.
+    ///
+    /// Exit status: 0 when the model is clean, 1 when it has errors, 2 when
+    /// FILE cannot be read.
+    Check(CheckArgs),
+    /// Derive equations (4) and the reduced first-order system (7).
+    ///
+    /// Prints the equations, the reduced system, the state and its initial
+    /// values, and the result of the cross-check of (4) against the
+    /// multiplier route. Exit status: 0 on success, 1 when the model has
+    /// errors, 2 when FILE cannot be read.
+    Derive(DeriveArgs),
+    /// Write the generated crate that integrates the model.
+    ///
+    /// The crate builds with `cargo build --release` alone and holds only
+    /// what this system needs. Exit status: 0 on success, 1 when the model
+    /// has errors, 2 when FILE cannot be read or DIR cannot be written.
+    Build(BuildArgs),
+    /// Build the generated crate (cached) and run it.
+    ///
+    /// The crate is kept under `$LAGC_CACHE_DIR` (or `$XDG_CACHE_HOME/lagc`,
+    /// or `~/.cache/lagc`), one directory per model and one shared cargo
+    /// target directory, so an unchanged model is not rebuilt. The
+    /// trajectory goes to stdout as CSV (`t,q1,…,q1',…`), cargo's progress
+    /// and the run summary to stderr. Exit status: that of the model's
+    /// binary (3 on a numerical failure), or 1/2 as for `build`.
+    Run(RunArgs),
+    /// The build cache: list its models, or clean it.
+    ///
+    /// `lagc run` keeps each model's crate and binary in the cache and
+    /// removes the least recently run ones when the cache outgrows
+    /// `$LAGC_CACHE_MAX_BYTES` (default 4 GB).
+    Cache(CacheArgs),
+    /// Error against run time: every method at a ladder of tolerances.
+    ///
+    /// Builds the model's crate (cached, as `run`) and runs it for the
+    /// field method, direct DOP853 and direct RODAS4 at each tolerance
+    /// (rtol 1e-3 … 1e-12 by default, atol = rtol·1e-2); the time of a run
+    /// is the smallest of --runs solves after a warm-up, measured inside
+    /// the binary. The error is the largest over the samples against the
+    /// model's `exact` lines, or, without them, against a run at rtol 1e-13
+    /// by another method (direct DOP853; for direct DOP853 the field).
+    /// Prints a table on stdout and writes a work-precision plot (SVG) and
+    /// the data (CSV) into DIR. Runs that fail appear in the table as
+    /// failed. Exit status: 0 on success, 1 when the model has errors or
+    /// its crate does not build, 2 on bad usage.
+    Report(ReportArgs),
+}
+
+/// Negative numbers are values, not flags: `--tolerances -1` gets lagc's
+/// own message about tolerances rather than clap's "unexpected argument".
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct ReportArgs {
+    /// The `.lag` model.
+    pub file: PathBuf,
+    /// Where to write `<model>.work-precision.svg` and `.csv`.
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+    /// Timed solves per measurement (after one warm-up); the time is their
+    /// minimum.
+    #[arg(long, value_name = "N", default_value_t = 5)]
+    pub runs: usize,
+    /// Comma-separated relative tolerances (default 1e-3,1e-4,…,1e-12).
+    #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
+    pub tolerances: Option<String>,
+    /// Number of evenly spaced sample times; the error is the largest
+    /// over them. Samples never change the steps (every method has
+    /// dense output); more samples cost output time and look closer
+    /// between the steps.
+    #[arg(long, value_name = "N", default_value_t = 11)]
+    pub samples: usize,
+    /// Override a param: `--param NAME=VALUE` (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct BuildArgs {
+    /// The `.lag` model.
+    pub file: PathBuf,
+    /// The directory to write the crate into (created when missing). It
+    /// must be empty or hold an earlier `lagc build`'s output.
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    pub output: PathBuf,
+    /// Write into DIR even when it holds files lagc did not write.
+    #[arg(long)]
+    pub force: bool,
+    /// Where to write the runtime library the crate depends on (default:
+    /// DIR/lagc-runtime). Give several models' crates one runtime to use
+    /// them together in one program.
+    #[arg(long, value_name = "RUNTIME_DIR")]
+    pub runtime: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+#[command(disable_help_flag = true)]
+pub struct RunArgs {
+    /// The `.lag` model.
+    pub file: PathBuf,
+    /// The run's options, passed to the model's binary as they are
+    /// (`lagc run FILE --help` lists them): `--method field|direct`,
+    /// `--integrator auto|explicit|stiff|magnus`, `--param NAME=VALUE`,
+    /// `--init NAME=VALUE`, `--rtol R`, `--atol A`, `--samples N`,
+    /// `--times T1,T2,…`, `--estimate-error`, `--plot FILE.svg [--phase X,Y]`,
+    /// `--ensemble K`, `--repeat N`, `--quiet`, `--summary text|json`, …
+    #[arg(
+        trailing_var_arg = true,
+        allow_hyphen_values = true,
+        value_name = "OPTIONS"
+    )]
+    pub args: Vec<String>,
+}
+
+#[derive(Debug, Args)]
+pub struct CacheArgs {
+    #[command(subcommand)]
+    pub action: CacheAction,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum CacheAction {
+    /// Every cached model: its file, size and when it last ran, least
+    /// recently run first.
+    List,
+    /// Remove every cached model, binary and runtime (the next `lagc run`
+    /// of a model rebuilds it).
+    Clean,
+}
+
+#[derive(Debug, Args)]
+pub struct DeriveArgs {
+    /// The `.lag` model.
+    pub file: PathBuf,
+    /// The output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum Format {
+    /// Plain text.
+    Text,
+    /// A LaTeX `align*` block.
+    Latex,
+}
+
+#[derive(Debug, Args)]
+pub struct CheckArgs {
+    /// The `.lag` model to check.
+    pub file: PathBuf,
+}

@@ -1,0 +1,23 @@
+//! `lagc check`: the front end, the derivation and the kernel; prints only
+//! problems and a one-line summary.
+
+use super::{compile, count, status};
+use crate::cli::args::CheckArgs;
+use std::process::ExitCode;
+
+pub(crate) fn check(args: &CheckArgs) -> ExitCode {
+    let file_name = args.file.display().to_string();
+    let stage = |source: &str| lagc::check_and_derive(source).map(|(model, _)| (model, Vec::new()));
+    status(compile(&args.file, stage, |model| {
+        let constraints = match model.constraint_order {
+            Some(k) => format!(
+                "{} of order {k}",
+                count(model.constraints.len(), "constraint")
+            ),
+            None => "no constraints".to_string(),
+        };
+        let coords = count(model.coords.len(), "coordinate");
+        eprintln!("{file_name}: ok ({coords}, {constraints})");
+        ExitCode::SUCCESS
+    }))
+}
