@@ -120,7 +120,11 @@ impl SymbolNames {
                 .cloned()
                 .unwrap_or_else(|| quote! { f64::NAN })
         };
-        let Lowered { lets, roots } = lower_exprs(arena, roots, &lookup, &mut self.namer);
+        // The shared sub-expressions are named in a scope of this item's
+        // own (`e`, `e_2`, … in every function), so that a change in one
+        // item renames nothing in another.
+        let mut item_scope = self.namer.clone();
+        let Lowered { lets, roots } = lower_exprs(arena, roots, &lookup, &mut item_scope);
         Code {
             prelude,
             lets,

@@ -272,6 +272,45 @@ fn generated_code_holds_only_what_the_system_needs() {
     );
 }
 
+/// The generated item `fn NAME(` of `lib`, up to its end.
+fn item(lib: &str, name: &str) -> String {
+    let start = lib
+        .find(&format!("fn {name}("))
+        .unwrap_or_else(|| panic!("no fn {name}"));
+    let end = lib[start..].find("\n    }\n").unwrap();
+    lib[start..start + end].to_string()
+}
+
+#[test]
+fn an_unrelated_change_renames_nothing_in_other_items() {
+    // The paper without its `exact` lines: the items it still has are the
+    // same text (the shared sub-expressions of each item are named in a
+    // scope of that item's own, not numbered across the file).
+    let source = std::fs::read_to_string(root().join("examples/paper.lag")).unwrap();
+    let without: String = source
+        .lines()
+        .filter(|l| !l.starts_with("exact "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let dir = std::env::temp_dir().join(format!("lagc-namer-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("paper.lag");
+    std::fs::write(&path, without).unwrap();
+    let changed = generate_file(&path).file("src/lib.rs").unwrap().to_string();
+    let _ = std::fs::remove_dir_all(&dir);
+    let original = lib_rs("paper");
+    assert!(original.contains("fn exact(") && !changed.contains("fn exact("));
+    for name in [
+        "rhs",
+        "jacobian",
+        "time_partial",
+        "linearize",
+        "coefficients",
+    ] {
+        assert_eq!(item(&original, name), item(&changed, name), "fn {name}");
+    }
+}
+
 #[test]
 fn paper_lib_rs_snapshot() {
     insta::assert_snapshot!(lib_rs("paper"));
