@@ -21,19 +21,6 @@ fn field_of(name: &str) -> (Derivation, FieldSystem) {
     (derivation, field)
 }
 
-/// A deterministic generator of points in [-1, 1] (no dependency needed).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
-
 /// F from (9) equals `f_1' = b_1 − Σ f_A b_A + λ f_1`,
 /// `f_B' = a_1B − Σ f_A a_AB + λ f_B`, `λ = a_11 − Σ f_A a_A1` with `a`, `b`
 /// taken from `X` by `affine_parts`, at random points.
@@ -54,16 +41,18 @@ fn check_against_spec_formulas(name: &str) {
         a.push(row);
         b.push(free);
     }
-    let mut random = Lcg(17);
+    let mut random = lagc::mechanics::Rng::new(17);
     for _ in 0..50 {
-        let t = 0.5 + random.next();
+        let t = 0.5 + random.range(-1.0, 1.0);
         let params: Vec<f64> = derivation
             .param_defaults
             .iter()
-            .map(|v| v * (1.0 + 0.1 * random.next()))
+            .map(|v| v * (1.0 + 0.1 * random.range(-1.0, 1.0)))
             .collect();
-        let f: Vec<f64> = (0..n).map(|_| random.next()).collect();
-        let masses: Vec<f64> = (0..8).map(|_| 1.0 + 0.5 * random.next()).collect();
+        let f: Vec<f64> = (0..n).map(|_| random.range(-1.0, 1.0)).collect();
+        let masses: Vec<f64> = (0..8)
+            .map(|_| 1.0 + 0.5 * random.range(-1.0, 1.0))
+            .collect();
         let coefficients = field.coefficients.clone();
         let env = |s: Symbol| match s {
             Symbol::Time => t,
