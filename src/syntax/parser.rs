@@ -8,7 +8,7 @@ use super::ast::*;
 use super::depth::{
     check_paren_depth, too_deep_expr, too_long_chain, MAX_EXPR_DEPTH, MAX_TREE_HEIGHT,
 };
-use super::grammar::{LagParser, Rule};
+use super::grammar::{is_statement_keyword, LagParser, Rule};
 use super::syntax_error;
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
@@ -605,40 +605,27 @@ impl<'i> Iterator for Children<'i> {
 }
 
 fn is_punctuation(rule: Rule) -> bool {
-    matches!(
-        rule,
-        Rule::semi
-            | Rule::eq
-            | Rule::comma
-            | Rule::range
-            | Rule::lparen
-            | Rule::rparen
-            | Rule::lbrace
-            | Rule::rbrace
-            | Rule::kw_param
-            | Rule::kw_coord
-            | Rule::kw_mass
-            | Rule::kw_lagrangian
-            | Rule::kw_constraint
-            | Rule::kw_point
-            | Rule::kw_force
-            | Rule::kw_initial
-            | Rule::kw_time
-            | Rule::kw_exact
-            | Rule::kw_integrator
-            | Rule::kw_position
-            | Rule::kw_absolute
-            | Rule::kw_relative
-            | Rule::kw_velocity
-            | Rule::kw_let
-            | Rule::kw_output
-            | Rule::kw_stop
-            | Rule::kw_when
-            | Rule::kw_for
-            | Rule::kw_if
-            | Rule::kw_then
-            | Rule::kw_else
-            | Rule::kw_and
-            | Rule::kw_or
-    )
+    is_statement_keyword(rule)
+        || matches!(
+            rule,
+            Rule::semi
+                | Rule::eq
+                | Rule::comma
+                | Rule::range
+                | Rule::lparen
+                | Rule::rparen
+                | Rule::lbrace
+                | Rule::rbrace
+                | Rule::kw_position
+                | Rule::kw_absolute
+                | Rule::kw_relative
+                | Rule::kw_velocity
+                | Rule::kw_when
+                | Rule::kw_for
+                | Rule::kw_if
+                | Rule::kw_then
+                | Rule::kw_else
+                | Rule::kw_and
+                | Rule::kw_or
+        )
 }

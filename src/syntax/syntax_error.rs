@@ -1,6 +1,6 @@
 //! pest errors → [`Diagnostic`]s that say, in words, what was expected.
 
-use super::grammar::Rule;
+use super::grammar::{is_statement_keyword, Rule};
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
 use pest::error::{Error, ErrorVariant, InputLocation};
@@ -164,37 +164,24 @@ fn is_point_field(rule: Rule) -> bool {
 }
 
 fn is_statement(rule: Rule) -> bool {
-    matches!(
-        rule,
-        Rule::param
-            | Rule::coords
-            | Rule::mass
-            | Rule::lagrangian
-            | Rule::constraint
-            | Rule::point
-            | Rule::force
-            | Rule::initial
-            | Rule::time
-            | Rule::exact
-            | Rule::integrator
-            | Rule::kw_param
-            | Rule::kw_coord
-            | Rule::kw_mass
-            | Rule::kw_lagrangian
-            | Rule::kw_constraint
-            | Rule::kw_point
-            | Rule::kw_force
-            | Rule::kw_initial
-            | Rule::kw_time
-            | Rule::kw_exact
-            | Rule::kw_integrator
-            | Rule::let_def
-            | Rule::output
-            | Rule::stop
-            | Rule::kw_let
-            | Rule::kw_output
-            | Rule::kw_stop
-    )
+    is_statement_keyword(rule)
+        || matches!(
+            rule,
+            Rule::param
+                | Rule::coords
+                | Rule::mass
+                | Rule::lagrangian
+                | Rule::constraint
+                | Rule::point
+                | Rule::force
+                | Rule::initial
+                | Rule::time
+                | Rule::exact
+                | Rule::integrator
+                | Rule::let_def
+                | Rule::output
+                | Rule::stop
+        )
 }
 
 /// "`a`, `b` or `c`".
