@@ -1,6 +1,6 @@
 //! The front end as one call: source → checked model or diagnostics.
 //!
-//! `main.rs` and the tests call these same functions, so the tests exercise
+//! The CLI and the tests call these same functions, so the tests exercise
 //! exactly what the CLI does.
 
 use crate::check::{self, model::Model};

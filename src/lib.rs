@@ -9,7 +9,7 @@
 //! ```
 //!
 //! No stage does IO: problems come back as [`diagnostic::Diagnostic`]s and
-//! `main.rs` renders them.
+//! the binary (`cli/commands/`) renders them.
 
 pub mod check;
 pub mod diagnostic;

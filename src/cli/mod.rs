@@ -1,6 +1,6 @@
 //! The IO of `lagc build` and `lagc run`: writing the generated crate,
 //! the build cache, running cargo and the model's binary. Used only by
-//! `main.rs` (the library does no IO).
+//! the binary's command handlers (`commands/`; the library does no IO).
 
 pub mod args;
 pub mod cache;
