@@ -28,7 +28,7 @@ fn model_error_exits_1_with_location() {
     assert_eq!(out.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stderr.contains("tests/data/errors/unknown_name.lag:5:"),
+        stderr.contains("tests/data/errors/unknown_name.lag:6:"),
         "{stderr}"
     );
     assert!(stderr.contains("error[E0002]"), "{stderr}");

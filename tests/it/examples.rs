@@ -1,21 +1,77 @@
-//! Every model under `examples/` checks clean.
+//! Every model that `lagc check` accepts (`expect::ACCEPTED`: the
+//! examples, the language-v2, mass-law and run-time-failure models, the
+//! warning files and the loose models under `tests/data/`) states `check
+//! ok` in its `// expect:` header, and every warning `lagc check` and note
+//! `lagc build` give it, with positions. An example with `exact` lines
+//! states how close both methods come to them.
+
+use crate::expect::{as_stated, expectations_of, header_lines, stated, Expectation, ACCEPTED};
+use lagc::diagnostic::Severity;
+use lagc::emit::EmitOptions;
 
 #[test]
-fn every_example_checks_clean() {
-    let dir = crate::root().join("examples");
+fn every_accepted_model_checks_clean_with_the_stated_warnings_and_notes() {
     let mut checked = 0;
-    for entry in std::fs::read_dir(&dir).expect("examples/ exists") {
-        let path = entry.expect("examples/ is readable").path();
-        if path.extension().is_some_and(|e| e == "lag") {
-            let bytes = std::fs::read(&path).expect("example is readable");
+    for dir in ACCEPTED {
+        let files = crate::expect::lag_files(dir);
+        assert!(!files.is_empty(), "no models in {dir}");
+        for path in files {
             let name = path.display().to_string();
-            if let Err(rendered) = crate::check_bytes(&bytes, &name) {
-                panic!("{name} has errors:\n{rendered}");
+            let expectations = expectations_of(&path);
+            assert!(
+                expectations.contains(&Expectation::CheckOk),
+                "{name}: the header must state `// expect: check ok`"
+            );
+            let bytes = std::fs::read(&path).expect("model is readable");
+            let (source, checked_model) = crate::expect::check_diagnostics(&bytes);
+            let model = match checked_model {
+                Ok(model) => model,
+                Err(_) => panic!(
+                    "{name} has errors:\n{}",
+                    crate::check_bytes(&bytes, &name).unwrap_err()
+                ),
+            };
+            let mut diagnostics = lagc::literal_warnings(&source);
+            let options = EmitOptions {
+                model_name: "notes".to_string(),
+                source_hash: "test".to_string(),
+                runtime_path: "../runtime".to_string(),
+                package_key: None,
+            };
+            let (_, notes) =
+                lagc::on_big_stack(|| lagc::pipeline::generate_crate(&model, &options))
+                    .unwrap_or_else(|d| panic!("{name}: build refuses: {d:?}"));
+            diagnostics.extend(notes);
+            let found = as_stated(&diagnostics, &source);
+            assert_eq!(
+                stated(&expectations),
+                found,
+                "{name}: the header states other warnings or notes than check and build give; they give\n{}",
+                header_lines(&found)
+            );
+            if *dir == "tests/data/warnings" {
+                assert!(
+                    found.iter().any(|d| d.0 == Severity::Warning),
+                    "{name}: a warning file without a warning"
+                );
+            }
+            // A model with an exact solution states how close both methods
+            // come to it (tests/it/generated.rs runs them).
+            if *dir == "examples" && !model.exact.is_empty() {
+                for method in ["field", "direct"] {
+                    assert!(
+                        expectations.iter().any(|e| matches!(
+                            e,
+                            Expectation::Within { run, .. } if run.method == method
+                        )),
+                        "{name} has `exact` lines but no `// expect: {method} within …`"
+                    );
+                }
             }
             checked += 1;
         }
     }
-    assert!(checked >= 1, "no examples found in {}", dir.display());
+    assert!(checked >= 40, "{checked} models");
 }
 
 #[test]

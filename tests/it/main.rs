@@ -5,6 +5,7 @@ mod check_build;
 mod cli;
 mod errors;
 mod examples;
+mod expect;
 mod field;
 mod generated;
 mod ir;
@@ -20,6 +21,7 @@ mod robustness;
 mod rolling_bodies;
 mod runtime_failures;
 mod source_text;
+mod stages;
 mod stiff_extreme;
 
 use lagc::diagnostic::{self, Diagnostic};
