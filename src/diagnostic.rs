@@ -303,6 +303,10 @@ pub mod codes {
     /// of order above 2, and differentiating it k − 2 times (SPEC §1.4)
     /// passes the state.
     pub const UNSUPPORTED_REDUCTION: &str = "E0039";
+    /// Implicit constraints with several candidates whose other candidates'
+    /// reduced systems switch (`if`, `abs`, …) on a function the first
+    /// candidate's does not: every mode reads the first mode's branches.
+    pub const UNSHARED_SWITCHES: &str = "E0040";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

@@ -49,9 +49,9 @@ pub fn kernel_of(
         let other = mode_kernel(&model.in_mode(mode))?;
         // Every mode reads the first mode's branches; a switch only another
         // mode has would read none (never silently: refuse).
-        if let Some(text) = crate::emit::modes::unshared_switches(&kernel, &other).first() {
+        if let Some(text) = crate::kernel::switches::unshared_switches(&kernel, &other).first() {
             return Err(vec![Diagnostic::error(
-                crate::diagnostic::codes::CODE_GENERATION,
+                crate::diagnostic::codes::UNSHARED_SWITCHES,
                 format!("a reduced system of another candidate switches on `{text}`, which the first does not"),
             )
             .with_primary(model.lagrangian.span, "this model")

@@ -3,6 +3,7 @@
 //! `rhs_mode1`, …, and the trait's methods dispatch on the current mode.
 
 use crate::ir::Symbol;
+use crate::kernel::switches::switch_index;
 use crate::kernel::Kernel;
 use proc_macro2::{Group, Ident, TokenStream, TokenTree};
 use quote::quote;
@@ -135,27 +136,5 @@ pub fn shared_branches(first: &Kernel, mode: &Kernel) -> HashMap<Symbol, usize> 
                 .get(&mode.arena.display(g).to_string())
                 .map(|&k| (s, k))
         })
-        .collect()
-}
-
-/// The first mode's switching functions by text.
-pub fn switch_index(kernel: &Kernel) -> HashMap<String, usize> {
-    kernel
-        .switches
-        .functions
-        .iter()
-        .enumerate()
-        .map(|(k, &g)| (kernel.arena.display(g).to_string(), k))
-        .collect()
-}
-
-/// The switching functions of `mode` that the first mode does not have.
-pub fn unshared_switches(first: &Kernel, mode: &Kernel) -> Vec<String> {
-    let index = switch_index(first);
-    mode.switches
-        .functions
-        .iter()
-        .map(|&g| mode.arena.display(g).to_string())
-        .filter(|text| !index.contains_key(text))
         .collect()
 }

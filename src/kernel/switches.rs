@@ -157,3 +157,28 @@ pub fn latch_kernel(
     }
     cells(arena, &mut outputs.iter_mut().map(|(_, e)| e));
 }
+
+/// The first mode's switching functions by text.
+pub fn switch_index(kernel: &super::Kernel) -> HashMap<String, usize> {
+    kernel
+        .switches
+        .functions
+        .iter()
+        .enumerate()
+        .map(|(k, &g)| (kernel.arena.display(g).to_string(), k))
+        .collect()
+}
+
+/// The switching functions of `mode` that the first mode does not have:
+/// a model whose other modes have one is refused (E0040, in
+/// `pipeline::kernel_of`, which `lagc check` runs), since every mode reads
+/// the first mode's branches.
+pub fn unshared_switches(first: &super::Kernel, mode: &super::Kernel) -> Vec<String> {
+    let index = switch_index(first);
+    mode.switches
+        .functions
+        .iter()
+        .map(|&g| mode.arena.display(g).to_string())
+        .filter(|text| !index.contains_key(text))
+        .collect()
+}
