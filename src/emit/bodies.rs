@@ -50,23 +50,24 @@ pub fn vector(
     out_name: &str,
 ) -> Body {
     let roots: Vec<ExprId> = entries.iter().map(|&(_, e)| e).collect();
-    let code = names.code(arena, &roots, from);
-    let out = arg(true, out_name);
-    let assignments = entries
-        .iter()
-        .zip(&code.roots)
-        .map(|(&(row, _), value)| {
-            let row = index(row);
-            quote! { #out[#row] = #value; }
-        })
-        .collect();
-    Body {
-        statements: code.statements(quote! { self.params }),
-        assignments,
-        t: code.time_arg(),
-        source: arg(code.uses_source, source_name),
-        out: arg(!entries.is_empty(), out_name),
-    }
+    body(
+        names,
+        arena,
+        &roots,
+        from,
+        source_name,
+        out_name,
+        |out, values| {
+            entries
+                .iter()
+                .zip(values)
+                .map(|(&(row, _), value)| {
+                    let row = index(row);
+                    quote! { #out[#row] = #value; }
+                })
+                .collect()
+        },
+    )
 }
 
 /// `out[(row, column)] = expr;` for every `(row, column, expr)`.
@@ -79,15 +80,38 @@ pub fn matrix(
     out_name: &str,
 ) -> Body {
     let roots: Vec<ExprId> = entries.iter().map(|&(_, _, e)| e).collect();
-    let code = names.code(arena, &roots, from);
+    body(
+        names,
+        arena,
+        &roots,
+        from,
+        source_name,
+        out_name,
+        |out, values| cells(out, entries, values),
+    )
+}
+
+/// The body computing `roots` from `source`: their shared sub-expressions
+/// named in a scope of their own, and `assign(out, values)` writing the
+/// printed values into the output argument.
+fn body(
+    names: &mut SymbolNames,
+    arena: &Arena,
+    roots: &[ExprId],
+    from: Source,
+    source_name: &str,
+    out_name: &str,
+    assign: impl FnOnce(&TokenStream, &[TokenStream]) -> Vec<TokenStream>,
+) -> Body {
+    let code = names.code(arena, roots, from);
     let out = arg(true, out_name);
-    let assignments = cells(&out, entries, &code.roots);
+    let assignments = assign(&out, &code.roots);
     Body {
         statements: code.statements(quote! { self.params }),
         assignments,
         t: code.time_arg(),
         source: arg(code.uses_source, source_name),
-        out: arg(!entries.is_empty(), out_name),
+        out: arg(!roots.is_empty(), out_name),
     }
 }
 

@@ -85,6 +85,16 @@ pub(crate) fn count(n: usize, noun: &str) -> String {
 
 /// Reads, checks and generates the crate of `file`, printing diagnostics
 /// and notes; `Err(status)` when that fails.
+/// The crate of `file` for `lagc run` and `lagc report`: built against the
+/// runtime in the cache, keyed by the file's canonical path.
+pub(crate) fn generate_cached(file: &Path) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
+    generate(
+        file,
+        &crate::cli::runtime_path_from_cache(),
+        Some(crate::cli::path_key(file)),
+    )
+}
+
 pub(crate) fn generate(
     file: &Path,
     runtime_path: &str,

@@ -2,7 +2,7 @@
 //! run time, as a table, a plot and the data.
 
 use super::run::build_cached;
-use super::{generate, EXIT_USAGE};
+use super::{generate_cached, EXIT_USAGE};
 use crate::cli::args::ReportArgs;
 use std::io::IsTerminal;
 use std::process::ExitCode;
@@ -22,11 +22,7 @@ pub(crate) fn report(args: &ReportArgs) -> ExitCode {
         eprintln!("error: `--runs` must be at least 1");
         return ExitCode::from(EXIT_USAGE);
     }
-    let generated = match generate(
-        &args.file,
-        &crate::cli::runtime_path_from_cache(),
-        Some(crate::cli::path_key(&args.file)),
-    ) {
+    let generated = match generate_cached(&args.file) {
         Ok(generated) => generated,
         Err(status) => return status,
     };

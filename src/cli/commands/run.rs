@@ -1,17 +1,13 @@
 //! `lagc run`: the crate built in the cache (once per model and runtime
 //! version, under locks) and its binary run with the options as given.
 
-use super::{generate, EXIT_USAGE};
+use super::{generate_cached, EXIT_USAGE};
 use crate::cli::args::RunArgs;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 pub(crate) fn run(args: &RunArgs) -> ExitCode {
-    let generated = match generate(
-        &args.file,
-        &crate::cli::runtime_path_from_cache(),
-        Some(crate::cli::path_key(&args.file)),
-    ) {
+    let generated = match generate_cached(&args.file) {
         Ok(generated) => generated,
         Err(status) => return status,
     };
