@@ -195,18 +195,8 @@ impl Direct {
         if self.stiff_steps == TRIAL_STEPS {
             let mean = self.stiff_distance / TRIAL_STEPS as f64;
             if mean < REQUIRED_GAIN * self.explicit_step {
-                let (t, x) = (self.stepper.time(), self.stepper.state().to_vec());
-                self.done += self.stepper.stats();
-                self.stepper = AnyStepper::new(
-                    Integrator::Explicit,
-                    &ModelSystem(model),
-                    t,
-                    &x,
-                    self.tol,
-                    self.h_max,
-                    Some(self.explicit_step),
-                )?;
-                self.switched_back_at = Some(t);
+                self.switched_back_at = Some(self.stepper.time());
+                self.restart_with(model, Integrator::Explicit, self.explicit_step)?;
             }
         }
         Ok(())
@@ -219,23 +209,32 @@ impl Direct {
             && self.stepper.integrator() == Integrator::Explicit
             && self.stiff_steps == 0
         {
-            let (t, x, h) = (
-                self.stepper.time(),
-                self.stepper.state().to_vec(),
-                self.stepper.proposed_step(),
-            );
             self.explicit_step = self.stepper.time() - self.stepper.previous_time();
-            self.done += self.stepper.stats();
-            self.stepper = AnyStepper::new(
-                Integrator::Stiff,
-                &ModelSystem(model),
-                t,
-                &x,
-                self.tol,
-                self.h_max,
-                Some(h),
-            )?;
+            let h = self.stepper.proposed_step();
+            self.restart_with(model, Integrator::Stiff, h)?;
         }
+        Ok(())
+    }
+
+    /// Continues from the current state with `integrator`, first step `h`;
+    /// the finished stepper's statistics are kept.
+    fn restart_with(
+        &mut self,
+        model: &dyn DynModel,
+        integrator: Integrator,
+        h: f64,
+    ) -> Result<(), Failure> {
+        let (t, x) = (self.stepper.time(), self.stepper.state().to_vec());
+        self.done += self.stepper.stats();
+        self.stepper = AnyStepper::new(
+            integrator,
+            &ModelSystem(model),
+            t,
+            &x,
+            self.tol,
+            self.h_max,
+            Some(h),
+        )?;
         Ok(())
     }
 }
