@@ -23,6 +23,7 @@ mod runtime_failures;
 mod source_text;
 mod stages;
 mod stiff_extreme;
+mod stiff_joint;
 
 use lagc::diagnostic::{self, Diagnostic};
 

@@ -17,8 +17,13 @@ use crate::linalg::{condition_estimate, Lu, Matrix};
 #[derive(Clone, Debug)]
 pub struct Recovered {
     pub state: Vec<f64>,
-    /// 1-norm condition number of the condition matrix `M` (Hager's
-    /// estimate; 1 when `N = 1`).
+    /// 1-norm condition number of the condition matrix `M` equilibrated
+    /// (rows and columns scaled to a largest entry of about 1; Hager's
+    /// estimate; 1 when `N = 1`). Equilibrated, because the raw number
+    /// depends on the units of the state's components: a stiff joint's
+    /// conditions (a first column of 120 against entries of 1) measured
+    /// 4·10⁴ raw and 2.7 equilibrated, and ended every window after one
+    /// or two steps.
     pub condition: f64,
     /// `det M` (1 at every anchor, where `M = I`): a sign change between
     /// two steps means `M` passed through singularity in between.
@@ -31,7 +36,73 @@ pub struct Recovered {
     /// mode), and the condition number of the result cannot see that.
     pub formation: f64,
     /// The factors of `M` (for mapping errors); `None` when `N = 1`.
-    lu: Option<Lu>,
+    lu: Option<EquilibratedLu>,
+}
+
+/// The factors of `R M C`, with `R`, `C` diagonal scalings by powers of 2
+/// (exact) that bring every row's and column's largest entry near 1
+/// (LAPACK's `dgeequb`): `M x = z` is `(R M C)(C⁻¹ x) = R z`.
+#[derive(Clone, Debug)]
+struct EquilibratedLu {
+    lu: Lu,
+    rows: Vec<f64>,
+    columns: Vec<f64>,
+}
+
+impl EquilibratedLu {
+    /// Factors `m` equilibrated; its condition number when `estimate`.
+    fn new(mut m: Matrix, estimate: bool) -> (EquilibratedLu, f64) {
+        let size = m.rows();
+        let power_of_two = |largest: f64| {
+            if largest > 0.0 && largest.is_finite() {
+                (-largest.log2().round()).exp2()
+            } else {
+                1.0
+            }
+        };
+        let rows: Vec<f64> = (0..size)
+            .map(|r| power_of_two((0..size).fold(0.0_f64, |a, c| a.max(m[(r, c)].abs()))))
+            .collect();
+        let columns: Vec<f64> = (0..size)
+            .map(|c| {
+                power_of_two((0..size).fold(0.0_f64, |a, r| a.max((rows[r] * m[(r, c)]).abs())))
+            })
+            .collect();
+        for c in 0..size {
+            for r in 0..size {
+                m[(r, c)] *= rows[r] * columns[c];
+            }
+        }
+        let lu = Lu::new(&m);
+        let condition = if estimate && !lu.is_singular() {
+            condition_estimate(&m, &lu)
+        } else {
+            1.0
+        };
+        (EquilibratedLu { lu, rows, columns }, condition)
+    }
+
+    /// `det M`: `det(R M C)` over the scalings' (exact) product.
+    fn determinant(&self) -> f64 {
+        let scalings: f64 = self.rows.iter().chain(&self.columns).product();
+        if scalings.is_normal() {
+            self.lu.determinant() / scalings
+        } else {
+            // Out of range: the sign, which is what the windows use, is
+            // still that of det(R M C).
+            self.lu.determinant()
+        }
+    }
+
+    fn solve_in_place(&self, z: &mut [f64]) {
+        for (v, r) in z.iter_mut().zip(&self.rows) {
+            *v *= r;
+        }
+        self.lu.solve_in_place(z);
+        for (v, c) in z.iter_mut().zip(&self.columns) {
+            *v *= c;
+        }
+    }
 }
 
 /// The condition matrix `M` at `(S, x0)`.
@@ -107,15 +178,10 @@ fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool) -> Option<
     } else {
         f64::INFINITY
     };
-    let lu = Lu::new(&matrix);
-    if lu.is_singular() {
+    let (lu, condition) = EquilibratedLu::new(matrix, estimate);
+    if lu.lu.is_singular() {
         return None;
     }
-    let condition = if estimate {
-        condition_estimate(&matrix, &lu)
-    } else {
-        1.0
-    };
     let determinant = lu.determinant();
     lu.solve_in_place(&mut z);
     let mut state = Vec::with_capacity(n);
