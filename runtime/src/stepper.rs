@@ -48,6 +48,25 @@ pub trait Stepper {
 /// How a an integrator step's error estimates become one scaled error (≤ 1
 /// accepts). The field method measures the error of the state it recovers
 /// from the coefficients rather than of the coefficients themselves.
+/// The state at `t` when `t` is not inside the last step `(t_old, t_new)`
+/// (or there was none: `h_old == 0`): the step's end state at or after
+/// its end, its start state at or before its start. `None` inside, where
+/// a stepper's own continuous extension answers.
+pub fn outside_last_step<'a>(
+    t: f64,
+    (t_old, t_new, h_old): (f64, f64, f64),
+    y_old: &'a [f64],
+    y: &'a [f64],
+) -> Option<&'a [f64]> {
+    if h_old == 0.0 || t >= t_new {
+        Some(y)
+    } else if t <= t_old {
+        Some(y_old)
+    } else {
+        None
+    }
+}
+
 pub trait ErrorMeasure {
     /// The scaled error of the step from `(t0, y0)` to `(t0 + h, y1)`, with
     /// the step's error estimates `e3`, `e5` per unit step (DOP853: Hairer's 3rd- and 5th-order ones; RODAS4: its one estimate, twice);
