@@ -122,7 +122,8 @@ pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
     quote! { #(#items)* }
 }
 
-/// A condition on the branches (`branches[k]`: `g_k > 0`).
+/// A condition on the branches (`branches[k]`: `g_k > 0`), without outer
+/// parentheses (a function's body with them is a rustc warning).
 fn condition(cond: &BranchCond) -> TokenStream {
     match cond {
         BranchCond::Negative(k) => {
@@ -134,13 +135,23 @@ fn condition(cond: &BranchCond) -> TokenStream {
             quote! { !(#c) }
         }
         BranchCond::And(a, b) => {
-            let (a, b) = (condition(a), condition(b));
-            quote! { (#a && #b) }
+            let (a, b) = (operand(a), operand(b));
+            quote! { #a && #b }
         }
         BranchCond::Or(a, b) => {
-            let (a, b) = (condition(a), condition(b));
-            quote! { (#a || #b) }
+            let (a, b) = (operand(a), operand(b));
+            quote! { #a || #b }
         }
+    }
+}
+
+/// A condition as an operand of `&&` or `||`: parenthesised when it is one
+/// of them itself.
+fn operand(cond: &BranchCond) -> TokenStream {
+    let printed = condition(cond);
+    match cond {
+        BranchCond::And(..) | BranchCond::Or(..) => quote! { (#printed) },
+        BranchCond::Negative(_) | BranchCond::Not(_) => printed,
     }
 }
 

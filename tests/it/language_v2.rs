@@ -372,6 +372,9 @@ fn every_function_and_operator_runs_and_outputs_what_it_means() {
         // the step's start).
         let error = crate::exact_error(&run.stderr);
         assert!(error < 1e-8, "{method}: error {error:e}");
+        // `stop when t > 2.9 and (… or not …)`: the last row at the stop.
+        let last = run.rows.last().unwrap()[0];
+        assert!((last - 2.9).abs() < 1e-9, "{method}: stopped at {last}");
         let col = |name: &str| run.column(name);
         let (x, y, xd, yd) = (col("x"), col("y"), col("x'"), col("y'"));
         for r in &run.rows {
