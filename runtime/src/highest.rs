@@ -77,6 +77,25 @@ pub fn solve_fixed_checked<const N: usize>(
     }
 }
 
+/// An `L D Lᵀ` solve whose pivots spread more than this is handed to
+/// [`solve_fixed_checked`], which decides whether the matrix is singular.
+const LDLT_PIVOT_RATIO: f64 = 1e-10;
+
+/// [`solve_fixed_checked`] for a symmetric mass matrix (a Lagrangian's,
+/// positive definite): `L D Lᵀ` (Cholesky without square roots), and the
+/// LU path when that fails or its pivots spread too far (a singular or
+/// indefinite matrix then stops the run exactly as there).
+pub fn solve_symmetric_fixed_checked<const N: usize>(
+    t: f64,
+    a: [[f64; N]; N],
+    g: [f64; N],
+) -> Result<[f64; N], Failure> {
+    match crate::linalg::ldlt_fixed(a, g.map(|v| -v)) {
+        Some((z, ratio)) if ratio >= LDLT_PIVOT_RATIO => Ok(z),
+        _ => solve_fixed_checked(t, a, g),
+    }
+}
+
 /// Newton's method on `G(z) = 0` from `z`: `residual(z, g, g_z)` writes `G`
 /// and `G_z` (zeroed). Returns `z` and the factors of `G_z` at it.
 pub fn newton(

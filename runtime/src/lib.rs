@@ -10,7 +10,8 @@
 //! |---|---|
 //! | `model` | the trait generated code implements |
 //! | `failure` | run-time failures with their physical cause (exit 3) |
-//! | `linalg` | dense matrices, LU, Cholesky-free fixed solves, `expm` |
+//! | `linalg` | dense matrices, LU, fixed-size LU and `L D Lᵀ` solves, `expm` |
+//! | `math` | `sin_cos`: a sine and a cosine in one call |
 //! | `tolerance`, `controller`, `budget` | tolerances, the PI step controller, the work budget |
 //! | `system`, `stepper` | what integrators integrate, and their interface |
 //! | `dop853`, `rodas4` | the integrators, with dense output |
@@ -34,6 +35,7 @@ pub mod field;
 pub mod highest;
 pub mod linalg;
 pub mod magnus;
+pub mod math;
 pub mod method;
 pub mod model;
 pub mod output;

@@ -1,7 +1,8 @@
 //! The dense linear algebra the methods need, for the small matrices of
 //! mechanics (a few to a few dozen rows): a column-major [`Matrix`], LU
 //! with partial pivoting (solve, determinant, a cheap condition estimate),
-//! Cholesky for symmetric positive definite mass matrices, fixed-size
+//! `L D Lᵀ` (Cholesky without square roots) for symmetric positive definite
+//! mass matrices, fixed-size
 //! solves on the stack for generated code, products and the matrix
 //! exponential.
 
@@ -428,6 +429,68 @@ pub fn solve_fixed<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Opt
         b[k] = s / a[k][k];
     }
     b.iter().all(|v| v.is_finite()).then_some(b)
+}
+
+/// Solves `A z = b` for a fixed-size symmetric `A` by the square-root-free
+/// Cholesky factorisation `A = L D Lᵀ` (only the lower triangle is read):
+/// about half the work of [`solve_fixed`], no pivot search and no square
+/// root, for the mass matrix of a Lagrangian, which is symmetric positive
+/// definite. Returns `z` and the ratio of the smallest to the largest
+/// pivot `d_k`; `None` when a pivot is not positive (`A` is not positive
+/// definite: use [`solve_fixed`]) or the result is not finite.
+pub fn ldlt_fixed<const N: usize>(
+    mut a: [[f64; N]; N],
+    mut b: [f64; N],
+) -> Option<([f64; N], f64)> {
+    let mut d = [0.0; N];
+    let mut inverse = [0.0; N];
+    // `w[k] = l_jk d_k` for the column `j` being factored.
+    let mut w = [0.0; N];
+    let (mut small, mut large) = (f64::INFINITY, 0.0_f64);
+    for j in 0..N {
+        let mut pivot = a[j][j];
+        for k in 0..j {
+            let v = a[j][k] * d[k];
+            w[k] = v;
+            pivot -= a[j][k] * v;
+        }
+        // Also false for NaN.
+        if !(pivot > 0.0) || !pivot.is_finite() {
+            return None;
+        }
+        small = small.min(pivot);
+        large = large.max(pivot);
+        d[j] = pivot;
+        let r = 1.0 / pivot;
+        inverse[j] = r;
+        for i in j + 1..N {
+            let mut s = a[i][j];
+            for k in 0..j {
+                s -= a[i][k] * w[k];
+            }
+            a[i][j] = s * r;
+        }
+    }
+    for i in 0..N {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= a[i][k] * b[k];
+        }
+        b[i] = s;
+    }
+    for i in 0..N {
+        b[i] *= inverse[i];
+    }
+    for i in (0..N).rev() {
+        let mut s = b[i];
+        for k in i + 1..N {
+            s -= a[k][i] * b[k];
+        }
+        b[i] = s;
+    }
+    b.iter()
+        .all(|v| v.is_finite())
+        .then_some((b, small / large))
 }
 
 /// [`solve_fixed`] for a size known only at run time (large systems):

@@ -5,11 +5,12 @@
 //! same `f64`) with an `_f64` suffix; integer powers become `powi`, odd
 //! half-integer ones square roots of them (`x^-1.5` is `x.powi(3).sqrt()
 //! .recip()`), other powers `powf` — the same choices as `ir::pow_value`, so the
-//! generated code computes what `Arena::eval` computes. Parentheses are
+//! generated code computes what `Arena::eval` computes. A sine and a cosine
+//! of one argument are one `lagc_runtime::math::sin_cos` call. Parentheses are
 //! written only where precedence needs them (rustc warns on the others).
 
 use super::namer::Namer;
-use crate::ir::{half_odd_power, Arena, ExprId, Node, Symbol};
+use crate::ir::{half_odd_power, Arena, ExprId, Func, Node, Symbol};
 use proc_macro2::{Ident, Span, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
@@ -53,8 +54,31 @@ pub fn lower_exprs(
         symbol,
         bound: HashMap::new(),
     };
+    // `sin u` and `cos u` both needed: one `sin_cos` call (C compilers
+    // do the same with `sincos`), bound where the first of them falls.
+    let mut trig: HashMap<ExprId, [Option<ExprId>; 2]> = HashMap::new();
+    for &e in &order {
+        match arena.node(e) {
+            Node::Func(Func::Sin, u) => trig.entry(*u).or_default()[0] = Some(e),
+            Node::Func(Func::Cos, u) => trig.entry(*u).or_default()[1] = Some(e),
+            _ => {}
+        }
+    }
     let mut lets = Vec::new();
     for &e in &order {
+        if writer.bound.contains_key(&e) {
+            continue;
+        }
+        if let Node::Func(Func::Sin | Func::Cos, u) = arena.node(e) {
+            if let Some([Some(sin), Some(cos)]) = trig.get(u).copied() {
+                let argument = writer.expr(*u).0;
+                let (s, c) = (namer.fresh("e"), namer.fresh("e"));
+                lets.push(quote! { let (#s, #c) = lagc_runtime::math::sin_cos(#argument); });
+                writer.bound.insert(sin, s);
+                writer.bound.insert(cos, c);
+                continue;
+            }
+        }
         let shared = uses.get(&e).copied().unwrap_or(0) > 1;
         if shared
             && matches!(

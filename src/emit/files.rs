@@ -56,6 +56,7 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
     ("src/magnus.rs", include_str!("../../runtime/src/magnus.rs")),
+    ("src/math.rs", include_str!("../../runtime/src/math.rs")),
     ("src/method.rs", include_str!("../../runtime/src/method.rs")),
     ("src/model.rs", include_str!("../../runtime/src/model.rs")),
     ("src/output.rs", include_str!("../../runtime/src/output.rs")),

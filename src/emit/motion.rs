@@ -183,6 +183,11 @@ fn implicit(
         let cells = g_z_cells(quote! { a }, cells);
         let t = code.time_arg();
         let x = arg(code.uses_source, "x");
+        let solver = if i.symmetric {
+            quote! { lagc_runtime::highest::solve_symmetric_fixed_checked }
+        } else {
+            quote! { lagc_runtime::highest::solve_fixed_checked }
+        };
         (
             quote! {
                 /// The mass matrix of the highest derivatives and the
@@ -197,7 +202,7 @@ fn implicit(
                 /// The independent highest derivatives: one solve on the stack.
                 fn highest(&self, t: f64, x: &[f64]) -> Result<[f64; #size], Failure> {
                     let (a, g) = self.mass_system(t, x);
-                    lagc_runtime::highest::solve_fixed_checked(t, a, g)
+                    #solver(t, a, g)
                 }
 
                 /// The highest derivatives with the factors of the mass matrix.

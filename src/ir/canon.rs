@@ -3,7 +3,8 @@
 //!
 //! Rules: constant folding when the result is finite; flat sums and
 //! products, sorted by a structural order that does not depend on
-//! construction history; like terms and like powers collected;
+//! construction history; like terms and like powers collected, a number
+//! times a sum distributed when its terms collect with others;
 //! `exp(a)·exp(b) → exp(a+b)`, `(e^a)^b → e^(ab)`; `(a·b)^n → a^n·b^n` and
 //! `(x^a)^n → x^(an)` for integer `n`; `sqrt(x) → x^(1/2)`. Products of sums
 //! are never expanded: that keeps the DAG small.
@@ -69,6 +70,7 @@ impl Arena {
                 _ => flat.push(t),
             }
         }
+        self.distribute_collecting(&mut flat);
         for t in flat {
             let (c, rest) = self.split_coefficient(t);
             match index.get(&rest) {
@@ -89,6 +91,72 @@ impl Arena {
             0 => self.zero(),
             1 => built[0],
             _ => self.intern(Node::Add(built.into_boxed_slice())),
+        }
+    }
+
+    /// Replaces each term `c·S` (a number times a sum) of `flat` by the
+    /// terms of `S` times `c` when one of them is like a term outside `S`
+    /// (`2·(a + b) − 3·(a + c) → −a + 2b − 3c`): the rewrite that lets like
+    /// terms collect, and only then — a numeric factor over a sum whose
+    /// terms collect with nothing is one multiplication, distributed it is
+    /// one per term. Repeats while distributing brings new such terms in.
+    /// Depends on the multiset of terms only, never on their order.
+    fn distribute_collecting(&mut self, flat: &mut Vec<ExprId>) {
+        loop {
+            // `scaled[i]`: term `i` as `(c, S)` when it is `c·S`.
+            let scaled: Vec<Option<(f64, ExprId)>> = flat
+                .iter()
+                .map(|&t| match self.node(t) {
+                    Node::Mul(fs) if fs.len() == 2 => match (self.node(fs[0]), self.node(fs[1])) {
+                        (Node::Const(c), Node::Add(_)) => Some((*c, fs[1])),
+                        _ => None,
+                    },
+                    _ => None,
+                })
+                .collect();
+            if scaled.iter().all(Option::is_none) {
+                return;
+            }
+            // rest → the first term of `flat` contributing it (itself, or
+            // for `c·S` one of the terms of `S`); `hit[i]`: term `i` shares
+            // a rest with another term.
+            let mut owner: FxMap<ExprId, usize> = FxMap::default();
+            let mut hit = vec![false; flat.len()];
+            for i in 0..flat.len() {
+                let inner = match scaled[i] {
+                    Some((_, sum)) => self.children(sum),
+                    None => vec![flat[i]],
+                };
+                for t in inner {
+                    let (_, rest) = self.split_coefficient(t);
+                    match owner.get(&rest) {
+                        Some(&j) if j != i => {
+                            hit[i] = true;
+                            hit[j] = true;
+                        }
+                        Some(_) => {}
+                        None => {
+                            owner.insert(rest, i);
+                        }
+                    }
+                }
+            }
+            if !(0..flat.len()).any(|i| hit[i] && scaled[i].is_some()) {
+                return;
+            }
+            let mut out = Vec::with_capacity(flat.len());
+            for (i, &t) in flat.iter().enumerate() {
+                match scaled[i] {
+                    Some((c, sum)) if hit[i] => {
+                        let k = self.constant(c);
+                        for u in self.children(sum) {
+                            out.push(self.mul(&[k, u]));
+                        }
+                    }
+                    _ => out.push(t),
+                }
+            }
+            *flat = out;
         }
     }
 

@@ -41,6 +41,10 @@ pub struct Implicit {
     pub free: Vec<ExprId>,
     /// Non-zero cells `(row, unknown, ∂G/∂z)`.
     pub g_z: Vec<(usize, usize, ExprId)>,
+    /// A linear system whose `G_z` is symmetric cell by cell (the same
+    /// expression at `(r, c)` and `(c, r)`): a Lagrangian's mass matrix,
+    /// solved by `L D Lᵀ` (LU when that fails).
+    pub symmetric: bool,
     /// Non-zero cells `(row, state column, ∂G/∂x)`.
     pub g_x: Vec<(usize, usize, ExprId)>,
     /// Non-zero `(row, ∂G/∂t)` (true time partial).
@@ -158,9 +162,17 @@ pub fn motion(arena: &mut Arena, reduced: &ReducedSystem, time: &TimeDependence)
                     }
                 })
                 .collect();
+            let cells: HashMap<(usize, usize), ExprId> =
+                g_z.iter().map(|&(r, c, e)| ((r, c), e)).collect();
+            let symmetric = *linear
+                && residual.len() == unknowns.len()
+                && g_z
+                    .iter()
+                    .all(|&(r, c, e)| cells.get(&(c, r)) == Some(&e));
             Motion::Implicit(Implicit {
                 unknowns: unknowns.clone(),
                 linear: *linear,
+                symmetric,
                 residual: residual.clone(),
                 free,
                 g_z,

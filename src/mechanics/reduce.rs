@@ -151,7 +151,17 @@ pub fn reduce(
                         None => arena.constant(f64::NAN),
                     },
                 };
-                exprs.push(tidy(arena, e));
+                exprs.push(e);
+            }
+            // The readable form (jets collected, each coefficient in its
+            // smallest form) unless it costs more operations than the
+            // solution as found: the generated right side evaluates these,
+            // sharing sub-expressions across them (Cramer's rule on a
+            // pendulum's 2×2 mass matrix shares its rows; tidying each
+            // apart loses that).
+            let tidied: Vec<ExprId> = exprs.iter().map(|&e| tidy(arena, e)).collect();
+            if arena.op_count(&tidied) <= arena.op_count(&exprs) {
+                exprs = tidied;
             }
             Highest::Explicit(exprs)
         }

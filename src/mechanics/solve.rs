@@ -35,7 +35,17 @@ impl System {
     ) -> System {
         let jacobian: Vec<Vec<ExprId>> = rows
             .iter()
-            .map(|&r| unknowns.iter().map(|&z| arena.diff(r, z)).collect())
+            .map(|&r| {
+                unknowns
+                    .iter()
+                    .map(|&z| {
+                        // The mass matrix: sin² + cos² = 1 where the
+                        // derivative brought the squares together.
+                        let d = arena.diff(r, z);
+                        arena.pythagoras(d)
+                    })
+                    .collect()
+            })
             .collect();
         let linear = rows.iter().all(|&r| arena.is_affine_in(r, &unknowns))
             || affine_numerically(arena, &jacobian, &unknowns, param_defaults, masses);

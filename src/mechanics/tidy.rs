@@ -84,8 +84,12 @@ pub fn simplify(arena: &mut Arena, e: ExprId) -> ExprId {
     let distributed = distribute(arena, e, DISTRIBUTE_DEPTH);
     let distributed = arena.pythagoras(distributed);
     let merged = merge_fractions(arena, distributed);
+    // And where distributing merges `sin u · sin²u` into `sin³u`, the
+    // squares paired in `e` as it is: `sin u (1 + ½sin²u + ½cos²u)`.
+    let paired = arena.pythagoras(e);
     let candidates = [
         factor_common(arena, merged),
+        factor_common(arena, paired),
         factor_common(arena, e),
         merged,
         distributed,

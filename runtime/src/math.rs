@@ -1,0 +1,40 @@
+//! Elementary functions the generated code calls besides `f64`'s methods.
+
+/// `(sin x, cos x)` in one call. With glibc it is `sincos`, what a C
+/// compiler emits for a sine and a cosine of one argument (it shares the
+/// argument reduction; glibc computes both with the routines of `sin` and
+/// `cos`, so the values are theirs); elsewhere the two calls.
+#[inline]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        extern "C" {
+            fn sincos(x: f64, sin: *mut f64, cos: *mut f64);
+        }
+        let (mut s, mut c) = (0.0, 0.0);
+        // SAFETY: glibc's `sincos` (in libm, which std links on this
+        // target) writes one f64 through each pointer and keeps neither.
+        unsafe { sincos(x, &mut s, &mut c) };
+        (s, c)
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    {
+        (x.sin(), x.cos())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn sin_cos_is_sin_and_cos() {
+        for i in -2000..2000 {
+            let x = f64::from(i) * 0.0137 + 1e-3 * f64::from(i % 7);
+            assert_eq!(super::sin_cos(x), (x.sin(), x.cos()), "at {x}");
+        }
+        for x in [0.0, -0.0, 1e300, -1e-300, f64::INFINITY, f64::NAN] {
+            let (s, c) = super::sin_cos(x);
+            assert_eq!(s.to_bits(), x.sin().to_bits());
+            assert_eq!(c.to_bits(), x.cos().to_bits());
+        }
+    }
+}
