@@ -39,10 +39,21 @@ pub fn lower_exprs(
     symbol: &dyn Fn(Symbol) -> TokenStream,
     namer: &mut Namer,
 ) -> Lowered {
-    let order = arena.reachable(roots);
+    let prefix = sum_prefixes(arena, roots);
+    let operands = |e: ExprId| -> Vec<ExprId> {
+        match (prefix.get(&e), arena.node(e)) {
+            (Some(&(p, len)), Node::Add(ts)) => {
+                let mut v = vec![p];
+                v.extend_from_slice(&ts[len..]);
+                v
+            }
+            _ => arena.children(e),
+        }
+    };
+    let order = postorder(roots, &operands);
     let mut uses: HashMap<ExprId, usize> = HashMap::new();
     for &e in &order {
-        for c in arena.children(e) {
+        for c in operands(e) {
             *uses.entry(c).or_default() += 1;
         }
     }
@@ -53,6 +64,7 @@ pub fn lower_exprs(
         arena,
         symbol,
         bound: HashMap::new(),
+        prefix,
     };
     // `sin u` and `cos u` both needed: one `sin_cos` call (C compilers
     // do the same with `sincos`), bound where the first of them falls.
@@ -96,10 +108,63 @@ pub fn lower_exprs(
     Lowered { lets, roots }
 }
 
+/// For each sum among the nodes reachable from `roots`, the longest other
+/// reachable sum whose terms begin its terms (`a + b` of `a + b + c`), and
+/// that prefix's length. Writing `(a + b) + c` from the prefix's value is
+/// what `a + b + c` computes anyway (left to right), so the sharing changes
+/// no bit of the result; it is the common sub-sum of cumulative sums (the
+/// velocities of a chain's links), one addition instead of a chain.
+fn sum_prefixes(arena: &Arena, roots: &[ExprId]) -> HashMap<ExprId, (ExprId, usize)> {
+    let sums: HashMap<&[ExprId], ExprId> = arena
+        .reachable(roots)
+        .into_iter()
+        .filter_map(|e| match arena.node(e) {
+            Node::Add(ts) => Some((&ts[..], e)),
+            _ => None,
+        })
+        .collect();
+    let mut prefix = HashMap::new();
+    for (&terms, &e) in &sums {
+        if let Some((len, p)) = (2..terms.len())
+            .rev()
+            .find_map(|len| sums.get(&terms[..len]).map(|&p| (len, p)))
+        {
+            prefix.insert(e, (p, len));
+        }
+    }
+    prefix
+}
+
+/// Post-order (operands before the node) of the nodes reachable from
+/// `roots` through `operands`.
+fn postorder(roots: &[ExprId], operands: &dyn Fn(ExprId) -> Vec<ExprId>) -> Vec<ExprId> {
+    let mut seen = std::collections::HashSet::new();
+    let mut order = Vec::new();
+    let mut stack: Vec<(ExprId, bool)> = roots.iter().rev().map(|&r| (r, false)).collect();
+    while let Some((e, expanded)) = stack.pop() {
+        if expanded {
+            order.push(e);
+            continue;
+        }
+        if !seen.insert(e) {
+            continue;
+        }
+        stack.push((e, true));
+        for c in operands(e).into_iter().rev() {
+            if !seen.contains(&c) {
+                stack.push((c, false));
+            }
+        }
+    }
+    order
+}
+
 struct Writer<'a> {
     arena: &'a Arena,
     symbol: &'a dyn Fn(Symbol) -> TokenStream,
     bound: HashMap<ExprId, Ident>,
+    /// [`sum_prefixes`].
+    prefix: HashMap<ExprId, (ExprId, usize)>,
 }
 
 /// A float literal: `1.5_f64`, `1e-9_f64` (non-negative `v`).
@@ -146,7 +211,7 @@ impl Writer<'_> {
             }
             Node::Pow(b, x) => self.pow(*b, *x),
             Node::Mul(fs) => self.product(fs, false),
-            Node::Add(ts) => self.sum(ts),
+            Node::Add(ts) => self.sum(e, ts),
             Node::Select(g, a, b) => {
                 let g = wrap(self.expr(*g), Prec::Sum);
                 let a = self.expr(*a).0;
@@ -217,9 +282,17 @@ impl Writer<'_> {
         }
     }
 
-    fn sum(&self, terms: &[ExprId]) -> (TokenStream, Prec) {
+    fn sum(&self, e: ExprId, terms: &[ExprId]) -> (TokenStream, Prec) {
         let mut code = TokenStream::new();
-        for (i, &t) in terms.iter().enumerate() {
+        // The value of a bound prefix sum, then the rest.
+        let start = match self.prefix.get(&e) {
+            Some(&(p, len)) if self.bound.contains_key(&p) => {
+                code = self.expr(p).0;
+                len
+            }
+            _ => 0,
+        };
+        for (i, &t) in terms.iter().enumerate().skip(start) {
             if i == 0 {
                 code = wrap(self.expr(t), Prec::Sum);
             } else if self.is_negative(t) {
