@@ -582,6 +582,27 @@ mod tests {
     }
 
     #[test]
+    fn ldlt_solves_a_symmetric_positive_definite_system_and_refuses_others() {
+        // A pendulum-like mass matrix: symmetric, positive definite.
+        let a = [[3.0, 2.0, 1.0], [2.0, 2.0, 0.5], [1.0, 0.5, 1.0]];
+        let x = [1.0, -2.0, 3.0];
+        let b: [f64; 3] = std::array::from_fn(|i| (0..3).map(|j| a[i][j] * x[j]).sum());
+        let (z, ratio) = ldlt_fixed(a, b).expect("positive definite");
+        let lu = solve_fixed(a, b).expect("regular");
+        for i in 0..3 {
+            assert!(close(z[i], x[i], 1e-14), "{z:?}");
+            assert!(close(z[i], lu[i], 1e-14), "{z:?} {lu:?}");
+        }
+        assert!(ratio > 0.0 && ratio <= 1.0, "{ratio}");
+        // Indefinite (a negative pivot) and singular (a zero pivot): None.
+        assert!(ldlt_fixed([[1.0, 2.0], [2.0, 1.0]], [1.0, 1.0]).is_none());
+        assert!(ldlt_fixed([[1.0, 1.0], [1.0, 1.0]], [1.0, 1.0]).is_none());
+        // Nearly singular: the pivot ratio says so.
+        let (_, ratio) = ldlt_fixed([[1.0, 1.0], [1.0, 1.0 + 1e-12]], [1.0, 1.0]).unwrap();
+        assert!(ratio < 1e-11, "{ratio}");
+    }
+
+    #[test]
     fn condition_estimate_is_exact_on_a_diagonal_and_large_near_singular() {
         let a = Matrix::from_rows(&[&[1.0, 0.0], &[0.0, 1e-6]]);
         let lu = Lu::new(&a);

@@ -218,3 +218,37 @@ fn half_odd_powers_agree_with_powf() {
         }
     }
 }
+
+#[test]
+fn a_number_times_a_sum_distributes_when_its_terms_collect() {
+    // Issue 11's example: 48a + 48b − 1.5(24a + 24b) = 12a + 12b.
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let y = sym(&mut a, ALPHA);
+    let c48 = num(&mut a, 48.0);
+    let c24 = num(&mut a, 24.0);
+    let c15 = num(&mut a, -1.5);
+    let c12 = num(&mut a, 12.0);
+    let t1 = a.mul(&[c48, x]);
+    let t2 = a.mul(&[c48, y]);
+    let u1 = a.mul(&[c24, x]);
+    let u2 = a.mul(&[c24, y]);
+    let inner = a.add(&[u1, u2]);
+    let scaled = a.mul(&[c15, inner]);
+    let e = a.add(&[t1, t2, scaled]);
+    let v1 = a.mul(&[c12, x]);
+    let v2 = a.mul(&[c12, y]);
+    assert_eq!(e, a.add(&[v1, v2]));
+    // In any order of the terms.
+    assert_eq!(a.add(&[scaled, t2, t1]), e);
+    // A sum whose terms collect with nothing stays one product: 2(a + b) + t.
+    let two = num(&mut a, 2.0);
+    let t = sym(&mut a, Symbol::Time);
+    let xy = a.add(&[x, y]);
+    let kept = a.mul(&[two, xy]);
+    let e = a.add(&[kept, t]);
+    match a.node(e) {
+        Node::Add(ts) => assert!(ts.contains(&kept), "{}", a.display(e)),
+        other => panic!("{other:?}"),
+    }
+}
