@@ -166,9 +166,7 @@ pub fn motion(arena: &mut Arena, reduced: &ReducedSystem, time: &TimeDependence)
                 g_z.iter().map(|&(r, c, e)| ((r, c), e)).collect();
             let symmetric = *linear
                 && residual.len() == unknowns.len()
-                && g_z
-                    .iter()
-                    .all(|&(r, c, e)| cells.get(&(c, r)) == Some(&e));
+                && g_z.iter().all(|&(r, c, e)| cells.get(&(c, r)) == Some(&e));
             Motion::Implicit(Implicit {
                 unknowns: unknowns.clone(),
                 linear: *linear,
