@@ -7,7 +7,8 @@
 use crate::generated::build;
 use std::process::Command;
 
-fn run(binary: &std::path::Path, args: &[&str]) -> (Vec<Vec<f64>>, String) {
+/// The CSV rows and the summary of a run that must succeed.
+pub(crate) fn run(binary: &std::path::Path, args: &[&str]) -> (Vec<Vec<f64>>, String) {
     let output = Command::new(binary).args(args).output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "{args:?}: {stderr}");

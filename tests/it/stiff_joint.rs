@@ -8,21 +8,7 @@
 //! reference is DOP853 at rtol 1e-13.
 
 use crate::generated::build_file;
-use std::process::Command;
-
-/// The CSV rows and the summary of one run.
-fn run(binary: &std::path::Path, args: &[&str]) -> (Vec<Vec<f64>>, String) {
-    let output = Command::new(binary).args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(output.status.success(), "{args:?}:\n{stderr}");
-    let rows = String::from_utf8(output.stdout)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (rows, stderr)
-}
+use crate::rolling_bodies::run;
 
 /// The count after `label: ` in a summary.
 fn count(summary: &str, label: &str) -> usize {
