@@ -4,6 +4,10 @@
 //! with `k` the order of the error estimate. The integral part damps the
 //! oscillation of step sizes where stability, not accuracy, limits them.
 
+/// `ln 1e-4`: the smallest previous error the integral part remembers
+/// (Hairer's `facold` floor).
+const LN_ERROR_FLOOR: f64 = -9.210340371976182;
+
 /// Step-size control of one integration.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Controller {
@@ -14,8 +18,9 @@ pub struct Controller {
     safety: f64,
     min_scale: f64,
     max_scale: f64,
-    /// The previous accepted step's error (Hairer's `facold`).
-    previous_error: f64,
+    /// The logarithm of the previous accepted step's error (Hairer's
+    /// `facold`): one `ln` and one `exp` a step instead of two `powf`.
+    ln_previous_error: f64,
     /// The last attempt was rejected: do not grow the next step.
     rejected: bool,
 }
@@ -31,7 +36,7 @@ impl Controller {
             safety: 0.9,
             min_scale,
             max_scale,
-            previous_error: 1e-4,
+            ln_previous_error: LN_ERROR_FLOOR,
             rejected: false,
         }
     }
@@ -51,13 +56,14 @@ impl Controller {
     /// The next step after accepting a step of length `h` with scaled error
     /// `err ≤ 1`.
     pub fn accept(&mut self, h: f64, err: f64) -> f64 {
-        let err = err.max(1e-10);
-        let mut scale = self.safety * err.powf(-self.alpha) * self.previous_error.powf(self.beta);
+        let ln_err = err.max(1e-10).ln();
+        let mut scale =
+            self.safety * (self.beta * self.ln_previous_error - self.alpha * ln_err).exp();
         scale = scale.clamp(self.min_scale, self.max_scale);
         if self.rejected {
             scale = scale.min(1.0);
         }
-        self.previous_error = err.max(1e-4);
+        self.ln_previous_error = ln_err.max(LN_ERROR_FLOOR);
         self.rejected = false;
         h * scale
     }
@@ -76,7 +82,7 @@ impl Controller {
 
     /// Forgets the history (after a restart at an event or an anchor).
     pub fn reset(&mut self) {
-        self.previous_error = 1e-4;
+        self.ln_previous_error = LN_ERROR_FLOOR;
         self.rejected = false;
     }
 }

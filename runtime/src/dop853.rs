@@ -280,11 +280,13 @@ impl ErrorMeasure for HairerMeasure {
 /// Hairer's combined error norm of DOP853.
 pub fn hairer_error(tol: Tolerance, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], e5: &[f64]) -> f64 {
     let n = y0.len();
+    let (y1, e3, e5) = (&y1[..n], &e3[..n], &e5[..n]);
     let (mut err3, mut err5) = (0.0, 0.0);
     for i in 0..n {
-        let scale = tol.atol + tol.rtol * y0[i].abs().max(y1[i].abs());
-        err3 += (e3[i] / scale).powi(2);
-        err5 += (e5[i] / scale).powi(2);
+        let inverse = 1.0 / (tol.atol + tol.rtol * y0[i].abs().max(y1[i].abs()));
+        let (a, b) = (e3[i] * inverse, e5[i] * inverse);
+        err3 += a * a;
+        err5 += b * b;
     }
     let denominator = if err5 + 0.01 * err3 > 0.0 {
         err5 + 0.01 * err3
@@ -304,11 +306,12 @@ pub struct Dop853 {
     tol: Tolerance,
     t: f64,
     y: Vec<f64>,
-    /// Stages: `k[0] = X(t, y)` (first same as last), `k[1..12]` the
-    /// stages of the last step, `k[12] = X(t, y)` again after a step is
+    /// Stages, `n` numbers each in one buffer (stage `j` at `j n`):
+    /// `k[0] = X(t, y)` (first same as last), `k[1..12]` the stages of the
+    /// last step, `k[12]` the rate at the last step's start after a step is
     /// accepted (kept for the continuous extension), `k[13..16]` its extra
     /// stages.
-    k: Vec<Vec<f64>>,
+    k: Vec<f64>,
     y_trial: Vec<f64>,
     /// The 3rd- and 5th-order error estimates of the last attempt, per unit
     /// step (multiply by `h`).
@@ -346,9 +349,9 @@ impl Dop853 {
         if let Some(i) = first_non_finite(y0) {
             return Err(Failure::non_finite(t0, system.component_name(i)));
         }
-        let mut k = vec![vec![0.0; n]; STAGES + 4];
-        system.rhs(t0, y0, &mut k[0])?;
-        if let Some(i) = first_non_finite(&k[0]) {
+        let mut k = vec![0.0; (STAGES + 4) * n];
+        system.rhs(t0, y0, &mut k[..n])?;
+        if let Some(i) = first_non_finite(&k[..n]) {
             return Err(Failure::non_finite_rate(t0, system.rate_name(i)));
         }
         let mut stats = Stats {
@@ -359,7 +362,7 @@ impl Dop853 {
             Some(h) if h.is_finite() && h > 0.0 => h.min(h_max),
             _ => {
                 stats.rhs_evaluations += 1;
-                initial_step(system, t0, y0, &k[0], tol, 8, h_max)?
+                initial_step(system, t0, y0, &k[..n], tol, 8, h_max)?
             }
         };
         Ok(Dop853 {
@@ -387,7 +390,7 @@ impl Dop853 {
 
     /// The slope `X(t, y)` at the current state.
     pub fn slope(&self) -> &[f64] {
-        &self.k[0]
+        &self.k[..self.y.len()]
     }
 
     /// One accepted step under `measure` (see [`Stepper::step`]), or
@@ -452,12 +455,11 @@ impl Dop853 {
                 let t_new = if reaches_limit { t_limit } else { self.t + h };
                 // The slope at the step's end (kept in k[12] until the
                 // step is taken: it is the next step's first stage).
-                let mut end_slope = std::mem::take(&mut self.k[12]);
-                let evaluated = system.rhs(t_new, &self.y_trial, &mut end_slope);
-                self.k[12] = end_slope;
-                evaluated?;
+                let n = self.y.len();
+                let end_slope = &mut self.k[12 * n..13 * n];
+                system.rhs(t_new, &self.y_trial, end_slope)?;
                 self.stats.rhs_evaluations += 1;
-                if let Some(i) = first_non_finite(&self.k[12]) {
+                if let Some(i) = first_non_finite(end_slope) {
                     // The step ends where the rates are not defined (a
                     // force infinite just ahead): retry shorter, so that
                     // the motion stops at the boundary, not beyond it.
@@ -468,7 +470,8 @@ impl Dop853 {
                     continue;
                 }
                 let h_next = self.controller.accept(h, err);
-                self.y_old.copy_from_slice(&self.y);
+                // y_old ← y ← y_trial without copying.
+                std::mem::swap(&mut self.y_old, &mut self.y);
                 std::mem::swap(&mut self.y, &mut self.y_trial);
                 self.t_old = self.t;
                 self.h_old = h;
@@ -482,7 +485,8 @@ impl Dop853 {
                 };
                 // k[0] becomes the new slope; X(t_old) moves to k[12] for
                 // the continuous extension.
-                self.k.swap(0, 12);
+                let (start, rest) = self.k.split_at_mut(12 * n);
+                start[..n].swap_with_slice(&mut rest[..n]);
                 self.stats.accepted_steps += 1;
                 self.dense_ready = false;
                 self.test_stiffness(h);
@@ -500,9 +504,13 @@ impl Dop853 {
     /// evaluated at the same time at `stage_state = y₁`.
     fn test_stiffness(&mut self, h: f64) {
         let (mut numerator, mut denominator) = (0.0, 0.0);
-        for i in 0..self.y.len() {
-            numerator += (self.k[0][i] - self.k[STAGES - 1][i]).powi(2);
-            denominator += (self.y[i] - self.stage_state[i]).powi(2);
+        let n = self.y.len();
+        let (slope, last) = (&self.k[..n], &self.k[(STAGES - 1) * n..STAGES * n]);
+        let (y, y1) = (&self.y[..n], &self.stage_state[..n]);
+        for i in 0..n {
+            let (a, b) = (slope[i] - last[i], y[i] - y1[i]);
+            numerator += a * a;
+            denominator += b * b;
         }
         if denominator <= 0.0 || !numerator.is_finite() {
             return;
@@ -528,15 +536,16 @@ impl Dop853 {
     /// first (the motion grows without bound). Recomputes the stage
     /// states, so it costs nothing on the way of finite steps.
     fn broken_rate(&mut self, h: f64) -> Option<usize> {
+        let n = self.y.len();
         for s in 1..STAGES {
             self.stage_state.copy_from_slice(&self.y);
             for &(j, a) in A[s] {
-                axpy(h * a, &self.k[j], &mut self.stage_state);
+                axpy(h * a, &self.k[j * n..(j + 1) * n], &mut self.stage_state);
             }
             if first_non_finite(&self.stage_state).is_some() {
                 return None;
             }
-            if let Some(i) = first_non_finite(&self.k[s]) {
+            if let Some(i) = first_non_finite(&self.k[s * n..(s + 1) * n]) {
                 return Some(i);
             }
         }
@@ -545,54 +554,84 @@ impl Dop853 {
 
     /// Computes the stages, `y_trial` and the two error estimates (per
     /// unit step) for step `h`; `false` when a stage is not finite.
+    ///
+    /// Each stage state is one pass over the components summing the
+    /// stage's row with its coefficients known at compile time (Hairer's
+    /// `dop853.f` loops), and `y_trial` with both error estimates one more
+    /// pass: for the small systems of mechanics (n = 2…12) a whole-vector
+    /// `axpy` per coefficient cost more in loop overhead than the
+    /// arithmetic, and the loops vectorise as well for the field's large
+    /// coefficient systems.
     fn attempt<S: System + ?Sized>(&mut self, system: &S, h: f64) -> Result<bool, Failure> {
         let n = self.y.len();
-        for s in 1..STAGES {
-            // y + h Σ_j a_sj k_j, as axpy loops over whole stage vectors
-            // (vectorised; a per-component sum over the sparse row was a
-            // fifth of a field step's time).
-            self.stage_state.copy_from_slice(&self.y);
-            for &(j, a) in A[s] {
-                axpy(h * a, &self.k[j], &mut self.stage_state);
+        let t = self.t;
+        let y = &self.y[..n];
+        let k = &mut self.k[..];
+        let ys = &mut self.stage_state[..n];
+        macro_rules! stage {
+            ($s:literal, $r:literal) => {{
+                let (done, rest) = k.split_at_mut($s * n);
+                let row: [(f64, &[f64]); $r] = std::array::from_fn(|m| {
+                    let j = A[$s][m].0;
+                    (A[$s][m].1, &done[j * n..(j + 1) * n])
+                });
+                combine(ys, y, h, &row);
+                system.rhs(t + C[$s] * h, ys, &mut rest[..n])?;
+            }};
+        }
+        stage!(1, 1);
+        stage!(2, 2);
+        stage!(3, 2);
+        stage!(4, 3);
+        stage!(5, 3);
+        stage!(6, 4);
+        stage!(7, 5);
+        stage!(8, 6);
+        stage!(9, 7);
+        stage!(10, 8);
+        stage!(11, 9);
+        self.stats.rhs_evaluations += STAGES - 1;
+        let ks: [&[f64]; STAGES] = std::array::from_fn(|j| &k[j * n..(j + 1) * n]);
+        let y_trial = &mut self.y_trial[..n];
+        let error3 = &mut self.error3[..n];
+        let error5 = &mut self.error5[..n];
+        // 0·v is 0 for every finite v and NaN otherwise: one sum tells
+        // whether every number of the step is finite.
+        let mut poison = 0.0;
+        for i in 0..n {
+            let mut b = 0.0;
+            for &(j, w) in &B {
+                b += w * ks[j][i];
             }
-            let mut out = std::mem::take(&mut self.k[s]);
-            let evaluated = system.rhs(self.t + C[s] * h, &self.stage_state, &mut out);
-            self.k[s] = out;
-            evaluated?;
-            self.stats.rhs_evaluations += 1;
+            let mut e5 = 0.0;
+            for &(j, w) in &ER {
+                e5 += w * ks[j][i];
+            }
+            let e3 = b
+                - BHH[0].1 * ks[BHH[0].0][i]
+                - BHH[1].1 * ks[BHH[1].0][i]
+                - BHH[2].1 * ks[BHH[2].0][i];
+            let y1 = y[i] + h * b;
+            y_trial[i] = y1;
+            error3[i] = e3;
+            error5[i] = e5;
+            poison += 0.0 * y1 + 0.0 * e3 + 0.0 * e5;
         }
-        self.y_trial.copy_from_slice(&self.y);
-        for &(j, b) in &B {
-            axpy(h * b, &self.k[j], &mut self.y_trial);
-        }
-        self.error3.fill(0.0);
-        self.error5.fill(0.0);
-        for &(j, b) in &B {
-            axpy(b, &self.k[j], &mut self.error3);
-        }
-        for &(j, b) in &BHH {
-            axpy(-b, &self.k[j], &mut self.error3);
-        }
-        for &(j, e) in &ER {
-            axpy(e, &self.k[j], &mut self.error5);
-        }
-        let _ = n;
-        Ok(first_non_finite(&self.y_trial).is_none()
-            && first_non_finite(&self.error3).is_none()
-            && first_non_finite(&self.error5).is_none())
+        Ok(poison == 0.0)
     }
 
     /// The continuous extension of the last step (Hairer's `dop853.f`,
     /// `IOUT ≥ 2`): three more stages and the coefficients `cont`.
     fn prepare_dense<S: System + ?Sized>(&mut self, system: &S) -> Result<(), Failure> {
-        let (stages, extra) = self.k.split_at_mut(13);
+        let n = self.y.len();
+        let (stages, extra) = self.k.split_at_mut(13 * n);
         continuous_extension(
             system,
             self.t_old,
             self.h_old,
             &self.y_old,
             &self.y,
-            stages,
+            &FlatStages { data: stages, n },
             extra,
             &mut self.stage_state,
             &mut self.cont,
@@ -620,9 +659,7 @@ impl Dop853 {
         dst.data.reserve(15 * self.y.len());
         dst.data.extend_from_slice(&self.y_old);
         dst.data.extend_from_slice(&self.y);
-        for k in &self.k[..13] {
-            dst.data.extend_from_slice(k);
-        }
+        dst.data.extend_from_slice(&self.k[..13 * self.y.len()]);
     }
 
     /// The prepared continuous extension of the last accepted step, as a
@@ -735,11 +772,14 @@ pub(crate) fn eval_contd8(cont: &[f64], s: f64, out: &mut [f64]) {
 /// Stage `j` of Hairer's numbering (`0` the rate at the step's start,
 /// `12` at its end, `13..16` the extra stages of the extension) in this
 /// module's storage (`k[0]` the end rate, `k[12]` the start rate).
-fn stage<'a, K: Stages + ?Sized>(k: &'a K, extra: &'a [Vec<f64>], j: usize) -> &'a [f64] {
+fn stage<'a, K: Stages + ?Sized>(k: &'a K, extra: &'a [f64], j: usize) -> &'a [f64] {
     match j {
         0 => k.stage(12),
         12 => k.stage(0),
-        13.. => &extra[j - 13],
+        13.. => {
+            let n = extra.len() / 3;
+            &extra[(j - 13) * n..(j - 12) * n]
+        }
         _ => k.stage(j),
     }
 }
@@ -749,12 +789,6 @@ fn stage<'a, K: Stages + ?Sized>(k: &'a K, extra: &'a [Vec<f64>], j: usize) -> &
 /// step's one buffer.
 trait Stages {
     fn stage(&self, j: usize) -> &[f64];
-}
-
-impl Stages for [Vec<f64>] {
-    fn stage(&self, j: usize) -> &[f64] {
-        &self[j]
-    }
 }
 
 /// Stages stored one after another, `n` numbers each.
@@ -782,39 +816,64 @@ fn continuous_extension<S: System + ?Sized, K: Stages + ?Sized>(
     y_old: &[f64],
     y: &[f64],
     k: &K,
-    extra: &mut [Vec<f64>],
+    extra: &mut [f64],
     stage_state: &mut [f64],
     cont: &mut [f64],
 ) -> Result<(), Failure> {
     let n = y.len();
-    for (e, row) in A_EXTRA.iter().enumerate() {
-        stage_state.copy_from_slice(y_old);
-        for &(j, a) in row.iter() {
-            axpy(h * a, stage(k, extra, j), stage_state);
-        }
-        let mut out = std::mem::take(&mut extra[e]);
-        out.resize(n, 0.0);
-        let evaluated = system.rhs(t_old + C_EXTRA[e] * h, stage_state, &mut out);
-        extra[e] = out;
-        evaluated?;
+    let (y, y_old) = (&y[..n], &y_old[..n]);
+    let stage_state = &mut stage_state[..n];
+    let extra = &mut extra[..3 * n];
+    macro_rules! extra_stage {
+        ($e:literal, $r:literal) => {{
+            let (done, rest) = extra.split_at_mut($e * n);
+            let row: [(f64, &[f64]); $r] = std::array::from_fn(|m| {
+                let j = A_EXTRA[$e][m].0;
+                let stage = if j >= 13 {
+                    &done[(j - 13) * n..(j - 12) * n]
+                } else {
+                    &stage(k, &[], j)[..n]
+                };
+                (A_EXTRA[$e][m].1, stage)
+            });
+            combine(stage_state, y_old, h, &row);
+            system.rhs(t_old + C_EXTRA[$e] * h, stage_state, &mut rest[..n])?;
+        }};
     }
-    let (start_rate, end_rate) = (k.stage(12), k.stage(0));
+    extra_stage!(0, 8);
+    extra_stage!(1, 8);
+    extra_stage!(2, 8);
+    // The stages D uses (Hairer's numbering), as slices of length n.
+    const USED: [usize; 12] = [0, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+    let extra = &*extra;
+    let used: [&[f64]; 12] = std::array::from_fn(|m| &stage(k, extra, USED[m])[..n]);
+    let (start_rate, end_rate) = (&k.stage(12)[..n], &k.stage(0)[..n]);
+    let (c0, rest) = cont.split_at_mut(n);
+    let (c1, rest) = rest.split_at_mut(n);
+    let (c2, rest) = rest.split_at_mut(n);
+    let (c3, rest) = rest.split_at_mut(n);
+    let (c4, rest) = rest.split_at_mut(n);
+    let (c5, rest) = rest.split_at_mut(n);
+    let (c6, c7) = rest.split_at_mut(n);
+    let c7 = &mut c7[..n];
     for i in 0..n {
         let y_diff = y[i] - y_old[i];
         let bspl = h * start_rate[i] - y_diff;
-        cont[i] = y_old[i];
-        cont[n + i] = y_diff;
-        cont[2 * n + i] = bspl;
-        cont[3 * n + i] = y_diff - h * end_rate[i] - bspl;
-    }
-    for (r, row) in D.iter().enumerate() {
-        let block = &mut cont[(4 + r) * n..(5 + r) * n];
-        block.fill(0.0);
-        for (j, &d) in row.iter().enumerate() {
-            if d != 0.0 {
-                axpy(h * d, stage(k, extra, j), block);
+        c0[i] = y_old[i];
+        c1[i] = y_diff;
+        c2[i] = bspl;
+        c3[i] = y_diff - h * end_rate[i] - bspl;
+        let mut d = [0.0; 4];
+        for (m, stage) in used.iter().enumerate() {
+            let v = stage[i];
+            for r in 0..4 {
+                d[r] += D[r][USED[m]] * v;
             }
         }
+        c4[i] = h * d[0];
+        c5[i] = h * d[1];
+        c6[i] = h * d[2];
+        c7[i] = h * d[3];
     }
     Ok(())
 }
@@ -835,23 +894,21 @@ pub fn dense_step_between<S: System + ?Sized>(
 ) -> Result<DenseStep, Failure> {
     let n = y_old.len();
     // Hairer's stage numbering: k[0] the start rate, k[1..12] the stages.
-    let mut k = vec![vec![0.0; n]; STAGES + 1];
-    system.rhs(t_old, y_old, &mut k[0])?;
+    let mut k = vec![0.0; (STAGES + 1) * n];
+    system.rhs(t_old, y_old, &mut k[..n])?;
     let mut stage_state = vec![0.0; n];
     for s in 1..STAGES {
         stage_state.copy_from_slice(y_old);
         for &(j, a) in A[s] {
-            axpy(h * a, &k[j], &mut stage_state);
+            axpy(h * a, &k[j * n..(j + 1) * n], &mut stage_state);
         }
-        let mut out = std::mem::take(&mut k[s]);
-        let evaluated = system.rhs(t_old + C[s] * h, &stage_state, &mut out);
-        k[s] = out;
-        evaluated?;
+        system.rhs(t_old + C[s] * h, &stage_state, &mut k[s * n..(s + 1) * n])?;
     }
-    system.rhs(t_old + h, y_new, &mut k[STAGES])?;
+    system.rhs(t_old + h, y_new, &mut k[STAGES * n..])?;
     // This module's storage: k[0] the end rate, k[12] the start rate.
-    k.swap(0, STAGES);
-    let mut extra = vec![vec![0.0; n]; 3];
+    let (start, rest) = k.split_at_mut(STAGES * n);
+    start[..n].swap_with_slice(&mut rest[..n]);
+    let mut extra = vec![0.0; 3 * n];
     let mut cont = vec![0.0; 8 * n];
     continuous_extension(
         system,
@@ -859,7 +916,7 @@ pub fn dense_step_between<S: System + ?Sized>(
         h,
         y_old,
         y_new,
-        k.as_slice(),
+        &FlatStages { data: &k, n },
         &mut extra,
         &mut stage_state,
         &mut cont,
@@ -899,7 +956,7 @@ impl RawStep {
         let n = self.n();
         let (y_old, rest) = self.data.split_at(n);
         let (y, stages) = rest.split_at(n);
-        let mut extra = vec![vec![0.0; n]; 3];
+        let mut extra = vec![0.0; 3 * n];
         let mut stage_state = vec![0.0; n];
         let mut cont = vec![0.0; 8 * n];
         continuous_extension(
@@ -914,6 +971,21 @@ impl RawStep {
             &mut cont,
         )?;
         Ok(DenseStep::dop853(self.t_old, self.t_new, self.h, cont))
+    }
+}
+
+/// `dst = base + h Σ_m a_m k_m` component by component; `R` is a
+/// compile-time row length, so the inner sum unrolls.
+#[inline(always)]
+fn combine<const R: usize>(dst: &mut [f64], base: &[f64], h: f64, row: &[(f64, &[f64]); R]) {
+    let n = dst.len();
+    let base = &base[..n];
+    for i in 0..n {
+        let mut acc = 0.0;
+        for (a, k) in row {
+            acc += a * k[i];
+        }
+        dst[i] = base[i] + h * acc;
     }
 }
 

@@ -287,16 +287,18 @@ fn run_with(
     model.set_regime(&regime);
     let mut next_sample = 0;
     let mut events = 0;
-    let emit_until = |model: &dyn DynModel,
-                      solver: &mut dyn Solver,
-                      next: &mut usize,
-                      until: f64,
-                      sample: &mut Sample<'_>|
+    // The sample buffer, allocated once (emit_until runs after every step).
+    let mut x_sample = vec![0.0; n];
+    let mut emit_until = |model: &dyn DynModel,
+                          solver: &mut dyn Solver,
+                          next: &mut usize,
+                          until: f64,
+                          sample: &mut Sample<'_>|
      -> Result<(), Failure> {
-        let mut x = vec![0.0; n];
+        let x = &mut x_sample;
         while *next < times.len() && times[*next] <= until {
             let t = times[*next];
-            solver.dense(model, t, &mut x)?;
+            solver.dense(model, t, x)?;
             sample(model, t, &x)?;
             *next += 1;
         }
