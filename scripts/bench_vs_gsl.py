@@ -27,9 +27,10 @@ Error: the largest over the samples and the exact components of
 smallest in-process wall time of R solves after a warm-up (R chosen so that
 R solves take ~0.3 s), measured inside the generated binary (`--repeat`)
 and inside peers.cpp. Cost at equal error: each method's lower envelope of
-(error, time), interpolated in log-log at error levels 1e-4 .. 1e-11 where
-both reach them (no extrapolation); ratio = lagc time / peer time (< 1:
-lagc faster).
+(error, time), interpolated in log-log at error levels 1e-4 .. 1e-11
+(above the loosest run's error, that run's time: no looser run is cheaper;
+below the tightest run's error, nothing: no extrapolation); ratio = lagc
+time / peer time (< 1: lagc faster).
 
 Usage: python3 scripts/bench_vs_gsl.py [--quick] [--json OUT] [--models a,b]
 """
@@ -167,8 +168,16 @@ def envelope(points):
 
 
 def cost_at(points, level):
-    """log-log interpolation of the envelope at `level`; None outside it."""
+    """The cost of reaching error <= level: the envelope interpolated in
+    log-log between two ladder points that bracket it; at a level above the
+    loosest run's error, that run's time (no cheaper run reaches it: the
+    solver cannot be loosened further, e.g. a driver stepping onto every
+    sample time); None below the tightest run's error (no extrapolation)."""
     env = envelope(points)
+    if not env or level < env[0][0]:
+        return None
+    if level >= env[-1][0]:
+        return env[-1][1]
     for (e0, t0), (e1, t1) in zip(env, env[1:]):
         if e0 <= level <= e1:
             if e1 == e0:

@@ -275,6 +275,10 @@ impl ErrorMeasure for HairerMeasure {
     ) -> Option<f64> {
         Some(hairer_error(self.0, h, y0, y1, e3, e5))
     }
+
+    fn hairer_tolerance(&self) -> Option<Tolerance> {
+        Some(self.0)
+    }
 }
 
 /// Hairer's combined error norm of DOP853.
@@ -288,6 +292,13 @@ pub fn hairer_error(tol: Tolerance, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], 
         err3 += a * a;
         err5 += b * b;
     }
+    hairer_combine(h, n, err3, err5)
+}
+
+/// Hairer's norm from the sums of squares of the scaled 3rd- and
+/// 5th-order estimates over `n` components.
+#[inline]
+fn hairer_combine(h: f64, n: usize, err3: f64, err5: f64) -> f64 {
     let denominator = if err5 + 0.01 * err3 > 0.0 {
         err5 + 0.01 * err3
     } else {
@@ -417,8 +428,13 @@ impl Dop853 {
                     Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h })
                 });
             }
-            let finite = self.attempt(system, h)?;
-            let err = if finite {
+            let fused = measure.hairer_tolerance();
+            let (finite, fused_error) = self.attempt(system, h, fused)?;
+            let err = if !finite {
+                f64::INFINITY
+            } else if fused.is_some() {
+                fused_error
+            } else {
                 match measure.measure(
                     self.t,
                     h,
@@ -433,8 +449,6 @@ impl Dop853 {
                         return Ok(StepOutcome::Declined);
                     }
                 }
-            } else {
-                f64::INFINITY
             };
             if !finite {
                 // A stage overflowed: the step was too long for a solution
@@ -553,7 +567,9 @@ impl Dop853 {
     }
 
     /// Computes the stages, `y_trial` and the two error estimates (per
-    /// unit step) for step `h`; `false` when a stage is not finite.
+    /// unit step) for step `h`: `false` when a stage is not finite; with
+    /// `hairer`, Hairer's norm of the step under that tolerance, computed
+    /// in the same pass (else `0`).
     ///
     /// Each stage state is one pass over the components summing the
     /// stage's row with its coefficients known at compile time (Hairer's
@@ -562,7 +578,12 @@ impl Dop853 {
     /// `axpy` per coefficient cost more in loop overhead than the
     /// arithmetic, and the loops vectorise as well for the field's large
     /// coefficient systems.
-    fn attempt<S: System + ?Sized>(&mut self, system: &S, h: f64) -> Result<bool, Failure> {
+    fn attempt<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        h: f64,
+        hairer: Option<Tolerance>,
+    ) -> Result<(bool, f64), Failure> {
         let n = self.y.len();
         let t = self.t;
         let y = &self.y[..n];
@@ -598,6 +619,7 @@ impl Dop853 {
         // 0·v is 0 for every finite v and NaN otherwise: one sum tells
         // whether every number of the step is finite.
         let mut poison = 0.0;
+        let (mut err3, mut err5) = (0.0, 0.0);
         for i in 0..n {
             let mut b = 0.0;
             for &(j, w) in &B {
@@ -616,8 +638,19 @@ impl Dop853 {
             error3[i] = e3;
             error5[i] = e5;
             poison += 0.0 * y1 + 0.0 * e3 + 0.0 * e5;
+            if let Some(tol) = hairer {
+                let inverse = 1.0 / (tol.atol + tol.rtol * y[i].abs().max(y1.abs()));
+                let (a, b) = (e3 * inverse, e5 * inverse);
+                err3 += a * a;
+                err5 += b * b;
+            }
         }
-        Ok(poison == 0.0)
+        let err = if hairer.is_some() {
+            hairer_combine(h, n, err3, err5)
+        } else {
+            0.0
+        };
+        Ok((poison == 0.0, err))
     }
 
     /// The continuous extension of the last step (Hairer's `dop853.f`,

@@ -81,6 +81,14 @@ pub trait ErrorMeasure {
         e3: &[f64],
         e5: &[f64],
     ) -> Option<f64>;
+
+    /// `Some(tol)` when the measure is Hairer's norm of the step itself
+    /// under `tol` ([`crate::dop853::hairer_error`]): the integrator then
+    /// computes it in the pass that forms the step instead of calling
+    /// [`ErrorMeasure::measure`].
+    fn hairer_tolerance(&self) -> Option<crate::tolerance::Tolerance> {
+        None
+    }
 }
 
 /// What `step_measured` did.
