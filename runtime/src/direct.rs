@@ -76,7 +76,8 @@ impl Direct {
                 self.first.name(),
                 self.stepper.integrator().name()
             ),
-            None => format!("direct ({})", self.stepper.integrator().name()),
+            // concat, not format!: every solve's report asks.
+            None => ["direct (", self.stepper.integrator().name(), ")"].concat(),
         }
     }
 }

@@ -52,11 +52,20 @@ impl Options {
     /// The integrator choice: the option, else the model's statement,
     /// else `Auto`; with where it came from, in words.
     pub fn choice(&self, model: &dyn DynModel) -> (IntegratorChoice, String) {
+        let choice = self.integrator_choice(model);
         match (self.integrator, model.declared_integrator()) {
-            (Some(c), _) => (c, format!("--integrator {}", c.name())),
-            (None, Some(c)) => (c, format!("declared {} in the model", c.name())),
-            (None, None) => (IntegratorChoice::Auto, "auto, the default".to_string()),
+            (Some(c), _) => (choice, format!("--integrator {}", c.name())),
+            (None, Some(c)) => (choice, format!("declared {} in the model", c.name())),
+            (None, None) => (choice, "auto, the default".to_string()),
         }
+    }
+
+    /// The integrator choice of [`Options::choice`] without the words (no
+    /// allocation: every solve asks).
+    pub fn integrator_choice(&self, model: &dyn DynModel) -> IntegratorChoice {
+        self.integrator
+            .or_else(|| model.declared_integrator())
+            .unwrap_or(IntegratorChoice::Auto)
     }
 }
 
@@ -200,7 +209,7 @@ pub fn make_solver(
     x0: &[f64],
     h_max: f64,
 ) -> Result<Box<dyn Solver>, Failure> {
-    let (choice, _) = options.choice(model);
+    let choice = options.integrator_choice(model);
     Ok(match options.method {
         Method::Direct => Box::new(Direct::new(model, choice, options.tol, t0, x0, h_max)?),
         Method::Field => {
@@ -321,9 +330,16 @@ fn run_with(
         });
     }
     check_masses(model, t0)?;
-    let scale = MassScale::at(model, t0, x0);
-    let mut solver =
-        make_solver(model, options, t0, x0, h_max).map_err(|f| diagnose(model, f, x0, &scale))?;
+    // The mass matrix's scale at the start, which only the diagnosis of a
+    // failure reads: an LU and a norm estimate, computed up front only when
+    // the regime (on which the mass matrix may depend) can change during
+    // the run, else when a failure asks for it (a tenth of a small model's
+    // solve).
+    let regime_may_change = model.switches() > 0 || !model.constraints().is_empty();
+    let early_scale = regime_may_change.then(|| MassScale::at(model, t0, x0));
+    let scale = |model: &dyn DynModel| early_scale.unwrap_or_else(|| MassScale::at(model, t0, x0));
+    let mut solver = make_solver(model, options, t0, x0, h_max)
+        .map_err(|f| diagnose(model, f, x0, &scale(model)))?;
     let mut progress = Progress::new(options.progress, t0, t1);
     let mut g_now = vec![0.0; model.switches()];
     let mut x_event = vec![0.0; n];
@@ -331,7 +347,7 @@ fn run_with(
         if let Err(failure) = solver.advance(model, t1, &budget) {
             let x = solver.state().to_vec();
             progress.finish();
-            return Err(diagnose(model, failure, &x, &scale));
+            return Err(diagnose(model, failure, &x, &scale(model)));
         }
         progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
@@ -589,6 +605,7 @@ fn check_masses(model: &dyn DynModel, t: f64) -> Result<(), Failure> {
 /// The mass matrix's smallest scale `1/‖M⁻¹‖₁` at the start of a run: a
 /// mass matrix is singular where that has shrunk by many orders of
 /// magnitude (for one coordinate the condition number is always 1).
+#[derive(Clone, Copy)]
 pub struct MassScale(Option<f64>);
 
 impl MassScale {
