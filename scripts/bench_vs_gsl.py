@@ -7,8 +7,9 @@ BENCHMARKS §7.
 Outside `cargo test`. Needs g++, GSL and Boost headers (Debian: apt-get
 install libgsl-dev libboost-dev) and the release build of lagc.
 
-Models (the reduced systems (7) written by hand in C++ from `lagc derive`
-and the generated crate's `rhs`, in scripts/bench_vs_gsl/peers.cpp):
+Models (the peers evaluate the same equations: each generated crate's `rhs`
+translated line by line to C++ in scripts/bench_vs_gsl/peers.cpp, the
+same expressions and libm calls, pendulum_3's L D L^T solve included):
   paper            n = 4, exact q1', q2'
   knife_edge       n = 6, exact in every component
   vertical_rocket  n = 2, variable mass, exact

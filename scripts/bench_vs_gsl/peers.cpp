@@ -1,9 +1,10 @@
 // The compiled peers of scripts/bench_vs_gsl.py: GSL's rk8pd (Prince-Dormand
 // 8(7), gsl_odeiv2 driver) and Boost odeint's runge_kutta_fehlberg78
 // (controlled) and runge_kutta_dopri5 (dense output) on the reduced systems
-// (7) of four lagc models, written here by hand from `lagc derive` / the
-// generated crate's `rhs` (same operations, same number of sin/cos/tan
-// calls; parameters are compile-time constants).
+// (7) of four lagc models: each the generated crate's `rhs` (lagc build,
+// target/bench-gsl/<model>/src/lib.rs) translated line by line to C++ — the
+// same expressions in the same order, the same libm calls; parameters are
+// compile-time constants here, fields of the model there.
 //
 // Usage: peers MODEL STEPPER RTOL ATOL SAMPLES REPEAT
 //   STEPPER: rk8pd | rkf78 | dopri5
@@ -41,7 +42,7 @@ static void paper(double t, const double* x, double* dx) {
 static void knife_edge(double, const double* x, double* dx) {
     double x_d1 = x[3], theta = x[2], theta_d1 = x[5];
     double c = std::cos(theta);
-    double e_7 = 1.0 / (c * c);
+    double e_7 = 1.0 / (c * c);  // theta.cos().powi(-2)
     double e_8 = std::tan(theta);
     double e_9 = 1.0 / (1.0 + e_8 * e_8);
     dx[0] = x[3];
@@ -60,26 +61,54 @@ static void vertical_rocket(double t, const double* x, double* dx) {
 }
 
 // pendulum_3.lag (scripts/gen_pendulum.py 3): x = (th1..th3, th1'..th3').
-// Unit masses and links: sum_j c_ij [cos(th_i - th_j) th_j'' + sin(th_i -
-// th_j) th_j'^2] + g c_ii sin(th_i) = 0, c_ij = 3 - max(i, j); six trig
-// calls (the generated crate's count), the 3x3 mass matrix solved by
-// Gaussian elimination with partial pivoting (as lagc's solve_fixed).
-static void pendulum_3(double, const double* x, double* dx) {
+// The generated crate's `mass_system` and `highest` translated line by
+// line (target/bench-gsl/pendulum_3/src/lib.rs): the same expressions, the
+// same three sincos calls (lagc_runtime::math::sin_cos is glibc's sincos),
+// the symmetric mass matrix solved by L D L^T as lagc_runtime's
+// ldlt_fixed, with its pivot-ratio check (1e-10) and Gaussian elimination
+// with partial pivoting as the fallback (solve_fixed; never taken on this
+// motion).
+static bool ldlt3(double a[3][3], double b[3]) {
     const int N = 3;
-    const double g = 9.81;
-    double s[N], c[N], a[N][N], b[N];
-    for (int i = 0; i < N; i++) {
-        s[i] = std::sin(x[i]);
-        c[i] = std::cos(x[i]);
-    }
-    for (int i = 0; i < N; i++) {
-        b[i] = -g * (N - i) * s[i];
-        for (int j = 0; j < N; j++) {
-            double cij = N - (i > j ? i : j);
-            a[i][j] = cij * (c[i] * c[j] + s[i] * s[j]);
-            b[i] -= cij * (s[i] * c[j] - c[i] * s[j]) * x[N + j] * x[N + j];
+    double d[N], inverse[N], w[N];
+    double small = INFINITY, large = 0.0;
+    for (int j = 0; j < N; j++) {
+        double pivot = a[j][j];
+        for (int k = 0; k < j; k++) {
+            double v = a[j][k] * d[k];
+            w[k] = v;
+            pivot -= a[j][k] * v;
+        }
+        if (!(pivot > 0.0) || !std::isfinite(pivot)) return false;
+        small = std::fmin(small, pivot);
+        large = std::fmax(large, pivot);
+        d[j] = pivot;
+        double r = 1.0 / pivot;
+        inverse[j] = r;
+        for (int i = j + 1; i < N; i++) {
+            double s = a[i][j];
+            for (int k = 0; k < j; k++) s -= a[i][k] * w[k];
+            a[i][j] = s * r;
         }
     }
+    for (int i = 0; i < N; i++) {
+        double s = b[i];
+        for (int k = 0; k < i; k++) s -= a[i][k] * b[k];
+        b[i] = s;
+    }
+    for (int i = 0; i < N; i++) b[i] *= inverse[i];
+    for (int i = N - 1; i >= 0; i--) {
+        double s = b[i];
+        for (int k = i + 1; k < N; k++) s -= a[k][i] * b[k];
+        b[i] = s;
+    }
+    for (int i = 0; i < N; i++)
+        if (!std::isfinite(b[i])) return false;
+    return small / large >= 1e-10;
+}
+
+static void gauss3(double a[3][3], double b[3]) {
+    const int N = 3;
     for (int k = 0; k < N; k++) {
         int p = k;
         for (int i = k + 1; i < N; i++)
@@ -99,10 +128,44 @@ static void pendulum_3(double, const double* x, double* dx) {
         for (int j = k + 1; j < N; j++) v -= a[k][j] * b[j];
         b[k] = v / a[k][k];
     }
-    for (int i = 0; i < N; i++) {
-        dx[i] = x[N + i];
-        dx[N + i] = b[i];
+}
+
+static void pendulum_3(double, const double* x, double* dx) {
+    const double g_2 = 9.81;
+    double th1 = x[0], th1_d1 = x[3], th2 = x[1], th2_d1 = x[4], th3 = x[2], th3_d1 = x[5];
+    double e, e_2, e_4, e_5, e_8, e_9;
+    sincos(th1, &e, &e_2);
+    double e_3 = th1_d1 * th1_d1;
+    sincos(th2, &e_4, &e_5);
+    double e_6 = th2_d1 * th2_d1;
+    double e_7 = e_2 * e_3 + e_5 * e_6;
+    sincos(th3, &e_8, &e_9);
+    double e_10 = th3_d1 * th3_d1;
+    double e_11 = e_7 + e_9 * e_10;
+    double e_12 = -e * e_3 - e_4 * e_6;
+    double e_13 = e_12 - e_8 * e_10;
+    double e_14 = 2.0 * e * e_4 + 2.0 * e_2 * e_5;
+    double e_15 = e * e_8 + e_2 * e_9;
+    double e_16 = e_4 * e_8 + e_5 * e_9;
+    double a[3][3] = {{3.0, e_14, e_15}, {e_14, 2.0, e_16}, {e_15, e_16, 1.0}};
+    double g[3] = {
+        3.0 * g_2 * e + e * e_7 + e * e_11 + e_2 * e_12 + e_2 * e_13,
+        2.0 * g_2 * e_4 + e_4 * e_7 + e_4 * e_11 + e_5 * e_12 + e_5 * e_13,
+        g_2 * e_8 + e_8 * e_11 + e_9 * e_13,
+    };
+    double z[3] = {-g[0], -g[1], -g[2]};
+    double a_ldlt[3][3];
+    std::memcpy(a_ldlt, a, sizeof a);
+    if (!ldlt3(a_ldlt, z)) {
+        z[0] = -g[0], z[1] = -g[1], z[2] = -g[2];
+        gauss3(a, z);
     }
+    dx[0] = x[3];
+    dx[1] = x[4];
+    dx[2] = x[5];
+    dx[3] = z[0];
+    dx[4] = z[1];
+    dx[5] = z[2];
 }
 
 struct Model {
