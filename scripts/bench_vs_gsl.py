@@ -2,7 +2,7 @@
 """lagc's direct integration (DOP853) against compiled peers at equal error:
 GSL's rk8pd (Prince-Dormand 8(7), gsl_odeiv2 driver) and Boost odeint's
 runge_kutta_fehlberg78 (controlled) and runge_kutta_dopri5 (dense output).
-BENCHMARKS §7.
+BENCHMARKS §10.
 
 Outside `cargo test`. Needs g++, GSL and Boost headers (Debian: apt-get
 install libgsl-dev libboost-dev) and the release build of lagc.
