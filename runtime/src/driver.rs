@@ -308,7 +308,7 @@ fn run_with(
         while *next < times.len() && times[*next] <= until {
             let t = times[*next];
             solver.dense(model, t, x)?;
-            sample(model, t, &x)?;
+            sample(model, t, x)?;
             *next += 1;
         }
         Ok(())
