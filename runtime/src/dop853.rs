@@ -759,12 +759,9 @@ impl Stepper for Dop853 {
         out: &mut [f64],
     ) -> Result<(), Failure> {
         let n = self.y.len();
-        if self.h_old == 0.0 || t >= self.t {
-            out.copy_from_slice(&self.y);
-            return Ok(());
-        }
-        if t <= self.t_old {
-            out.copy_from_slice(&self.y_old);
+        let step = (self.t_old, self.t, self.h_old);
+        if let Some(end) = crate::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
+            out.copy_from_slice(end);
             return Ok(());
         }
         if !self.dense_ready {
