@@ -10,10 +10,10 @@
 //! written only where precedence needs them (rustc warns on the others).
 
 use super::namer::Namer;
-use crate::ir::{half_odd_power, Arena, ExprId, Func, Node, Symbol};
+use crate::ir::{half_odd_power, postorder, Arena, ExprId, Func, Node, Symbol};
 use proc_macro2::{Ident, Span, TokenStream};
 use quote::quote;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Binding strength of a generated expression.
 #[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -50,7 +50,7 @@ pub fn lower_exprs(
             _ => arena.children(e),
         }
     };
-    let order = postorder(roots, &operands);
+    let order = postorder(roots, operands, &mut HashSet::new());
     let mut uses: HashMap<ExprId, usize> = HashMap::new();
     for &e in &order {
         for c in operands(e) {
@@ -133,30 +133,6 @@ fn sum_prefixes(arena: &Arena, roots: &[ExprId]) -> HashMap<ExprId, (ExprId, usi
         }
     }
     prefix
-}
-
-/// Post-order (operands before the node) of the nodes reachable from
-/// `roots` through `operands`.
-fn postorder(roots: &[ExprId], operands: &dyn Fn(ExprId) -> Vec<ExprId>) -> Vec<ExprId> {
-    let mut seen = std::collections::HashSet::new();
-    let mut order = Vec::new();
-    let mut stack: Vec<(ExprId, bool)> = roots.iter().rev().map(|&r| (r, false)).collect();
-    while let Some((e, expanded)) = stack.pop() {
-        if expanded {
-            order.push(e);
-            continue;
-        }
-        if !seen.insert(e) {
-            continue;
-        }
-        stack.push((e, true));
-        for c in operands(e).into_iter().rev() {
-            if !seen.contains(&c) {
-                stack.push((c, false));
-            }
-        }
-    }
-    order
 }
 
 struct Writer<'a> {

@@ -7,7 +7,7 @@
 //! this file only interns nodes that are already canonical.
 
 use crate::syntax::ast::Func;
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hash, Hasher};
 
 /// An expression: an index into its [`Arena`].
@@ -318,25 +318,7 @@ impl Arena {
     /// Distinct nodes reachable from `roots`, each once (post-order).
     pub fn reachable(&self, roots: &[ExprId]) -> Vec<ExprId> {
         let mut seen = vec![false; self.nodes.len()];
-        let mut order = Vec::new();
-        let mut stack: Vec<(ExprId, bool)> = roots.iter().rev().map(|&r| (r, false)).collect();
-        while let Some((e, expanded)) = stack.pop() {
-            if expanded {
-                order.push(e);
-                continue;
-            }
-            if seen[e.index()] {
-                continue;
-            }
-            seen[e.index()] = true;
-            stack.push((e, true));
-            for c in self.children(e).into_iter().rev() {
-                if !seen[c.index()] {
-                    stack.push((c, false));
-                }
-            }
-        }
-        order
+        postorder(roots, |e| self.children(e), &mut seen)
     }
 
     /// Distinct nodes reachable from `roots`.
@@ -416,4 +398,61 @@ impl Arena {
         self.symbol_index.insert(s, i);
         i
     }
+}
+
+/// The nodes a walk has met: a dense `Vec<bool>` by index when the walk
+/// may cover much of an arena ([`Arena::reachable`]), a hash set when it
+/// covers a little of a large one (emission, one body at a time).
+pub trait Seen {
+    /// Marks `e`; false when it was marked already.
+    fn insert(&mut self, e: ExprId) -> bool;
+    fn contains(&self, e: ExprId) -> bool;
+}
+
+impl Seen for Vec<bool> {
+    fn insert(&mut self, e: ExprId) -> bool {
+        !std::mem::replace(&mut self[e.index()], true)
+    }
+    fn contains(&self, e: ExprId) -> bool {
+        self[e.index()]
+    }
+}
+
+impl Seen for HashSet<ExprId> {
+    fn insert(&mut self, e: ExprId) -> bool {
+        HashSet::insert(self, e)
+    }
+    fn contains(&self, e: ExprId) -> bool {
+        HashSet::contains(self, &e)
+    }
+}
+
+/// Post-order (children before the node, first child first, roots in
+/// order) of the nodes reachable from `roots` through `children`, each
+/// once; nodes already in `seen` are not visited. Iterative, so no depth
+/// overflows the stack. The one walk behind [`Arena::reachable`] and the
+/// emitter's order of `let`s.
+pub fn postorder(
+    roots: &[ExprId],
+    children: impl Fn(ExprId) -> Vec<ExprId>,
+    seen: &mut impl Seen,
+) -> Vec<ExprId> {
+    let mut order = Vec::new();
+    let mut stack: Vec<(ExprId, bool)> = roots.iter().rev().map(|&r| (r, false)).collect();
+    while let Some((e, expanded)) = stack.pop() {
+        if expanded {
+            order.push(e);
+            continue;
+        }
+        if !seen.insert(e) {
+            continue;
+        }
+        stack.push((e, true));
+        for c in children(e).into_iter().rev() {
+            if !seen.contains(c) {
+                stack.push((c, false));
+            }
+        }
+    }
+    order
 }

@@ -32,7 +32,7 @@ pub use crate::syntax::ast::Func;
 pub use canon::{apply_func, half_odd_power, pow_value};
 pub use display::ExprDisplay;
 pub(crate) use expr::FxMap;
-pub use expr::{Arena, ExprId, Names, Node, Symbol};
+pub use expr::{postorder, Arena, ExprId, Names, Node, Seen, Symbol};
 pub use lower::{
     lower, names_of, select, try_lower, try_lower_components, try_lower_condition, Cond, LowerError,
 };
