@@ -39,73 +39,50 @@ pub struct Body {
     pub out: TokenStream,
 }
 
-/// `out[row] = expr;` for every `(row, expr)`, reading symbols from
-/// `source`, which is named `source_name` in the signature.
-pub fn vector(
-    names: &mut SymbolNames,
-    arena: &Arena,
-    entries: &[(usize, ExprId)],
-    from: Source,
-    source_name: &str,
-    out_name: &str,
-) -> Body {
-    let roots: Vec<ExprId> = entries.iter().map(|&(_, e)| e).collect();
-    body(
-        names,
-        arena,
-        &roots,
-        from,
-        source_name,
-        out_name,
-        |out, values| {
-            entries
-                .iter()
-                .zip(values)
-                .map(|(&(row, _), value)| {
-                    let row = index(row);
-                    quote! { #out[#row] = #value; }
-                })
-                .collect()
-        },
-    )
+/// An entry of a vector, `(row, expr)`, or of a matrix, `(row, column,
+/// expr)`.
+pub trait Entry: Copy {
+    fn expr(self) -> ExprId;
+    /// `out[row] = value;` or `out[(row, column)] = value;`.
+    fn assign(self, out: &TokenStream, value: &TokenStream) -> TokenStream;
 }
 
-/// `out[(row, column)] = expr;` for every `(row, column, expr)`.
-pub fn matrix(
-    names: &mut SymbolNames,
-    arena: &Arena,
-    entries: &[(usize, usize, ExprId)],
-    from: Source,
-    source_name: &str,
-    out_name: &str,
-) -> Body {
-    let roots: Vec<ExprId> = entries.iter().map(|&(_, _, e)| e).collect();
-    body(
-        names,
-        arena,
-        &roots,
-        from,
-        source_name,
-        out_name,
-        |out, values| cells(out, entries, values),
-    )
+impl Entry for (usize, ExprId) {
+    fn expr(self) -> ExprId {
+        self.1
+    }
+    fn assign(self, out: &TokenStream, value: &TokenStream) -> TokenStream {
+        let row = index(self.0);
+        quote! { #out[#row] = #value; }
+    }
 }
 
-/// The body computing `roots` from `source`: their shared sub-expressions
-/// named in a scope of their own, and `assign(out, values)` writing the
-/// printed values into the output argument.
-fn body(
+impl Entry for (usize, usize, ExprId) {
+    fn expr(self) -> ExprId {
+        self.2
+    }
+    fn assign(self, out: &TokenStream, value: &TokenStream) -> TokenStream {
+        let (r, c) = (index(self.0), index(self.1));
+        quote! { #out[(#r, #c)] = #value; }
+    }
+}
+
+/// The body computing `entries` from `source`, which is named
+/// `source_name` in the signature: their shared sub-expressions named in a
+/// scope of their own, then one assignment per entry into the output
+/// argument `out_name`.
+pub fn body(
     names: &mut SymbolNames,
     arena: &Arena,
-    roots: &[ExprId],
+    entries: &[impl Entry],
     from: Source,
     source_name: &str,
     out_name: &str,
-    assign: impl FnOnce(&TokenStream, &[TokenStream]) -> Vec<TokenStream>,
 ) -> Body {
-    let code = names.code(arena, roots, from);
+    let roots: Vec<ExprId> = entries.iter().map(|e| e.expr()).collect();
+    let code = names.code(arena, &roots, from);
     let out = arg(true, out_name);
-    let assignments = assign(&out, &code.roots);
+    let assignments = assignments(&out, entries, &code.roots);
     Body {
         statements: code.statements(quote! { self.params }),
         assignments,
@@ -115,18 +92,15 @@ fn body(
     }
 }
 
-/// `out[(row, column)] = value;` for the entries and their printed values.
-pub fn cells(
+/// `out[…] = value;` for the entries and their printed values.
+pub fn assignments(
     out: &TokenStream,
-    entries: &[(usize, usize, ExprId)],
+    entries: &[impl Entry],
     values: &[TokenStream],
 ) -> Vec<TokenStream> {
     entries
         .iter()
         .zip(values)
-        .map(|(&(r, c, _), v)| {
-            let (r, c) = (index(r), index(c));
-            quote! { #out[(#r, #c)] = #v; }
-        })
+        .map(|(e, v)| e.assign(out, v))
         .collect()
 }

@@ -22,9 +22,9 @@ pub fn coefficient_code(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream
         })
     };
     let rates: Vec<_> = system.rhs.iter().copied().enumerate().collect();
-    let rhs = bodies::vector(names, arena, &rates, &from_f, "f", "df");
-    let jac = bodies::matrix(names, arena, &system.jacobian, &from_f, "f", "jac");
-    let tp = bodies::vector(names, arena, &system.time_partial, &from_f, "f", "dfdt");
+    let rhs = bodies::body(names, arena, &rates, &from_f, "f", "df");
+    let jac = bodies::body(names, arena, &system.jacobian, &from_f, "f", "jac");
+    let tp = bodies::body(names, arena, &system.time_partial, &from_f, "f", "dfdt");
     let (rhs_t, rhs_f, rhs_statements, rhs_rows) =
         (&rhs.t, &rhs.source, &rhs.statements, &rhs.assignments);
     let (jac_t, jac_f, jac_out, jac_statements, cells) = (

@@ -84,12 +84,12 @@ fn explicit(
         .map(|j| kernel.highest_row(j as u32))
         .collect();
     let rates: Vec<(usize, ExprId)> = rows.iter().copied().zip(e.rhs.iter().copied()).collect();
-    let rhs = bodies::vector(names, arena, &rates, from_x, "x", "dx");
+    let rhs = bodies::body(names, arena, &rates, from_x, "x", "dx");
     let (rhs_t, rhs_statements, rhs_rows) = (&rhs.t, &rhs.statements, &rhs.assignments);
-    let jac = bodies::matrix(names, arena, &e.jacobian, from_x, "x", "jac");
+    let jac = bodies::body(names, arena, &e.jacobian, from_x, "x", "jac");
     let (jac_t, jac_x, jac_statements, jac_cells) =
         (&jac.t, &jac.source, &jac.statements, &jac.assignments);
-    let tp = bodies::vector(names, arena, &e.time_partial, from_x, "x", "dxdt");
+    let tp = bodies::body(names, arena, &e.time_partial, from_x, "x", "dxdt");
     let (tp_t, tp_x, tp_out, tp_statements, tp_rows) =
         (&tp.t, &tp.source, &tp.out, &tp.statements, &tp.assignments);
     let rows: Vec<Literal> = rows.into_iter().map(index).collect();
@@ -101,7 +101,7 @@ fn explicit(
     let lin = names.code(arena, &both, from_x);
     let lin_statements = lin.statements(quote! { self.params });
     let (lin_rhs, lin_jac) = lin.roots.split_at(e.rhs.len());
-    let lin_cells = bodies::cells(&quote! { jac }, &e.jacobian, lin_jac);
+    let lin_cells = bodies::assignments(&quote! { jac }, &e.jacobian, lin_jac);
     let lin_t = lin.time_arg();
     quote! {
         fn rhs(&self, #rhs_t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
@@ -220,7 +220,7 @@ fn implicit(
         let code = names.code(arena, &roots, &from_xz);
         let statements = code.statements(quote! { self.params });
         let (residual, cells) = code.roots.split_at(i.residual.len());
-        let cells = bodies::cells(&quote! { g_z }, &i.g_z, cells);
+        let cells = bodies::assignments(&quote! { g_z }, &i.g_z, cells);
         let rows: Vec<Literal> = (0..residual.len()).map(index).collect();
         let t = code.time_arg();
         let uses_state = roots
