@@ -8,7 +8,7 @@ use crate::failure::Failure;
 use crate::method::{AnyStepper, Integrator, IntegratorChoice};
 use crate::model::DynModel;
 use crate::solver::{Report, Solver};
-use crate::stepper::Stepper;
+use crate::stepper::{Clocked, Stepper};
 use crate::system::ModelSystem;
 use crate::tolerance::{Stats, Tolerance};
 

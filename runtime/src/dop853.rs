@@ -9,10 +9,10 @@
 
 use crate::budget::Budget;
 use crate::controller::Controller;
-use crate::failure::{Failure, FailureKind};
-use crate::stepper::{ErrorMeasure, StepOutcome, Stepper};
+use crate::failure::Failure;
+use crate::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
 use crate::system::System;
-use crate::tolerance::{first_non_finite, initial_step, step_toward, underflows, Stats, Tolerance};
+use crate::tolerance::{first_non_finite, Tolerance};
 
 const STAGES: usize = 12;
 
@@ -315,7 +315,7 @@ fn hairer_combine(h: f64, n: usize, err3: f64, err5: f64) -> f64 {
 /// The DOP853 integrator at time `t` with state `y`.
 pub struct Dop853 {
     tol: Tolerance,
-    t: f64,
+    clock: Clock,
     y: Vec<f64>,
     /// Stages, `n` numbers each in one buffer (stage `j` at `j n`):
     /// `k[0] = X(t, y)` (first same as last), `k[1..12]` the stages of the
@@ -329,12 +329,7 @@ pub struct Dop853 {
     error3: Vec<f64>,
     error5: Vec<f64>,
     stage_state: Vec<f64>,
-    h: f64,
-    controller: Controller,
-    stats: Stats,
-    /// The last accepted step: its start, length and start state.
-    t_old: f64,
-    h_old: f64,
+    /// The last accepted step's start state.
     y_old: Vec<f64>,
     /// The continuous extension's coefficients (8 blocks of `n`), valid
     /// when `dense_ready`.
@@ -357,39 +352,18 @@ impl Dop853 {
         h0: Option<f64>,
     ) -> Result<Self, Failure> {
         let n = y0.len();
-        if let Some(i) = first_non_finite(y0) {
-            return Err(Failure::non_finite(t0, system.component_name(i)));
-        }
         let mut k = vec![0.0; (STAGES + 4) * n];
-        system.rhs(t0, y0, &mut k[..n])?;
-        if let Some(i) = first_non_finite(&k[..n]) {
-            return Err(Failure::non_finite_rate(t0, system.rate_name(i)));
-        }
-        let mut stats = Stats {
-            rhs_evaluations: 1,
-            ..Stats::default()
-        };
-        let h = match h0 {
-            Some(h) if h.is_finite() && h > 0.0 => h.min(h_max),
-            _ => {
-                stats.rhs_evaluations += 1;
-                initial_step(system, t0, y0, &k[..n], tol, 8, h_max)?
-            }
-        };
+        let controller = Controller::dop853();
+        let clock = Clock::start(system, t0, y0, &mut k[..n], tol, 8, h_max, h0, controller)?;
         Ok(Dop853 {
             tol,
-            t: t0,
+            clock,
             y: y0.to_vec(),
             k,
             y_trial: vec![0.0; n],
             error3: vec![0.0; n],
             error5: vec![0.0; n],
             stage_state: vec![0.0; n],
-            h,
-            controller: Controller::dop853(),
-            stats,
-            t_old: t0,
-            h_old: 0.0,
             y_old: y0.to_vec(),
             cont: vec![0.0; 8 * n],
             dense_ready: false,
@@ -416,18 +390,11 @@ impl Dop853 {
         let mut last_non_finite = false;
         let mut rate_broken: Option<usize> = None;
         loop {
-            budget.draw(self.t)?;
-            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
-            if underflows(self.t, h) && !reaches_limit {
-                return Err(if last_non_finite {
-                    let i = first_non_finite(&self.y_trial).unwrap_or(0);
-                    Failure::non_finite(self.t, system.component_name(i))
-                } else if let Some(i) = rate_broken {
-                    Failure::non_finite_rate(self.t, system.rate_name(i))
-                } else {
-                    Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h })
-                });
-            }
+            let (h, reaches_limit) = self.clock.attempt(t_limit, budget, |h| {
+                let component =
+                    last_non_finite.then(|| first_non_finite(&self.y_trial).unwrap_or(0));
+                stalled(system, self.clock.t, h, component, rate_broken)
+            })?;
             let fused = measure.hairer_tolerance();
             let (finite, fused_error) = self.attempt(system, h, fused)?;
             let err = if !finite {
@@ -436,7 +403,7 @@ impl Dop853 {
                 fused_error
             } else {
                 match measure.measure(
-                    self.t,
+                    self.clock.t,
                     h,
                     &self.y,
                     &self.y_trial,
@@ -444,10 +411,7 @@ impl Dop853 {
                     &self.error5,
                 ) {
                     Some(err) => err,
-                    None => {
-                        self.stats.rejected_steps += 1;
-                        return Ok(StepOutcome::Declined);
-                    }
+                    None => return Ok(self.clock.decline()),
                 }
             };
             if !finite {
@@ -456,8 +420,7 @@ impl Dop853 {
                 // defined (a force infinite at a finite state); retry
                 // shorter, and remember which, for the diagnosis should the
                 // step underflow.
-                self.stats.rejected_steps += 1;
-                self.h = self.controller.reject(h, f64::INFINITY);
+                self.clock.reject(h, f64::INFINITY);
                 match self.broken_rate(h) {
                     Some(i) => {
                         rate_broken = Some(i);
@@ -466,48 +429,33 @@ impl Dop853 {
                     None => last_non_finite = true,
                 }
             } else if err <= 1.0 {
-                let t_new = if reaches_limit { t_limit } else { self.t + h };
+                let t_new = self.clock.end(h, reaches_limit, t_limit);
                 // The slope at the step's end (kept in k[12] until the
                 // step is taken: it is the next step's first stage).
                 let n = self.y.len();
                 let end_slope = &mut self.k[12 * n..13 * n];
                 system.rhs(t_new, &self.y_trial, end_slope)?;
-                self.stats.rhs_evaluations += 1;
+                self.clock.stats.rhs_evaluations += 1;
                 if let Some(i) = first_non_finite(end_slope) {
-                    // The step ends where the rates are not defined (a
-                    // force infinite just ahead): retry shorter, so that
-                    // the motion stops at the boundary, not beyond it.
-                    self.stats.rejected_steps += 1;
-                    self.h = 0.25 * h;
+                    self.clock.reject_short(h);
                     rate_broken = Some(i);
                     last_non_finite = false;
                     continue;
                 }
-                let h_next = self.controller.accept(h, err);
+                let h_next = self.clock.controller.accept(h, err);
                 // y_old ← y ← y_trial without copying.
                 std::mem::swap(&mut self.y_old, &mut self.y);
                 std::mem::swap(&mut self.y, &mut self.y_trial);
-                self.t_old = self.t;
-                self.h_old = h;
-                self.t = t_new;
-                // A step cut short to land on `t_limit` says nothing against
-                // the longer step proposed before.
-                self.h = if reaches_limit {
-                    h_next.max(self.h)
-                } else {
-                    h_next
-                };
+                self.clock.accept(h, t_new, h_next, reaches_limit);
                 // k[0] becomes the new slope; X(t_old) moves to k[12] for
                 // the continuous extension.
                 let (start, rest) = self.k.split_at_mut(12 * n);
                 start[..n].swap_with_slice(&mut rest[..n]);
-                self.stats.accepted_steps += 1;
                 self.dense_ready = false;
                 self.test_stiffness(h);
                 return Ok(StepOutcome::Accepted);
             } else {
-                self.stats.rejected_steps += 1;
-                self.h = self.controller.reject(h, err);
+                self.clock.reject(h, err);
                 last_non_finite = false;
             }
         }
@@ -534,7 +482,7 @@ impl Dop853 {
             self.non_stiff_tests = 0;
             self.stiff_tests += 1;
             if self.stiff_tests >= STIFF_STEPS && self.stiffness_detected.is_none() {
-                self.stiffness_detected = Some(self.t);
+                self.stiffness_detected = Some(self.clock.t);
             }
         } else {
             self.non_stiff_tests += 1;
@@ -585,7 +533,7 @@ impl Dop853 {
         hairer: Option<Tolerance>,
     ) -> Result<(bool, f64), Failure> {
         let n = self.y.len();
-        let t = self.t;
+        let t = self.clock.t;
         let y = &self.y[..n];
         let k = &mut self.k[..];
         let ys = &mut self.stage_state[..n];
@@ -611,7 +559,7 @@ impl Dop853 {
         stage!(9, 7);
         stage!(10, 8);
         stage!(11, 9);
-        self.stats.rhs_evaluations += STAGES - 1;
+        self.clock.stats.rhs_evaluations += STAGES - 1;
         let ks: [&[f64]; STAGES] = std::array::from_fn(|j| &k[j * n..(j + 1) * n]);
         let y_trial = &mut self.y_trial[..n];
         let error3 = &mut self.error3[..n];
@@ -660,8 +608,8 @@ impl Dop853 {
         let (stages, extra) = self.k.split_at_mut(13 * n);
         continuous_extension(
             system,
-            self.t_old,
-            self.h_old,
+            self.clock.t_old,
+            self.clock.h_old,
             &self.y_old,
             &self.y,
             &FlatStages { data: stages, n },
@@ -669,7 +617,7 @@ impl Dop853 {
             &mut self.stage_state,
             &mut self.cont,
         )?;
-        self.stats.rhs_evaluations += 3;
+        self.clock.stats.rhs_evaluations += 3;
         self.dense_ready = true;
         Ok(())
     }
@@ -685,9 +633,9 @@ impl Dop853 {
 
     /// [`Dop853::raw_step`] into an existing value, reusing its storage.
     pub fn raw_step_into(&self, dst: &mut RawStep) {
-        dst.t_old = self.t_old;
-        dst.h = self.h_old;
-        dst.t_new = self.t;
+        dst.t_old = self.clock.t_old;
+        dst.h = self.clock.h_old;
+        dst.t_new = self.clock.t;
         dst.data.clear();
         dst.data.reserve(15 * self.y.len());
         dst.data.extend_from_slice(&self.y_old);
@@ -702,39 +650,27 @@ impl Dop853 {
             self.prepare_dense(system)?;
         }
         Ok(DenseStep::dop853(
-            self.t_old,
-            self.t,
-            self.h_old,
+            self.clock.t_old,
+            self.clock.t,
+            self.clock.h_old,
             self.cont.clone(),
         ))
     }
 }
 
-impl Stepper for Dop853 {
-    fn time(&self) -> f64 {
-        self.t
+impl Clocked for Dop853 {
+    fn clock(&self) -> &Clock {
+        &self.clock
     }
 
+    fn clock_mut(&mut self) -> &mut Clock {
+        &mut self.clock
+    }
+}
+
+impl Stepper for Dop853 {
     fn state(&self) -> &[f64] {
         &self.y
-    }
-
-    fn previous_time(&self) -> f64 {
-        self.t_old
-    }
-
-    fn stats(&self) -> Stats {
-        self.stats
-    }
-
-    fn proposed_step(&self) -> f64 {
-        self.h
-    }
-
-    fn propose_step(&mut self, h: f64) {
-        if h.is_finite() && h > 0.0 {
-            self.h = h;
-        }
     }
 
     fn stiffness_detected(&self) -> Option<f64> {
@@ -759,7 +695,7 @@ impl Stepper for Dop853 {
         out: &mut [f64],
     ) -> Result<(), Failure> {
         let n = self.y.len();
-        let step = (self.t_old, self.t, self.h_old);
+        let step = self.clock.last_step();
         if let Some(end) = crate::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
             out.copy_from_slice(end);
             return Ok(());
@@ -767,7 +703,12 @@ impl Stepper for Dop853 {
         if !self.dense_ready {
             self.prepare_dense(system)?;
         }
-        contd8(&self.cont, n, (t - self.t_old) / self.h_old, out);
+        contd8(
+            &self.cont,
+            n,
+            (t - self.clock.t_old) / self.clock.h_old,
+            out,
+        );
         Ok(())
     }
 }

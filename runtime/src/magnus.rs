@@ -18,8 +18,8 @@ use crate::budget::Budget;
 use crate::controller::Controller;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{expm, Matrix};
-use crate::stepper::{ErrorMeasure, StepOutcome};
-use crate::tolerance::{first_non_finite, step_toward, underflows, Stats};
+use crate::stepper::{Clock, Clocked, ErrorMeasure, StepOutcome};
+use crate::tolerance::{first_non_finite, Stats};
 
 /// Offset of the two Gauss–Legendre nodes from the midpoint, in units of `h`.
 const GAUSS_OFFSET: f64 = 0.288_675_134_594_812_9; // √3/6
@@ -35,54 +35,37 @@ pub trait LinearGenerator {
 }
 
 pub struct Magnus {
-    t: f64,
+    clock: Clock,
     y: Vec<f64>,
-    t_old: f64,
-    h_old: f64,
     y_old: Vec<f64>,
-    h: f64,
-    controller: Controller,
-    stats: Stats,
+}
+
+impl Clocked for Magnus {
+    fn clock(&self) -> &Clock {
+        &self.clock
+    }
+
+    fn clock_mut(&mut self) -> &mut Clock {
+        &mut self.clock
+    }
 }
 
 impl Magnus {
     pub fn new(t0: f64, y0: &[f64], h0: f64) -> Magnus {
         Magnus {
-            t: t0,
+            clock: Clock::new(
+                t0,
+                h0,
+                Controller::new(4.0, 0.08, 0.2, 5.0),
+                Stats::default(),
+            ),
             y: y0.to_vec(),
-            t_old: t0,
-            h_old: 0.0,
             y_old: y0.to_vec(),
-            h: h0,
-            controller: Controller::new(4.0, 0.08, 0.2, 5.0),
-            stats: Stats::default(),
         }
-    }
-
-    pub fn time(&self) -> f64 {
-        self.t
-    }
-
-    pub fn previous_time(&self) -> f64 {
-        self.t_old
     }
 
     pub fn state(&self) -> &[f64] {
         &self.y
-    }
-
-    pub fn stats(&self) -> Stats {
-        self.stats
-    }
-
-    pub fn proposed_step(&self) -> f64 {
-        self.h
-    }
-
-    pub fn propose_step(&mut self, h: f64) {
-        if h.is_finite() && h > 0.0 {
-            self.h = h;
-        }
     }
 
     /// `exp(Ω)` over `[t, t + h]`.
@@ -98,7 +81,7 @@ impl Magnus {
         let mut b2 = Matrix::zeros(m, m);
         system.generator(mid - GAUSS_OFFSET * h, &mut b1)?;
         system.generator(mid + GAUSS_OFFSET * h, &mut b2)?;
-        self.stats.rhs_evaluations += 2;
+        self.clock.stats.rhs_evaluations += 2;
         let commutator = {
             let mut c = b2.mul(&b1);
             let d = b1.mul(&b2);
@@ -112,7 +95,7 @@ impl Magnus {
             *o = 0.5 * h * (b1.as_slice()[i] + b2.as_slice()[i])
                 + COMMUTATOR_WEIGHT * h * h * commutator.as_slice()[i];
         }
-        self.stats.matrix_exponentials += 1;
+        self.clock.stats.matrix_exponentials += 1;
         Ok(expm(&omega))
     }
 
@@ -127,21 +110,16 @@ impl Magnus {
     ) -> Result<StepOutcome, Failure> {
         let m = system.order();
         loop {
-            budget.draw(self.t)?;
-            let (h, reaches) = step_toward(self.t, self.h, t_limit);
-            if underflows(self.t, h) && !reaches {
-                return Err(Failure::new(
-                    self.t,
-                    FailureKind::StepSizeUnderflow { step: h },
-                ));
-            }
+            let (h, reaches) = self.clock.attempt(t_limit, budget, |h| {
+                Failure::new(self.clock.t, FailureKind::StepSizeUnderflow { step: h })
+            })?;
             let apply = |p: &Matrix, y: &[f64]| -> Vec<f64> {
                 let yy = Matrix::from_column_major(m, y.len() / m, y.to_vec());
                 p.mul(&yy).as_slice().to_vec()
             };
-            let full = self.propagator(system, self.t, h)?;
-            let first = self.propagator(system, self.t, 0.5 * h)?;
-            let second = self.propagator(system, self.t + 0.5 * h, 0.5 * h)?;
+            let full = self.propagator(system, self.clock.t, h)?;
+            let first = self.propagator(system, self.clock.t, 0.5 * h)?;
+            let second = self.propagator(system, self.clock.t + 0.5 * h, 0.5 * h)?;
             let y_full = apply(&full, &self.y);
             let y_half = apply(&second, &apply(&first, &self.y));
             let estimate: Vec<f64> = y_half
@@ -154,26 +132,19 @@ impl Magnus {
             let error = if first_non_finite(&y_new).is_some() {
                 f64::INFINITY
             } else {
-                match measure.measure(self.t, h, &self.y, &y_new, &per_unit, &per_unit) {
+                match measure.measure(self.clock.t, h, &self.y, &y_new, &per_unit, &per_unit) {
                     Some(e) => e,
-                    None => {
-                        self.stats.rejected_steps += 1;
-                        return Ok(StepOutcome::Declined);
-                    }
+                    None => return Ok(self.clock.decline()),
                 }
             };
             if error <= 1.0 {
-                let h_next = self.controller.accept(h, error);
+                let h_next = self.clock.controller.accept(h, error);
                 self.y_old = std::mem::replace(&mut self.y, y_new);
-                self.t_old = self.t;
-                self.h_old = h;
-                self.t = if reaches { t_limit } else { self.t + h };
-                self.h = if reaches { h_next.max(self.h) } else { h_next };
-                self.stats.accepted_steps += 1;
+                let t_new = self.clock.end(h, reaches, t_limit);
+                self.clock.accept(h, t_new, h_next, reaches);
                 return Ok(StepOutcome::Accepted);
             }
-            self.stats.rejected_steps += 1;
-            self.h = self.controller.reject(h, error);
+            self.clock.reject(h, error);
         }
     }
 
@@ -185,13 +156,13 @@ impl Magnus {
         t: f64,
         out: &mut [f64],
     ) -> Result<(), Failure> {
-        let step = (self.t_old, self.t, self.h_old);
+        let step = self.clock.last_step();
         if let Some(end) = crate::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
             out.copy_from_slice(end);
             return Ok(());
         }
         let m = system.order();
-        let p = self.propagator(system, self.t_old, t - self.t_old)?;
+        let p = self.propagator(system, self.clock.t_old, t - self.clock.t_old)?;
         let yy = Matrix::from_column_major(m, self.y_old.len() / m, self.y_old.clone());
         out.copy_from_slice(p.mul(&yy).as_slice());
         Ok(())

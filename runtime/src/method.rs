@@ -4,9 +4,9 @@ use crate::budget::Budget;
 use crate::dop853::Dop853;
 use crate::failure::Failure;
 use crate::rodas4::Rodas4;
-use crate::stepper::Stepper;
+use crate::stepper::{Clock, Clocked, Stepper};
 use crate::system::System;
-use crate::tolerance::{Stats, Tolerance};
+use crate::tolerance::Tolerance;
 
 /// Which one-step method integrates a system.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -144,29 +144,19 @@ macro_rules! each {
     };
 }
 
-impl Stepper for AnyStepper {
-    fn time(&self) -> f64 {
-        each!(self, s => s.time())
+impl Clocked for AnyStepper {
+    fn clock(&self) -> &Clock {
+        each!(self, s => s.clock())
     }
 
+    fn clock_mut(&mut self) -> &mut Clock {
+        each!(self, s => s.clock_mut())
+    }
+}
+
+impl Stepper for AnyStepper {
     fn state(&self) -> &[f64] {
         each!(self, s => s.state())
-    }
-
-    fn previous_time(&self) -> f64 {
-        each!(self, s => s.previous_time())
-    }
-
-    fn stats(&self) -> Stats {
-        each!(self, s => s.stats())
-    }
-
-    fn proposed_step(&self) -> f64 {
-        each!(self, s => s.proposed_step())
-    }
-
-    fn propose_step(&mut self, h: f64) {
-        each!(self, s => s.propose_step(h))
     }
 
     fn step<S: System + ?Sized>(

@@ -11,13 +11,13 @@
 
 use crate::budget::Budget;
 use crate::controller::Controller;
-use crate::failure::{Failure, FailureKind};
+use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
-use crate::stepper::{DenseKind, DenseStep, ErrorMeasure, StepOutcome, Stepper};
-use crate::system::System;
-use crate::tolerance::{
-    first_non_finite, initial_step, rms_norm, step_toward, underflows, Stats, Tolerance,
+use crate::stepper::{
+    stalled, Clock, Clocked, DenseKind, DenseStep, ErrorMeasure, StepOutcome, Stepper,
 };
+use crate::system::System;
+use crate::tolerance::{first_non_finite, rms_norm, Tolerance};
 
 const GAMMA: f64 = 0.25;
 const ALPHA: [f64; 6] = [0.0, 0.386, 0.21, 0.63, 1.0, 1.0];
@@ -111,22 +111,17 @@ const D3: [f64; 5] = [
 /// The RODAS4 integrator at time `t` with state `y`.
 pub struct Rodas4 {
     tol: Tolerance,
-    t: f64,
+    clock: Clock,
     y: Vec<f64>,
     /// `X(t, y)`.
     slope: Vec<f64>,
-    h: f64,
-    controller: Controller,
-    stats: Stats,
     /// Scratch: the stage increments of the last attempt.
     k: Vec<Vec<f64>>,
     y_new: Vec<f64>,
     jacobian: Matrix,
     time_partial: Vec<f64>,
-    /// The last accepted step: start, length, start state, and the
-    /// continuous extension's two coefficient vectors.
-    t_old: f64,
-    h_old: f64,
+    /// The last accepted step's start state and the continuous
+    /// extension's two coefficient vectors.
     y_old: Vec<f64>,
     dense_d2: Vec<f64>,
     dense_d3: Vec<f64>,
@@ -150,39 +145,18 @@ impl Rodas4 {
         h0: Option<f64>,
     ) -> Result<Self, Failure> {
         let n = y0.len();
-        if let Some(i) = first_non_finite(y0) {
-            return Err(Failure::non_finite(t0, system.component_name(i)));
-        }
         let mut slope = vec![0.0; n];
-        system.rhs(t0, y0, &mut slope)?;
-        if let Some(i) = first_non_finite(&slope) {
-            return Err(Failure::non_finite_rate(t0, system.rate_name(i)));
-        }
-        let mut stats = Stats {
-            rhs_evaluations: 1,
-            ..Stats::default()
-        };
-        let h = match h0 {
-            Some(h) if h.is_finite() && h > 0.0 => h.min(h_max),
-            _ => {
-                stats.rhs_evaluations += 1;
-                initial_step(system, t0, y0, &slope, tol, 4, h_max)?
-            }
-        };
+        let controller = Controller::rodas4();
+        let clock = Clock::start(system, t0, y0, &mut slope, tol, 4, h_max, h0, controller)?;
         Ok(Rodas4 {
             tol,
-            t: t0,
+            clock,
             y: y0.to_vec(),
             slope,
-            h,
-            controller: Controller::rodas4(),
-            stats,
             k: vec![vec![0.0; n]; 6],
             y_new: vec![0.0; n],
             jacobian: Matrix::zeros(n, n),
             time_partial: vec![0.0; n],
-            t_old: t0,
-            h_old: 0.0,
             y_old: y0.to_vec(),
             dense_d2: vec![0.0; n],
             dense_d3: vec![0.0; n],
@@ -199,7 +173,7 @@ impl Rodas4 {
             iteration[(j, j)] += 1.0 / (GAMMA * h);
         }
         let lu = Lu::in_place(iteration);
-        self.stats.lu_decompositions += 1;
+        self.clock.stats.lu_decompositions += 1;
         if lu.is_singular() {
             return Ok(Attempt::Broken { component: 0 });
         }
@@ -214,8 +188,8 @@ impl Rodas4 {
                     }
                     stage_state[i] = v;
                 }
-                system.rhs(self.t + ALPHA[s] * h, &stage_state, &mut stage_slope)?;
-                self.stats.rhs_evaluations += 1;
+                system.rhs(self.clock.t + ALPHA[s] * h, &stage_state, &mut stage_slope)?;
+                self.clock.stats.rhs_evaluations += 1;
             }
             let mut right = stage_slope.clone();
             for i in 0..n {
@@ -273,25 +247,17 @@ impl Rodas4 {
         measure: &mut E,
     ) -> Result<StepOutcome, Failure> {
         self.jacobian.fill(0.0);
-        system.jacobian(self.t, &self.y, &mut self.jacobian)?;
+        system.jacobian(self.clock.t, &self.y, &mut self.jacobian)?;
         self.time_partial.fill(0.0);
-        system.time_partial(self.t, &self.y, &mut self.time_partial)?;
-        self.stats.jacobian_evaluations += 1;
+        system.time_partial(self.clock.t, &self.y, &mut self.time_partial)?;
+        self.clock.stats.jacobian_evaluations += 1;
         let mut broken: Option<usize> = None;
         let mut rate_broken: Option<usize> = None;
         let mut estimate = vec![0.0; self.y.len()];
         loop {
-            budget.draw(self.t)?;
-            let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
-            if underflows(self.t, h) && !reaches_limit {
-                return Err(match (broken, rate_broken) {
-                    (Some(i), _) => Failure::non_finite(self.t, system.component_name(i)),
-                    (None, Some(i)) => Failure::non_finite_rate(self.t, system.rate_name(i)),
-                    (None, None) => {
-                        Failure::new(self.t, FailureKind::StepSizeUnderflow { step: h })
-                    }
-                });
-            }
+            let (h, reaches_limit) = self.clock.attempt(t_limit, budget, |h| {
+                stalled(system, self.clock.t, h, broken, rate_broken)
+            })?;
             let error = match self.attempt(system, h)? {
                 Attempt::Broken { component } => {
                     broken = Some(component);
@@ -302,17 +268,21 @@ impl Rodas4 {
                     for (e, k) in estimate.iter_mut().zip(&self.k[5]) {
                         *e = k / h;
                     }
-                    match measure.measure(self.t, h, &self.y, &self.y_new, &estimate, &estimate) {
+                    match measure.measure(
+                        self.clock.t,
+                        h,
+                        &self.y,
+                        &self.y_new,
+                        &estimate,
+                        &estimate,
+                    ) {
                         Some(error) => error,
-                        None => {
-                            self.stats.rejected_steps += 1;
-                            return Ok(StepOutcome::Declined);
-                        }
+                        None => return Ok(self.clock.decline()),
                     }
                 }
             };
             if error <= 1.0 {
-                let h_next = self.controller.accept(h, error);
+                let h_next = self.clock.controller.accept(h, error);
                 for i in 0..self.y.len() {
                     let mut d2 = 0.0;
                     let mut d3 = 0.0;
@@ -323,43 +293,30 @@ impl Rodas4 {
                     self.dense_d2[i] = d2;
                     self.dense_d3[i] = d3;
                 }
-                let t_new = if reaches_limit { t_limit } else { self.t + h };
+                let t_new = self.clock.end(h, reaches_limit, t_limit);
                 system.rhs(t_new, &self.y_new, &mut estimate)?;
-                self.stats.rhs_evaluations += 1;
+                self.clock.stats.rhs_evaluations += 1;
                 if let Some(i) = first_non_finite(&estimate) {
-                    // The step ends where the rates are not defined (a
-                    // force infinite just ahead): retry shorter, so that
-                    // the motion stops at the boundary, not beyond it.
-                    self.stats.rejected_steps += 1;
-                    self.h = 0.25 * h;
+                    self.clock.reject_short(h);
                     rate_broken = Some(i);
                     continue;
                 }
                 self.slope.copy_from_slice(&estimate);
                 self.y_old.copy_from_slice(&self.y);
                 std::mem::swap(&mut self.y, &mut self.y_new);
-                self.t_old = self.t;
-                self.h_old = h;
-                self.t = t_new;
-                self.h = if reaches_limit {
-                    h_next.max(self.h)
-                } else {
-                    h_next
-                };
-                self.stats.accepted_steps += 1;
+                self.clock.accept(h, t_new, h_next, reaches_limit);
                 return Ok(StepOutcome::Accepted);
             }
-            self.stats.rejected_steps += 1;
-            self.h = self.controller.reject(h, error);
+            self.clock.reject(h, error);
         }
     }
 
     /// The last accepted step's continuous extension, detached.
     pub fn dense_step(&self) -> DenseStep {
         DenseStep {
-            t_old: self.t_old,
-            t_new: self.t,
-            h: self.h_old,
+            t_old: self.clock.t_old,
+            t_new: self.clock.t,
+            h: self.clock.h_old,
             kind: DenseKind::Rodas4 {
                 y_old: self.y_old.clone(),
                 y: self.y.clone(),
@@ -385,31 +342,19 @@ pub(crate) fn eval_dense(
     }
 }
 
-impl Stepper for Rodas4 {
-    fn time(&self) -> f64 {
-        self.t
+impl Clocked for Rodas4 {
+    fn clock(&self) -> &Clock {
+        &self.clock
     }
 
+    fn clock_mut(&mut self) -> &mut Clock {
+        &mut self.clock
+    }
+}
+
+impl Stepper for Rodas4 {
     fn state(&self) -> &[f64] {
         &self.y
-    }
-
-    fn previous_time(&self) -> f64 {
-        self.t_old
-    }
-
-    fn stats(&self) -> Stats {
-        self.stats
-    }
-
-    fn proposed_step(&self) -> f64 {
-        self.h
-    }
-
-    fn propose_step(&mut self, h: f64) {
-        if h.is_finite() && h > 0.0 {
-            self.h = h;
-        }
     }
 
     fn step<S: System + ?Sized>(
@@ -429,12 +374,12 @@ impl Stepper for Rodas4 {
         t: f64,
         out: &mut [f64],
     ) -> Result<(), Failure> {
-        let step = (self.t_old, self.t, self.h_old);
+        let step = self.clock.last_step();
         if let Some(end) = crate::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
             out.copy_from_slice(end);
             return Ok(());
         }
-        let s = (t - self.t_old) / self.h_old;
+        let s = (t - self.clock.t_old) / self.clock.h_old;
         eval_dense(&self.y_old, &self.y, &self.dense_d2, &self.dense_d3, s, out);
         Ok(())
     }

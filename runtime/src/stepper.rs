@@ -1,23 +1,196 @@
 //! The interface of a one-step integrator with dense output.
 
 use crate::budget::Budget;
-use crate::failure::Failure;
+use crate::controller::Controller;
+use crate::failure::{Failure, FailureKind};
 use crate::system::System;
-use crate::tolerance::Stats;
+use crate::tolerance::{first_non_finite, initial_step, step_toward, underflows, Stats, Tolerance};
+
+/// Where a one-step integrator is and how long its next step is: the
+/// bookkeeping DOP853, RODAS4 and Magnus-4 share, with their step-size
+/// controller and counts.
+#[derive(Clone, Debug)]
+pub struct Clock {
+    pub t: f64,
+    /// The last accepted step's start and length (`h_old == 0` before the
+    /// first).
+    pub t_old: f64,
+    pub h_old: f64,
+    /// The length the next step will try.
+    pub h: f64,
+    pub controller: Controller,
+    pub stats: Stats,
+}
+
+impl Clock {
+    /// At `t0`, about to try a step of length `h`.
+    pub fn new(t0: f64, h: f64, controller: Controller, stats: Stats) -> Clock {
+        Clock {
+            t: t0,
+            t_old: t0,
+            h_old: 0.0,
+            h,
+            controller,
+            stats,
+        }
+    }
+
+    /// The start of an integration at `(t0, y0)` by a method of order
+    /// `order`: the state and its rate `slope = X(t0, y0)` checked finite,
+    /// and the first step `h0` when given (at most `h_max`), else Hairer's
+    /// guess.
+    #[allow(clippy::too_many_arguments)]
+    pub fn start<S: System + ?Sized>(
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        slope: &mut [f64],
+        tol: Tolerance,
+        order: i32,
+        h_max: f64,
+        h0: Option<f64>,
+        controller: Controller,
+    ) -> Result<Clock, Failure> {
+        if let Some(i) = first_non_finite(y0) {
+            return Err(Failure::non_finite(t0, system.component_name(i)));
+        }
+        system.rhs(t0, y0, slope)?;
+        if let Some(i) = first_non_finite(slope) {
+            return Err(Failure::non_finite_rate(t0, system.rate_name(i)));
+        }
+        let mut stats = Stats {
+            rhs_evaluations: 1,
+            ..Stats::default()
+        };
+        let h = match h0 {
+            Some(h) if h.is_finite() && h > 0.0 => h.min(h_max),
+            _ => {
+                stats.rhs_evaluations += 1;
+                initial_step(system, t0, y0, slope, tol, order, h_max)?
+            }
+        };
+        Ok(Clock::new(t0, h, controller, stats))
+    }
+
+    /// The next attempt toward `t_limit`, drawn from `budget`: its length
+    /// and whether it lands on `t_limit`; `stalled(length)` is the failure
+    /// when the step underflows short of the limit.
+    pub fn attempt(
+        &self,
+        t_limit: f64,
+        budget: &Budget,
+        stalled: impl FnOnce(f64) -> Failure,
+    ) -> Result<(f64, bool), Failure> {
+        budget.draw(self.t)?;
+        let (h, reaches_limit) = step_toward(self.t, self.h, t_limit);
+        if underflows(self.t, h) && !reaches_limit {
+            return Err(stalled(h));
+        }
+        Ok((h, reaches_limit))
+    }
+
+    /// Where an attempt of length `h` ends: exactly on `t_limit` when it
+    /// reaches it.
+    pub fn end(&self, h: f64, reaches_limit: bool, t_limit: f64) -> f64 {
+        if reaches_limit {
+            t_limit
+        } else {
+            self.t + h
+        }
+    }
+
+    /// Takes the accepted step of length `h` to `t_new`; the next tries
+    /// `h_next`, or what was proposed before if longer when the step was
+    /// cut short to land on the limit (that says nothing against it).
+    pub fn accept(&mut self, h: f64, t_new: f64, h_next: f64, reaches_limit: bool) {
+        self.t_old = self.t;
+        self.h_old = h;
+        self.t = t_new;
+        self.h = if reaches_limit {
+            h_next.max(self.h)
+        } else {
+            h_next
+        };
+        self.stats.accepted_steps += 1;
+    }
+
+    /// Rejects an attempt of length `h` with scaled error `err` (infinite
+    /// when the attempt was not finite).
+    pub fn reject(&mut self, h: f64, err: f64) {
+        self.stats.rejected_steps += 1;
+        self.h = self.controller.reject(h, err);
+    }
+
+    /// Rejects an attempt of length `h` that ended where the rates are not
+    /// defined (a force infinite just ahead): a quarter of it next, so that
+    /// the motion stops at the boundary, not beyond it.
+    pub fn reject_short(&mut self, h: f64) {
+        self.stats.rejected_steps += 1;
+        self.h = 0.25 * h;
+    }
+
+    /// The measure declined the attempt (counted as a rejection; nothing
+    /// else changes).
+    pub fn decline(&mut self) -> StepOutcome {
+        self.stats.rejected_steps += 1;
+        StepOutcome::Declined
+    }
+
+    /// The last step as [`outside_last_step`] takes it.
+    pub fn last_step(&self) -> (f64, f64, f64) {
+        (self.t_old, self.t, self.h_old)
+    }
+}
+
+/// The failure of a step that underflowed at `t` with length `h`: a
+/// component that turned non-finite, else a rate that did, else the step
+/// size itself.
+pub fn stalled<S: System + ?Sized>(
+    system: &S,
+    t: f64,
+    h: f64,
+    component: Option<usize>,
+    rate: Option<usize>,
+) -> Failure {
+    match (component, rate) {
+        (Some(i), _) => Failure::non_finite(t, system.component_name(i)),
+        (None, Some(i)) => Failure::non_finite_rate(t, system.rate_name(i)),
+        (None, None) => Failure::new(t, FailureKind::StepSizeUnderflow { step: h }),
+    }
+}
+
+/// An integrator with a [`Clock`]: its time, last step and proposed step.
+pub trait Clocked {
+    fn clock(&self) -> &Clock;
+    fn clock_mut(&mut self) -> &mut Clock;
+
+    fn time(&self) -> f64 {
+        self.clock().t
+    }
+    /// The time at which the last accepted step started.
+    fn previous_time(&self) -> f64 {
+        self.clock().t_old
+    }
+    fn stats(&self) -> Stats {
+        self.clock().stats
+    }
+    /// The length the next step will try.
+    fn proposed_step(&self) -> f64 {
+        self.clock().h
+    }
+    /// Replaces the next step's length (e.g. the one that worked before a
+    /// restart); ignored unless finite and positive.
+    fn propose_step(&mut self, h: f64) {
+        if h.is_finite() && h > 0.0 {
+            self.clock_mut().h = h;
+        }
+    }
+}
 
 /// A one-step integrator holding its current time and state, and the dense
 /// output of its last step.
-pub trait Stepper {
-    fn time(&self) -> f64;
+pub trait Stepper: Clocked {
     fn state(&self) -> &[f64];
-    /// The time at which the last accepted step started.
-    fn previous_time(&self) -> f64;
-    fn stats(&self) -> Stats;
-    /// The length the next step will try.
-    fn proposed_step(&self) -> f64;
-    /// Replaces the next step's length (e.g. the one that worked before a
-    /// restart).
-    fn propose_step(&mut self, h: f64);
 
     /// Takes one accepted step that does not pass `t_limit` (landing on it
     /// exactly when it is reached), drawing every attempt from `budget`.

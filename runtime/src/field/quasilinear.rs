@@ -32,7 +32,7 @@ use crate::method::{AnyStepper, Integrator};
 use crate::model::DynModel;
 use crate::solver::{Report, Solver};
 use crate::stepper::DenseStep;
-use crate::stepper::Stepper;
+use crate::stepper::{Clocked, Stepper};
 use crate::system::ModelSystem;
 use crate::tolerance::{underflows, Stats, Tolerance};
 use std::cell::{Cell, RefCell};

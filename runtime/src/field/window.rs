@@ -20,7 +20,7 @@ use crate::linalg::Matrix;
 use crate::magnus::{LinearGenerator, Magnus};
 use crate::rodas4::Rodas4;
 use crate::solution::Segment;
-use crate::stepper::{DenseStep, ErrorMeasure, StepOutcome, Stepper};
+use crate::stepper::{Clocked, DenseStep, ErrorMeasure, StepOutcome, Stepper};
 use crate::tolerance::{Stats, Tolerance};
 
 /// The free anchor values `c_2..c_N` used at every (re-)anchoring.
@@ -426,11 +426,7 @@ impl Window {
     }
 
     pub fn propose_step(&mut self, h: f64) {
-        match &mut self.stepper {
-            WindowStepper::Explicit(s) => s.propose_step(h),
-            WindowStepper::Stiff(s) => s.propose_step(h),
-            WindowStepper::Magnus(s) => s.propose_step(h),
-        }
+        each!(&mut self.stepper, s => s.propose_step(h))
     }
 
     pub fn stats(&self) -> Stats {
@@ -462,11 +458,7 @@ impl Window {
         // ending the window, whose fresh start costs more.
         if outcome == StepOutcome::Declined && self.steps > 0 {
             let h = 0.25 * (measure_step_length(&self.stepper));
-            match &mut self.stepper {
-                WindowStepper::Explicit(s) => s.propose_step(h),
-                WindowStepper::Stiff(s) => s.propose_step(h),
-                WindowStepper::Magnus(s) => s.propose_step(h),
-            }
+            each!(&mut self.stepper, s => s.propose_step(h));
             outcome = each_system!(&mut self.stepper, system, s, sys => s.step_measured(sys, t_limit, budget, &mut measure))?;
         }
         self.declined = measure.declined;
