@@ -47,6 +47,16 @@ pub fn affine_jacobian<M: Model>(
     Ok(())
 }
 
+/// Each value given, else its default: the parameters from their
+/// overrides, the initial state from the values given.
+pub fn given_or(given: &[Option<f64>], defaults: &[f64]) -> Vec<f64> {
+    defaults
+        .iter()
+        .enumerate()
+        .map(|(i, &d)| given.get(i).copied().flatten().unwrap_or(d))
+        .collect()
+}
+
 fn affine_parts<M: Model>(model: &M, t: f64) -> Result<(Matrix, Vec<f64>), Failure> {
     let n = M::STATE.len();
     let mut a = Matrix::zeros(n, n);
@@ -75,7 +85,7 @@ impl Model for Oscillator {
     const EXACT: bool = true;
 
     fn parameters(overrides: &[Option<f64>]) -> Vec<f64> {
-        vec![overrides[0].unwrap_or(2.0), overrides[1].unwrap_or(10.0)]
+        given_or(overrides, &[2.0, 10.0])
     }
     fn new(params: &[f64]) -> Self {
         Oscillator {
@@ -89,7 +99,7 @@ impl Model for Oscillator {
         (0.0, self.params[1])
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
-        Ok(vec![given[0].unwrap_or(1.0), given[1].unwrap_or(0.0)])
+        Ok(given_or(given, &[1.0, 0.0]))
     }
     fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         let w = self.params[0];
@@ -147,7 +157,7 @@ impl Model for MassLossPendulum {
         (0.0, 10.0)
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
-        Ok(vec![given[0].unwrap_or(1.0), given[1].unwrap_or(0.0)])
+        Ok(given_or(given, &[1.0, 0.0]))
     }
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         dx[0] = x[1];
@@ -190,7 +200,7 @@ impl Model for SphericalPendulum {
     const INITIAL: &'static [Initial] = &[Initial::Given; 4];
 
     fn parameters(overrides: &[Option<f64>]) -> Vec<f64> {
-        vec![overrides.first().copied().flatten().unwrap_or(10.0)]
+        given_or(overrides, &[10.0])
     }
     fn new(params: &[f64]) -> Self {
         SphericalPendulum {
@@ -204,8 +214,7 @@ impl Model for SphericalPendulum {
         (0.0, self.params[0])
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
-        let d = [1.0, 0.0, 0.0, 2.0];
-        Ok((0..4).map(|i| given[i].unwrap_or(d[i])).collect())
+        Ok(given_or(given, &[1.0, 0.0, 0.0, 2.0]))
     }
     fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         let (th, thd, phd) = (x[0], x[2], x[3]);
@@ -278,7 +287,7 @@ impl Model for StiffDamped {
         (0.0, 2.0)
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
-        Ok(vec![given[0].unwrap_or(1.0), given[1].unwrap_or(0.0)])
+        Ok(given_or(given, &[1.0, 0.0]))
     }
     fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         dx[0] = x[1];
@@ -378,7 +387,7 @@ impl Model for ThrownBall {
         (0.0, 10.0)
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
-        Ok(vec![given[0].unwrap_or(0.0), given[1].unwrap_or(Self::V0)])
+        Ok(given_or(given, &[0.0, Self::V0]))
     }
     fn set_regime(&mut self, regime: &lagc_runtime::model::Regime) {
         self.rising = regime.branches[0];
@@ -467,7 +476,7 @@ impl Model for KnifeEdge {
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
         let e = Self::exact_at(0.0);
-        let mut x: Vec<f64> = (0..6).map(|i| given[i].unwrap_or(e[i])).collect();
+        let mut x = given_or(given, &e[..6]);
         x[4] = x[2].tan() * x[3];
         Ok(x)
     }
@@ -566,7 +575,7 @@ impl Model for DoublePendulum {
     const INITIAL: &'static [Initial] = &[Initial::Given; 4];
 
     fn parameters(overrides: &[Option<f64>]) -> Vec<f64> {
-        vec![overrides.first().copied().flatten().unwrap_or(10.0)]
+        given_or(overrides, &[10.0])
     }
     fn new(params: &[f64]) -> Self {
         DoublePendulum {
@@ -580,8 +589,7 @@ impl Model for DoublePendulum {
         (0.0, self.params[0])
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
-        let d = [1.0, 0.5, 0.0, 0.0];
-        Ok((0..4).map(|i| given[i].unwrap_or(d[i])).collect())
+        Ok(given_or(given, &[1.0, 0.5, 0.0, 0.0]))
     }
     fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         let (z, _, _) = Self::accelerations(x);
@@ -668,7 +676,7 @@ impl Model for VanishingMass {
         (0.0, 12.0)
     }
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
-        Ok(vec![given[0].unwrap_or(1.0), given[1].unwrap_or(0.0)])
+        Ok(given_or(given, &[1.0, 0.0]))
     }
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         dx[0] = x[1];
