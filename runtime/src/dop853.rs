@@ -402,6 +402,7 @@ impl Dop853 {
             } else if fused.is_some() {
                 fused_error
             } else {
+                self.clock.controller.end_ramp();
                 match measure.measure(
                     self.clock.t,
                     h,

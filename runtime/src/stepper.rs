@@ -62,11 +62,12 @@ impl Clock {
             rhs_evaluations: 1,
             ..Stats::default()
         };
-        let h = match h0 {
-            Some(h) if h.is_finite() && h > 0.0 => h.min(h_max),
+        let (h, controller) = match h0 {
+            Some(h) if h.is_finite() && h > 0.0 => (h.min(h_max), controller),
             _ => {
                 stats.rhs_evaluations += 1;
-                initial_step(system, t0, y0, slope, tol, order, h_max)?
+                let guess = initial_step(system, t0, y0, slope, tol, order, h_max)?;
+                (guess, controller.guessed_start())
             }
         };
         Ok(Clock::new(t0, h, controller, stats))
