@@ -41,7 +41,12 @@ pub enum FailureKind {
     /// determinant changed sign) after `since`, with re-anchoring off.
     ConditionMatrixCrossedSingularity { since: f64 },
     /// The run used its whole work budget (`steps` steps of every kind).
-    StepBudgetExhausted { steps: usize },
+    StepBudgetExhausted {
+        steps: usize,
+        /// The time the run had reached with half the budget left, when
+        /// the steps since then hardly moved it.
+        stalled_since: Option<f64>,
+    },
     /// Newton's method for the highest derivatives did not converge.
     NewtonNonConvergence { residual: f64, iterations: usize },
     /// The field method's quasilinearisation did not converge on a window
@@ -150,7 +155,22 @@ impl fmt::Display for Failure {
                  after t = {since:e} (its determinant changed sign) and re-anchoring \
                  was off"
             ),
-            FailureKind::StepBudgetExhausted { steps } => write!(
+            FailureKind::StepBudgetExhausted {
+                steps,
+                stalled_since: Some(since),
+            } => write!(
+                f,
+                "at t = {t:e}: the work budget is exhausted ({steps} steps), and its \
+                 second half moved the time only from t = {since:e}: the steps stall \
+                 here. The motion may reach a point where its rates are not smooth \
+                 (a force or constraint with |v| or sign(v) at a velocity that \
+                 reaches zero, switching without end) or a singularity; a looser \
+                 tolerance or a larger budget will likely not get past it"
+            ),
+            FailureKind::StepBudgetExhausted {
+                steps,
+                stalled_since: None,
+            } => write!(
                 f,
                 "at t = {t:e}: the work budget is exhausted ({steps} steps): the local \
                  errors of so many steps may add up beyond the tolerance; try another \
