@@ -78,3 +78,49 @@ fn an_anchor_that_makes_the_field_cancel_is_refused() {
     );
     assert_eq!(failure.exit_status(), 2);
 }
+
+#[test]
+fn a_field_window_cut_short_by_the_budget_keeps_its_steps() {
+    // The knife edge's motion is smooth enough for one quasilinear window
+    // to span it all: a budget that runs out inside that window used to
+    // lose every step of it (no row after t0). The steps the window kept
+    // are now written, agreeing with direct integration, and the failure
+    // follows them.
+    type M = models::KnifeEdge;
+    let mut model = M::new(&M::parameters(&vec![None; M::PARAMS.len()]));
+    let (t0, t1) = model.time_span();
+    let x0 = model.initial_state(&vec![None; M::STATE.len()]).unwrap();
+    let times: Vec<f64> = (0..=1000)
+        .map(|i| t0 + (t1 - t0) * f64::from(i) / 1000.0)
+        .collect();
+    let mut sampled = |method, max_steps| {
+        let mut rows: Vec<(f64, Vec<f64>)> = Vec::new();
+        let options = Options {
+            method,
+            max_steps,
+            ..Options::default()
+        };
+        let outcome = run(&mut model, &options, t0, t1, &x0, &times, |_, t, x| {
+            rows.push((t, x.to_vec()));
+            Ok(())
+        });
+        (rows, outcome)
+    };
+    let (direct, outcome) = sampled(Method::Direct, 1_000_000);
+    assert!(outcome.is_ok());
+    let (field, outcome) = sampled(Method::Field, 40);
+    let failure = outcome.expect_err("the budget runs out");
+    assert!(
+        matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }),
+        "{failure}"
+    );
+    assert!(field.len() > 100, "the field wrote {} rows", field.len());
+    for ((t, a), (_, b)) in field.iter().zip(&direct) {
+        for (a, b) in a.iter().zip(b) {
+            assert!(
+                (a - b).abs() <= 1e-8 * b.abs().max(1.0),
+                "t = {t}: {a} vs {b}"
+            );
+        }
+    }
+}

@@ -211,6 +211,9 @@ enum WindowEnd {
     Conditioning,
     Defect,
     Length,
+    /// The work budget ran out inside the window: its steps so far are
+    /// kept (their output is written), and the run fails after them.
+    Budget,
 }
 
 pub struct QuasilinearField {
@@ -239,6 +242,9 @@ pub struct QuasilinearField {
     /// window's anchor.
     members: Option<States>,
     window_members: Option<States>,
+    /// The failure that ended the last accepted window's pass (the work
+    /// budget): reported by the next advance.
+    pending: Option<Failure>,
 }
 
 impl QuasilinearField {
@@ -258,6 +264,7 @@ impl QuasilinearField {
             predictor_h: None,
             field_h: None,
             accepted: None,
+            pending: None,
             stats: Stats::default(),
             predictor_stats: Stats::default(),
             windows: 0,
@@ -360,6 +367,9 @@ impl Solver for QuasilinearField {
         budget: &Budget,
     ) -> Result<(), Failure> {
         let n = self.x.len();
+        if let Some(failure) = self.pending.take() {
+            return Err(failure);
+        }
         let mut retries = 0;
         loop {
             let predictor = Predictor::new(
@@ -391,6 +401,12 @@ impl Solver for QuasilinearField {
             let failure = predictor.failure.borrow_mut().take();
             let pass = match (failure, pass) {
                 (None, Ok(pass)) => pass,
+                // The budget ran out past the steps the window kept: they
+                // are good (the predictor's failure came after them).
+                (Some(failure), Ok(pass)) if pass.end == WindowEnd::Budget => {
+                    self.pending = Some(failure);
+                    pass
+                }
                 (failure, pass) => {
                     let failure = failure.or(pass.err()).expect("a failure");
                     // A loose predictor can leave the motion's domain where
@@ -442,7 +458,7 @@ impl Solver for QuasilinearField {
                 WindowEnd::Conditioning | WindowEnd::Length => {
                     self.predictor_ratio = (self.predictor_ratio * 1.5).min(MAX_PREDICTOR_RATIO)
                 }
-                WindowEnd::Span => {}
+                WindowEnd::Span | WindowEnd::Budget => {}
             }
             self.field_h = Some(pass.field_h);
             self.largest_condition = self.largest_condition.max(pass.largest_condition);
@@ -709,7 +725,17 @@ impl QuasilinearField {
             if steps.len() >= MAX_WINDOW_STEPS {
                 break WindowEnd::Length;
             }
-            match window.step(&source, &self.options, t_limit, budget)? {
+            let step = match window.step(&source, &self.options, t_limit, budget) {
+                Err(failure)
+                    if !steps.is_empty()
+                        && matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) =>
+                {
+                    self.pending = Some(failure);
+                    break WindowEnd::Budget;
+                }
+                step => step?,
+            };
+            match step {
                 WindowStep::Accepted => {
                     let t = window.time();
                     iterate.eval(t, &mut scratch.x0)?;
