@@ -93,11 +93,29 @@ impl Arena {
     /// Whether `e` is affine in `vars` as written: no coefficient `∂e/∂x_A`
     /// depends on any `x_B`. Canonical forms do not expand, so an expression
     /// affine only after cancellation (`(x+1)^2 − x^2`) reports `false`.
+    ///
+    /// Nor is `e` affine in a variable that a selection in it switches on:
+    /// `sign(x')`, `if x' > 0 then a else b` have the derivative 0 in `x'`
+    /// on either side, yet are not `c + 0·x'` — their value at `x' = 0`
+    /// is one branch, not the expression.
     pub fn is_affine_in(&mut self, e: ExprId, vars: &[Symbol]) -> bool {
+        if vars.iter().any(|&x| self.switches_on(e, x)) {
+            return false;
+        }
         vars.iter().all(|&x| {
             let c = self.diff(e, x);
             vars.iter().all(|&y| !self.depends_on(c, y))
         })
+    }
+
+    /// Whether a selection in `e` has a switching function depending on `x`.
+    pub fn switches_on(&self, e: ExprId, x: Symbol) -> bool {
+        if !self.depends_on(e, x) {
+            return false;
+        }
+        self.reachable(&[e])
+            .iter()
+            .any(|&n| matches!(self.node(n), Node::Select(g, _, _) if self.depends_on(*g, x)))
     }
 }
 

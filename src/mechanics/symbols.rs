@@ -131,7 +131,9 @@ fn solve_implicit(
         order: c.order,
     };
     let pivot = arena.diff(h, dep);
-    if arena.depends_on(pivot, dep) {
+    // A selection switching on the candidate (`sign(y')`) has the
+    // derivative 0 there, yet the candidate does not enter linearly.
+    if arena.depends_on(pivot, dep) || arena.switches_on(h, dep) {
         let name = arena.symbol_name(dep);
         return Err(Diagnostic::error(
             codes::BAD_CANDIDATE,

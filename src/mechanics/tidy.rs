@@ -50,6 +50,10 @@ fn affine_jets(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
         .free_symbols(e)
         .into_iter()
         .filter(|s| matches!(s, Symbol::Jet { .. }))
+        // A selection switching on a jet is not affine in it, though its
+        // derivative there is 0 (`sign(x')`): setting the jet to 0 would
+        // pick one branch for good.
+        .filter(|&s| !arena.switches_on(e, s))
         .collect();
     vars.sort_by_key(|s| match *s {
         Symbol::Jet { coord, order } => (std::cmp::Reverse(order), coord),

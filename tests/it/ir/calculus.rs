@@ -348,4 +348,18 @@ fn affine_parts_and_affinity() {
     let xy = a.mul(&[x, y]);
     let bilinear = a.add(&[e, xy]);
     assert!(!a.is_affine_in(bilinear, &vars));
+    // sign(x) = (if x < 0 then -1 else 1): its derivative in x is 0 on
+    // either side, but it is not 1 + 0·x (Coulomb friction, sign(x'), was
+    // once folded to its branch at x' = 0 this way). A switch on t alone
+    // keeps an expression affine in x.
+    let (minus_one, one) = (num(&mut a, -1.0), num(&mut a, 1.0));
+    let sign_x = a.select(x, minus_one, one);
+    let friction = a.add(&[e, sign_x]);
+    assert!(a.switches_on(friction, q(0, 0)));
+    assert!(!a.is_affine_in(friction, &vars));
+    let on_time = a.select(t, minus_one, one);
+    let burnout = a.mul(&[on_time, x]);
+    let switched_in_time = a.add(&[e, burnout]);
+    assert!(!a.switches_on(switched_in_time, q(0, 0)));
+    assert!(a.is_affine_in(switched_in_time, &vars));
 }
