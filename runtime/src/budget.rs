@@ -12,7 +12,7 @@ use std::cell::Cell;
 /// a run that needs more is better stopped with a clear message.
 pub const DEFAULT_MAX_STEPS: usize = 1_000_000;
 
-/// The budget's second half advanced the time by less than this fraction
+/// The budget's second half advanced the run by less than this fraction
 /// of what its first half did: the steps stalled.
 const STALL_RATIO: f64 = 1e-2;
 
@@ -20,12 +20,12 @@ const STALL_RATIO: f64 = 1e-2;
 pub struct Budget {
     limit: usize,
     used: Cell<usize>,
-    /// The time of the first draw, the furthest time any draw has reached
-    /// (the field's predictor runs ahead of its windows, and a window that
-    /// is tried again starts over), and how far that was halfway through
-    /// the budget.
-    first: Cell<f64>,
-    reached: Cell<f64>,
+    /// Where the run starts, how far its solution has been accepted
+    /// ([`Budget::accepted_to`]: the driver's steps, the field's windows —
+    /// not the predictor that runs ahead of them), and how far that was
+    /// halfway through the budget.
+    start: Cell<f64>,
+    accepted: Cell<f64>,
     halfway: Cell<f64>,
 }
 
@@ -34,49 +34,62 @@ impl Budget {
         Budget {
             limit,
             used: Cell::new(0),
-            first: Cell::new(f64::NAN),
-            reached: Cell::new(f64::NAN),
+            start: Cell::new(f64::NAN),
+            accepted: Cell::new(f64::NAN),
             halfway: Cell::new(f64::NAN),
         }
     }
 
-    /// Draws one step at time `t`; `Err` once the budget is spent.
+    /// Draws one step at time `t`; `Err` once the budget is spent, at the
+    /// time the run's solution has been accepted to.
     pub fn draw(&self, t: f64) -> Result<(), Failure> {
         let used = self.used.get();
         if used >= self.limit {
+            // The time is where the solution stands, when known: the
+            // field's predictor may be far ahead of it.
+            let accepted = self.accepted.get();
             return Err(Failure::new(
-                t,
+                if accepted.is_nan() { t } else { accepted },
                 FailureKind::StepBudgetExhausted {
                     steps: used,
-                    stalled_since: self.stalled_since(),
+                    stalled: self.stalled(),
                 },
             ));
         }
-        if used == 0 {
-            self.first.set(t);
-            self.reached.set(t);
-        }
-        // Spans run forward: the furthest time is the largest.
-        self.reached.set(self.reached.get().max(t));
         if used == self.limit / 2 {
-            self.halfway.set(self.reached.get());
+            self.halfway.set(self.accepted.get());
         }
         self.used.set(used + 1);
         Ok(())
     }
 
-    /// Where the steps stalled, when the budget runs out: the furthest time
-    /// reached halfway through it, if the second half of the steps moved
-    /// that by less than [`STALL_RATIO`] of what the first half did — a motion
-    /// that chatters at a point where it is not smooth (a rate that
-    /// switches with the sign of a velocity that reaches zero) or that
-    /// runs into a singularity, rather than one that merely needs many
-    /// steps.
-    fn stalled_since(&self) -> Option<f64> {
-        let (first, halfway) = (self.first.get(), self.halfway.get());
-        let before = halfway - first;
-        let after = self.reached.get() - halfway;
-        (before > 0.0 && after <= STALL_RATIO * before).then_some(halfway)
+    /// The run's solution is accepted up to `t` (the first call: where it
+    /// starts).
+    pub fn accepted_to(&self, t: f64) {
+        if self.start.get().is_nan() {
+            self.start.set(t);
+        }
+        self.accepted.set(t);
+    }
+
+    /// Where the steps stalled, when the budget runs out: `(from, to)`, how
+    /// far the run had been accepted halfway through the budget and now,
+    /// if the second half of the steps moved it by less than
+    /// [`STALL_RATIO`] of what the first half did (or neither half moved
+    /// it at all) — a motion that chatters at a point where it is not
+    /// smooth (a rate that switches with the sign of a velocity that
+    /// reaches zero) or that runs into a singularity, rather than one that
+    /// merely needs many steps.
+    fn stalled(&self) -> Option<(f64, f64)> {
+        let (start, halfway, now) = (self.start.get(), self.halfway.get(), self.accepted.get());
+        let before = (halfway - start).abs();
+        let after = (now - halfway).abs();
+        let stalled = if before > 0.0 {
+            after <= STALL_RATIO * before
+        } else {
+            after == 0.0
+        };
+        stalled.then_some((halfway, now))
     }
 
     pub fn used(&self) -> usize {
@@ -98,10 +111,13 @@ impl Default for Budget {
 mod tests {
     use super::*;
 
-    fn exhaust(budget: &Budget, time_of_draw: impl Fn(usize) -> f64) -> FailureKind {
+    /// Draws until the budget is spent, the run accepted to `accepted(i)`
+    /// before draw `i`.
+    fn exhaust(budget: &Budget, accepted: impl Fn(usize) -> f64) -> FailureKind {
         let mut i = 0;
         loop {
-            if let Err(failure) = budget.draw(time_of_draw(i)) {
+            budget.accepted_to(accepted(i));
+            if let Err(failure) = budget.draw(accepted(i)) {
                 return failure.kind;
             }
             i += 1;
@@ -116,7 +132,7 @@ mod tests {
             kind,
             FailureKind::StepBudgetExhausted {
                 steps: 1000,
-                stalled_since: None
+                stalled: None
             }
         );
         // Steps that shrink geometrically toward t = 1 (a singularity or
@@ -125,25 +141,30 @@ mod tests {
         match kind {
             FailureKind::StepBudgetExhausted {
                 steps: 1000,
-                stalled_since: Some(since),
-            } => assert!((since - 1.0).abs() < 1e-10, "{since}"),
+                stalled: Some((from, to)),
+            } => assert!((from - 1.0).abs() < 1e-10 && to >= from, "{from} {to}"),
             other => panic!("{other:?}"),
         }
-        // A predictor that ran ahead to t = 1 and windows that keep
-        // starting over from 0 behind it: the furthest time stalls.
-        let kind = exhaust(&Budget::new(1000), |i| {
-            if i < 400 {
-                i as f64 / 400.0
-            } else {
-                (i % 7) as f64 / 7.0
-            }
-        });
+        // Nothing accepted at all (a field window that never completes,
+        // its predictor running ahead): stalled where it started.
+        let kind = exhaust(&Budget::new(1000), |_| 0.0);
         assert!(matches!(
             kind,
             FailureKind::StepBudgetExhausted {
-                stalled_since: Some(_),
+                stalled: Some((0.0, 0.0)),
                 ..
             }
+        ));
+        // Never told what was accepted: no verdict.
+        let budget = Budget::new(10);
+        let kind = loop {
+            if let Err(failure) = budget.draw(1.0) {
+                break failure.kind;
+            }
+        };
+        assert!(matches!(
+            kind,
+            FailureKind::StepBudgetExhausted { stalled: None, .. }
         ));
     }
 }

@@ -287,6 +287,7 @@ fn run_with(
 ) -> Result<Outcome, Failure> {
     let n = x0.len();
     let budget = Budget::new(options.max_steps);
+    budget.accepted_to(t0);
     let span = t1 - t0;
     let h_max = if span > 0.0 { span } else { 1.0 };
     let mut regime = Regime {
@@ -344,7 +345,16 @@ fn run_with(
     let mut g_now = vec![0.0; model.switches()];
     let mut x_event = vec![0.0; n];
     while solver.time() < t1 {
-        if let Err(failure) = solver.advance(model, t1, &budget) {
+        // Where the solution stands: after the last step, or where an
+        // event restarted it.
+        budget.accepted_to(solver.time());
+        if let Err(mut failure) = solver.advance(model, t1, &budget) {
+            if matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) {
+                // Where the solution stands (after the last step and any
+                // event's restart), not where the field's predictor or a
+                // window's steps had run ahead to.
+                failure.time = solver.time();
+            }
             let x = solver.state().to_vec();
             progress.finish();
             return Err(diagnose(model, failure, &x, &scale(model)));
@@ -697,6 +707,7 @@ pub fn run_ensemble(
         return Err(Failure::new(t0, FailureKind::NotAffine));
     }
     let budget = Budget::new(options.max_steps);
+    budget.accepted_to(t0);
     let h_max = (t1 - t0).max(f64::MIN_POSITIVE);
     let field = Options {
         method: Method::Field,
@@ -715,6 +726,7 @@ pub fn run_ensemble(
     }
     while solver.time() < t1 {
         solver.advance(model, t1, &budget)?;
+        budget.accepted_to(solver.time());
         while next < times.len() && times[next] <= solver.time() {
             solver.members_at(model, times[next], &mut states)?;
             sample(times[next], &states);

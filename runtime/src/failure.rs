@@ -43,9 +43,10 @@ pub enum FailureKind {
     /// The run used its whole work budget (`steps` steps of every kind).
     StepBudgetExhausted {
         steps: usize,
-        /// The time the run had reached with half the budget left, when
-        /// the steps since then hardly moved it.
-        stalled_since: Option<f64>,
+        /// How far the run's solution had been accepted with half the
+        /// budget left, and at its end, when the steps since hardly moved
+        /// it.
+        stalled: Option<(f64, f64)>,
     },
     /// Newton's method for the highest derivatives did not converge.
     NewtonNonConvergence { residual: f64, iterations: usize },
@@ -157,19 +158,19 @@ impl fmt::Display for Failure {
             ),
             FailureKind::StepBudgetExhausted {
                 steps,
-                stalled_since: Some(since),
+                stalled: Some((from, to)),
             } => write!(
                 f,
                 "at t = {t:e}: the work budget is exhausted ({steps} steps), and its \
-                 second half moved the time only from t = {since:e}: the steps stall \
-                 here. The motion may reach a point where its rates are not smooth \
+                 second half moved the solution only from t = {from:e} to {to:e}: the \
+                 steps stall there. The motion may reach a point where its rates are not smooth \
                  (a force or constraint with |v| or sign(v) at a velocity that \
                  reaches zero, switching without end) or a singularity; a looser \
                  tolerance or a larger budget will likely not get past it"
             ),
             FailureKind::StepBudgetExhausted {
                 steps,
-                stalled_since: None,
+                stalled: None,
             } => write!(
                 f,
                 "at t = {t:e}: the work budget is exhausted ({steps} steps): the local \

@@ -57,7 +57,7 @@ fn every_method_stops_within_its_budget() {
         let failure = fails(&mut model, &options, 1e5);
         assert!(
             // A long span that merely needs many steps is not a stall.
-            matches!(failure.kind, FailureKind::StepBudgetExhausted { steps, stalled_since: None } if steps <= 10_000),
+            matches!(failure.kind, FailureKind::StepBudgetExhausted { steps, stalled: None } if steps <= 10_000),
             "{method:?}: {failure}"
         );
     }

@@ -402,11 +402,9 @@ impl Solver for QuasilinearField {
             let pass = match (failure, pass) {
                 (None, Ok(pass)) => pass,
                 // The budget ran out past the steps the window kept: they
-                // are good (the predictor's failure came after them).
-                (Some(failure), Ok(pass)) if pass.end == WindowEnd::Budget => {
-                    self.pending = Some(failure);
-                    pass
-                }
+                // are good (the predictor's failure came after them), and
+                // the pass has set the failure to report next.
+                (Some(_), Ok(pass)) if pass.end == WindowEnd::Budget => pass,
                 (failure, pass) => {
                     let failure = failure.or(pass.err()).expect("a failure");
                     // A loose predictor can leave the motion's domain where
@@ -718,6 +716,8 @@ impl QuasilinearField {
         let (mut t_last, mut defect_last) = (self.t, 0.0);
         let mut shortenings = 0;
         let mut largest_condition = 1.0_f64;
+        // The last step kept: its time and the budget's draws by then.
+        let mut kept_at = (self.t, budget.used());
         let end = loop {
             if window.time() >= t_limit {
                 break WindowEnd::Span;
@@ -730,7 +730,7 @@ impl QuasilinearField {
                     if !steps.is_empty()
                         && matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) =>
                 {
-                    self.pending = Some(failure);
+                    self.pending = Some(budget_spent_in_window(failure, kept_at, budget));
                     break WindowEnd::Budget;
                 }
                 step => step?,
@@ -759,6 +759,7 @@ impl QuasilinearField {
                     state.clear();
                     state.extend_from_slice(window.state());
                     states.push(state);
+                    kept_at = (t, budget.used());
                 }
                 WindowStep::Ended if window.steps() == 0 => {
                     shortenings += 1;
@@ -784,4 +785,24 @@ impl QuasilinearField {
             field_h: window.proposed_step(),
         })
     }
+}
+
+/// The work budget's failure inside a window whose steps are kept up to
+/// `(t, draws)`: stalled there if no step was kept in the budget's second
+/// half (the predictor chattered on past a point where the motion is not
+/// smooth), else as the budget judged the run. (The driver reports it at
+/// the time the solution stands.)
+fn budget_spent_in_window(failure: Failure, (t, draws): (f64, usize), budget: &Budget) -> Failure {
+    let FailureKind::StepBudgetExhausted { steps, stalled } = failure.kind else {
+        return failure;
+    };
+    let stalled = if draws <= budget.limit() / 2 {
+        Some((t, t))
+    } else {
+        stalled
+    };
+    Failure::new(
+        failure.time,
+        FailureKind::StepBudgetExhausted { steps, stalled },
+    )
 }
