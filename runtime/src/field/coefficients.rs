@@ -267,6 +267,12 @@ pub struct LinearizationScratch {
     /// `w_x` as rows (entry `i` of vector `k` at `i·N + k`, `N²` numbers)
     /// and one running sum per vector (`N` more).
     batch: Vec<f64>,
+    /// The time (its bits) at which `x`, `rate` and `a` were evaluated,
+    /// and at which `b` was formed from them: DOP853 evaluates twice at
+    /// the step's end (its last stage, `c = 1`, and the rate at the new
+    /// state), and the iterate and the model give the same bits again.
+    evaluated_at: Option<u64>,
+    formed_at: Option<u64>,
 }
 
 impl LinearizationScratch {
@@ -279,11 +285,15 @@ impl LinearizationScratch {
             g: vec![0.0; n],
             r: vec![0.0; n],
             batch: vec![0.0; n * (n + 1)],
+            evaluated_at: None,
+            formed_at: None,
         })
     }
 }
 
-/// A linearisation's buffers, its own or lent.
+/// A linearisation's buffers, its own or lent. Not boxed: one value per
+/// system, and a box would be one more allocation for each.
+#[allow(clippy::large_enum_variant)]
 enum Scratch<'a> {
     Owned(RefCell<LinearizationScratch>),
     Lent(&'a RefCell<LinearizationScratch>),
@@ -324,25 +334,35 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
     /// The iterate `x0`, `X(t, x0)` and `A = ∂X/∂x (t, x0)` at `t`, into
     /// the scratch.
     fn evaluate(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
+        if sc.evaluated_at == Some(t.to_bits()) {
+            return Ok(());
+        }
+        sc.evaluated_at = None;
+        sc.formed_at = None;
         self.iterate.eval(t, &mut sc.x)?;
         sc.a.fill(0.0);
         self.model.linearize(t, &sc.x, &mut sc.rate, &mut sc.a)?;
         self.evaluations.set(self.evaluations.get() + 1);
+        sc.evaluated_at = Some(t.to_bits());
         Ok(())
     }
 
     /// `A` and `b` at `t`, into the scratch.
     fn linearize(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
         self.evaluate(t, sc)?;
-        if self.iterate.is_origin() {
-            sc.b.copy_from_slice(&sc.rate);
+        if sc.formed_at == Some(t.to_bits()) {
             return Ok(());
         }
-        // b = X − A x
-        sc.a.mul_vec(&sc.x, &mut sc.b);
-        for (b, r) in sc.b.iter_mut().zip(&sc.rate) {
-            *b = r - *b;
+        if self.iterate.is_origin() {
+            sc.b.copy_from_slice(&sc.rate);
+        } else {
+            // b = X − A x
+            sc.a.mul_vec(&sc.x, &mut sc.b);
+            for (b, r) in sc.b.iter_mut().zip(&sc.rate) {
+                *b = r - *b;
+            }
         }
+        sc.formed_at = Some(t.to_bits());
         Ok(())
     }
 }
@@ -537,6 +557,13 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
         iterate: &'a I,
         scratch: &'a RefCell<LinearizationScratch>,
     ) -> Self {
+        // Another system (iterate) on the same buffers: nothing in them
+        // holds for it.
+        {
+            let mut sc = scratch.borrow_mut();
+            sc.evaluated_at = None;
+            sc.formed_at = None;
+        }
         ProjectiveCoefficients {
             linear: LinearizedCoefficients {
                 model,
