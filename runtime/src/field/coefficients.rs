@@ -616,6 +616,8 @@ fn adjoint_rates(
             6 => return adjoint_rates_fixed::<6>(a, b, shift, y, dy),
             7 => return adjoint_rates_fixed::<7>(a, b, shift, y, dy),
             8 => return adjoint_rates_fixed::<8>(a, b, shift, y, dy),
+            10 => return adjoint_rates_fixed::<10>(a, b, shift, y, dy),
+            12 => return adjoint_rates_fixed::<12>(a, b, shift, y, dy),
             _ => {}
         }
     }
@@ -657,7 +659,8 @@ fn adjoint_rates(
     }
 }
 
-/// [`adjoint_rates`] for `N` vectors of `N + 1`, unrolled.
+/// [`adjoint_rates`] for `N` vectors of `N + 1`, unrolled (`N` up to 8, and
+/// 10 and 12: five or six coordinates).
 fn adjoint_rates_fixed<const N: usize>(
     a: &Matrix,
     b: &[f64],
@@ -939,7 +942,7 @@ mod tests {
     /// are the dot products they stand for.
     #[test]
     fn adjoint_rates_are_the_same_bits_for_every_dimension() {
-        for n in 1..=9 {
+        for n in 1..=13 {
             for shift in [n / 2, n] {
                 let mut a = Matrix::zeros(n, n);
                 for c in 0..n {
