@@ -263,6 +263,16 @@ pub struct LinearizationScratch {
     a: Matrix,
     g: Vec<f64>,
     r: Vec<f64>,
+    /// For the projective form's rates (`adjoint_rates`): its vectors
+    /// `w_x` as rows (entry `i` of vector `k` at `i·N + k`, `N²` numbers)
+    /// and one running sum per vector (`N` more).
+    batch: Vec<f64>,
+    /// The time (its bits) at which `x`, `rate` and `a` were evaluated,
+    /// and at which `b` was formed from them: DOP853 evaluates twice at
+    /// the step's end (its last stage, `c = 1`, and the rate at the new
+    /// state), and the iterate and the model give the same bits again.
+    evaluated_at: Option<u64>,
+    formed_at: Option<u64>,
 }
 
 impl LinearizationScratch {
@@ -274,11 +284,16 @@ impl LinearizationScratch {
             a: Matrix::zeros(n, n),
             g: vec![0.0; n],
             r: vec![0.0; n],
+            batch: vec![0.0; n * (n + 1)],
+            evaluated_at: None,
+            formed_at: None,
         })
     }
 }
 
-/// A linearisation's buffers, its own or lent.
+/// A linearisation's buffers, its own or lent. Not boxed: one value per
+/// system, and a box would be one more allocation for each.
+#[allow(clippy::large_enum_variant)]
 enum Scratch<'a> {
     Owned(RefCell<LinearizationScratch>),
     Lent(&'a RefCell<LinearizationScratch>),
@@ -319,25 +334,35 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
     /// The iterate `x0`, `X(t, x0)` and `A = ∂X/∂x (t, x0)` at `t`, into
     /// the scratch.
     fn evaluate(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
+        if sc.evaluated_at == Some(t.to_bits()) {
+            return Ok(());
+        }
+        sc.evaluated_at = None;
+        sc.formed_at = None;
         self.iterate.eval(t, &mut sc.x)?;
         sc.a.fill(0.0);
         self.model.linearize(t, &sc.x, &mut sc.rate, &mut sc.a)?;
         self.evaluations.set(self.evaluations.get() + 1);
+        sc.evaluated_at = Some(t.to_bits());
         Ok(())
     }
 
     /// `A` and `b` at `t`, into the scratch.
     fn linearize(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
         self.evaluate(t, sc)?;
-        if self.iterate.is_origin() {
-            sc.b.copy_from_slice(&sc.rate);
+        if sc.formed_at == Some(t.to_bits()) {
             return Ok(());
         }
-        // b = X − A x
-        sc.a.mul_vec(&sc.x, &mut sc.b);
-        for (b, r) in sc.b.iter_mut().zip(&sc.rate) {
-            *b = r - *b;
+        if self.iterate.is_origin() {
+            sc.b.copy_from_slice(&sc.rate);
+        } else {
+            // b = X − A x
+            sc.a.mul_vec(&sc.x, &mut sc.b);
+            for (b, r) in sc.b.iter_mut().zip(&sc.rate) {
+                *b = r - *b;
+            }
         }
+        sc.formed_at = Some(t.to_bits());
         Ok(())
     }
 }
@@ -532,6 +557,13 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
         iterate: &'a I,
         scratch: &'a RefCell<LinearizationScratch>,
     ) -> Self {
+        // Another system (iterate) on the same buffers: nothing in them
+        // holds for it.
+        {
+            let mut sc = scratch.borrow_mut();
+            sc.evaluated_at = None;
+            sc.formed_at = None;
+        }
         ProjectiveCoefficients {
             linear: LinearizedCoefficients {
                 model,
@@ -556,6 +588,122 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
     }
 }
 
+/// The projective form's rates for all its vectors `(w_0, w_x)` (each
+/// `N + 1` long, in `y`): `w_0' = −b · w_x`, `w_x' = −Aᵀ w_x`, the first
+/// `N − n` rows of `A` the shifts `x_i' = x_{i+n}` (`a_{i,i+n} = 1`),
+/// which are not read. All vectors at once, walking `A` once: their
+/// entries gathered as rows (`rows[i·m + k]` = entry `i` of `w_x` of
+/// vector `k`), so the innermost loop runs over the vectors, contiguous.
+/// Each sum is accumulated in the order of a dot product per vector (from
+/// −0.0, over `i` ascending): the same bits.
+fn adjoint_rates(
+    a: &Matrix,
+    b: &[f64],
+    shift: usize,
+    y: &[f64],
+    dy: &mut [f64],
+    rows: &mut [f64],
+    sums: &mut [f64],
+) {
+    let n = b.len();
+    let m = y.len() / (n + 1);
+    if m == n {
+        match n {
+            2 => return adjoint_rates_fixed::<2>(a, b, shift, y, dy),
+            3 => return adjoint_rates_fixed::<3>(a, b, shift, y, dy),
+            4 => return adjoint_rates_fixed::<4>(a, b, shift, y, dy),
+            5 => return adjoint_rates_fixed::<5>(a, b, shift, y, dy),
+            6 => return adjoint_rates_fixed::<6>(a, b, shift, y, dy),
+            7 => return adjoint_rates_fixed::<7>(a, b, shift, y, dy),
+            8 => return adjoint_rates_fixed::<8>(a, b, shift, y, dy),
+            10 => return adjoint_rates_fixed::<10>(a, b, shift, y, dy),
+            12 => return adjoint_rates_fixed::<12>(a, b, shift, y, dy),
+            _ => {}
+        }
+    }
+    let rows = &mut rows[..n * m];
+    let sums = &mut sums[..m];
+    for (k, v) in y.chunks_exact(n + 1).enumerate() {
+        for (i, &x) in v[1..].iter().enumerate() {
+            rows[i * m + k] = x;
+        }
+    }
+    let accumulate = |sums: &mut [f64], factor: f64, row: &[f64]| {
+        for (s, &x) in sums.iter_mut().zip(row) {
+            *s += factor * x;
+        }
+    };
+    sums.fill(-0.0);
+    for (i, row) in rows.chunks_exact(m).enumerate() {
+        accumulate(sums, b[i], row);
+    }
+    for (k, s) in sums.iter().enumerate() {
+        dy[k * (n + 1)] = -*s;
+    }
+    let shifted = n - shift;
+    for col in 0..n {
+        let column = a.column(col);
+        sums.fill(-0.0);
+        for i in shifted..n {
+            accumulate(sums, column[i], &rows[i * m..(i + 1) * m]);
+        }
+        if col >= shift {
+            let row = &rows[(col - shift) * m..(col - shift + 1) * m];
+            for (s, &x) in sums.iter_mut().zip(row) {
+                *s += x;
+            }
+        }
+        for (k, s) in sums.iter().enumerate() {
+            dy[k * (n + 1) + 1 + col] = -*s;
+        }
+    }
+}
+
+/// [`adjoint_rates`] for `N` vectors of `N + 1`, unrolled (`N` up to 8, and
+/// 10 and 12: five or six coordinates).
+fn adjoint_rates_fixed<const N: usize>(
+    a: &Matrix,
+    b: &[f64],
+    shift: usize,
+    y: &[f64],
+    dy: &mut [f64],
+) {
+    let mut rows = [[0.0; N]; N];
+    for (k, v) in y.chunks_exact(N + 1).enumerate().take(N) {
+        for i in 0..N {
+            rows[i][k] = v[1 + i];
+        }
+    }
+    let b: &[f64; N] = b.try_into().expect("N components");
+    let mut sums = [-0.0; N];
+    for i in 0..N {
+        for k in 0..N {
+            sums[k] += b[i] * rows[i][k];
+        }
+    }
+    for k in 0..N {
+        dy[k * (N + 1)] = -sums[k];
+    }
+    let shifted = N - shift;
+    for col in 0..N {
+        let column: &[f64; N] = a.column(col).try_into().expect("N rows");
+        let mut sums = [-0.0; N];
+        for i in shifted..N {
+            for k in 0..N {
+                sums[k] += column[i] * rows[i][k];
+            }
+        }
+        if col >= shift {
+            for k in 0..N {
+                sums[k] += rows[col - shift][k];
+            }
+        }
+        for k in 0..N {
+            dy[k * (N + 1) + 1 + col] = -sums[k];
+        }
+    }
+}
+
 impl<I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, I> {
     fn dim(&self) -> usize {
         let n = self.linear.model.dim();
@@ -568,15 +716,8 @@ impl<I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, I> {
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
         self.linear.linearize(t, sc)?;
-        for (v, dv) in y.chunks_exact(n + 1).zip(dy.chunks_exact_mut(n + 1)) {
-            let (v0, vx) = v.split_at(1);
-            let _ = v0;
-            dv[0] = -sc.b.iter().zip(vx).map(|(b, w)| b * w).sum::<f64>();
-            transpose_times(&sc.a, vx, shift, &mut sc.r);
-            for (d, r) in dv[1..].iter_mut().zip(&sc.r) {
-                *d = -r;
-            }
-        }
+        let (rows, sums) = sc.batch.split_at_mut(n * n);
+        adjoint_rates(&sc.a, &sc.b, shift, y, dy, rows, sums);
         Ok(())
     }
 
@@ -791,4 +932,50 @@ fn central_time_partial<S: System + ?Sized>(
         dydt[i] = (plus[i] - minus[i]) / (2.0 * h);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The unrolled rates are the general loop's, bit for bit, and both
+    /// are the dot products they stand for.
+    #[test]
+    fn adjoint_rates_are_the_same_bits_for_every_dimension() {
+        for n in 1..=13 {
+            for shift in [n / 2, n] {
+                let mut a = Matrix::zeros(n, n);
+                for c in 0..n {
+                    for r in 0..n {
+                        a[(r, c)] = ((r * 5 + c * 3) % 7) as f64 / 3.0 - 1.0;
+                    }
+                }
+                let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).cos()).collect();
+                let y: Vec<f64> = (0..n * (n + 1)).map(|k| (k as f64 * 0.37).sin()).collect();
+                let mut fast = vec![0.0; y.len()];
+                let (mut rows, mut sums) = (vec![0.0; n * n], vec![0.0; n]);
+                adjoint_rates(&a, &b, shift, &y, &mut fast, &mut rows, &mut sums);
+                let mut general = vec![0.0; y.len()];
+                // The general loop, as for more vectors than coefficients.
+                let mut wide = y.clone();
+                wide.extend(std::iter::repeat_n(0.0, n + 1));
+                let mut wide_out = vec![0.0; wide.len()];
+                let (mut rows, mut sums) = (vec![0.0; n * (n + 1)], vec![0.0; n + 1]);
+                adjoint_rates(&a, &b, shift, &wide, &mut wide_out, &mut rows, &mut sums);
+                general.copy_from_slice(&wide_out[..y.len()]);
+                let mut expected = vec![0.0; y.len()];
+                for (v, e) in y.chunks(n + 1).zip(expected.chunks_mut(n + 1)) {
+                    e[0] = -b.iter().zip(&v[1..]).map(|(b, w)| b * w).sum::<f64>();
+                    let mut r = vec![0.0; n];
+                    transpose_times(&a, &v[1..], shift, &mut r);
+                    for (e, r) in e[1..].iter_mut().zip(&r) {
+                        *e = -r;
+                    }
+                }
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fast), bits(&expected), "n = {n}, shift = {shift}");
+                assert_eq!(bits(&general), bits(&expected), "n = {n}, shift = {shift}");
+            }
+        }
+    }
 }
