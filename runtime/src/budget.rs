@@ -40,16 +40,13 @@ impl Budget {
         }
     }
 
-    /// Draws one step at time `t`; `Err` once the budget is spent, at the
-    /// time the run's solution has been accepted to.
+    /// Draws one step at time `t`; `Err` once the budget is spent (the
+    /// driver reports it where the solution stands).
     pub fn draw(&self, t: f64) -> Result<(), Failure> {
         let used = self.used.get();
         if used >= self.limit {
-            // The time is where the solution stands, when known: the
-            // field's predictor may be far ahead of it.
-            let accepted = self.accepted.get();
             return Err(Failure::new(
-                if accepted.is_nan() { t } else { accepted },
+                t,
                 FailureKind::StepBudgetExhausted {
                     steps: used,
                     stalled: self.stalled(),
