@@ -114,22 +114,11 @@ def ldlt_ops(n):
 
 def sympy_c(n):
     import sympy as sp
-    from sympy.physics.mechanics import LagrangesMethod, dynamicsymbols
+    from sympy.physics.mechanics import LagrangesMethod
 
-    g = sp.Symbol("g")
-    th = dynamicsymbols(f"th1:{n + 1}")
-    t = dynamicsymbols._t
-    x = 0
-    y = 0
-    kinetic = 0
-    potential = 0
-    for k in range(n):
-        x = x + sp.sin(th[k])
-        y = y - sp.cos(th[k])
-        kinetic += (sp.diff(x, t) ** 2 + sp.diff(y, t) ** 2) / 2
-        potential += g * y
+    lagrangian, th, g, t = gen_pendulum.sympy_lagrangian(n)
     start = time.perf_counter()
-    method = LagrangesMethod(kinetic - potential, th)
+    method = LagrangesMethod(lagrangian, th)
     method.form_lagranges_equations()
     mass = method.mass_matrix
     forcing = method.forcing

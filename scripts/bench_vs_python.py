@@ -45,6 +45,8 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 VENV = os.path.join(ROOT, "target", "bench-venv")
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import gen_pendulum  # noqa: E402
 VENV_PYTHON = os.path.join(VENV, "bin", "python")
 
 
@@ -279,23 +281,10 @@ def part_a(quick):
 
 def sympy_pendulum(n):
     """The same pendulum as scripts/gen_pendulum.py, by SymPy's mechanics."""
-    import sympy as sp
-    from sympy.physics.mechanics import LagrangesMethod, dynamicsymbols
+    from sympy.physics.mechanics import LagrangesMethod
 
     start = time.perf_counter()
-    g = sp.Symbol("g")
-    th = dynamicsymbols(f"th1:{n + 1}")
-    t = dynamicsymbols._t
-    x = 0
-    y = 0
-    kinetic = 0
-    potential = 0
-    for k in range(n):
-        x = x + sp.sin(th[k])
-        y = y - sp.cos(th[k])
-        kinetic += (sp.diff(x, t) ** 2 + sp.diff(y, t) ** 2) / 2
-        potential += g * y
-    lagrangian = kinetic - potential
+    lagrangian, th, _, _ = gen_pendulum.sympy_lagrangian(n)
     method = LagrangesMethod(lagrangian, th)
     method.form_lagranges_equations()
     return time.perf_counter() - start

@@ -43,6 +43,28 @@ def model(n: int) -> str:
     )
 
 
+def sympy_lagrangian(n: int):
+    """The same pendulum in SymPy's mechanics (for the benchmark scripts
+    that compare with SymPy): `(L, th, g, t)`, `th` the n angles as
+    dynamic symbols. Imports SymPy only when called."""
+    import sympy as sp
+    from sympy.physics.mechanics import dynamicsymbols
+
+    g = sp.Symbol("g")
+    th = dynamicsymbols(f"th1:{n + 1}")
+    t = dynamicsymbols._t
+    x = 0
+    y = 0
+    kinetic = 0
+    potential = 0
+    for k in range(n):
+        x = x + sp.sin(th[k])
+        y = y - sp.cos(th[k])
+        kinetic += (sp.diff(x, t) ** 2 + sp.diff(y, t) ** 2) / 2
+        potential += g * y
+    return kinetic - potential, th, g, t
+
+
 def main() -> None:
     sizes = [int(a) for a in sys.argv[1:]] or [3, 5, 8, 12]
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
