@@ -312,6 +312,17 @@ fn hairer_combine(h: f64, n: usize, err3: f64, err5: f64) -> f64 {
     }
 }
 
+/// Blocks of `n` numbers in [`Dop853`]'s stage buffer after the 16 stages:
+/// the state at which a stage is evaluated;
+const STAGE_STATE: usize = STAGES + 4;
+/// the 3rd- and 5th-order error estimates of the last attempt, per unit
+/// step (multiply by `h`);
+const ERROR3: usize = STAGE_STATE + 1;
+const ERROR5: usize = ERROR3 + 1;
+/// the 8 blocks of the continuous extension's coefficients.
+const CONT: usize = ERROR5 + 1;
+const BLOCKS: usize = CONT + 8;
+
 /// The DOP853 integrator at time `t` with state `y`.
 pub struct Dop853 {
     tol: Tolerance,
@@ -321,19 +332,15 @@ pub struct Dop853 {
     /// `k[0] = X(t, y)` (first same as last), `k[1..12]` the stages of the
     /// last step, `k[12]` the rate at the last step's start after a step is
     /// accepted (kept for the continuous extension), `k[13..16]` its extra
-    /// stages.
+    /// stages; then, in the same buffer (one allocation a solver, not
+    /// five: a small model's solve is a few microseconds), the blocks at
+    /// [`STAGE_STATE`], [`ERROR3`], [`ERROR5`] and [`CONT`].
     k: Vec<f64>,
     y_trial: Vec<f64>,
-    /// The 3rd- and 5th-order error estimates of the last attempt, per unit
-    /// step (multiply by `h`).
-    error3: Vec<f64>,
-    error5: Vec<f64>,
-    stage_state: Vec<f64>,
     /// The last accepted step's start state.
     y_old: Vec<f64>,
-    /// The continuous extension's coefficients (8 blocks of `n`), valid
-    /// when `dense_ready`.
-    cont: Vec<f64>,
+    /// The continuous extension's coefficients (the 8 blocks at [`CONT`])
+    /// are those of the last accepted step.
     dense_ready: bool,
     stiff_tests: usize,
     non_stiff_tests: usize,
@@ -352,7 +359,7 @@ impl Dop853 {
         h0: Option<f64>,
     ) -> Result<Self, Failure> {
         let n = y0.len();
-        let mut k = vec![0.0; (STAGES + 4) * n];
+        let mut k = vec![0.0; BLOCKS * n];
         let controller = Controller::dop853();
         let clock = Clock::start(system, t0, y0, &mut k[..n], tol, 8, h_max, h0, controller)?;
         Ok(Dop853 {
@@ -361,11 +368,7 @@ impl Dop853 {
             y: y0.to_vec(),
             k,
             y_trial: vec![0.0; n],
-            error3: vec![0.0; n],
-            error5: vec![0.0; n],
-            stage_state: vec![0.0; n],
             y_old: y0.to_vec(),
-            cont: vec![0.0; 8 * n],
             dense_ready: false,
             stiff_tests: 0,
             non_stiff_tests: 0,
@@ -403,13 +406,14 @@ impl Dop853 {
                 fused_error
             } else {
                 self.clock.controller.end_ramp();
+                let n = self.y.len();
                 match measure.measure(
                     self.clock.t,
                     h,
                     &self.y,
                     &self.y_trial,
-                    &self.error3,
-                    &self.error5,
+                    &self.k[ERROR3 * n..(ERROR3 + 1) * n],
+                    &self.k[ERROR5 * n..(ERROR5 + 1) * n],
                 ) {
                     Some(err) => err,
                     None => return Ok(self.clock.decline()),
@@ -469,7 +473,10 @@ impl Dop853 {
         let (mut numerator, mut denominator) = (0.0, 0.0);
         let n = self.y.len();
         let (slope, last) = (&self.k[..n], &self.k[(STAGES - 1) * n..STAGES * n]);
-        let (y, y1) = (&self.y[..n], &self.stage_state[..n]);
+        let (y, y1) = (
+            &self.y[..n],
+            &self.k[STAGE_STATE * n..(STAGE_STATE + 1) * n],
+        );
         for i in 0..n {
             let (a, b) = (slope[i] - last[i], y[i] - y1[i]);
             numerator += a * a;
@@ -500,15 +507,17 @@ impl Dop853 {
     /// states, so it costs nothing on the way of finite steps.
     fn broken_rate(&mut self, h: f64) -> Option<usize> {
         let n = self.y.len();
+        let (k, scratch) = self.k.split_at_mut(STAGE_STATE * n);
+        let stage_state = &mut scratch[..n];
         for s in 1..STAGES {
-            self.stage_state.copy_from_slice(&self.y);
+            stage_state.copy_from_slice(&self.y);
             for &(j, a) in A[s] {
-                axpy(h * a, &self.k[j * n..(j + 1) * n], &mut self.stage_state);
+                axpy(h * a, &k[j * n..(j + 1) * n], stage_state);
             }
-            if first_non_finite(&self.stage_state).is_some() {
+            if first_non_finite(stage_state).is_some() {
                 return None;
             }
-            if let Some(i) = first_non_finite(&self.k[s * n..(s + 1) * n]) {
+            if let Some(i) = first_non_finite(&k[s * n..(s + 1) * n]) {
                 return Some(i);
             }
         }
@@ -536,8 +545,10 @@ impl Dop853 {
         let n = self.y.len();
         let t = self.clock.t;
         let y = &self.y[..n];
-        let k = &mut self.k[..];
-        let ys = &mut self.stage_state[..n];
+        let (k, scratch) = self.k.split_at_mut(STAGE_STATE * n);
+        let (ys, scratch) = scratch.split_at_mut(n);
+        let (error3, scratch) = scratch.split_at_mut(n);
+        let error5 = &mut scratch[..n];
         macro_rules! stage {
             ($s:literal, $r:literal) => {{
                 let (done, rest) = k.split_at_mut($s * n);
@@ -563,8 +574,6 @@ impl Dop853 {
         self.clock.stats.rhs_evaluations += STAGES - 1;
         let ks: [&[f64]; STAGES] = std::array::from_fn(|j| &k[j * n..(j + 1) * n]);
         let y_trial = &mut self.y_trial[..n];
-        let error3 = &mut self.error3[..n];
-        let error5 = &mut self.error5[..n];
         // 0·v is 0 for every finite v and NaN otherwise: one sum tells
         // whether every number of the step is finite.
         let mut poison = 0.0;
@@ -606,7 +615,10 @@ impl Dop853 {
     /// `IOUT ≥ 2`): three more stages and the coefficients `cont`.
     fn prepare_dense<S: System + ?Sized>(&mut self, system: &S) -> Result<(), Failure> {
         let n = self.y.len();
-        let (stages, extra) = self.k.split_at_mut(13 * n);
+        let (stages, rest) = self.k.split_at_mut(13 * n);
+        let (extra, rest) = rest.split_at_mut((STAGE_STATE - 13) * n);
+        let (stage_state, rest) = rest.split_at_mut(n);
+        let cont = &mut rest[(CONT - STAGE_STATE - 1) * n..(BLOCKS - STAGE_STATE - 1) * n];
         continuous_extension(
             system,
             self.clock.t_old,
@@ -615,8 +627,8 @@ impl Dop853 {
             &self.y,
             &FlatStages { data: stages, n },
             extra,
-            &mut self.stage_state,
-            &mut self.cont,
+            stage_state,
+            cont,
         )?;
         self.clock.stats.rhs_evaluations += 3;
         self.dense_ready = true;
@@ -654,8 +666,14 @@ impl Dop853 {
             self.clock.t_old,
             self.clock.t,
             self.clock.h_old,
-            self.cont.clone(),
+            self.cont().to_vec(),
         ))
+    }
+
+    /// The continuous extension's coefficients (valid when `dense_ready`).
+    fn cont(&self) -> &[f64] {
+        let n = self.y.len();
+        &self.k[CONT * n..BLOCKS * n]
     }
 }
 
@@ -705,7 +723,7 @@ impl Stepper for Dop853 {
             self.prepare_dense(system)?;
         }
         contd8(
-            &self.cont,
+            self.cont(),
             n,
             (t - self.clock.t_old) / self.clock.h_old,
             out,

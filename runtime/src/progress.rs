@@ -6,8 +6,9 @@ use std::io::{IsTerminal, Write};
 use std::time::{Duration, Instant};
 
 pub struct Progress {
-    enabled: bool,
-    start: Instant,
+    /// When the run started; `None` when progress is not shown (no clock
+    /// read for a solve that shows nothing).
+    start: Option<Instant>,
     last: Option<Instant>,
     t0: f64,
     t1: f64,
@@ -16,8 +17,7 @@ pub struct Progress {
 impl Progress {
     pub fn new(wanted: bool, t0: f64, t1: f64) -> Progress {
         Progress {
-            enabled: wanted && std::io::stderr().is_terminal(),
-            start: Instant::now(),
+            start: (wanted && std::io::stderr().is_terminal()).then(Instant::now),
             last: None,
             t0,
             t1,
@@ -25,11 +25,11 @@ impl Progress {
     }
 
     pub fn update(&mut self, t: f64) {
-        if !self.enabled {
+        let Some(start) = self.start else {
             return;
-        }
+        };
         let now = Instant::now();
-        if now.duration_since(self.start) < Duration::from_secs(1) {
+        if now.duration_since(start) < Duration::from_secs(1) {
             return;
         }
         if self
@@ -46,13 +46,13 @@ impl Progress {
             "\r  t = {t:.6e} of {:.6e} ({:5.1} %), {:.1} s ",
             self.t1,
             100.0 * fraction,
-            now.duration_since(self.start).as_secs_f64()
+            now.duration_since(start).as_secs_f64()
         );
         let _ = err.flush();
     }
 
     pub fn finish(&mut self) {
-        if self.enabled && self.last.is_some() {
+        if self.start.is_some() && self.last.is_some() {
             let mut err = std::io::stderr().lock();
             let _ = write!(err, "\r{:60}\r", "");
             let _ = err.flush();

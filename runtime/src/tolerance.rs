@@ -118,11 +118,20 @@ pub fn initial_step<S: System + ?Sized>(
         0.01 * d0 / d1
     };
     h0 = h0.min(h_max);
-    let y1: Vec<f64> = y0.iter().zip(f0).map(|(y, f)| y + h0 * f).collect();
-    let mut f1 = vec![0.0; y0.len()];
-    system.rhs(t0 + h0, &y1, &mut f1)?;
-    let diff: Vec<f64> = f1.iter().zip(f0).map(|(a, b)| a - b).collect();
-    let d2 = rms_norm(&diff, y0, y0, tol) / h0;
+    // One buffer: the Euler step's state, then the slope there (a small
+    // model's whole solve costs a few microseconds).
+    let n = y0.len();
+    let mut work = vec![0.0; 2 * n];
+    let (y1, f1) = work.split_at_mut(n);
+    for ((y1, y), f) in y1.iter_mut().zip(y0).zip(f0) {
+        *y1 = y + h0 * f;
+    }
+    system.rhs(t0 + h0, y1, f1)?;
+    // The slope's change, in place.
+    for (d, f) in f1.iter_mut().zip(f0) {
+        *d -= f;
+    }
+    let d2 = rms_norm(f1, y0, y0, tol) / h0;
     let h1 = if d1.max(d2) <= 1e-15 {
         (h0 * 1e-3).max(1e-6)
     } else {
