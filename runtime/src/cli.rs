@@ -45,7 +45,9 @@ usage: MODEL [OPTIONS]
                          output times never change the steps
   --times T1,T2,...      output at these times instead
   --estimate-error       also run at a 100× tighter tolerance and report the
-                         largest difference (an estimate of the global error)
+                         largest difference (an estimate of the global error;
+                         like the error against `exact` lines, relative:
+                         |a − b| / max(|b|, 1) over samples and components)
   --anchor VALUE         field: every free anchor value c_A (default 0)
   --no-reanchor          field: stop where the conditions (13) degrade
                          instead of re-anchoring

@@ -882,6 +882,21 @@ pub fn dense_step_between<S: System + ?Sized>(
     y_old: &[f64],
     y_new: &[f64],
 ) -> Result<DenseStep, Failure> {
+    dense_step_between_measured(system, t_old, h, y_old, y_new, None).map(|(step, _)| step)
+}
+
+/// [`dense_step_between`], and with `tol` how far the step's own end
+/// misses `y_new` (Hairer's scaled RMS norm; `0` without `tol`): above 1
+/// the step is too long for one explicit step of `system`, and so is its
+/// continuous extension.
+pub fn dense_step_between_measured<S: System + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y_new: &[f64],
+    tol: Option<Tolerance>,
+) -> Result<(DenseStep, f64), Failure> {
     let n = y_old.len();
     // Hairer's stage numbering: k[0] the start rate, k[1..12] the stages.
     let mut k = vec![0.0; (STAGES + 1) * n];
@@ -894,6 +909,16 @@ pub fn dense_step_between<S: System + ?Sized>(
         }
         system.rhs(t_old + C[s] * h, &stage_state, &mut k[s * n..(s + 1) * n])?;
     }
+    let miss = match tol {
+        Some(tol) => {
+            let own_end: Vec<f64> = (0..n)
+                .map(|i| y_old[i] + h * B.iter().map(|&(j, w)| w * k[j * n + i]).sum::<f64>())
+                .collect();
+            let miss: Vec<f64> = own_end.iter().zip(y_new).map(|(a, b)| a - b).collect();
+            crate::tolerance::rms_norm(&miss, y_old, y_new, tol)
+        }
+        None => 0.0,
+    };
     system.rhs(t_old + h, y_new, &mut k[STAGES * n..])?;
     // This module's storage: k[0] the end rate, k[12] the start rate.
     let (start, rest) = k.split_at_mut(STAGES * n);
@@ -914,7 +939,7 @@ pub fn dense_step_between<S: System + ?Sized>(
     if first_non_finite(&cont).is_some() {
         return Err(Failure::non_finite(t_old, system.component_name(0)));
     }
-    Ok(DenseStep::dop853(t_old, t_old + h, h, cont))
+    Ok((DenseStep::dop853(t_old, t_old + h, h, cont), miss))
 }
 
 /// An accepted step as data (see [`Dop853::raw_step`]): one buffer of

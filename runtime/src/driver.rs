@@ -7,7 +7,7 @@
 
 use crate::budget::Budget;
 use crate::direct::Direct;
-use crate::events::locate;
+use crate::events::{locate, SwitchPace};
 use crate::failure::{Failure, FailureKind};
 use crate::field::affine::AffineField;
 use crate::field::quasilinear::QuasilinearField;
@@ -320,7 +320,10 @@ fn run_with(
         next_sample += 1;
     }
     if model.switches() > 0 && model.stop(&regime.branches) {
-        if times.last().is_none_or(|&t| t > t0) {
+        // The last row is at the stop time, t0: written above when t0 is a
+        // sample time, else now.
+        let already = next_sample > 0 && times[next_sample - 1] == t0;
+        if !already {
             sample(model, t0, x0)?;
         }
         return Ok(Outcome {
@@ -344,11 +347,20 @@ fn run_with(
     let mut progress = Progress::new(options.progress, t0, t1);
     let mut g_now = vec![0.0; model.switches()];
     let mut x_event = vec![0.0; n];
+    let mut step_ends: Vec<f64> = Vec::new();
+    let mut pace = SwitchPace::default();
+    // After a step across a vanishing pivot: how far the retry may reach.
+    let mut pivot_limit: Option<f64> = None;
+    let (mut g_half, mut g_three_quarters) = (g_now.clone(), g_now.clone());
     while solver.time() < t1 {
         // Where the solution stands: after the last step, or where an
         // event restarted it.
         budget.accepted_to(solver.time());
-        if let Err(mut failure) = solver.advance(model, t1, &budget) {
+        let mut t_limit = pace.limit(solver.time(), t1);
+        if let Some(t) = pivot_limit.take() {
+            t_limit = t_limit.min(t);
+        }
+        if let Err(mut failure) = solver.advance(model, t_limit, &budget) {
             if matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) {
                 // Where the solution stands (after the last step and any
                 // event's restart), not where the field's predictor or a
@@ -372,32 +384,48 @@ fn run_with(
         // A switch whose function changed sign against its branch.
         let mut event: Option<(f64, Vec<usize>)> = None;
         if model.switches() > 0 {
-            // The step's end and three points inside it: a function that
-            // crosses zero and back within one step is seen at one of them
-            // unless both crossings fall between two neighbours.
-            let mut t_check = tb;
+            // In each of the integrator's steps (one for direct
+            // integration, a window's for the field), the step's end and
+            // three points inside it: a function that crosses zero and back
+            // within one step is seen at one of them unless both crossings
+            // fall between two neighbours. The search for the crossing
+            // starts at the beginning of the first step where one is seen.
+            solver.step_ends(&mut step_ends);
+            let (mut t_check, mut t_from) = (tb, ta);
             let mut changed: Vec<usize> = Vec::new();
-            for fraction in [0.25, 0.5, 0.75, 1.0] {
-                let t = if fraction == 1.0 {
-                    tb
-                } else {
-                    ta + fraction * (tb - ta)
-                };
-                if fraction == 1.0 {
-                    model.switching_functions(tb, solver.state(), &mut g_now);
-                } else {
-                    solver.dense(model, t, &mut x_event)?;
-                    model.switching_functions(t, &x_event, &mut g_now);
+            let mut start = ta;
+            'scan: for &end in &step_ends {
+                for fraction in [0.25, 0.5, 0.75, 1.0] {
+                    let t = if fraction == 1.0 {
+                        end
+                    } else {
+                        start + fraction * (end - start)
+                    };
+                    if t == tb {
+                        model.switching_functions(tb, solver.state(), &mut g_now);
+                    } else {
+                        solver.dense(model, t, &mut x_event)?;
+                        model.switching_functions(t, &x_event, &mut g_now);
+                    }
+                    changed = (0..model.switches())
+                        .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
+                        .collect();
+                    if !changed.is_empty() {
+                        (t_check, t_from) = (t, start);
+                        break 'scan;
+                    }
+                    if fraction == 0.5 {
+                        g_half.copy_from_slice(&g_now);
+                    } else if fraction == 0.75 {
+                        g_three_quarters.copy_from_slice(&g_now);
+                    }
                 }
-                changed = (0..model.switches())
-                    .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
-                    .collect();
-                if !changed.is_empty() {
-                    t_check = t;
-                    break;
+                if end == tb {
+                    pace.observe(end - start, &g_half, &g_three_quarters, &g_now);
                 }
+                start = end;
             }
-            let tb = t_check;
+            let (ta, tb) = (t_from, t_check);
             if !changed.is_empty() {
                 let mut roots = Vec::with_capacity(changed.len());
                 for &k in &changed {
@@ -472,10 +500,23 @@ fn run_with(
             None => {
                 // A step across a vanishing pivot is not a solution: it is
                 // taken again with another candidate, or the run stops.
-                if !model.constraints().is_empty()
-                    && pivot_crossed(model, &mut regime, solver.as_mut(), ta, tb)?
-                {
-                    continue;
+                if !model.constraints().is_empty() {
+                    match pivot_crossed(model, &mut regime, solver.as_mut(), ta, tb)? {
+                        PivotCrossing::None => {}
+                        crossing => {
+                            if let Some(pieces) = pieces.as_deref_mut() {
+                                // The step is taken again from its start.
+                                pieces.retain(|p| p.segment.t_old() < ta);
+                                if let Some(last) = pieces.last_mut() {
+                                    last.until = last.until.min(ta);
+                                }
+                            }
+                            if let PivotCrossing::Retry(t) = crossing {
+                                pivot_limit = Some(t);
+                            }
+                            continue;
+                        }
+                    }
                 }
                 emit_until(model, solver.as_mut(), &mut next_sample, tb, &mut sample)?;
                 if !model.constraints().is_empty() {
@@ -500,18 +541,34 @@ fn run_with(
     })
 }
 
+/// What a step across a vanishing pivot calls for.
+enum PivotCrossing {
+    /// No current candidate's pivot changed sign within the step.
+    None,
+    /// Restarted at the step's start in the mode of a better candidate.
+    Switched,
+    /// Restarted at the step's start in the same mode: the next step may
+    /// reach at most this far, so that it ends where the pivot is poor but
+    /// not yet zero and [`switch_candidates`] chooses another candidate.
+    Retry(f64),
+}
+
 /// Whether the current candidate's pivot of some constraint changed sign
 /// within the step `[ta, tb]`: then the step divided by a vanishing pivot.
-/// With a better candidate at `ta` the run restarts there in that mode
-/// (true); without one it stops, naming the constraint and the time where
-/// the pivot vanishes.
+/// With a better candidate at `ta` the run restarts there in that mode.
+/// With another candidate that is not better yet (a long step, a field
+/// window, crossed both where the candidates' pivots cross and where the
+/// current one vanishes), it restarts at `ta` and the next step reaches at
+/// most halfway to the pivot's zero. With no other candidate, or the zero
+/// closer than rounding can resolve, the run stops, naming the constraint
+/// and the time where the pivot vanishes.
 fn pivot_crossed(
     model: &mut dyn DynModel,
     regime: &mut Regime,
     solver: &mut dyn Solver,
     ta: f64,
     tb: f64,
-) -> Result<bool, Failure> {
+) -> Result<PivotCrossing, Failure> {
     let total: usize = model.constraints().iter().map(|c| c.names.len()).sum();
     let n = solver.state().len();
     let mut x_a = vec![0.0; n];
@@ -531,10 +588,16 @@ fn pivot_crossed(
                 regime.mode = mode;
                 model.set_regime(regime);
                 solver.restart(model, ta, &x_a)?;
-                return Ok(true);
+                return Ok(PivotCrossing::Switched);
             }
             // The pivot's zero, by linear interpolation within the step.
             let t_zero = ta + (tb - ta) * a / (a - b);
+            let halfway = ta + 0.5 * (t_zero - ta);
+            let resolvable = halfway - ta > 64.0 * f64::EPSILON * ta.abs().max(1.0);
+            if c.names.len() > 1 && resolvable {
+                solver.restart(model, ta, &x_a)?;
+                return Ok(PivotCrossing::Retry(halfway));
+            }
             return Err(Failure::new(
                 t_zero,
                 FailureKind::ConstraintPivotVanishes {
@@ -545,7 +608,7 @@ fn pivot_crossed(
         }
         at += c.names.len();
     }
-    Ok(false)
+    Ok(PivotCrossing::None)
 }
 
 /// After a step: when a constraint's current candidate has become poor

@@ -365,7 +365,8 @@ impl<M: Model + 'static> DynModel for M {
         Model::rhs(self, t, x, dx)
     }
     fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
-        Model::jacobian(self, t, x, jac)
+        Model::jacobian(self, t, x, jac)?;
+        repair_jacobian(self, t, x, jac)
     }
     fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
         Model::time_partial(self, t, x, dxdt)
@@ -377,7 +378,8 @@ impl<M: Model + 'static> DynModel for M {
         dx: &mut [f64],
         jac: &mut Matrix,
     ) -> Result<(), Failure> {
-        Model::linearize(self, t, x, dx, jac)
+        Model::linearize(self, t, x, dx, jac)?;
+        repair_jacobian(self, t, x, jac)
     }
     fn coefficients(&self, t: f64, f: &[f64], df: &mut [f64]) -> Result<(), Failure> {
         Model::coefficients(self, t, f, df)
@@ -409,4 +411,41 @@ impl<M: Model + 'static> DynModel for M {
     fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix> {
         Model::mass_matrix(self, t, x)
     }
+}
+
+/// Replaces the columns of an exact Jacobian that are not finite at a
+/// finite state by central differences of the right side. The symbolic
+/// derivative of a right side that is smooth there can be `0/0`: drag
+/// `|v| v_x` written `sqrt(x'^2 + y'^2) * x'` has `∂/∂x' = |v| + x'^2/|v|`,
+/// NaN for a body at rest, where its limit is 0 (the field method, which
+/// linearises at every stage, stopped at t = 0 on every such model started
+/// from rest). Costs one pass over the entries where all are finite.
+fn repair_jacobian<M: Model>(
+    model: &M,
+    t: f64,
+    x: &[f64],
+    jac: &mut Matrix,
+) -> Result<(), Failure> {
+    if jac.is_finite() || x.iter().any(|v| !v.is_finite()) {
+        return Ok(());
+    }
+    let n = x.len();
+    let (mut shifted, mut ahead, mut behind) = (x.to_vec(), vec![0.0; n], vec![0.0; n]);
+    for j in 0..n {
+        if jac.column(j).iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        // The step that balances truncation and rounding for a central
+        // difference.
+        let h = f64::EPSILON.cbrt() * x[j].abs().max(1.0);
+        shifted[j] = x[j] + h;
+        model.rhs(t, &shifted, &mut ahead)?;
+        shifted[j] = x[j] - h;
+        model.rhs(t, &shifted, &mut behind)?;
+        shifted[j] = x[j];
+        for (i, (a, b)) in ahead.iter().zip(&behind).enumerate() {
+            jac[(i, j)] = (a - b) / (2.0 * h);
+        }
+    }
+    Ok(())
 }

@@ -48,6 +48,16 @@ pub trait Solver {
     ) -> Result<(), Failure>;
     /// The state at `t` in `[previous_time, time]`.
     fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure>;
+    /// The ends of the integrator's own steps within the last advance, in
+    /// order, the last being [`Solver::time`] (into `out`, cleared first).
+    /// One advance of the quasilinear field covers a whole window of
+    /// steps: the driver looks at the switching functions within each of
+    /// them, as it does within a step of direct integration, or an
+    /// oscillation inside a window hides its crossings.
+    fn step_ends(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.push(self.time());
+    }
     /// Starts afresh from `(t, x)` (after an event changed the regime).
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
     /// The work so far.

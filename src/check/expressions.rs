@@ -57,7 +57,7 @@ impl Allowed {
 }
 
 /// A coordinate's derivative found in an expression.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CoordUse {
     pub coord: usize,
     pub order: u32,

@@ -524,11 +524,20 @@ impl Checker<'_> {
                     ok = false;
                     break;
                 }
-                Some(_) => uses.coords.push(CoordUse {
-                    coord: used.coord,
-                    order,
-                    span,
-                }),
+                Some(_) => {
+                    // One entry per coordinate and order at this use: a let
+                    // used twice by the next, and so on, would otherwise
+                    // double its list at every level (a chain of 30 lets
+                    // took 13 GB to check).
+                    let entry = CoordUse {
+                        coord: used.coord,
+                        order,
+                        span,
+                    };
+                    if !uses.coords.contains(&entry) {
+                        uses.coords.push(entry);
+                    }
+                }
             }
         }
         ok.then_some(ty)

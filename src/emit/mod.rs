@@ -65,6 +65,8 @@ pub struct GeneratedCrate {
     /// `--init` names), for checking a run's options before building.
     pub params: Vec<String>,
     pub state: Vec<String>,
+    /// The output columns after the state (`--phase` may name them).
+    pub outputs: Vec<String>,
     pub files: Vec<(String, String)>,
 }
 
@@ -208,6 +210,7 @@ pub fn emit_crate(
             .iter()
             .map(|&s| kernel.arena.symbol_name(s))
             .collect(),
+        outputs: kernel.outputs.iter().map(|(n, _)| n.clone()).collect(),
         files: out,
     })
 }

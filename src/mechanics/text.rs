@@ -149,7 +149,11 @@ impl Derivation {
                 );
             }
         }
-        out.push_str("initial values at t0:\n");
+        // Another mode of an implicit constraint (`lagc derive` shows every
+        // mode's system) starts from the first mode's initial values.
+        if !self.reduced.initial.is_empty() {
+            out.push_str("initial values at t0:\n");
+        }
         for (&s, value) in self.reduced.state.iter().zip(&self.reduced.initial) {
             let what = match value {
                 InitialValue::Given(e) => format!("{}", a.display(*e)),

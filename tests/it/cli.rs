@@ -111,6 +111,56 @@ fn run_reproduces_the_paper_and_does_not_rebuild_an_unchanged_model() {
     assert_eq!(String::from_utf8(second.stdout).unwrap(), stdout);
 }
 
+/// `lagc derive` shows the reduced system (7) of every candidate of an
+/// implicit constraint (SPEC 2.2: "lagc derives the reduced system (7) for
+/// each"); it showed the first only.
+#[test]
+fn derive_shows_every_candidates_reduced_system() {
+    let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .args(["derive", "examples/knife_edge_turning.lag"])
+        .current_dir(crate::root())
+        .output()
+        .expect("lagc runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("  y' = sin(th)*x'/cos(th)"), "{stdout}");
+    assert!(stdout.contains("--- mode 2 of 2"), "{stdout}");
+    assert!(stdout.contains("  x' = cos(th)*y'/sin(th)"), "{stdout}");
+}
+
+/// `lagc run … --plot F --phase X,Y` may name an output column (SPEC 2.2:
+/// "one column against another"): `lagc run` checks the options before it
+/// builds, with the outputs among the columns (it listed only the state).
+#[test]
+fn run_draws_a_phase_plot_of_an_output_against_a_coordinate() {
+    let cache = crate::root().join("target/lagc-cache");
+    let svg = crate::root().join("target/phase-output.svg");
+    let _ = std::fs::remove_file(&svg);
+    let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .args([
+            "run",
+            "examples/double_pendulum_energy.lag",
+            "--samples",
+            "3",
+            "--plot",
+        ])
+        .arg(&svg)
+        .args(["--phase", "a,E"])
+        .env("LAGC_CACHE_DIR", &cache)
+        .current_dir(crate::root())
+        .output()
+        .expect("lagc runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    let drawn = std::fs::read_to_string(&svg).expect("the plot is written");
+    assert!(drawn.contains("<svg"), "{drawn}");
+}
+
 /// Issue 15, item 4: every path runs the same derivation checks. A model
 /// whose equations (4) fail the cross-check is refused by `check`,
 /// `derive`, `build`, `run` and `report` alike, with the same message, and

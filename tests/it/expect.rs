@@ -168,7 +168,8 @@ fn parse_line(line: &str) -> Result<Expectation, String> {
             let mut run_words: Vec<&str> = w[..within].to_vec();
             run_words.extend(&w[within + 2..]);
             let run = run_of(&run_words)?;
-            if !run.flags.is_empty() {
+            // Flags only after `with` (`… with --samples 191`).
+            if !run.flags.is_empty() && !run_words.contains(&"with") {
                 return Err(format!("unexpected words {:?}", run.flags));
             }
             Ok(Expectation::Within { run, tol })

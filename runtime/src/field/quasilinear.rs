@@ -371,6 +371,7 @@ impl Solver for QuasilinearField {
             return Err(failure);
         }
         let mut retries = 0;
+        let mut t_limit = t_limit;
         loop {
             let predictor = Predictor::new(
                 model,
@@ -410,6 +411,12 @@ impl Solver for QuasilinearField {
                     // A loose predictor can leave the motion's domain where
                     // the motion itself does not (a square root near its
                     // branch point): predict more tightly before giving up.
+                    // The window may also end halfway to where it failed:
+                    // ahead of a switch the predictor follows the branch the
+                    // window started on (a burning rocket's mass law,
+                    // `M0 − μ t`, long after its burnout, to where it
+                    // vanishes), which the motion leaves at the switch.
+                    let shorter = failure.time > self.t && failure.time < t_limit;
                     let retry = matches!(
                         failure.kind,
                         FailureKind::NonFiniteRate { .. }
@@ -417,13 +424,16 @@ impl Solver for QuasilinearField {
                             | FailureKind::StepSizeUnderflow { .. }
                             | FailureKind::NewtonNonConvergence { .. }
                             | FailureKind::SingularMassMatrix { .. }
-                    ) && self.predictor_ratio > MIN_PREDICTOR_RATIO
+                    ) && (self.predictor_ratio > MIN_PREDICTOR_RATIO || shorter)
                         && retries < 12;
                     if !retry {
                         return Err(super::explain(model, failure, self.t, &self.x));
                     }
                     retries += 1;
                     self.predictor_ratio = (self.predictor_ratio * 0.01).max(MIN_PREDICTOR_RATIO);
+                    if shorter {
+                        t_limit = self.t + 0.5 * (failure.time - self.t);
+                    }
                     continue;
                 }
             };
@@ -497,6 +507,20 @@ impl Solver for QuasilinearField {
             debug_assert_eq!(self.x.len(), n);
             return Ok(());
         }
+    }
+
+    fn step_ends(&self, out: &mut Vec<f64>) {
+        out.clear();
+        if let Some(window) = &self.accepted {
+            out.extend(
+                window
+                    .steps
+                    .iter()
+                    .map(|s| s.t_new())
+                    .filter(|&t| t > self.t_prev && t < self.t),
+            );
+        }
+        out.push(self.t);
     }
 
     fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure> {

@@ -396,6 +396,11 @@ impl Window {
         &self.current.state
     }
 
+    /// The state at the last step's start.
+    pub fn previous_state(&self) -> &[f64] {
+        &self.previous_state
+    }
+
     pub fn recovered(&self) -> &Recovered {
         &self.current
     }

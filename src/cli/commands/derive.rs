@@ -8,34 +8,56 @@ use std::process::ExitCode;
 pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
     // The same derivation, cross-check included, as every other path: a
     // model whose equations (4) fail it is a model with errors (E0033).
+    // An implicit constraint with several candidates has a reduced system
+    // (7) for each choice (SPEC 2.2): the text shows every mode's, the
+    // first in full.
     let stage = |source: &str| {
         let model = lagc::frontend(source)?;
-        lagc::mechanics::derive_checked(&model).map(|checked| (checked, Vec::new()))
-    };
-    status(compile(&args.file, stage, |(derivation, check)| {
-        match args.format {
-            Format::Text => {
-                print!("{}", derivation.text());
-                let reduced = derivation.reduced.clone();
-                let mut arena = derivation.arena.clone();
-                let field = lagc::field::field_system(&mut arena, &reduced);
-                print!("{}", field.text(&arena, &reduced.state));
-            }
-            Format::Latex => {
-                let reduced = derivation.reduced.clone();
-                let mut arena = derivation.arena.clone();
-                let field = lagc::field::field_system(&mut arena, &reduced);
-                print!(
-                    "\\begin{{align*}}\n{}{}\\end{{align*}}\n",
-                    derivation.latex_lines(),
-                    field.latex_lines(&arena, &reduced.state)
-                );
-            }
+        let first = lagc::mechanics::derive_checked(&model)?;
+        let mut others = Vec::new();
+        for mode in 1..model.mode_count() {
+            others.push(lagc::mechanics::derive_mode_checked(&model.in_mode(mode))?);
         }
-        eprintln!(
-            "cross-check of (4) against the multiplier route: passed at {} points",
-            check.points
-        );
-        ExitCode::SUCCESS
-    }))
+        Ok(((first, others), Vec::new()))
+    };
+    status(compile(
+        &args.file,
+        stage,
+        |((derivation, check), others)| {
+            match args.format {
+                Format::Text => {
+                    print!("{}", derivation.text());
+                    let reduced = derivation.reduced.clone();
+                    let mut arena = derivation.arena.clone();
+                    let field = lagc::field::field_system(&mut arena, &reduced);
+                    print!("{}", field.text(&arena, &reduced.state));
+                    let modes = others.len() + 1;
+                    for (i, other) in others.iter().enumerate() {
+                        println!(
+                            "\n--- mode {} of {modes}: the implicit constraints solved for \
+                         another candidate (the run switches to it where its pivot is \
+                         the larger) ---\n",
+                            i + 2
+                        );
+                        print!("{}", other.text());
+                    }
+                }
+                Format::Latex => {
+                    let reduced = derivation.reduced.clone();
+                    let mut arena = derivation.arena.clone();
+                    let field = lagc::field::field_system(&mut arena, &reduced);
+                    print!(
+                        "\\begin{{align*}}\n{}{}\\end{{align*}}\n",
+                        derivation.latex_lines(),
+                        field.latex_lines(&arena, &reduced.state)
+                    );
+                }
+            }
+            eprintln!(
+                "cross-check of (4) against the multiplier route: passed at {} points",
+                check.points
+            );
+            ExitCode::SUCCESS
+        },
+    ))
 }

@@ -16,7 +16,8 @@ pub(crate) fn run(args: &RunArgs) -> ExitCode {
     // They are passed on as they came.
     let params: Vec<&str> = generated.params.iter().map(String::as_str).collect();
     let state: Vec<&str> = generated.state.iter().map(String::as_str).collect();
-    let parsed = lagc_runtime::cli::parse(&args.args, &params, &state, &[]);
+    let outputs: Vec<&str> = generated.outputs.iter().map(String::as_str).collect();
+    let parsed = lagc_runtime::cli::parse(&args.args, &params, &state, &outputs);
     match parsed {
         Err(message) => {
             eprintln!("error: {message}\n\n{}", lagc_runtime::cli::USAGE);
