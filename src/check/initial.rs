@@ -119,6 +119,32 @@ impl Checker<'_> {
             if let Some(statement) = first_statement {
                 diagnostic = diagnostic.with_secondary(statement, "initial values are given here");
             }
+            // A later candidate of an implicit constraint: the initial
+            // values take the first candidate as the derivative the
+            // constraint fixes. A motion that starts where the other one
+            // must be fixed (a knife edge heading along y, where
+            // `for y' or x'` cannot give y' from x') names it first.
+            let later_candidate = constraints.iter().find_map(|c| {
+                let implicit = c.implicit.as_ref()?;
+                let first = *implicit.candidates.first()?;
+                let missing_order = !initial
+                    .iter()
+                    .any(|i| (i.coord, i.order) == (coord, c.order));
+                (implicit.candidates.iter().skip(1).any(|&q| q == coord) && missing_order)
+                    .then_some((first, c.order))
+            });
+            if let Some((first, order)) = later_candidate {
+                let primes = "'".repeat(order as usize);
+                let (this, other) = (
+                    format!("{}{primes}", coordinate.name),
+                    format!("{}{primes}", self.coords[first].name),
+                );
+                diagnostic = diagnostic.with_help(format!(
+                    "the initial values take the first candidate, `{other}`, as the \
+                     derivative the constraint fixes; to give `{other}` and have `{this}` \
+                     fixed instead, name `{this}` first: `for {this} or {other}`"
+                ));
+            }
             self.report(diagnostic);
         }
     }
