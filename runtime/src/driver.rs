@@ -101,15 +101,28 @@ pub fn initial_branches(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Vec<bool> 
         return Vec::new();
     }
     let mut g = vec![0.0; k];
-    model.switching_functions(t0, x0, &mut g);
-    if g.contains(&0.0) {
-        // The right side reads the branches: give it those already known
-        // (a function exactly zero provisionally positive).
-        let mut model = model.boxed_clone();
+    // A switching function may read another's branch (`stop when
+    // abs(x - 1.5) < 0.5` reads the kink's): evaluate them again under the
+    // branches found until these settle (at most once per function; a
+    // function exactly zero provisionally positive). Under the default
+    // branches that stop fired at t0 from x = 0, exit 0.
+    let mut model = model.boxed_clone();
+    let mode = best_mode(&*model, t0, x0).0;
+    let mut branches: Vec<bool> = Vec::new();
+    for _ in 0..=k {
+        model.switching_functions(t0, x0, &mut g);
+        let found: Vec<bool> = g.iter().map(|&v| v >= 0.0).collect();
+        if found == branches {
+            break;
+        }
+        branches = found;
         model.set_regime(&Regime {
-            mode: best_mode(&*model, t0, x0).0,
-            branches: g.iter().map(|&v| v >= 0.0).collect(),
+            mode,
+            branches: branches.clone(),
         });
+    }
+    if g.contains(&0.0) {
+        // The right side reads the branches: it has those already known.
         let model = &*model;
         // A moment later along Heun's second-order step, so that a function
         // whose first derivative also vanishes (a rocket at rest on the

@@ -464,6 +464,19 @@ fn every_kink_of_a_rectified_forcing_is_an_event() {
     }
 }
 
+/// A stop condition that reads another switch's branch (a kink) is read
+/// at t0 under the branches the initial state is on.
+#[test]
+fn a_stop_that_reads_a_kink_does_not_fire_at_the_start() {
+    let binary = build_file(&crate::root().join("tests/data/v2/stop_inside_band.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "11"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let t_stop = run.stop_time();
+        assert!((t_stop - 1.0).abs() < 1e-9, "{method}: stopped at {t_stop}");
+    }
+}
+
 #[test]
 fn every_function_and_operator_runs_and_outputs_what_it_means() {
     let binary = build_file(&crate::root().join("tests/data/v2/constructs.lag"));
