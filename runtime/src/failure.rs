@@ -190,8 +190,11 @@ impl fmt::Display for Failure {
             FailureKind::FieldNotConverging { correction } => write!(
                 f,
                 "at t = {t:e}: the field method's linearisation along the motion does \
-                 not converge even on the shortest window (last correction \
-                 {correction:.3e} of the tolerance)"
+                 not converge even on the shortest window (Newton's error bound above \
+                 {correction:.1e} of the tolerance on every first step). The motion may \
+                 not be smooth here (a force or constraint with |v| or sign(v) at a \
+                 velocity that reaches zero, switching without end) or may reach a \
+                 singularity"
             ),
             FailureKind::ConstraintPivotVanishes { constraint, pivot } => write!(
                 f,

@@ -98,19 +98,41 @@ pub fn solve_symmetric_fixed_checked<const N: usize>(
 
 /// Newton's method on `G(z) = 0` from `z`: `residual(z, g, g_z)` writes `G`
 /// and `G_z` (zeroed). Returns `z` and the factors of `G_z` at it.
+///
+/// A step that leaves the equations' domain (a residual or a `z` not
+/// finite: `x''/√(A² − x''²)` past `|x''| = A`) is halved until it stays
+/// inside: from `z = 0` the first full step of `k x − m g x''/√(A² −
+/// x''²) = 0` lands on the boundary exactly where `k x ≥ m g`, and the run
+/// stopped there although the root is regular.
 pub fn newton(
     t: f64,
     mut z: Vec<f64>,
     mut residual: impl FnMut(&[f64], &mut [f64], &mut Matrix) -> Result<(), Failure>,
 ) -> Result<(Vec<f64>, Lu), Failure> {
     const MAX_ITERATIONS: usize = 50;
+    /// Halvings of one step before the domain is given up.
+    const MAX_HALVINGS: usize = 30;
     let m = z.len();
     let mut g = vec![0.0; m];
     let mut g_z = Matrix::zeros(m, m);
     let mut norm = f64::INFINITY;
+    let mut trial = z.clone();
+    // Whether `g`, `g_z` hold the residual at `z` (after an accepted step).
+    let mut evaluated = false;
+    let fails = |norm: f64, iterations: usize| {
+        Failure::new(
+            t,
+            FailureKind::NewtonNonConvergence {
+                residual: norm,
+                iterations,
+            },
+        )
+    };
     for iteration in 0..MAX_ITERATIONS {
-        g_z.fill(0.0);
-        residual(&z, &mut g, &mut g_z)?;
+        if !evaluated {
+            g_z.fill(0.0);
+            residual(&z, &mut g, &mut g_z)?;
+        }
         norm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
         let lu = Lu::new(&g_z);
         if lu.is_singular() {
@@ -118,41 +140,46 @@ pub fn newton(
             // root: step aside once before giving up.
             if iteration == 0 {
                 z.iter_mut().for_each(|v| *v += 1e-3 * v.abs().max(1.0));
+                evaluated = false;
                 continue;
             }
-            return Err(Failure::new(
-                t,
-                FailureKind::NewtonNonConvergence {
-                    residual: norm,
-                    iterations: iteration,
-                },
-            ));
+            return Err(fails(norm, iteration));
         }
         let mut step: Vec<f64> = g.iter().map(|v| -v).collect();
         lu.solve_in_place(&mut step);
         let step_norm = step.iter().map(|v| v * v).sum::<f64>().sqrt();
         let z_norm = z.iter().map(|v| v * v).sum::<f64>().sqrt();
-        for (zi, s) in z.iter_mut().zip(&step) {
-            *zi += s;
+        if !step_norm.is_finite() {
+            return Err(fails(norm, iteration));
         }
-        if z.iter().any(|v| !v.is_finite()) {
-            break;
-        }
-        // Quadratic convergence: after a step of 1e-12 (relative) the error
-        // left is at rounding level.
-        if step_norm <= 1e-12 * z_norm.max(1.0) {
+        let mut fraction = 1.0;
+        let mut halvings = 0;
+        loop {
+            for ((zt, zi), s) in trial.iter_mut().zip(&z).zip(&step) {
+                *zt = zi + fraction * s;
+            }
             g_z.fill(0.0);
-            residual(&z, &mut g, &mut g_z)?;
+            let inside = trial.iter().all(|v| v.is_finite())
+                && residual(&trial, &mut g, &mut g_z).is_ok()
+                && g.iter().all(|v| v.is_finite());
+            if inside {
+                break;
+            }
+            halvings += 1;
+            if halvings > MAX_HALVINGS {
+                return Err(fails(norm, iteration + 1));
+            }
+            fraction *= 0.5;
+        }
+        std::mem::swap(&mut z, &mut trial);
+        evaluated = true;
+        // Quadratic convergence: after a full step of 1e-12 (relative)
+        // the error left is at rounding level.
+        if halvings == 0 && step_norm <= 1e-12 * z_norm.max(1.0) {
             return Ok((z, Lu::new(&g_z)));
         }
     }
-    Err(Failure::new(
-        t,
-        FailureKind::NewtonNonConvergence {
-            residual: norm,
-            iterations: MAX_ITERATIONS,
-        },
-    ))
+    Err(fails(norm, MAX_ITERATIONS))
 }
 
 /// `out = −G_z⁻¹ · partials` column by column (`partials` is `m × k`): the
@@ -190,6 +217,22 @@ mod tests {
         let mut g_x = Matrix::from_rows(&[&[-1.0]]);
         implicit_derivatives(&lu, &mut g_x);
         assert!((g_x[(0, 0)] - 1.0 / 13.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_step_out_of_the_domain_is_halved() {
+        // G(z) = k − z/√(A² − z²) with k = 2, A = 1.5: z = A k/√(1 + k²).
+        // From 0 the full step is z = A k = 3, outside |z| < A.
+        let (k, a) = (2.0_f64, 1.5_f64);
+        let (z, _) = newton(0.0, vec![0.0], |z, g, g_z| {
+            let r = (a * a - z[0] * z[0]).sqrt();
+            g[0] = k - z[0] / r;
+            g_z[(0, 0)] = -a * a / (r * r * r);
+            Ok(())
+        })
+        .unwrap();
+        let exact = a * k / (1.0 + k * k).sqrt();
+        assert!((z[0] - exact).abs() < 1e-14, "{} against {exact}", z[0]);
     }
 
     #[test]

@@ -464,6 +464,129 @@ fn every_kink_of_a_rectified_forcing_is_an_event() {
     }
 }
 
+/// A clock far faster than the motion (tests/data/v2/pwm_pendulum.lag):
+/// both methods locate all 1591 switches and agree.
+#[test]
+fn a_fast_clock_switches_every_time_in_both_methods() {
+    let binary = build_file(&crate::root().join("tests/data/v2/pwm_pendulum.lag"));
+    let ends: Vec<Vec<f64>> = METHODS
+        .iter()
+        .map(|method| {
+            let run = run(&binary, &["--method", method, "--samples", "2"]);
+            assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+            assert!(
+                run.stderr.contains("events: 1591;"),
+                "{method}: {}",
+                run.stderr
+            );
+            run.rows.last().unwrap().clone()
+        })
+        .collect();
+    let difference = crate::largest_difference(&ends[0], &ends[1]);
+    assert!(
+        difference < 1e-9,
+        "field and direct differ by {difference:e}"
+    );
+}
+
+/// Pulses of a clock above a level, at every width down to a 3 % duty
+/// cycle (tests/data/v2/narrow_pulses.lag): every switch located, the
+/// velocity against its closed form.
+#[test]
+fn narrow_pulses_of_a_clock_above_a_level_are_all_located() {
+    use std::f64::consts::PI;
+    let (m, f, w, v0) = (2.0, 3.0, 500.0, 0.5);
+    let binary = build_file(&crate::root().join("tests/data/v2/narrow_pulses.lag"));
+    for c in [0.5_f64, 0.999] {
+        let a = c.asin();
+        let exact = |t: f64| {
+            let n = (w * t / (2.0 * PI)).floor();
+            let theta = w * t - 2.0 * PI * n;
+            v0 + f / m * (n * (PI - 2.0 * a) + (theta - a).clamp(0.0, PI - 2.0 * a)) / w
+        };
+        for method in METHODS {
+            let param = format!("c={c}");
+            let args = ["--method", method, "--param", &param, "--samples", "101"];
+            let run = run(&binary, &args);
+            assert_eq!(run.code, 0, "{method} at c = {c}: {}", run.stderr);
+            assert!(
+                run.stderr.contains("events: 1592;"),
+                "{method} at c = {c}: {}",
+                run.stderr
+            );
+            let error = run
+                .rows
+                .iter()
+                .map(|r| (r[2] - exact(r[0])).abs())
+                .fold(0.0, f64::max);
+            assert!(error < 1e-9, "{method} at c = {c}: error {error:e}");
+        }
+    }
+}
+
+/// A non-linear k = 2 constraint whose Newton iteration first steps onto
+/// the edge of its square root's domain (tests/data/v2/acceleration_magnitude.lag):
+/// both methods reach the end, keep the hand-derived first integral, and
+/// end where the hand-derived equations x'' = A s/√(1 + s²),
+/// y'' = A/√(1 + s²) end (SciPy's DOP853 at rtol 1e-13; its Radau at
+/// 1e-12 agrees to 5e-13).
+#[test]
+fn a_fixed_acceleration_magnitude_runs_past_its_newton_boundary() {
+    let reference = [
+        69.7852115810168,
+        28.729078692650734,
+        14.382808753768598,
+        3.245510990101776,
+    ];
+    let binary = build_file(&crate::root().join("tests/data/v2/acceleration_magnitude.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "101"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        assert!(
+            drift(&run, "E") < 1e-9,
+            "{method}: E drifts {:e}",
+            drift(&run, "E")
+        );
+        let end = &run.rows.last().unwrap()[1..5];
+        let difference = crate::largest_difference(end, &reference);
+        assert!(
+            difference < 1e-9,
+            "{method}: {end:?}, by hand {reference:?}"
+        );
+    }
+}
+
+/// A switch located at a Riccati pole of the field's coefficients
+/// (tests/data/v2/output_switch_at_pole.lag): the run goes on, on
+/// x = sin t, with the output's switches in place.
+#[test]
+fn an_output_switch_at_a_coefficient_pole_runs_on() {
+    let binary = build_file(&crate::root().join("tests/data/v2/output_switch_at_pole.lag"));
+    for rtol in ["1e-6", "1e-7", "1e-8"] {
+        let run = run(
+            &binary,
+            &["--method", "field", "--rtol", rtol, "--samples", "101"],
+        );
+        assert_eq!(run.code, 0, "rtol {rtol}: {}", run.stderr);
+        assert!(
+            run.stderr.contains("events: 3;"),
+            "rtol {rtol}: {}",
+            run.stderr
+        );
+        let rising = run.column("rising");
+        for row in &run.rows {
+            let t: f64 = row[0];
+            assert!(
+                (row[1] - t.sin()).abs() < 1e-4,
+                "rtol {rtol}: x({t}) = {}",
+                row[1]
+            );
+            let expected = if t.cos() > 0.0 { 1.0 } else { 0.0 };
+            assert_eq!(row[rising], expected, "rtol {rtol} at t = {t}");
+        }
+    }
+}
+
 /// A stop condition that reads another switch's branch (a kink) is read
 /// at t0 under the branches the initial state is on.
 #[test]

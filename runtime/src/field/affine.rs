@@ -16,6 +16,7 @@ use crate::model::DynModel;
 use crate::solver::{Report, Solver};
 use crate::stepper::DenseStep;
 use crate::system::ModelSystem;
+use crate::tolerance::Tolerance;
 use crate::tolerance::{rms_norm, underflows, Stats};
 use std::cell::RefCell;
 
@@ -44,7 +45,34 @@ pub struct AffineField {
 struct Between {
     t_old: f64,
     t_new: f64,
-    step: Option<DenseStep>,
+    /// One DOP853 step of the motion between the step's recovered states,
+    /// if it meets the tolerance at the step's end (`miss ≤ 1`).
+    motion: Option<DenseStep>,
+    /// Whether `motion` is the output between the steps (else the
+    /// coefficients' extension, with `motion` where the conditions fail).
+    preferred: bool,
+    /// Whether `motion` was computed (in RODAS4's and Magnus' steps only
+    /// where the conditions fail).
+    motion_tried: bool,
+}
+
+/// One DOP853 step of the motion between the window's last two recovered
+/// states, if it meets the tolerance at the step's end, and its miss.
+fn motion_step(
+    model: &dyn DynModel,
+    window: &Window,
+    tol: Tolerance,
+) -> Result<(Option<DenseStep>, f64), Failure> {
+    let (t_old, t_new) = (window.previous_time(), window.time());
+    let (step, miss) = dense_step_between_measured(
+        &ModelSystem(model),
+        t_old,
+        t_new - t_old,
+        window.previous_state(),
+        window.state(),
+        Some(tol),
+    )?;
+    Ok(((miss <= 1.0).then_some(step), miss))
 }
 
 impl AffineField {
@@ -133,7 +161,16 @@ impl Solver for AffineField {
         let window = &mut self.window;
         let (t_old, t_new) = (window.previous_time(), window.time());
         let inside = t > t_old && t < t_new && window.steps() > 0;
-        if inside && window.kind() == StepperKind::Explicit {
+        if !inside {
+            return with_system(model, self.options.magnus, &self.scratch, |system| {
+                window.dense(system, t, out)
+            });
+        }
+        let current = self
+            .between
+            .as_ref()
+            .is_some_and(|b| b.t_old == t_old && b.t_new == t_new);
+        if !current {
             // One DOP853 step of the motion between the two recovered
             // states, as the quasilinear field does, where that step is
             // short enough for the motion (its own end within the
@@ -145,61 +182,72 @@ impl Solver for AffineField {
             // coefficients and can be longer than the motion allows (the
             // paper's, over 100 s): there, and in RODAS4's and Magnus'
             // steps, the coefficients' extension.
-            let current = self
-                .between
-                .as_ref()
-                .is_some_and(|b| b.t_old == t_old && b.t_new == t_new);
-            if !current {
-                let motion = ModelSystem(model);
-                let (step, miss) = dense_step_between_measured(
-                    &motion,
-                    t_old,
-                    t_new - t_old,
-                    window.previous_state(),
-                    window.state(),
-                    Some(self.options.tol),
-                )?;
-                // Which of the two is right between the steps: where they
-                // agree at the step's middle to three tolerances, the
-                // coefficients' extension (the field's own output: on the
-                // paper's 100 s it is the better, 6e-12 against 1.5e-10);
-                // where they differ by more, and by more than the motion
-                // step's extension can be off (an order-7 extension misses
-                // by up to about 20× its step's end), the motion step (the
-                // raindrop: apart by 11–74 tolerances, its steps' ends
-                // missed by 1e-5 … 1e-3).
-                let mut chosen = None;
-                if miss <= 1.0 {
-                    let t_mid = 0.5 * (t_old + t_new);
-                    let mut by_step = vec![0.0; out.len()];
-                    step.eval(t_mid, &mut by_step);
-                    with_system(model, self.options.magnus, &self.scratch, |system| {
-                        window.dense(system, t_mid, out)
-                    })?;
-                    let difference: Vec<f64> =
-                        out.iter().zip(&by_step).map(|(a, b)| a - b).collect();
-                    let apart = rms_norm(&difference, out, &by_step, self.options.tol);
-                    if apart > 3.0 * (20.0 * miss).max(1.0) {
-                        chosen = Some(step);
-                    }
-                }
-                self.between = Some(Between {
-                    t_old,
-                    t_new,
-                    step: chosen,
+            let explicit = window.kind() == StepperKind::Explicit;
+            let (motion, miss) = if explicit {
+                motion_step(model, window, self.options.tol)?
+            } else {
+                (None, f64::INFINITY)
+            };
+            // Which of the two is right between the steps: where they
+            // agree at the step's middle to three tolerances, the
+            // coefficients' extension (the field's own output: on the
+            // paper's 100 s it is the better, 6e-12 against 1.5e-10);
+            // where they differ by more, and by more than the motion
+            // step's extension can be off (an order-7 extension misses by
+            // up to about 20× its step's end), the motion step (the
+            // raindrop: apart by 11–74 tolerances, its steps' ends missed
+            // by 1e-5 … 1e-3). And the motion step where the conditions
+            // fail at the middle.
+            let mut preferred = false;
+            if let Some(step) = &motion {
+                let t_mid = 0.5 * (t_old + t_new);
+                let mut by_step = vec![0.0; out.len()];
+                step.eval(t_mid, &mut by_step);
+                let extension = with_system(model, self.options.magnus, &self.scratch, |system| {
+                    window.dense(system, t_mid, out)
                 });
+                preferred = match extension {
+                    Ok(()) => {
+                        let difference: Vec<f64> =
+                            out.iter().zip(&by_step).map(|(a, b)| a - b).collect();
+                        let apart = rms_norm(&difference, out, &by_step, self.options.tol);
+                        apart > 3.0 * (20.0 * miss).max(1.0)
+                    }
+                    Err(_) => true,
+                };
             }
-            if let Some(Between {
-                step: Some(dense), ..
-            }) = &self.between
-            {
-                dense.eval(t, out);
-                return Ok(());
-            }
+            self.between = Some(Between {
+                t_old,
+                t_new,
+                motion,
+                preferred,
+                motion_tried: explicit,
+            });
         }
-        with_system(model, self.options.magnus, &self.scratch, |system| {
+        let between = self.between.as_mut().expect("made current above");
+        if let (true, Some(step)) = (between.preferred, &between.motion) {
+            step.eval(t, out);
+            return Ok(());
+        }
+        let extension = with_system(model, self.options.magnus, &self.scratch, |system| {
             window.dense(system, t, out)
-        })
+        });
+        // The conditions singular at `t` inside a step (a Riccati
+        // coefficient's pole, crossed in projective form; an oscillator's
+        // `x' = 0` there, where an output's `if x' > 0` was located): the
+        // motion step, if it meets the tolerance. Before, the run stopped,
+        // exit 3.
+        if extension.is_err() && !between.motion_tried {
+            between.motion = motion_step(model, window, self.options.tol)?.0;
+            between.motion_tried = true;
+        }
+        match (extension, &between.motion) {
+            (Err(_), Some(step)) => {
+                step.eval(t, out);
+                Ok(())
+            }
+            (result, _) => result,
+        }
     }
 
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
