@@ -340,7 +340,12 @@ fn run_with(
             sample(model, t0, x0)?;
         }
         return Ok(Outcome {
-            report: Report::default(),
+            // The summary names the method even when it took no step (it
+            // printed `method: ;`).
+            report: Report {
+                method: format!("{} (no step: stopped at the start)", options.method.name()),
+                ..Report::default()
+            },
             ending: Ending::Stopped(t0),
             events,
             budget_used: 0,

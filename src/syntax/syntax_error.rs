@@ -32,6 +32,9 @@ pub fn from_pest(error: &Error<Rule>, source: &str) -> Diagnostic {
 }
 
 fn expected(positives: &[Rule], source: &str, found_span: Span, found: &str) -> Diagnostic {
+    if let Some(diagnostic) = equality(positives, source, found_span) {
+        return diagnostic;
+    }
     let in_point = positives.iter().any(|&rule| is_point_field(rule));
     let mut words: Vec<&'static str> = Vec::new();
     for &rule in positives {
@@ -78,6 +81,30 @@ fn expected(positives: &[Rule], source: &str, found_span: Span, found: &str) -> 
     } else {
         diagnostic
     }
+}
+
+/// `==` or `!=` where an operator may follow: the language compares reals
+/// only by order (an equality holds at instants, which no switch follows);
+/// pest alone said "expected `then` or an operator, found `=`".
+fn equality(positives: &[Rule], source: &str, found_span: Span) -> Option<Diagnostic> {
+    let rest = &source[found_span.start..];
+    let operator = ["==", "!="].into_iter().find(|op| rest.starts_with(op))?;
+    if !positives.contains(&Rule::cmp_op) && !positives.contains(&Rule::add_op) {
+        return None;
+    }
+    let span = Span::new(found_span.start, found_span.start + 2);
+    Some(
+        Diagnostic::error(
+            codes::SYNTAX,
+            format!("`{operator}` is not an operator of the language"),
+        )
+        .with_primary(span, "no equality of real values")
+        .with_help(
+            "conditions compare by order, `<`, `<=`, `>`, `>=`, combined with `and`, `or`, \
+             `not`; two real values are equal only at instants, which no switch can follow \
+             (`abs(a - b) < 1e-9` is a band around them)",
+        ),
+    )
 }
 
 /// A vector component: possible after almost any operand, so named only

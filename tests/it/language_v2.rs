@@ -593,10 +593,23 @@ fn an_output_switch_at_a_coefficient_pole_runs_on() {
 fn a_stop_that_reads_a_kink_does_not_fire_at_the_start() {
     let binary = build_file(&crate::root().join("tests/data/v2/stop_inside_band.lag"));
     for method in METHODS {
-        let run = run(&binary, &["--method", method, "--samples", "11"]);
-        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
-        let t_stop = run.stop_time();
+        let band = run(&binary, &["--method", method, "--samples", "11"]);
+        assert_eq!(band.code, 0, "{method}: {}", band.stderr);
+        let t_stop = band.stop_time();
         assert!((t_stop - 1.0).abs() < 1e-9, "{method}: stopped at {t_stop}");
+        // Inside the band at the start: one row, and the summary still
+        // names the method (it printed `method: ;`).
+        let inside = run(&binary, &["--method", method, "--init", "x=1.2"]);
+        assert_eq!(inside.code, 0, "{method}: {}", inside.stderr);
+        assert_eq!(inside.rows.len(), 1, "{method}: {:?}", inside.rows);
+        assert_eq!(inside.stop_time(), 0.0);
+        assert!(
+            inside
+                .stderr
+                .contains(&format!("method: {method} (no step: stopped at the start)")),
+            "{}",
+            inside.stderr
+        );
     }
 }
 
