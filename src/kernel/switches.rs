@@ -112,15 +112,15 @@ pub enum BranchCond {
     Or(Box<BranchCond>, Box<BranchCond>),
 }
 
-/// Latches every expression a run evaluates: the motion, the coefficient
-/// system, the mass matrix and the outputs.
+/// Latches every expression the integration evaluates: the motion, the
+/// coefficient system and the mass matrix (not the outputs, read at each
+/// sample as they stand).
 pub fn latch_kernel(
     arena: &mut Arena,
     switches: &mut Switches,
     motion: &mut super::Motion,
     coefficients: Option<&mut super::Coefficients>,
     mass_matrix: &mut [Vec<ExprId>],
-    outputs: &mut [(String, ExprId)],
 ) {
     let mut cells = |arena: &mut Arena, cells: &mut dyn Iterator<Item = &mut ExprId>| {
         for e in cells {
@@ -155,7 +155,6 @@ pub fn latch_kernel(
     for row in mass_matrix {
         cells(arena, &mut row.iter_mut());
     }
-    cells(arena, &mut outputs.iter_mut().map(|(_, e)| e));
 }
 
 /// The first mode's switching functions by text.

@@ -557,11 +557,11 @@ fn a_fixed_acceleration_magnitude_runs_past_its_newton_boundary() {
 }
 
 /// A switch located at a Riccati pole of the field's coefficients
-/// (tests/data/v2/output_switch_at_pole.lag): the run goes on, on
-/// x = sin t, with the output's switches in place.
+/// (tests/data/v2/switch_at_coefficient_pole.lag): the run goes on, on
+/// x = sin t, to its stop at t = 4.
 #[test]
-fn an_output_switch_at_a_coefficient_pole_runs_on() {
-    let binary = build_file(&crate::root().join("tests/data/v2/output_switch_at_pole.lag"));
+fn a_switch_at_a_coefficient_pole_runs_on() {
+    let binary = build_file(&crate::root().join("tests/data/v2/switch_at_coefficient_pole.lag"));
     for rtol in ["1e-6", "1e-7", "1e-8"] {
         let run = run(
             &binary,
@@ -569,11 +569,15 @@ fn an_output_switch_at_a_coefficient_pole_runs_on() {
         );
         assert_eq!(run.code, 0, "rtol {rtol}: {}", run.stderr);
         assert!(
-            run.stderr.contains("events: 3;"),
+            run.stderr.contains("events: 2;"),
             "rtol {rtol}: {}",
             run.stderr
         );
-        let rising = run.column("rising");
+        assert!(
+            (run.stop_time() - 4.0).abs() < 1e-9,
+            "rtol {rtol}: {}",
+            run.stderr
+        );
         for row in &run.rows {
             let t: f64 = row[0];
             assert!(
@@ -581,8 +585,35 @@ fn an_output_switch_at_a_coefficient_pole_runs_on() {
                 "rtol {rtol}: x({t}) = {}",
                 row[1]
             );
-            let expected = if t.cos() > 0.0 { 1.0 } else { 0.0 };
-            assert_eq!(row[rising], expected, "rtol {rtol} at t = {t}");
+        }
+    }
+}
+
+/// Conditions only in outputs are read at each sample, not switched on:
+/// the motion and its steps are those of the model without them.
+#[test]
+fn output_conditions_are_no_events() {
+    let binary = build_file(&crate::root().join("tests/data/v2/output_conditions.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "201"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        // No switching function: the summary has no events at all.
+        assert!(!run.stderr.contains("events:"), "{method}: {}", run.stderr);
+        let (rising, side) = (run.column("rising"), run.column("side"));
+        for row in &run.rows {
+            let t: f64 = row[0];
+            assert!(
+                (row[1] - t.sin()).abs() < 1e-8,
+                "{method}: x({t}) = {}",
+                row[1]
+            );
+            // Away from the zeros (where the sign is rounding's).
+            if t.cos().abs() > 1e-6 {
+                assert_eq!(row[rising], if t.cos() > 0.0 { 1.0 } else { 0.0 }, "at {t}");
+            }
+            if t.sin().abs() > 1e-6 {
+                assert_eq!(row[side], t.sin().signum(), "at {t}");
+            }
         }
     }
 }
