@@ -377,6 +377,26 @@ fn a_chain_of_lets_that_use_each_other_twice_checks_at_once() {
     assert!(lib.len() < 100_000, "lib.rs is {} bytes", lib.len());
 }
 
+/// A run that exits 0 having located `events` switches (and stops).
+fn run_located(binary: &Path, args: &[&str], events: usize) -> Run {
+    let run = run(binary, args);
+    assert_eq!(run.code, 0, "{args:?}: {}", run.stderr);
+    assert!(
+        run.stderr.contains(&format!("events: {events};")),
+        "{args:?}: {}",
+        run.stderr
+    );
+    run
+}
+
+/// The largest difference of column `k` from `exact` over the samples.
+fn column_error(run: &Run, k: usize, exact: impl Fn(f64) -> f64) -> f64 {
+    run.rows
+        .iter()
+        .map(|r| (r[k] - exact(r[0])).abs())
+        .fold(0.0, f64::max)
+}
+
 /// A window of the field method that starts before a burnout must not
 /// fail where the burning branch of the mass law would vanish, long after
 /// the burnout (tests/data/v2/burnout_with_drag.lag).
@@ -448,18 +468,8 @@ fn every_kink_of_a_rectified_forcing_is_an_event() {
     };
     let binary = build_file(&crate::root().join("tests/data/v2/rectified_forcing.lag"));
     for method in METHODS {
-        let run = run(&binary, &["--method", method, "--samples", "1001"]);
-        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
-        assert!(
-            run.stderr.contains("events: 63"),
-            "{method}: {}",
-            run.stderr
-        );
-        let error = run
-            .rows
-            .iter()
-            .map(|r| (r[2] - exact(r[0])).abs())
-            .fold(0.0, f64::max);
+        let run = run_located(&binary, &["--method", method, "--samples", "1001"], 63);
+        let error = column_error(&run, 2, exact);
         assert!(error < 1e-8, "{method}: error {error:e}");
     }
 }
@@ -472,13 +482,7 @@ fn a_fast_clock_switches_every_time_in_both_methods() {
     let ends: Vec<Vec<f64>> = METHODS
         .iter()
         .map(|method| {
-            let run = run(&binary, &["--method", method, "--samples", "2"]);
-            assert_eq!(run.code, 0, "{method}: {}", run.stderr);
-            assert!(
-                run.stderr.contains("events: 1591;"),
-                "{method}: {}",
-                run.stderr
-            );
+            let run = run_located(&binary, &["--method", method, "--samples", "2"], 1591);
             run.rows.last().unwrap().clone()
         })
         .collect();
@@ -507,18 +511,8 @@ fn narrow_pulses_of_a_clock_above_a_level_are_all_located() {
         for method in METHODS {
             let param = format!("c={c}");
             let args = ["--method", method, "--param", &param, "--samples", "101"];
-            let run = run(&binary, &args);
-            assert_eq!(run.code, 0, "{method} at c = {c}: {}", run.stderr);
-            assert!(
-                run.stderr.contains("events: 1592;"),
-                "{method} at c = {c}: {}",
-                run.stderr
-            );
-            let error = run
-                .rows
-                .iter()
-                .map(|r| (r[2] - exact(r[0])).abs())
-                .fold(0.0, f64::max);
+            let run = run_located(&binary, &args, 1592);
+            let error = column_error(&run, 2, exact);
             assert!(error < 1e-9, "{method} at c = {c}: error {error:e}");
         }
     }
@@ -563,16 +557,8 @@ fn a_fixed_acceleration_magnitude_runs_past_its_newton_boundary() {
 fn a_switch_at_a_coefficient_pole_runs_on() {
     let binary = build_file(&crate::root().join("tests/data/v2/switch_at_coefficient_pole.lag"));
     for rtol in ["1e-6", "1e-7", "1e-8"] {
-        let run = run(
-            &binary,
-            &["--method", "field", "--rtol", rtol, "--samples", "101"],
-        );
-        assert_eq!(run.code, 0, "rtol {rtol}: {}", run.stderr);
-        assert!(
-            run.stderr.contains("events: 2;"),
-            "rtol {rtol}: {}",
-            run.stderr
-        );
+        let args = ["--method", "field", "--rtol", rtol, "--samples", "101"];
+        let run = run_located(&binary, &args, 2);
         assert!(
             (run.stop_time() - 4.0).abs() < 1e-9,
             "rtol {rtol}: {}",
