@@ -113,6 +113,7 @@ pub fn solve_model(
             }
         }
     }
+    crate::driver::check_initial_candidates(model, t0, &x0)?;
     let quiet = Options {
         progress: false,
         ..options.clone()

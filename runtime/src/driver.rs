@@ -152,6 +152,45 @@ pub fn initial_branches(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Vec<bool> 
     g.iter().map(|&v| v > 0.0).collect()
 }
 
+/// A pivot of a first candidate below this fraction of its constraint's
+/// largest leaves the initial value it fixes undetermined.
+const INITIAL_PIVOT_RATIO: f64 = 1e-8;
+
+/// Whether every constraint determines its first candidate at the initial
+/// state `(t0, x0)`, which the initial values take as the one it fixes
+/// (the model's own values are checked when it compiles, E0011; `--init`
+/// values only here: a knife edge started at heading π/2 with x' given
+/// computed y' = x' tan(π/2) = 1.6e16 and stopped at t = 5e-14 naming the
+/// pivot).
+pub fn check_initial_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
+    let constraints = model.constraints();
+    if constraints.is_empty() {
+        return Ok(());
+    }
+    let total: usize = constraints.iter().map(|c| c.names.len()).sum();
+    let mut pivots = vec![0.0; total];
+    model.pivots(t0, x0, &mut pivots);
+    let mut at = 0;
+    for c in constraints {
+        let slice = &pivots[at..at + c.names.len()];
+        at += c.names.len();
+        let (best, best_pivot) = largest_pivot(slice);
+        let ratio = slice[0].abs() / best_pivot;
+        if best != 0 && ratio < INITIAL_PIVOT_RATIO {
+            return Err(Failure::new(
+                t0,
+                FailureKind::InitialCandidateVanishes {
+                    constraint: c.text.to_string(),
+                    candidate: c.names[0].to_string(),
+                    better: c.names[best].to_string(),
+                    ratio,
+                },
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The mode whose candidates have the largest pivots at `(t, x)`, with
 /// the worst ratio of a chosen pivot to the best of its constraint.
 pub fn best_mode(model: &dyn DynModel, t: f64, x: &[f64]) -> (usize, Vec<usize>, f64) {

@@ -56,6 +56,15 @@ pub enum FailureKind {
     /// The pivot `∂h/∂dep` of an implicit constraint vanished and no other
     /// candidate is better.
     ConstraintPivotVanishes { constraint: String, pivot: f64 },
+    /// At the initial state a constraint hardly determines its first
+    /// candidate, the one the initial values take as fixed (its pivot a
+    /// vanishing fraction of another's): that value is not determined.
+    InitialCandidateVanishes {
+        constraint: String,
+        candidate: String,
+        better: String,
+        ratio: f64,
+    },
     /// A stated initial value of a dependent component disagrees with the
     /// value the constraints require.
     InconsistentInitialValue {
@@ -105,6 +114,7 @@ impl Failure {
     pub fn exit_status(&self) -> u8 {
         match self.kind {
             FailureKind::InconsistentInitialValue { .. }
+            | FailureKind::InitialCandidateVanishes { .. }
             | FailureKind::BadTimeSpan { .. }
             | FailureKind::NonFiniteInitialValue { .. }
             | FailureKind::AnchorCancels { .. } => USAGE_EXIT_STATUS,
@@ -201,6 +211,19 @@ impl fmt::Display for Failure {
                 "at t = {t:e}: the constraint `{constraint}` no longer determines its \
                  dependent derivative (pivot {pivot:.3e}); name another candidate with \
                  `for … or …`"
+            ),
+            FailureKind::InitialCandidateVanishes {
+                constraint,
+                candidate,
+                better,
+                ratio,
+            } => write!(
+                f,
+                "at t = {t:e}: the initial state hardly determines `{candidate}` through \
+                 the constraint `{constraint}` (its pivot is {ratio:.1e} of `{better}`'s), \
+                 and the initial values take `{candidate}`, its first candidate, as the \
+                 one it fixes. Start where `{candidate}` is determined, or name `{better}` \
+                 first in the model (`for {better} or …`) and give `{candidate}`"
             ),
             FailureKind::InconsistentInitialValue {
                 component,

@@ -604,6 +604,37 @@ fn output_conditions_are_no_events() {
     }
 }
 
+/// `--init` values where a constraint hardly determines its first
+/// candidate: refused with exit 2, naming the candidate and the better one
+/// (a knife edge at heading π/2 with x' given computed y' = 1.6e16 and
+/// stopped at t = 5e-14).
+#[test]
+fn an_initial_heading_that_leaves_the_first_candidate_undetermined_is_refused() {
+    let binary = build_file(&crate::root().join("examples/knife_edge_turning.lag"));
+    let refused = run(&binary, &["--init", "th=1.5707963267948966"]);
+    assert_eq!(refused.code, 2, "{}", refused.stderr);
+    assert!(
+        refused.stderr.contains("hardly determines `y'`")
+            && refused.stderr.contains("name `x'` first"),
+        "{}",
+        refused.stderr
+    );
+    assert!(refused.rows.is_empty(), "{:?}", refused.rows);
+    // Away from it the run goes on.
+    let near = run(&binary, &["--init", "th=1.5", "--samples", "2"]);
+    assert_eq!(near.code, 0, "{}", near.stderr);
+    // Its exact lines hold for heading 0 only: not compared (an error of
+    // 12.9 was reported).
+    assert!(
+        near.stderr.contains("the exact solution is not compared")
+            && !near
+                .stderr
+                .contains("largest error against the exact solution"),
+        "{}",
+        near.stderr
+    );
+}
+
 /// A stop condition that reads another switch's branch (a kink) is read
 /// at t0 under the branches the initial state is on.
 #[test]
