@@ -635,6 +635,22 @@ fn an_initial_heading_that_leaves_the_first_candidate_undetermined_is_refused() 
     );
 }
 
+/// Soft walls bounced off 400 times (tests/data/v2/soft_walls.lag): every
+/// contact located (800 events) and the energy kept, by both methods and
+/// at every tolerance of the ladder.
+#[test]
+fn soft_walls_keep_the_energy_through_every_bounce() {
+    let binary = build_file(&crate::root().join("tests/data/v2/soft_walls.lag"));
+    for method in METHODS {
+        for rtol in ["1e-5", "1e-6", "1e-7", "1e-8"] {
+            let args = ["--method", method, "--rtol", rtol, "--samples", "201"];
+            let run = run_located(&binary, &args, 800);
+            let drift = drift(&run, "E");
+            assert!(drift < 1e-3, "{method} at rtol {rtol}: E drifts {drift:e}");
+        }
+    }
+}
+
 /// A stop condition that reads another switch's branch (a kink) is read
 /// at t0 under the branches the initial state is on.
 #[test]
