@@ -108,14 +108,8 @@ pub type Quarters<'a> = [&'a [f64]; 5];
 impl SwitchPace {
     /// Learns from a step of length `h` with no sign change.
     pub fn observe(&mut self, h: f64, g: Quarters) {
-        let d = 0.25 * h.abs();
-        if !(d > 0.0) {
-            return;
-        }
-        self.rate = 0.0;
-        for k in 0..g[4].len() {
-            let values = [g[0][k], g[1][k], g[2][k], g[3][k], g[4][k]];
-            self.rate = self.rate.max(rate(d, values, true));
+        if let Some(rate) = fastest(h, g, &[]) {
+            self.rate = rate;
         }
     }
 
@@ -126,13 +120,8 @@ impl SwitchPace {
     /// under a fast clock, so the pace learnt before is kept if it was
     /// faster.
     pub fn observe_to_event(&mut self, h: f64, g: Quarters, switched: &[usize]) {
-        let d = 0.25 * h.abs();
-        if !(d > 0.0) {
-            return;
-        }
-        for k in 0..g[4].len() {
-            let values = [g[0][k], g[1][k], g[2][k], g[3][k], g[4][k]];
-            self.rate = self.rate.max(rate(d, values, !switched.contains(&k)));
+        if let Some(rate) = fastest(h, g, switched) {
+            self.rate = self.rate.max(rate);
         }
     }
 
@@ -149,6 +138,20 @@ impl SwitchPace {
             t_end
         }
     }
+}
+
+/// The largest [`rate`] of the functions over a step of length `h` (the
+/// `switched` ones without their slope), or `None` for an empty step.
+fn fastest(h: f64, g: Quarters, switched: &[usize]) -> Option<f64> {
+    let d = 0.25 * h.abs();
+    if !(d > 0.0) {
+        return None;
+    }
+    let rates = (0..g[4].len()).map(|k| {
+        let values = [g[0][k], g[1][k], g[2][k], g[3][k], g[4][k]];
+        rate(d, values, !switched.contains(&k))
+    });
+    Some(rates.fold(0.0, f64::max))
 }
 
 /// How fast one function may reach zero, from its values `y` at spacing
