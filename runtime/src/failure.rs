@@ -65,6 +65,14 @@ pub enum FailureKind {
         better: String,
         ratio: f64,
     },
+    /// Newton found no initial positions on the holonomic constraints
+    /// near the given ones (`singular`: their Jacobian in the dependent
+    /// coordinates is singular there).
+    InitialPositionsOffConstraint {
+        constraint: String,
+        residual: f64,
+        singular: bool,
+    },
     /// A stated initial value of a dependent component disagrees with the
     /// value the constraints require.
     InconsistentInitialValue {
@@ -114,6 +122,7 @@ impl Failure {
     pub fn exit_status(&self) -> u8 {
         match self.kind {
             FailureKind::InconsistentInitialValue { .. }
+            | FailureKind::InitialPositionsOffConstraint { .. }
             | FailureKind::InitialCandidateVanishes { .. }
             | FailureKind::BadTimeSpan { .. }
             | FailureKind::NonFiniteInitialValue { .. }
@@ -224,6 +233,21 @@ impl fmt::Display for Failure {
                  and the initial values take `{candidate}`, its first candidate, as the \
                  one it fixes. Start where `{candidate}` is determined, or name `{better}` \
                  first in the model (`for {better} or …`) and give `{candidate}`"
+            ),
+            FailureKind::InitialPositionsOffConstraint {
+                constraint,
+                residual,
+                singular,
+            } => write!(
+                f,
+                "at t = {t:e}: Newton finds no initial positions on the constraint \
+                 `{constraint}` near the given ones ({}, residual {residual:.3e}); give \
+                 the dependent coordinates closer to a configuration that satisfies it",
+                if *singular {
+                    "its Jacobian in the dependent coordinates is singular there"
+                } else {
+                    "no convergence"
+                }
             ),
             FailureKind::InconsistentInitialValue {
                 component,

@@ -36,7 +36,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let params = checker.params();
     let lets = checker.lets();
     let masses = checker.masses();
-    let (constraint_order, constraints) = checker.constraints();
+    let (constraint_order, constraints, groups) = checker.constraints();
     let lagrangian = checker.lagrangian();
     let forces = checker.forces();
     let points = checker.points();
@@ -67,6 +67,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
         lagrangian,
         constraint_order,
         constraints,
+        groups,
         points,
         forces,
         initial,

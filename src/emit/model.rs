@@ -99,6 +99,13 @@ fn initial_state(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
             InitialSource::Given { index: k, value } => (kernel.state[k], value, Some(k)),
             InitialSource::Constraint { index: k, value } => (kernel.state[k], value, None),
             InitialSource::Solved { symbol, value } => (symbol, value, None),
+            InitialSource::Closure => {
+                if let Some(closure) = &kernel.closure {
+                    statements.push(closure_newton(kernel, names, closure, &known));
+                    uses_time = true;
+                }
+                continue;
+            }
         };
         let lookup: Source = &|s| known.get(&s).cloned();
         let code = names.code(arena, &[value], lookup);
@@ -156,6 +163,66 @@ fn initial_state(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
             #(#checks)*
             Ok(vec![#(#values),*])
         }
+    }
+}
+
+/// Newton on the holonomic constraints from the given positions (in
+/// scope by their names in `known`): the dependent ones are rebound to
+/// the root.
+fn closure_newton(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    closure: &crate::kernel::KernelClosure,
+    known: &HashMap<Symbol, TokenStream>,
+) -> TokenStream {
+    let arena = &kernel.arena;
+    let z = names.namer.fresh("closure_z");
+    let f = names.namer.fresh("closure_f");
+    let jac = names.namer.fresh("closure_jac");
+    let unknowns: Vec<Symbol> = closure.unknowns.iter().map(|&k| kernel.state[k]).collect();
+    let lookup = |s: Symbol| match unknowns.iter().position(|&u| u == s) {
+        Some(i) => {
+            let i = index(i);
+            Some(quote! { #z[#i] })
+        }
+        None => known.get(&s).cloned(),
+    };
+    let mut roots = closure.residual.clone();
+    roots.extend(closure.jacobian.iter().map(|&(_, _, e)| e));
+    let code = names.code(arena, &roots, &lookup);
+    let statements = code.statements(quote! { self.params });
+    let m = closure.residual.len();
+    let rows = (0..m).map(|r| {
+        let (i, value) = (index(r), &code.roots[r]);
+        quote! { #f[#i] = #value; }
+    });
+    let entries = closure.jacobian.iter().enumerate().map(|(e, &(r, c, _))| {
+        let (r, c, value) = (index(r), index(c), &code.roots[m + e]);
+        quote! { #jac[(#r, #c)] = #value; }
+    });
+    let starts: Vec<TokenStream> = unknowns
+        .iter()
+        .map(|s| known.get(s).cloned().unwrap_or_else(|| quote! { f64::NAN }))
+        .collect();
+    let rebound = unknowns.iter().enumerate().map(|(i, s)| {
+        let name = known.get(s).cloned().unwrap_or_else(|| quote! { _unused });
+        let i = index(i);
+        quote! { let #name = #z[#i]; }
+    });
+    let text = &closure.text;
+    quote! {
+        let mut #z = [#(#starts),*];
+        lagc_runtime::closure::initial(
+            t,
+            &mut #z,
+            #text,
+            &mut |#z: &[f64], #f: &mut [f64], #jac: &mut Matrix| {
+                #statements
+                #(#rows)*
+                #(#entries)*
+            },
+        )?;
+        #(#rebound)*
     }
 }
 

@@ -19,7 +19,9 @@ mod text;
 pub mod time;
 
 pub use candidates::KernelCandidates;
-pub use items::{Coefficients, InitialKind, InitialSource, KernelInitial, KernelParam};
+pub use items::{
+    Coefficients, InitialKind, InitialSource, KernelClosure, KernelInitial, KernelParam,
+};
 pub use motion::{Explicit, Implicit, Motion};
 pub use switches::{BranchCond, Switches};
 
@@ -64,6 +66,9 @@ pub struct Kernel {
     pub switches: Switches,
     /// Every implicit constraint with its candidates' pivots.
     pub candidates: Vec<KernelCandidates>,
+    /// The holonomic constraints at position level, with this mode's
+    /// dependent coordinates as the unknowns.
+    pub closure: Option<KernelClosure>,
     /// The kernels of modes 1, 2, …: the same model with other candidates
     /// (their motion only).
     pub modes: Vec<Kernel>,
@@ -152,6 +157,7 @@ fn build_with(
         &mut mass_matrix,
     );
     let stop = stop.map(|c| switches.condition(&mut arena, &c));
+    let closure = items::closure(&mut arena, reduced);
     Ok(Kernel {
         arena,
         state: reduced.state.clone(),
@@ -171,6 +177,7 @@ fn build_with(
         stop,
         switches,
         candidates,
+        closure,
         modes: Vec::new(),
     })
 }
