@@ -90,6 +90,10 @@ pub struct Outcome {
     pub events: usize,
     /// Steps drawn from the budget.
     pub budget_used: usize,
+    /// Holonomic constraints: the largest distance of an accepted step's
+    /// state from them (relative to the tolerance), where, and the
+    /// projections made.
+    pub positions_kept: Option<crate::closure::PositionsKept>,
 }
 
 /// The initial regime at `(t0, x0)`: branches from the switching
@@ -347,12 +351,16 @@ fn run_with(
         branches: initial_branches(model, t0, x0),
     };
     model.set_regime(&regime);
+    let volumes = pivot_volumes(model, t0, x0);
     let mut next_sample = 0;
     let mut events = 0;
     // The sample buffer, allocated once (emit_until runs after every step).
     let mut x_sample = vec![0.0; n];
+    // Holonomic constraints: the positions kept on them (SPEC §2.3).
+    let mut keeper = crate::closure::PositionKeeper::new(model, options.tol);
     let mut emit_until = |model: &dyn DynModel,
                           solver: &mut dyn Solver,
+                          keeper: &mut Option<crate::closure::PositionKeeper>,
                           next: &mut usize,
                           until: f64,
                           sample: &mut Sample<'_>|
@@ -361,6 +369,10 @@ fn run_with(
         while *next < times.len() && times[*next] <= until {
             let t = times[*next];
             solver.dense(model, t, x)?;
+            // No output is off the constraints.
+            if let Some(keeper) = keeper.as_mut() {
+                keeper.project(model, t, x)?;
+            }
             sample(model, t, x)?;
             *next += 1;
         }
@@ -388,6 +400,7 @@ fn run_with(
             ending: Ending::Stopped(t0),
             events,
             budget_used: 0,
+            positions_kept: keeper.as_ref().map(|k| k.kept()),
         });
     }
     check_masses(model, t0)?;
@@ -428,7 +441,8 @@ fn run_with(
             }
             let x = solver.state().to_vec();
             progress.finish();
-            return Err(diagnose(model, failure, &x, &scale(model)));
+            let failure = diagnose(model, failure, &x, &scale(model));
+            return Err(near_singular_configuration(model, failure, &x, &volumes));
         }
         progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
@@ -531,11 +545,15 @@ fn run_with(
                 emit_until(
                     model,
                     solver.as_mut(),
+                    &mut keeper,
                     &mut next_sample,
                     t_event,
                     &mut sample,
                 )?;
                 solver.dense(model, t_event, &mut x_event)?;
+                if let Some(keeper) = keeper.as_mut() {
+                    keeper.project(model, t_event, &mut x_event)?;
+                }
                 observe_to_event(
                     model,
                     solver.as_mut(),
@@ -560,6 +578,7 @@ fn run_with(
                         ending: Ending::Stopped(t_event),
                         events,
                         budget_used: budget.used(),
+                        positions_kept: keeper.as_ref().map(|k| k.kept()),
                     });
                 }
                 model.set_regime(&regime);
@@ -569,7 +588,7 @@ fn run_with(
                 // A step across a vanishing pivot is not a solution: it is
                 // taken again with another candidate, or the run stops.
                 if !model.constraints().is_empty() {
-                    match pivot_crossed(model, &mut regime, solver.as_mut(), ta, tb)? {
+                    match pivot_crossed(model, &mut regime, solver.as_mut(), (ta, tb), &volumes)? {
                         PivotCrossing::None => {}
                         crossing => {
                             if let Some(pieces) = pieces.as_deref_mut() {
@@ -586,9 +605,21 @@ fn run_with(
                         }
                     }
                 }
-                emit_until(model, solver.as_mut(), &mut next_sample, tb, &mut sample)?;
+                emit_until(
+                    model,
+                    solver.as_mut(),
+                    &mut keeper,
+                    &mut next_sample,
+                    tb,
+                    &mut sample,
+                )?;
+                if let Some(keeper) = keeper.as_mut() {
+                    if let Some(x) = keeper.after_step(model, tb, solver.state())? {
+                        solver.project(model, tb, &x)?;
+                    }
+                }
                 if !model.constraints().is_empty() {
-                    switch_candidates(model, &mut regime, solver.as_mut(), tb)?;
+                    switch_candidates(model, &mut regime, solver.as_mut(), tb, &volumes)?;
                 }
             }
         }
@@ -596,6 +627,7 @@ fn run_with(
     emit_until(
         model,
         solver.as_mut(),
+        &mut keeper,
         &mut next_sample,
         f64::INFINITY,
         &mut sample,
@@ -606,6 +638,7 @@ fn run_with(
         ending: Ending::End,
         events,
         budget_used: budget.used(),
+        positions_kept: keeper.as_ref().map(|k| k.kept()),
     })
 }
 
@@ -712,8 +745,8 @@ fn pivot_crossed(
     model: &mut dyn DynModel,
     regime: &mut Regime,
     solver: &mut dyn Solver,
-    ta: f64,
-    tb: f64,
+    (ta, tb): (f64, f64),
+    volumes: &[f64],
 ) -> Result<PivotCrossing, Failure> {
     let total: usize = model.constraints().iter().map(|c| c.names.len()).sum();
     let n = solver.state().len();
@@ -725,7 +758,7 @@ fn pivot_crossed(
     model.pivots(tb, &x_b, &mut p_b);
     let digits = mode_digits(model, regime.mode);
     let mut at = 0;
-    for (c, &digit) in model.constraints().iter().zip(&digits) {
+    for (index, (c, &digit)) in model.constraints().iter().zip(&digits).enumerate() {
         let (a, b) = (p_a[at + digit], p_b[at + digit]);
         if a * b < 0.0 {
             let (best, best_pivot) = largest_pivot(&p_a[at..at + c.names.len()]);
@@ -743,6 +776,19 @@ fn pivot_crossed(
             if c.names.len() > 1 && resolvable {
                 solver.restart(model, ta, &x_a)?;
                 return Ok(PivotCrossing::Retry(halfway));
+            }
+            // No other choice is better where this one vanishes: every
+            // choice vanishes together, a singular configuration.
+            if c.names.len() > 1 {
+                let now = volumes_of(model.constraints(), &p_b);
+                let start = volumes.get(index).copied().unwrap_or(f64::NAN);
+                return Err(Failure::new(
+                    t_zero,
+                    FailureKind::SingularConfiguration {
+                        constraint: c.text.to_string(),
+                        ratio: now[index] / start,
+                    },
+                ));
             }
             return Err(Failure::new(
                 t_zero,
@@ -765,11 +811,13 @@ fn switch_candidates(
     regime: &mut Regime,
     solver: &mut dyn Solver,
     t: f64,
+    volumes: &[f64],
 ) -> Result<(), Failure> {
     let x = solver.state().to_vec();
     let total: usize = model.constraints().iter().map(|c| c.names.len()).sum();
     let mut pivots = vec![0.0; total];
     model.pivots(t, &x, &mut pivots);
+    singular_configuration(model, t, &pivots, volumes)?;
     let mut digits = mode_digits(model, regime.mode);
     let mut changed = false;
     let mut at = 0;
@@ -799,6 +847,101 @@ fn switch_candidates(
         solver.restart(model, t, &x)?;
     }
     Ok(())
+}
+
+/// A group of constraints with several choices of dependents is at a
+/// singular configuration when their pivots' volume `sqrt(Σ pivot²)` —
+/// by Cauchy–Binet `sqrt(det(J Jᵀ))` of the group's Jacobian in its
+/// candidates — has fallen below this fraction of its value at the start:
+/// the Jacobian has lost rank, and no choice determines the dependents
+/// (a four-bar at its change point, where two branches of motion meet).
+const SINGULAR_VOLUME: f64 = 1e-6;
+
+/// Each group's pivot volume at `(t, x)` (see [`SINGULAR_VOLUME`]).
+pub fn pivot_volumes(model: &dyn DynModel, t: f64, x: &[f64]) -> Vec<f64> {
+    let constraints = model.constraints();
+    let total: usize = constraints.iter().map(|c| c.names.len()).sum();
+    let mut pivots = vec![0.0; total];
+    model.pivots(t, x, &mut pivots);
+    volumes_of(constraints, &pivots)
+}
+
+fn volumes_of(constraints: &[crate::model::Candidates], pivots: &[f64]) -> Vec<f64> {
+    let mut at = 0;
+    constraints
+        .iter()
+        .map(|c| {
+            let v = pivots[at..at + c.names.len()]
+                .iter()
+                .map(|p| p * p)
+                .sum::<f64>()
+                .sqrt();
+            at += c.names.len();
+            v
+        })
+        .collect()
+}
+
+/// A failure naming the group whose pivot volume fell below
+/// [`SINGULAR_VOLUME`] of `start` (groups with several choices only).
+fn singular_configuration(
+    model: &dyn DynModel,
+    t: f64,
+    pivots: &[f64],
+    start: &[f64],
+) -> Result<(), Failure> {
+    let constraints = model.constraints();
+    for ((c, &now), &start) in constraints
+        .iter()
+        .zip(&volumes_of(constraints, pivots))
+        .zip(start)
+    {
+        if c.names.len() > 1 && start > 0.0 && now < SINGULAR_VOLUME * start {
+            return Err(Failure::new(
+                t,
+                FailureKind::SingularConfiguration {
+                    constraint: c.text.to_string(),
+                    ratio: now / start,
+                },
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A failure of the integration (a step size that underflows, a value
+/// that is not finite) near a singular configuration is named as that:
+/// the equations divide by the vanishing determinants there.
+fn near_singular_configuration(
+    model: &dyn DynModel,
+    failure: Failure,
+    x: &[f64],
+    start: &[f64],
+) -> Failure {
+    if !matches!(
+        failure.kind,
+        FailureKind::StepSizeUnderflow { .. }
+            | FailureKind::NonFiniteState { .. }
+            | FailureKind::NonFiniteRate { .. }
+    ) || model.constraints().is_empty()
+        || !x.iter().all(|v| v.is_finite())
+    {
+        return failure;
+    }
+    let t = failure.time;
+    let now = pivot_volumes(model, t, x);
+    for ((c, &now), &start) in model.constraints().iter().zip(&now).zip(start) {
+        if c.names.len() > 1 && start > 0.0 && now < 1e-3 * start {
+            return Failure::new(
+                t,
+                FailureKind::SingularConfiguration {
+                    constraint: c.text.to_string(),
+                    ratio: now / start,
+                },
+            );
+        }
+    }
+    failure
 }
 
 /// A mass law at or below zero at `t` stops the run (the equations divide
@@ -850,6 +993,7 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
             | FailureKind::StepBudgetExhausted { .. }
             | FailureKind::AnchorCancels { .. }
             | FailureKind::ConstraintPivotVanishes { .. }
+            | FailureKind::SingularConfiguration { .. }
     ) {
         return failure;
     }
@@ -947,5 +1091,6 @@ pub fn run_ensemble(
         ending: Ending::End,
         events: 0,
         budget_used: budget.used(),
+        positions_kept: None,
     })
 }

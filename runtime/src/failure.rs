@@ -56,6 +56,18 @@ pub enum FailureKind {
     /// The pivot `∂h/∂dep` of an implicit constraint vanished and no other
     /// candidate is better.
     ConstraintPivotVanishes { constraint: String, pivot: f64 },
+    /// Newton found no positions on the holonomic constraints near the
+    /// integrated ones: the motion has left them (or reached a point where
+    /// their Jacobian in the dependent coordinates is singular).
+    PositionsLeftConstraint {
+        constraint: String,
+        residual: f64,
+        singular: bool,
+    },
+    /// A group of constraints solved together reached a singular
+    /// configuration: every choice of dependents vanishes (their Jacobian
+    /// lost rank; `ratio`: the pivots' volume against the run's start).
+    SingularConfiguration { constraint: String, ratio: f64 },
     /// At the initial state a constraint hardly determines its first
     /// candidate, the one the initial values take as fixed (its pivot a
     /// vanishing fraction of another's): that value is not determined.
@@ -220,6 +232,28 @@ impl fmt::Display for Failure {
                 "at t = {t:e}: the constraint `{constraint}` no longer determines its \
                  dependent derivative (pivot {pivot:.3e}); name another candidate with \
                  `for … or …`"
+            ),
+            FailureKind::PositionsLeftConstraint {
+                constraint,
+                residual,
+                singular,
+            } => write!(
+                f,
+                "at t = {t:e}: the positions cannot be brought back onto the constraint \
+                 `{constraint}` ({}, residual {residual:.3e}): the motion has left it",
+                if *singular {
+                    "its Jacobian in the dependent coordinates is singular there"
+                } else {
+                    "Newton does not converge"
+                }
+            ),
+            FailureKind::SingularConfiguration { constraint, ratio } => write!(
+                f,
+                "at t = {t:e}: the constraints `{constraint}` reach a singular \
+                 configuration: no choice of dependent coordinates determines them \
+                 (their Jacobian loses rank; the pivots' volume is {ratio:.1e} of its \
+                 value at the start). The motion cannot be followed through it: a \
+                 change point of a linkage, where branches of motion meet"
             ),
             FailureKind::InitialCandidateVanishes {
                 constraint,

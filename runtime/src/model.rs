@@ -91,6 +91,9 @@ pub trait Model: Clone {
     const COEFFICIENTS_LINEAR: bool = false;
     /// The model states exact solutions (`exact` lines).
     const EXACT: bool = false;
+    /// Holonomic constraints fix some positions (SPEC §2.3):
+    /// [`Model::constrained`] is given, and the run keeps the state on them.
+    const KEEPS_POSITIONS: bool = false;
 
     /// Every param's value: param `i` is `overrides[i]` when given, else
     /// its expression evaluated with the values before it (so an override
@@ -162,6 +165,15 @@ pub trait Model: Clone {
 
     /// The exact solution at `t`, for the components the model states.
     fn exact(&self, _t: f64, _out: &mut [Option<f64>]) {}
+
+    /// The values the current mode's constraints require of the state
+    /// components they fix, written into `kept` at those components'
+    /// indices (the others are left as they are): the dependent positions
+    /// of holonomic constraints brought onto them by Newton from `x`'s,
+    /// and the derivatives the constraints fix at those positions.
+    fn constrained(&self, _t: f64, _x: &[f64], _kept: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
 
     /// The `output` columns at `(t, x)` in the current regime.
     fn outputs(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
@@ -250,6 +262,8 @@ pub trait DynModel {
     fn coefficients_linear(&self) -> bool;
     /// [`Model::EXACT`].
     fn states_exact(&self) -> bool;
+    /// [`Model::KEEPS_POSITIONS`].
+    fn keeps_positions(&self) -> bool;
 
     /// [`Model::parameters`].
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64>;
@@ -283,6 +297,8 @@ pub trait DynModel {
     fn coefficient_time_partial(&self, t: f64, f: &[f64], dfdt: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::exact`].
     fn exact(&self, t: f64, out: &mut [Option<f64>]);
+    /// [`Model::constrained`].
+    fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::outputs`].
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::switching_functions`].
@@ -340,6 +356,9 @@ impl<M: Model + 'static> DynModel for M {
     fn states_exact(&self) -> bool {
         M::EXACT
     }
+    fn keeps_positions(&self) -> bool {
+        M::KEEPS_POSITIONS
+    }
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
         M::parameters(overrides)
     }
@@ -392,6 +411,9 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn exact(&self, t: f64, out: &mut [Option<f64>]) {
         Model::exact(self, t, out);
+    }
+    fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure> {
+        Model::constrained(self, t, x, kept)
     }
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::outputs(self, t, x, out);

@@ -56,6 +56,20 @@ impl Summary {
         for note in &r.notes {
             let _ = write!(s, "\nnote: {note}");
         }
+        if let Some(kept) = self.outcome.positions_kept {
+            let _ = write!(
+                s,
+                "\nholonomic constraints kept: the state came at most {:.2e} of the \
+                 tolerance off them{}, {} projections after steps (every output projected)",
+                kept.largest,
+                if kept.largest_at.is_finite() {
+                    format!(" (t = {:e})", kept.largest_at)
+                } else {
+                    String::new()
+                },
+                kept.projections
+            );
+        }
         if let Some(error) = self.exact_error {
             let _ = write!(s, "\nlargest error against the exact solution: {error:.3e}");
         }

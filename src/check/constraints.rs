@@ -693,13 +693,29 @@ impl Checker<'_> {
                 self.report(diagnostic);
                 continue;
             }
-            let choices: Vec<Vec<usize>> = subsets(union.len(), members.len())
+            let mut choices: Vec<Vec<usize>> = subsets(union.len(), members.len())
                 .into_iter()
                 .filter_map(|subset| {
                     let chosen: Vec<usize> = subset.iter().map(|&u| union[u]).collect();
                     matching(&members, &chosen, held, constraints)
                 })
                 .collect();
+            // The first choice: each constraint its first candidate that an
+            // earlier one has not taken (what `for y' or x'` on each says),
+            // when that works.
+            let mut greedy: Vec<usize> = Vec::new();
+            for &i in &members {
+                if let Some(&j) = candidates_of(i).iter().find(|j| !greedy.contains(j)) {
+                    greedy.push(j);
+                }
+            }
+            let same_set = |a: &[usize], b: &[usize]| a.iter().all(|j| b.contains(j));
+            if greedy.len() == members.len() {
+                if let Some(at) = choices.iter().position(|c| same_set(c, &greedy)) {
+                    choices.remove(at);
+                    choices.insert(0, greedy);
+                }
+            }
             if choices.is_empty() {
                 let names: Vec<String> = union
                     .iter()

@@ -275,6 +275,11 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
     } else {
         quote! { const EXACT: bool = true; }
     };
+    let keeps = if kernel.closure.is_some() {
+        quote! { const KEEPS_POSITIONS: bool = true; }
+    } else {
+        TokenStream::new()
+    };
     quote! {
         const NAME: &'static str = #model_name;
         const SOURCE_HASH: &'static str = #source_hash;
@@ -286,5 +291,6 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
         #integrator
         #affine
         #exact
+        #keeps
     }
 }

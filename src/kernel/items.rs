@@ -209,6 +209,11 @@ pub struct KernelClosure {
     pub jacobian: Vec<(usize, usize, ExprId)>,
     /// The constraints as written, for messages.
     pub text: String,
+    /// `(row, coordinate, ∂f_row/∂q_coordinate)`, non-zero entries: the
+    /// normals of the projection (`Closure::normals`).
+    pub normals: Vec<(usize, usize, ExprId)>,
+    /// `D^r f` for r = 1..u−1 (`Closure::levels`).
+    pub levels: Vec<Vec<ExprId>>,
 }
 
 pub fn closure(arena: &mut Arena, reduced: &ReducedSystem) -> Option<KernelClosure> {
@@ -231,10 +236,30 @@ pub fn closure(arena: &mut Arena, reduced: &ReducedSystem) -> Option<KernelClosu
             }
         }
     }
+    let mut normals = Vec::new();
+    for (r, row) in closure.normals.iter().enumerate() {
+        for (c, &e) in row.iter().enumerate() {
+            if !arena.is_zero(e) {
+                normals.push((r, c, crate::mechanics::tidy::simplify(arena, e)));
+            }
+        }
+    }
+    let levels = closure
+        .levels
+        .iter()
+        .map(|level| {
+            level
+                .iter()
+                .map(|&e| crate::mechanics::tidy::simplify(arena, e))
+                .collect()
+        })
+        .collect();
     Some(KernelClosure {
         unknowns,
         residual,
         jacobian,
         text: closure.text.clone(),
+        normals,
+        levels,
     })
 }

@@ -211,11 +211,24 @@ pub fn closure(
         return Ok(None);
     }
     let jacobian = block(arena, &residual, &unknowns);
+    let coordinates: Vec<Symbol> = (0..model.coords.len() as u32)
+        .map(|coord| Symbol::Jet { coord, order: 0 })
+        .collect();
+    let normals = block(arena, &residual, &coordinates);
+    let u = model.constraint_order.unwrap_or(1).max(2);
+    let mut levels: Vec<Vec<ExprId>> = Vec::new();
+    let mut level = residual.clone();
+    for _ in 1..u {
+        level = level.iter().map(|&f| arena.total_derivative(f)).collect();
+        levels.push(level.clone());
+    }
     Ok(Some(super::reduced::Closure {
         unknowns,
         residual,
         jacobian,
         text: texts.join("; "),
+        normals,
+        levels,
     }))
 }
 

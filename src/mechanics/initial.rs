@@ -283,7 +283,7 @@ fn closure_newton(
         }
         let full = step.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         let magnitude = z.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
-        if !(norm(&r_next) < norm(&r)) {
+        if norm(&r_next) >= norm(&r) || norm(&r_next).is_nan() {
             // Rounding: the residual no longer decreases, and the step
             // that would reduce it is at the level of rounding.
             if full <= 1e-9 * magnitude {

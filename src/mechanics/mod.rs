@@ -29,7 +29,7 @@ mod reactive_forces;
 mod reduce;
 pub mod reduced;
 mod sample;
-pub use sample::Rng;
+pub use sample::{eval_scaled, Rng, Scaled};
 mod singular;
 mod solve;
 mod star;
@@ -165,15 +165,15 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         .map(|(i, &law)| (Symbol::Mass(i as u32), law))
         .collect();
     let closure = coupled::closure(&mut arena, model, &laws).map_err(|d| vec![d])?;
+    let levels = match &closure {
+        Some(closure) if symbolic.k >= 2 => {
+            let span = model.constraints[0].span;
+            coupled::holonomic_levels(&mut arena, model, closure, symbolic.k, span)
+                .map_err(|d| vec![d])?
+        }
+        _ => Default::default(),
+    };
     let (initial, notes) = if with_initial {
-        let levels = match &closure {
-            Some(closure) if symbolic.k >= 2 => {
-                let span = model.constraints[0].span;
-                coupled::holonomic_levels(&mut arena, model, closure, symbolic.k, span)
-                    .map_err(|d| vec![d])?
-            }
-            _ => Default::default(),
-        };
         initial::initial_values(
             &mut arena,
             model,

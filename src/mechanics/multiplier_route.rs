@@ -176,7 +176,7 @@ pub fn cross_check(derivation: &mut Derivation) -> Result<CrossCheck, CrossCheck
                 worst = worst.max((a.value - b.value).abs() / scale);
             }
         }
-        for (w, &(ref text, _)) in derivation.written.iter().enumerate() {
+        for (w, (text, _)) in derivation.written.iter().enumerate() {
             let h = values[2 * rows + w];
             let zero = super::sample::Scaled {
                 value: 0.0,

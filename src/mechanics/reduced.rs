@@ -48,6 +48,15 @@ pub struct Closure {
     pub jacobian: Vec<Vec<ExprId>>,
     /// The constraints as written (`f = 0`, `; `-separated), for messages.
     pub text: String,
+    /// `∂f_ν/∂q_j` over every coordinate `j` (row-major, `n` columns):
+    /// the normals along which the run projects the state onto the
+    /// constraints (the smallest correction, Gauss–Newton), in positions
+    /// and, since `D^r f` is linear in `q^(r)` with the same matrix, in
+    /// every derivative.
+    pub normals: Vec<Vec<ExprId>>,
+    /// `D^r f_ν` for r = 1..u−1: the constraints on the state's
+    /// derivatives (expressions of `t`, params and the state).
+    pub levels: Vec<Vec<ExprId>>,
 }
 
 /// `residual(t, x, z) = 0` for `z = unknowns = (q_i^(r))_i`, one order `r`.

@@ -1,0 +1,130 @@
+//! SPEC §2.3 through the generated crates: holonomic constraints kept at
+//! position level, and loops closed by coupled constraints, against
+//! references in minimal coordinates that lagc has no part in
+//! (`scripts/holonomic_references.py`: SciPy DOP853 at rtol 1e-13, the
+//! pendulum in its angle, the four-bar in its crank angle with the closure
+//! solved by acos and atan2; the references' own error, judged against
+//! rtol 1e-12, is below 1e-8).
+
+use crate::generated::build;
+use crate::rolling_bodies::run;
+use std::f64::consts::PI;
+
+const METHODS: [&str; 2] = ["field", "direct"];
+
+/// The pendulum's angle from the downward vertical: (t, theta).
+const PENDULUM: [(f64, f64); 5] = [
+    (100.0, -0.5970485988718583),
+    (250.0, -0.5299139627747715),
+    (500.0, 0.22601989309006695),
+    (750.0, 0.16142094230638404),
+    (1000.0, -0.4890086549702606),
+];
+
+/// The four-bar's crank, coupler and rocker angles: (t, a, b, c).
+const FOUR_BAR: [(f64, f64, f64, f64); 5] = [
+    (
+        10.0,
+        42.4983355353442,
+        1.1767919014964294,
+        -3.9304693049320365,
+    ),
+    (
+        25.0,
+        104.30469933514436,
+        0.8598803619068073,
+        -3.879806470465871,
+    ),
+    (
+        50.0,
+        208.69712189128208,
+        0.5298740847110759,
+        1.6486106858519667,
+    ),
+    (
+        75.0,
+        312.9636869901702,
+        1.2293625424062347,
+        -4.002692293105507,
+    ),
+    (
+        100.0,
+        416.33018624243147,
+        0.5089143085354101,
+        1.751491025760246,
+    ),
+];
+
+/// The difference of two angles, modulo 2π.
+fn angle_difference(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(2.0 * PI);
+    d.min(2.0 * PI - d)
+}
+
+/// The summary's largest distance from the holonomic constraints, in
+/// tolerances.
+fn kept_distance(stderr: &str) -> f64 {
+    let line = stderr
+        .lines()
+        .find_map(|l| l.strip_prefix("holonomic constraints kept: the state came at most "))
+        .unwrap_or_else(|| panic!("no constraints kept in the summary:\n{stderr}"));
+    line.split_whitespace().next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn a_cartesian_pendulum_keeps_its_length_and_swings_as_in_its_angle() {
+    let binary = build("cartesian_pendulum");
+    let times = PENDULUM.map(|(t, _)| t.to_string()).join(",");
+    for method in METHODS {
+        let args = [
+            "--method", method, "--rtol", "1e-10", "--atol", "1e-12", "--times", &times,
+        ];
+        let (rows, stderr) = run(&binary, &args);
+        for (row, &(t, theta)) in rows.iter().zip(&PENDULUM) {
+            let (x, y) = (row[1], row[2]);
+            let length = (x * x + y * y).sqrt();
+            assert!(
+                (length - 1.0).abs() <= 1e-9,
+                "{method} at t = {t}: the length is off by {:e}",
+                length - 1.0
+            );
+            let error = (row[6] - theta).abs();
+            assert!(
+                error <= 1e-6,
+                "{method} at t = {t}: the angle is off by {error:e}"
+            );
+        }
+        // Between projections the state stays within a few tolerances of
+        // the circle (the field projects after each window).
+        let distance = kept_distance(&stderr);
+        assert!(distance <= 100.0, "{method}: {distance} tolerances off");
+    }
+}
+
+#[test]
+fn a_four_bar_closed_by_holonomic_constraints_follows_its_crank_angle_form() {
+    let binary = build("four_bar_closure");
+    let times = FOUR_BAR.map(|(t, ..)| t.to_string()).join(",");
+    for method in METHODS {
+        let args = [
+            "--method", method, "--rtol", "1e-10", "--atol", "1e-12", "--times", &times,
+        ];
+        let (rows, stderr) = run(&binary, &args);
+        for (row, &(t, a, b, c)) in rows.iter().zip(&FOUR_BAR) {
+            let errors = [
+                (row[1] - a).abs(),
+                angle_difference(row[2], b),
+                angle_difference(row[3], c),
+            ];
+            let worst = errors.iter().copied().fold(0.0, f64::max);
+            assert!(
+                worst <= 1e-6,
+                "{method} at t = {t}: (a, b, c) off by {errors:?}"
+            );
+            // The energy (an output) is conserved.
+            assert!((row[7] - rows[0][7]).abs() <= 1e-6 * rows[0][7].abs());
+        }
+        let distance = kept_distance(&stderr);
+        assert!(distance <= 10.0, "{method}: {distance} tolerances off");
+    }
+}
