@@ -12,6 +12,7 @@ use crate::failure::{Failure, FailureKind};
 use crate::field::affine::AffineField;
 use crate::field::quasilinear::QuasilinearField;
 use crate::field::{Anchor, FieldOptions};
+use crate::keep::Keeper;
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Regime};
 use crate::progress::Progress;
@@ -90,6 +91,9 @@ pub struct Outcome {
     pub events: usize,
     /// Steps drawn from the budget.
     pub budget_used: usize,
+    /// The constraints' residuals and projections (models whose
+    /// constraints fix state components).
+    pub kept: Option<crate::keep::Kept>,
 }
 
 /// The initial regime at `(t0, x0)`: branches from the switching
@@ -236,7 +240,7 @@ pub fn mode_index(model: &dyn DynModel, choice: &[usize]) -> usize {
     mode
 }
 
-fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
+pub(crate) fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
     let mut rest = mode;
     model
         .constraints()
@@ -349,10 +353,13 @@ fn run_with(
     model.set_regime(&regime);
     let mut next_sample = 0;
     let mut events = 0;
+    let mut keeper = Keeper::new(model, options.tol);
     // The sample buffer, allocated once (emit_until runs after every step).
     let mut x_sample = vec![0.0; n];
     let mut emit_until = |model: &dyn DynModel,
                           solver: &mut dyn Solver,
+                          keeper: &mut Option<Keeper>,
+                          mode: usize,
                           next: &mut usize,
                           until: f64,
                           sample: &mut Sample<'_>|
@@ -361,6 +368,10 @@ fn run_with(
         while *next < times.len() && times[*next] <= until {
             let t = times[*next];
             solver.dense(model, t, x)?;
+            // No output is off the constraints.
+            if let Some(keeper) = keeper.as_mut() {
+                keeper.project(model, mode, t, x)?;
+            }
             sample(model, t, x)?;
             *next += 1;
         }
@@ -388,6 +399,7 @@ fn run_with(
             ending: Ending::Stopped(t0),
             events,
             budget_used: 0,
+            kept: keeper.map(|k| k.kept()),
         });
     }
     check_masses(model, t0)?;
@@ -531,11 +543,16 @@ fn run_with(
                 emit_until(
                     model,
                     solver.as_mut(),
+                    &mut keeper,
+                    regime.mode,
                     &mut next_sample,
                     t_event,
                     &mut sample,
                 )?;
                 solver.dense(model, t_event, &mut x_event)?;
+                if let Some(keeper) = keeper.as_mut() {
+                    keeper.project(model, regime.mode, t_event, &mut x_event)?;
+                }
                 observe_to_event(
                     model,
                     solver.as_mut(),
@@ -560,6 +577,7 @@ fn run_with(
                         ending: Ending::Stopped(t_event),
                         events,
                         budget_used: budget.used(),
+                        kept: keeper.map(|k| k.kept()),
                     });
                 }
                 model.set_regime(&regime);
@@ -586,7 +604,20 @@ fn run_with(
                         }
                     }
                 }
-                emit_until(model, solver.as_mut(), &mut next_sample, tb, &mut sample)?;
+                emit_until(
+                    model,
+                    solver.as_mut(),
+                    &mut keeper,
+                    regime.mode,
+                    &mut next_sample,
+                    tb,
+                    &mut sample,
+                )?;
+                if let Some(keeper) = keeper.as_mut() {
+                    if let Some(x) = keeper.after_step(model, regime.mode, tb, solver.state())? {
+                        solver.project(model, tb, x)?;
+                    }
+                }
                 if !model.constraints().is_empty() {
                     switch_candidates(model, &mut regime, solver.as_mut(), tb)?;
                 }
@@ -596,6 +627,8 @@ fn run_with(
     emit_until(
         model,
         solver.as_mut(),
+        &mut keeper,
+        regime.mode,
         &mut next_sample,
         f64::INFINITY,
         &mut sample,
@@ -606,6 +639,7 @@ fn run_with(
         ending: Ending::End,
         events,
         budget_used: budget.used(),
+        kept: keeper.map(|k| k.kept()),
     })
 }
 
@@ -850,6 +884,8 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
             | FailureKind::StepBudgetExhausted { .. }
             | FailureKind::AnchorCancels { .. }
             | FailureKind::ConstraintPivotVanishes { .. }
+            | FailureKind::ConstraintUndefined { .. }
+            | FailureKind::ConstraintLeft { .. }
     ) {
         return failure;
     }
@@ -878,6 +914,24 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
         FailureKind::StepSizeUnderflow { .. }
             | FailureKind::NonFiniteState { .. }
             | FailureKind::NonFiniteRate { .. }
+            | FailureKind::SingularMassMatrix { .. }
+            | FailureKind::SingularConditionMatrix { .. }
+            | FailureKind::FieldNotConverging { .. }
+    ) && x.iter().all(|v| v.is_finite())
+    {
+        // A constraint whose value or slope is not finite where the motion
+        // stands (the root of `y' = sqrt(c² − x'²)` at its apex, where its
+        // slope is infinite and so is the mass matrix): the constraint is
+        // the cause, not the matrix it makes singular.
+        if let Some(component) = undefined_constraint(model, t, x) {
+            return Failure::new(t, FailureKind::ConstraintUndefined { component });
+        }
+    }
+    if matches!(
+        failure.kind,
+        FailureKind::StepSizeUnderflow { .. }
+            | FailureKind::NonFiniteState { .. }
+            | FailureKind::NonFiniteRate { .. }
     ) && x.iter().all(|v| v.is_finite())
     {
         if let (Some(m), Some(start)) = (model.mass_matrix(t, x), scale.0) {
@@ -894,6 +948,22 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
         }
     }
     failure
+}
+
+/// The fixed component whose constrained value, or its slope in the
+/// velocities, is not finite at `(t, x)`.
+fn undefined_constraint(model: &dyn DynModel, t: f64, x: &[f64]) -> Option<String> {
+    if !model.keeps_constraints() {
+        return None;
+    }
+    let n = x.len();
+    let mut kept = x.to_vec();
+    let mut gradient = crate::linalg::Matrix::zeros(n, n);
+    model.constrained(t, x, &mut kept).ok()?;
+    model.kept_gradient(t, x, &mut gradient).ok()?;
+    let row =
+        (0..n).find(|&j| !kept[j].is_finite() || (0..n).any(|i| !gradient[(j, i)].is_finite()))?;
+    Some(model.state_names()[row].to_string())
 }
 
 /// Integrates `members` (at least one; the first is the reference)
@@ -947,5 +1017,6 @@ pub fn run_ensemble(
         ending: Ending::End,
         events: 0,
         budget_used: budget.used(),
+        kept: None,
     })
 }

@@ -56,6 +56,14 @@ pub enum FailureKind {
     /// The pivot `∂h/∂dep` of an implicit constraint vanished and no other
     /// candidate is better.
     ConstraintPivotVanishes { constraint: String, pivot: f64 },
+    /// The constraint that fixes `component` has no finite value at the
+    /// state reached: its branch ends there (the root of a negative
+    /// number, a division by zero).
+    ConstraintUndefined { component: String },
+    /// Within one accepted step the state left the constraint that fixes
+    /// `component` by `residual`, far beyond any drift the tolerance lets
+    /// a step carry.
+    ConstraintLeft { component: String, residual: f64 },
     /// At the initial state a constraint hardly determines its first
     /// candidate, the one the initial values take as fixed (its pivot a
     /// vanishing fraction of another's): that value is not determined.
@@ -211,6 +219,25 @@ impl fmt::Display for Failure {
                 "at t = {t:e}: the constraint `{constraint}` no longer determines its \
                  dependent derivative (pivot {pivot:.3e}); name another candidate with \
                  `for … or …`"
+            ),
+            FailureKind::ConstraintUndefined { component } => write!(
+                f,
+                "at t = {t:e}: the constraint that fixes `{component}` has no finite value \
+                 here: its branch ends (a root of a negative number, or a division by \
+                 zero); the motion past this point is not on it. Write the constraint \
+                 implicitly (`… for {component} or …`) to let it pass onto another \
+                 branch, or end the time span before"
+            ),
+            FailureKind::ConstraintLeft {
+                component,
+                residual,
+            } => write!(
+                f,
+                "at t = {t:e}: the motion left the constraint that fixes `{component}` \
+                 (its residual {residual:.3e} in one step, far beyond the tolerance): the \
+                 constraint's branch ends here or the motion passes a singular point of \
+                 it. An explicit root (`y' = sqrt(…)`) holds one branch only: write the \
+                 constraint implicitly (`… for {component} or …`) to pass onto the other"
             ),
             FailureKind::InitialCandidateVanishes {
                 constraint,

@@ -33,6 +33,7 @@ pub mod events;
 pub mod failure;
 pub mod field;
 pub mod highest;
+pub mod keep;
 pub mod linalg;
 pub mod magnus;
 pub mod math;

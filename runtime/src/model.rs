@@ -91,6 +91,10 @@ pub trait Model: Clone {
     const COEFFICIENTS_LINEAR: bool = false;
     /// The model states exact solutions (`exact` lines).
     const EXACT: bool = false;
+    /// Constraints fix some state components (the dependent velocities of
+    /// first-order constraints): [`Model::constrained`] is given, and the
+    /// run keeps the state on them (SPEC §2.3).
+    const KEEPS_CONSTRAINTS: bool = false;
 
     /// Every param's value: param `i` is `overrides[i]` when given, else
     /// its expression evaluated with the values before it (so an override
@@ -162,6 +166,20 @@ pub trait Model: Clone {
 
     /// The exact solution at `t`, for the components the model states.
     fn exact(&self, _t: f64, _out: &mut [Option<f64>]) {}
+
+    /// The values the current mode's constraints require of the state
+    /// components they fix, written into `kept` at those components'
+    /// indices (the others are left as they are).
+    fn constrained(&self, _t: f64, _x: &[f64], _kept: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+
+    /// `jac[(j, i)] = ∂kept_j/∂x_i`: the partials of the values
+    /// [`Model::constrained`] writes in the velocities (zeroed by the
+    /// caller; rows of the fixed components, columns of the velocities).
+    fn kept_gradient(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
+    }
 
     /// The `output` columns at `(t, x)` in the current regime.
     fn outputs(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
@@ -250,6 +268,8 @@ pub trait DynModel {
     fn coefficients_linear(&self) -> bool;
     /// [`Model::EXACT`].
     fn states_exact(&self) -> bool;
+    /// [`Model::KEEPS_CONSTRAINTS`].
+    fn keeps_constraints(&self) -> bool;
 
     /// [`Model::parameters`].
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64>;
@@ -283,6 +303,10 @@ pub trait DynModel {
     fn coefficient_time_partial(&self, t: f64, f: &[f64], dfdt: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::exact`].
     fn exact(&self, t: f64, out: &mut [Option<f64>]);
+    /// [`Model::constrained`].
+    fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure>;
+    /// [`Model::kept_gradient`].
+    fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
     /// [`Model::outputs`].
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::switching_functions`].
@@ -340,6 +364,9 @@ impl<M: Model + 'static> DynModel for M {
     fn states_exact(&self) -> bool {
         M::EXACT
     }
+    fn keeps_constraints(&self) -> bool {
+        M::KEEPS_CONSTRAINTS
+    }
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
         M::parameters(overrides)
     }
@@ -392,6 +419,12 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn exact(&self, t: f64, out: &mut [Option<f64>]) {
         Model::exact(self, t, out);
+    }
+    fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure> {
+        Model::constrained(self, t, x, kept)
+    }
+    fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        Model::kept_gradient(self, t, x, jac)
     }
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::outputs(self, t, x, out);

@@ -60,6 +60,12 @@ pub trait Solver {
     }
     /// Starts afresh from `(t, x)` (after an event changed the regime).
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
+    /// Goes on from `x`, the state at [`Solver::time`] projected onto the
+    /// constraints: no discontinuity, so a method may keep what it has
+    /// learnt of the step sizes.
+    fn project(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        self.restart(model, t, x)
+    }
     /// The work so far.
     fn report(&self) -> Report;
 

@@ -56,6 +56,21 @@ impl Summary {
         for note in &r.notes {
             let _ = write!(s, "\nnote: {note}");
         }
+        if let Some(kept) = &self.outcome.kept {
+            let _ = write!(
+                s,
+                "\nconstraints kept: largest residual {:.3e} ({:.2} of the tolerance{}), \
+                 {} projections after steps",
+                kept.largest_absolute,
+                kept.largest,
+                if kept.largest_at.is_finite() {
+                    format!(", at t = {:e}", kept.largest_at)
+                } else {
+                    String::new()
+                },
+                kept.projections
+            );
+        }
         if let Some(error) = self.exact_error {
             let _ = write!(s, "\nlargest error against the exact solution: {error:.3e}");
         }
@@ -81,7 +96,8 @@ impl Summary {
              \"jacobian_evaluations\":{},\"linearizations\":{},\"windows\":{},\
              \"predictor_steps\":{},\"largest_condition\":{},\"reanchorings\":{},\
              \"events\":{},\"stopped_at\":{},\"budget_used\":{},\"wall_time_s\":{},\
-             \"runs\":{},\"exact_error\":{},\"estimated_error\":{}}}",
+             \"runs\":{},\"exact_error\":{},\"estimated_error\":{},\
+             \"constraint_residual\":{},\"projections\":{}}}",
             json_string(&r.method),
             r.stats.accepted_steps,
             r.stats.rejected_steps,
@@ -100,6 +116,10 @@ impl Summary {
             self.runs,
             json_number(self.exact_error),
             json_number(self.estimated_error),
+            json_number(self.outcome.kept.map(|k| k.largest_absolute)),
+            self.outcome
+                .kept
+                .map_or("null".to_string(), |k| k.projections.to_string()),
         )
     }
 }

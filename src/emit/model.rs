@@ -208,6 +208,11 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
     } else {
         quote! { const EXACT: bool = true; }
     };
+    let kept = if kernel.kept.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! { const KEEPS_CONSTRAINTS: bool = true; }
+    };
     quote! {
         const NAME: &'static str = #model_name;
         const SOURCE_HASH: &'static str = #source_hash;
@@ -219,5 +224,6 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
         #integrator
         #affine
         #exact
+        #kept
     }
 }

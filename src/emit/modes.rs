@@ -10,8 +10,10 @@ use quote::quote;
 use std::collections::HashMap;
 
 /// The motion's methods (trait items and their inherent helpers).
-const METHODS: [&str; 8] = [
+const METHODS: [&str; 10] = [
     "rhs",
+    "constrained",
+    "kept_gradient",
     "jacobian",
     "time_partial",
     "linearize",
@@ -22,8 +24,10 @@ const METHODS: [&str; 8] = [
 ];
 
 /// The trait methods a mode implements, with their argument lists.
-const DISPATCHED: [(&str, &[&str]); 4] = [
+const DISPATCHED: [(&str, &[&str]); 6] = [
     ("rhs", &["t", "x", "dx"]),
+    ("constrained", &["t", "x", "kept"]),
+    ("kept_gradient", &["t", "x", "jac"]),
     ("jacobian", &["t", "x", "jac"]),
     ("time_partial", &["t", "x", "dxdt"]),
     ("linearize", &["t", "x", "dx", "jac"]),
@@ -107,7 +111,8 @@ pub fn dispatch(trait_items: &TokenStream, modes: usize) -> TokenStream {
         });
         let signature = match name {
             "rhs" => quote! { t: f64, x: &[f64], dx: &mut [f64] },
-            "jacobian" => quote! { t: f64, x: &[f64], jac: &mut Matrix },
+            "constrained" => quote! { t: f64, x: &[f64], kept: &mut [f64] },
+            "jacobian" | "kept_gradient" => quote! { t: f64, x: &[f64], jac: &mut Matrix },
             "time_partial" => quote! { t: f64, x: &[f64], dxdt: &mut [f64] },
             _ => quote! { t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix },
         };

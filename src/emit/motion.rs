@@ -62,12 +62,52 @@ fn motion_of(
     let shift_cols: Vec<Literal> = (0..shifted).map(|i| index(i + c)).collect();
     let shifts = quote! { #(dx[#shift_rows] = x[#shift_cols];)* };
     let shift_jacobian = quote! { #(jac[(#shift_rows, #shift_cols)] = 1.0;)* };
-    match &kernel.motion {
+    let kept = kept_code(kernel, names, from_x);
+    let (items, helpers) = match &kernel.motion {
         Motion::Explicit(e) => (
             explicit(kernel, names, e, from_x, &shifts, &shift_jacobian),
             TokenStream::new(),
         ),
         Motion::Implicit(i) => implicit(kernel, names, i, from_x, &shifts, &shift_jacobian),
+    };
+    (quote! { #items #kept }, helpers)
+}
+
+/// `constrained`: the values the constraints require of the components
+/// they fix (nothing for a model without first-order constraints).
+fn kept_code(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
+    if kernel.kept.is_empty() {
+        return TokenStream::new();
+    }
+    let body = bodies::body(names, &kernel.arena, &kernel.kept, from_x, "x", "kept");
+    let (t, x, statements, rows) = (&body.t, &body.source, &body.statements, &body.assignments);
+    let gradient = bodies::body(
+        names,
+        &kernel.arena,
+        &kernel.kept_gradient,
+        from_x,
+        "x",
+        "jac",
+    );
+    let (g_t, g_x, g_out, g_statements, g_cells) = (
+        &gradient.t,
+        &gradient.source,
+        &gradient.out,
+        &gradient.statements,
+        &gradient.assignments,
+    );
+    quote! {
+        fn constrained(&self, #t: f64, #x: &[f64], kept: &mut [f64]) -> Result<(), Failure> {
+            #statements
+            #(#rows)*
+            Ok(())
+        }
+
+        fn kept_gradient(&self, #g_t: f64, #g_x: &[f64], #g_out: &mut Matrix) -> Result<(), Failure> {
+            #g_statements
+            #(#g_cells)*
+            Ok(())
+        }
     }
 }
 

@@ -64,6 +64,17 @@ pub struct Kernel {
     pub switches: Switches,
     /// Every implicit constraint with its candidates' pivots.
     pub candidates: Vec<KernelCandidates>,
+    /// The state components a constraint fixes, with the value it requires
+    /// at `(t, x)` — `(state index, value)`, the dependent velocities of
+    /// first-order constraints (SPEC §2.3): the state is brought back onto
+    /// them after steps and at outputs (latched like the motion; this
+    /// mode's dependents).
+    pub kept: Vec<(usize, ExprId)>,
+    /// `(fixed component, velocity component, ∂value/∂velocity)`, non-zero
+    /// entries: the projection onto the constraints moves the velocities
+    /// along the constraints' normals (a dependent velocity alone would be
+    /// moved by the residual over a pivot that may be poor).
+    pub kept_gradient: Vec<(usize, usize, ExprId)>,
     /// The kernels of modes 1, 2, …: the same model with other candidates
     /// (their motion only).
     pub modes: Vec<Kernel>,
@@ -152,6 +163,8 @@ fn build_with(
         &mut mass_matrix,
     );
     let stop = stop.map(|c| switches.condition(&mut arena, &c));
+    let kept = kept(&mut arena, &mut switches, reduced);
+    let kept_gradient = kept_gradient(&mut arena, &kept, &reduced.state);
     Ok(Kernel {
         arena,
         state: reduced.state.clone(),
@@ -171,8 +184,30 @@ fn build_with(
         stop,
         switches,
         candidates,
+        kept,
+        kept_gradient,
         modes: Vec::new(),
     })
+}
+
+/// The values the constraints require of the state components they fix
+/// (`ReducedSystem::fixed`: the same expressions as their initial values),
+/// on the motion's branches. Integrated as free state, a dependent velocity
+/// drifts from them wherever `φ` depends on a dependent coordinate
+/// (`e' = −φ_{q_d} e`, shared/notes/constraint-drift.md).
+fn kept(
+    arena: &mut Arena,
+    switches: &mut Switches,
+    reduced: &crate::mechanics::ReducedSystem,
+) -> Vec<(usize, ExprId)> {
+    reduced
+        .fixed
+        .iter()
+        .map(|&(i, e)| {
+            let e = crate::mechanics::tidy::simplify(arena, e);
+            (i, switches.latch(arena, e))
+        })
+        .collect()
 }
 
 impl Kernel {
@@ -193,4 +228,34 @@ impl Kernel {
             }
         }
     }
+}
+
+/// The non-zero partials of the kept values in the velocities (the state's
+/// highest block, `q^(u−1)`).
+fn kept_gradient(
+    arena: &mut Arena,
+    kept: &[(usize, ExprId)],
+    state: &[Symbol],
+) -> Vec<(usize, usize, ExprId)> {
+    let top = state
+        .iter()
+        .filter_map(|s| match s {
+            Symbol::Jet { order, .. } => Some(*order),
+            _ => None,
+        })
+        .max()
+        .unwrap_or(0);
+    let mut entries = Vec::new();
+    for &(i, e) in kept {
+        for (j, &s) in state.iter().enumerate() {
+            if !matches!(s, Symbol::Jet { order, .. } if order == top) {
+                continue;
+            }
+            let d = arena.diff(e, s);
+            if !arena.is_zero(d) {
+                entries.push((i, j, crate::mechanics::tidy::simplify(arena, d)));
+            }
+        }
+    }
+    entries
 }

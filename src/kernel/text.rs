@@ -71,6 +71,12 @@ impl fmt::Display for Kernel {
                 }
             }
         }
+        for &(i, e) in &self.kept {
+            writeln!(f, "kept {} = {}", name(i), a.display(e))?;
+        }
+        for &(i, j, d) in &self.kept_gradient {
+            writeln!(f, "∂kept {}/∂{} = {}", name(i), name(j), a.display(d))?;
+        }
         if let Some(c) = &self.coefficients {
             let kind = if c.linear { "linear" } else { "Riccati" };
             writeln!(f, "coefficient system ({kind}):")?;

@@ -148,6 +148,18 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             (0..model.coords.len() as u32).map(move |coord| Symbol::Jet { coord, order })
         })
         .collect();
+    // The state components the constraints fix (dependent derivatives of
+    // order ≥ k within the state), with the values they require: every
+    // mode keeps its own.
+    let mut fixed = Vec::new();
+    for (i, &symbol) in state.iter().enumerate() {
+        if let Symbol::Jet { coord, order } = symbol {
+            let dependent = symbolic.constraints.iter().any(|&(d, _)| d == coord);
+            if dependent && order >= symbolic.k {
+                fixed.push((i, elimination.image(&mut arena, coord, order)));
+            }
+        }
+    }
     let initial = if with_initial {
         initial::initial_values(
             &mut arena,
@@ -167,6 +179,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         mass_matrix: reduction.mass_matrix,
         mass_laws: Vec::new(),
         initial,
+        fixed,
         consistency: reduction.consistency,
     };
     reduced.mass_laws = remaining_masses(&arena, &reduced)
