@@ -6,7 +6,7 @@ use crate::span::Span;
 use pest::error::{Error, ErrorVariant, InputLocation};
 
 const STATEMENT_KEYWORDS: &str =
-    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact`, `integrator`, `let`, `output` or `stop`";
+    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact`, `integrator`, `let`, `output`, `stop` or `when`";
 const POINT_FIELDS: &str =
     "`mass = …;`, `position = (…);`, `absolute velocity = (…);` or `relative velocity = (…);`";
 
@@ -166,7 +166,8 @@ fn describe(rule: Rule, in_point: bool) -> Option<&'static str> {
         | Rule::number
         | Rule::var
         | Rule::neg
-        | Rule::initial_value => "an expression",
+        | Rule::initial_value
+        | Rule::reset => "an expression",
         Rule::ident => "a name",
         Rule::kw_mass | Rule::mass if in_point => "a point field",
         rule if is_point_field(rule) => "a point field",
@@ -208,6 +209,7 @@ fn is_statement(rule: Rule) -> bool {
                 | Rule::let_def
                 | Rule::output
                 | Rule::stop
+                | Rule::impact
         )
 }
 
