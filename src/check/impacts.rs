@@ -24,11 +24,15 @@ impl Checker<'_> {
         let several_candidates = constraints
             .iter()
             .any(|c| c.implicit.as_ref().is_some_and(|i| i.candidates.len() > 1));
-        let expressions = Allowed {
+        let condition = Allowed {
             time: true,
             masses: true,
             coord_order: Some(super::MAX_DERIVATIVE_ORDER),
-            ..Allowed::constants("an impact")
+            ..Allowed::constants("the condition of a `when`")
+        };
+        let value = Allowed {
+            what: "a reset",
+            ..condition
         };
         let mut impacts = Vec::new();
         for (item, span) in self.items() {
@@ -36,10 +40,10 @@ impl Checker<'_> {
                 continue;
             };
             let errors = self.diagnostics.len();
-            self.check_typed(cond, expressions, Ty::Bool);
+            self.check_typed(cond, condition, Ty::Bool);
             let mut checked: Vec<ImpactReset> = Vec::new();
             for reset in resets {
-                self.check_expr(&reset.value, expressions);
+                self.check_expr(&reset.value, value);
                 let Some((coord, order)) = self.derivative_target(&reset.target, "a reset") else {
                     continue;
                 };

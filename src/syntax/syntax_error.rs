@@ -37,8 +37,16 @@ fn expected(positives: &[Rule], source: &str, found_span: Span, found: &str) -> 
     }
     let in_point = positives.iter().any(|&rule| is_point_field(rule));
     let mut words: Vec<&'static str> = Vec::new();
+    // `when` after `stop` is a keyword expected; where a statement may
+    // start, it begins one (an impact).
+    let at_statement = positives.iter().any(|&rule| is_statement(rule));
     for &rule in positives {
-        if let Some(word) = describe(rule, in_point) {
+        let word = if rule == Rule::kw_when && at_statement {
+            Some("a statement")
+        } else {
+            describe(rule, in_point)
+        };
+        if let Some(word) = word {
             if !words.contains(&word) {
                 words.push(word);
             }
