@@ -374,3 +374,28 @@ fn direction(model: &dyn DynModel, t: f64, x: &[f64], k: usize) -> Result<Option
     let change = g_ahead[k] - g[k];
     Ok((change != 0.0).then_some(change > 0.0))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn geometric_impact_times_predict_their_accumulation() {
+        // A ball: impacts at T0 (1 + 2 e (1 - e^(n-1)) / (1 - e)), the limit
+        // T0 (1 + 2 e / (1 - e)), from the last four.
+        let (t0, e) = (0.45_f64, 0.8_f64);
+        let impact = |n: i32| t0 * (1.0 + 2.0 * e * (1.0 - e.powi(n - 1)) / (1.0 - e));
+        let times: Vec<f64> = (5..9).map(impact).collect();
+        let limit = accumulation(&times).unwrap();
+        assert!(
+            (limit - t0 * (1.0 + 2.0 * e / (1.0 - e))).abs() < 1e-12,
+            "{limit}"
+        );
+        // Evenly spaced (an elastic ball), growing, or too few: none.
+        assert_eq!(accumulation(&[1.0, 2.0, 3.0, 4.0]), None);
+        assert_eq!(accumulation(&[1.0, 1.1, 1.3, 1.7]), None);
+        assert_eq!(accumulation(&[1.0, 1.5, 1.75]), None);
+        // Shrinking, but not by one ratio: none.
+        assert_eq!(accumulation(&[0.0, 1.0, 1.9, 1.91]), None);
+    }
+}

@@ -33,6 +33,9 @@ pub struct Lowered {
     pub resets: Vec<(usize, ExprId)>,
 }
 
+/// `(state index, value)` of the components the constraints fix.
+type Fixed = Vec<(usize, ExprId)>;
+
 /// The impacts of `model` with their conditions lowered (the kernel puts
 /// them on the switches' branches once the motion is latched), and the
 /// state components the constraints fix with their expressions (empty
@@ -42,7 +45,7 @@ pub fn impacts(
     model: &Model,
     motion: &Motion,
     reduced: &ReducedSystem,
-) -> Result<(Vec<Lowered>, Vec<(usize, ExprId)>), Vec<Diagnostic>> {
+) -> Result<(Vec<Lowered>, Fixed), Vec<Diagnostic>> {
     if model.impacts.is_empty() {
         return Ok((Vec::new(), Vec::new()));
     }
