@@ -336,7 +336,11 @@ impl Derivation {
                     }
                     Style::Latex => {
                         let tag = format!("\\text{{when {}}}", latex_text(&impact.text));
-                        out.push_str(&crate::latex::equation(&format!("{lhs}^{{+}}"), &rhs, &tag));
+                        out.push_str(&crate::latex::equation(
+                            &format!("{{{lhs}}}^{{+}}"),
+                            &rhs,
+                            &tag,
+                        ));
                     }
                 }
             }
@@ -363,7 +367,7 @@ impl Derivation {
                 }
                 Style::Latex => {
                     out.push_str(&crate::latex::equation(
-                        &format!("{lhs}^{{+}}"),
+                        &format!("{{{lhs}}}^{{+}}"),
                         &rhs,
                         "\\text{after an impact}",
                     ));
