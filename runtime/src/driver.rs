@@ -12,6 +12,7 @@ use crate::failure::{Failure, FailureKind};
 use crate::field::affine::AffineField;
 use crate::field::quasilinear::QuasilinearField;
 use crate::field::{Anchor, FieldOptions};
+use crate::impacts::{AtEvent, Impacts};
 use crate::keep::Keeper;
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Regime};
@@ -80,6 +81,16 @@ pub enum Ending {
     End,
     /// `stop when` became true at this time.
     Stopped(f64),
+    /// The impacts of the `when` whose condition is `impact` left the
+    /// motion on its boundary at `at`: they accumulate at `accumulation`
+    /// (a ball with restitution below 1 comes to rest there), or (`None`)
+    /// the last one stopped the motion instead of turning it back. The
+    /// run ends at `at`, its last row the state after that impact.
+    Rest {
+        impact: &'static str,
+        at: f64,
+        accumulation: Option<f64>,
+    },
 }
 
 /// What a run did.
@@ -422,6 +433,7 @@ fn run_with(
     let mut pivot_limit: Option<f64> = None;
     // The functions at the last step's start and quarters, for the pace.
     let mut g_quarters = vec![g_now.clone(); 4];
+    let mut impacts = Impacts::new(model);
     probe_pace(model, t0, x0, t1 - t0, &mut pace);
     while solver.time() < t1 {
         // Where the solution stands: after the last step, or where an
@@ -479,7 +491,10 @@ fn run_with(
                         model.switching_functions(t, &x_event, &mut g_now);
                     }
                     changed = (0..model.switches())
-                        .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
+                        .filter(|&k| {
+                            let g = impacts.as_seen(k, g_now[k], regime.branches[k]);
+                            (g > 0.0) != regime.branches[k]
+                        })
                         .collect();
                     if !changed.is_empty() {
                         (t_check, t_from) = (t, start);
@@ -503,10 +518,11 @@ fn run_with(
                 for &k in &changed {
                     let mut x = vec![0.0; n];
                     let mut g = vec![0.0; model.switches()];
+                    let positive = regime.branches[k];
                     let mut phi = |t: f64| -> Result<f64, Failure> {
                         solver.dense(model, t, &mut x)?;
                         model.switching_functions(t, &x, &mut g);
-                        Ok(g[k])
+                        Ok(impacts.as_seen(k, g[k], positive))
                     };
                     let g_a = {
                         let v = phi(ta)?;
@@ -561,11 +577,35 @@ fn run_with(
                     &switches,
                     &mut pace,
                 )?;
-                for k in switches {
+                let before = regime.branches.clone();
+                for &k in &switches {
                     regime.branches[k] = !regime.branches[k];
                 }
                 events += 1;
-                if model.stop(&regime.branches) {
+                let mut ending = model
+                    .stop(&regime.branches)
+                    .then_some(Ending::Stopped(t_event));
+                if ending.is_none() && !model.impacts().is_empty() {
+                    // A `when` whose condition became true resets the
+                    // state; after it `stop when` may hold.
+                    let at = impacts.at_event(
+                        model,
+                        &mut regime,
+                        &before,
+                        &switches,
+                        t_event,
+                        &mut x_event,
+                        options.tol,
+                    )?;
+                    ending = match at {
+                        AtEvent::Stop(end) => Some(end),
+                        AtEvent::Reset if model.stop(&regime.branches) => {
+                            Some(Ending::Stopped(t_event))
+                        }
+                        AtEvent::Reset | AtEvent::None => None,
+                    };
+                }
+                if let Some(ending) = ending {
                     model.set_regime(&regime);
                     let already = next_sample > 0 && times[next_sample - 1] == t_event;
                     if !already {
@@ -574,7 +614,7 @@ fn run_with(
                     progress.finish();
                     return Ok(Outcome {
                         report: solver.report(),
-                        ending: Ending::Stopped(t_event),
+                        ending,
                         events,
                         budget_used: budget.used(),
                         kept: keeper.map(|k| k.kept()),

@@ -16,6 +16,7 @@
 //! | `system`, `stepper` | what integrators integrate, and their interface |
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
+//! | `events`, `impacts` | locating events; the resets of `when` at them |
 
 // Numerical kernels index several arrays with one loop variable; and
 // `!(x > 0.0)` is meant: it is true for NaN.
@@ -33,6 +34,7 @@ pub mod events;
 pub mod failure;
 pub mod field;
 pub mod highest;
+pub mod impacts;
 pub mod keep;
 pub mod linalg;
 pub mod magnus;

@@ -83,6 +83,9 @@ pub trait Model: Clone {
     const SWITCHES: usize = 0;
     /// Implicit constraints with run-time candidates.
     const CONSTRAINTS: &'static [Candidates] = &[];
+    /// The conditions of the model's `when` statements (impacts), as
+    /// written, in order.
+    const IMPACTS: &'static [&'static str] = &[];
     /// The reduced system (7) is affine in the state: the linear field
     /// ansatz is a complete solution and [`Model::coefficients`] is given.
     const AFFINE: bool = false;
@@ -192,6 +195,18 @@ pub trait Model: Clone {
         false
     }
 
+    /// Whether the condition of impact `w` ([`Model::IMPACTS`]) holds with
+    /// these branches.
+    fn impact_holds(&self, _w: usize, _branches: &[bool]) -> bool {
+        false
+    }
+
+    /// Impact `w`'s resets: `out` holds the state `x` before the impact on
+    /// entry; the reset components are written with their new values (all
+    /// read from `x`), then every component the constraints fix is
+    /// recomputed from the new state.
+    fn impact_reset(&self, _w: usize, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+
     /// The pivots `∂h/∂dep` of every candidate of every implicit
     /// constraint, flattened in [`Model::CONSTRAINTS`] order.
     fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
@@ -262,6 +277,8 @@ pub trait DynModel {
     fn switches(&self) -> usize;
     /// [`Model::CONSTRAINTS`].
     fn constraints(&self) -> &'static [Candidates];
+    /// [`Model::IMPACTS`].
+    fn impacts(&self) -> &'static [&'static str];
     /// [`Model::AFFINE`].
     fn affine(&self) -> bool;
     /// [`Model::COEFFICIENTS_LINEAR`].
@@ -313,6 +330,10 @@ pub trait DynModel {
     fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]);
     /// [`Model::stop`].
     fn stop(&self, branches: &[bool]) -> bool;
+    /// [`Model::impact_holds`].
+    fn impact_holds(&self, w: usize, branches: &[bool]) -> bool;
+    /// [`Model::impact_reset`].
+    fn impact_reset(&self, w: usize, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::pivots`].
     fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::masses`].
@@ -354,6 +375,9 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn constraints(&self) -> &'static [Candidates] {
         M::CONSTRAINTS
+    }
+    fn impacts(&self) -> &'static [&'static str] {
+        M::IMPACTS
     }
     fn affine(&self) -> bool {
         M::AFFINE
@@ -434,6 +458,12 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn stop(&self, branches: &[bool]) -> bool {
         Model::stop(self, branches)
+    }
+    fn impact_holds(&self, w: usize, branches: &[bool]) -> bool {
+        Model::impact_holds(self, w, branches)
+    }
+    fn impact_reset(&self, w: usize, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::impact_reset(self, w, t, x, out);
     }
     fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::pivots(self, t, x, out);

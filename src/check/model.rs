@@ -41,6 +41,8 @@ pub struct Model {
     pub outputs: Vec<Output>,
     /// `stop when cond;`: a condition of `t`, the state and params.
     pub stop: Option<Expr>,
+    /// `when cond then y' = …;` statements in source order (SPEC §2.3).
+    pub impacts: Vec<Impact>,
     /// Every declared name (params, coordinates, masses, points, lets,
     /// outputs).
     pub names: HashMap<String, Name>,
@@ -189,6 +191,29 @@ pub enum EjectaVelocity {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Force {
     pub coord: usize,
+    pub value: Expr,
+    pub span: Span,
+}
+
+/// `when cond then y' = …, x = …;`: where `cond` becomes true, the
+/// targets (free components of the state) are reset to their values, all
+/// evaluated at the state before the impact.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Impact {
+    /// The condition as written, for messages (`y < 0`).
+    pub text: String,
+    /// A condition of `t`, the state and params.
+    pub cond: Expr,
+    pub resets: Vec<ImpactReset>,
+    pub span: Span,
+}
+
+/// `coord^(order) = value` in a `when`; `value` an expression of `t`,
+/// params, masses and the state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpactReset {
+    pub coord: usize,
+    pub order: u32,
     pub value: Expr,
     pub span: Span,
 }

@@ -53,6 +53,10 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/highest.rs",
         include_str!("../../runtime/src/highest.rs"),
     ),
+    (
+        "src/impacts.rs",
+        include_str!("../../runtime/src/impacts.rs"),
+    ),
     ("src/keep.rs", include_str!("../../runtime/src/keep.rs")),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),

@@ -11,6 +11,7 @@
 //! | `text.rs` | the kernel's text form (snapshots) |
 
 mod candidates;
+mod impacts;
 mod items;
 mod motion;
 mod outputs;
@@ -19,6 +20,7 @@ mod text;
 pub mod time;
 
 pub use candidates::KernelCandidates;
+pub use impacts::KernelImpact;
 pub use items::{Coefficients, InitialKind, InitialSource, KernelInitial, KernelParam};
 pub use motion::{Explicit, Implicit, Motion};
 pub use switches::{BranchCond, Switches};
@@ -60,6 +62,12 @@ pub struct Kernel {
     pub outputs: Vec<(String, ExprId)>,
     /// `stop when`, on the switches' branches.
     pub stop: Option<BranchCond>,
+    /// Every `when` (SPEC §2.3): its condition on the branches and its
+    /// resets.
+    pub impacts: Vec<KernelImpact>,
+    /// `(state index, value)` of every component the constraints fix,
+    /// recomputed after an impact's resets (empty without impacts).
+    pub constrained: Vec<(usize, ExprId)>,
     /// The switching functions of every selection a run evaluates.
     pub switches: Switches,
     /// Every implicit constraint with its candidates' pivots.
@@ -90,8 +98,8 @@ pub fn build(
 }
 
 /// The kernel of one more mode of a model with implicit constraints (its
-/// motion; the initial state, exact solution, outputs and stop are mode
-/// 0's).
+/// motion; the initial state, exact solution, outputs, stop and impacts
+/// are mode 0's).
 pub fn build_mode(
     model: &Model,
     derivation: &Derivation,
@@ -142,6 +150,11 @@ fn build_with(
     } else {
         (Vec::new(), None)
     };
+    let (impacts, constrained) = if first_mode {
+        impacts::impacts(&mut arena, model, &motion, reduced)?
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let candidates = if first_mode {
         candidates::candidates(&mut arena, model)
     } else {
@@ -165,6 +178,7 @@ fn build_with(
     let stop = stop.map(|c| switches.condition(&mut arena, &c));
     let kept = kept(&mut arena, &mut switches, reduced);
     let kept_gradient = kept_gradient(&mut arena, &kept, &reduced.state);
+    let impacts = impacts::on_branches(&mut arena, &mut switches, impacts);
     Ok(Kernel {
         arena,
         state: reduced.state.clone(),
@@ -182,6 +196,8 @@ fn build_with(
         integrator: model.integrator.map(|d| d.choice),
         outputs,
         stop,
+        impacts,
+        constrained,
         switches,
         candidates,
         kept,

@@ -20,23 +20,7 @@ pub fn outputs(
     motion: &Motion,
     reduced: &ReducedSystem,
 ) -> Result<Lowered, Vec<Diagnostic>> {
-    let highest: HashMap<Symbol, ExprId> = match motion {
-        Motion::Explicit(m) => m
-            .rhs
-            .iter()
-            .enumerate()
-            .map(|(j, &e)| {
-                (
-                    Symbol::Jet {
-                        coord: j as u32,
-                        order: reduced.order,
-                    },
-                    e,
-                )
-            })
-            .collect(),
-        Motion::Implicit(_) => HashMap::new(),
-    };
+    let highest = highest_values(motion, reduced);
     let mut errors = Vec::new();
     let mut columns = Vec::new();
     for output in &model.outputs {
@@ -85,7 +69,29 @@ pub fn outputs(
     }
 }
 
-fn substitute(arena: &mut Arena, cond: &Cond, map: &HashMap<Symbol, ExprId>) -> Cond {
+/// The highest derivatives `q^(u)` by the reduced system's value, where
+/// that is an expression (explicit systems).
+pub(super) fn highest_values(motion: &Motion, reduced: &ReducedSystem) -> HashMap<Symbol, ExprId> {
+    match motion {
+        Motion::Explicit(m) => m
+            .rhs
+            .iter()
+            .enumerate()
+            .map(|(j, &e)| {
+                (
+                    Symbol::Jet {
+                        coord: j as u32,
+                        order: reduced.order,
+                    },
+                    e,
+                )
+            })
+            .collect(),
+        Motion::Implicit(_) => HashMap::new(),
+    }
+}
+
+pub(super) fn substitute(arena: &mut Arena, cond: &Cond, map: &HashMap<Symbol, ExprId>) -> Cond {
     match cond {
         Cond::Negative(g) => Cond::Negative(arena.subst(*g, map)),
         Cond::Not(c) => Cond::Not(Box::new(substitute(arena, c, map))),
@@ -102,7 +108,7 @@ fn substitute(arena: &mut Arena, cond: &Cond, map: &HashMap<Symbol, ExprId>) -> 
 
 /// A derivative the run does not have: above the state's order (or the
 /// highest one of an implicit system).
-fn beyond_state(
+pub(super) fn beyond_state(
     arena: &Arena,
     e: ExprId,
     reduced: &ReducedSystem,
@@ -127,7 +133,7 @@ fn beyond_state(
     )
 }
 
-fn internal(span: Span) -> Diagnostic {
+pub(super) fn internal(span: Span) -> Diagnostic {
     Diagnostic::error(
         codes::NAME_NOT_ALLOWED,
         "internal error: this statement could not be lowered",

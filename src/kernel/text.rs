@@ -87,6 +87,15 @@ impl fmt::Display for Kernel {
         for &(k, e) in &self.exact {
             writeln!(f, "exact {} = {}", name(k), a.display(e))?;
         }
+        for impact in &self.impacts {
+            writeln!(f, "when {} ({:?}):", impact.text, impact.condition)?;
+            for &(k, e) in &impact.resets {
+                writeln!(f, "  {} := {}", name(k), a.display(e))?;
+            }
+        }
+        for &(k, e) in &self.constrained {
+            writeln!(f, "after an impact {} := {}", name(k), a.display(e))?;
+        }
         Ok(())
     }
 }

@@ -229,6 +229,12 @@ fn generated_code_holds_only_what_the_system_needs() {
     assert!(!lib_rs("knife_edge").contains("const AFFINE"));
     // Exact-solution code only with `exact`.
     assert!(paper.contains("fn exact("));
+    // Impact code only with `when`; the derivatives the constraints fix
+    // are recomputed after a reset only where there are some.
+    assert!(!paper.contains("impact") && !paper.contains("IMPACTS"));
+    let reset = item(&lib_rs("bouncing_ball"), "impact_reset");
+    assert!(reset.contains("out[1] = -e * y_d1;") && !reset.contains("out[0]"));
+    assert!(item(&lib_rs("constrained_wall"), "impact_reset").contains("out[3] = t * q1_d1;"));
     // Nothing model-independent: the runtime is a dependency.
     assert!(
         paper.lines().count() < 400,
@@ -286,9 +292,11 @@ fn an_unrelated_change_renames_nothing_in_other_items() {
 #[test]
 fn generated_crates_pass_clippy() {
     // Contrasting systems: affine/linear, Riccati with a mass law, local
-    // field, Newton, k = 3 consistency.
+    // field, Newton, k = 3 consistency, impacts (with a constraint).
     for name in [
         "paper",
+        "incline_bounce",
+        "constrained_wall",
         "mass_loss_stiff_spring",
         "knife_edge",
         "nonlinear_second_order",

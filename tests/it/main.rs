@@ -8,6 +8,7 @@ mod examples;
 mod expect;
 mod field;
 mod generated;
+mod impacts;
 mod ir;
 mod kernel;
 mod language_v2;

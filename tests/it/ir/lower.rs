@@ -101,6 +101,7 @@ fn paper_model() -> Model {
         lets: Vec::new(),
         outputs: Vec::new(),
         stop: None,
+        impacts: Vec::new(),
         names: HashMap::from([
             ("M0".to_string(), Name::Param(0)),
             ("alpha".to_string(), Name::Param(1)),
