@@ -723,3 +723,58 @@ fn every_function_and_operator_runs_and_outputs_what_it_means() {
         }
     }
 }
+
+/// Two particles whose velocities stay parallel, an implicit constraint
+/// with two candidates whose modes solve their mass matrices numerically
+/// (tests/data/v2/parallel_velocities.lag): the crate builds (it did not:
+/// rustc E0599 on `mass_system`), and both methods keep the energy and the
+/// constraint and agree.
+#[test]
+fn parallel_velocities_of_two_candidates_build_and_keep_their_energy() {
+    let binary = build_file(&crate::root().join("tests/data/v2/parallel_velocities.lag"));
+    let mut ends = Vec::new();
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "201"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let drift = drift(&run, "E");
+        assert!(drift < 1e-8, "{method}: E drifts {drift:e}");
+        let cross = run.column("cross");
+        let residual = run.rows.iter().map(|r| r[cross].abs()).fold(0.0, f64::max);
+        assert!(residual < 1e-8, "{method}: residual {residual:e}");
+        // Particle 1 comes to rest: x1' = 0, the pivot of y2', is reached.
+        let x1d = run.column("x1'");
+        assert!(run.rows.last().unwrap()[x1d].abs() < 1e-6);
+        ends.push(run.rows.last().unwrap().clone());
+    }
+    let difference = crate::largest_difference(&ends[0], &ends[1]);
+    assert!(
+        difference < 1e-7,
+        "field and direct differ by {difference:e}"
+    );
+}
+
+/// Several candidates with a variable mass (an `if` burnout and a point),
+/// forces with a kink (`abs`) and a state switch (`min`), vector outputs,
+/// `stop when` and exact lines (tests/data/v2/candidates_combined.lag):
+/// builds, runs with both methods to its exact solution and stops after
+/// one and a half turns.
+#[test]
+fn every_construct_with_several_candidates_runs_to_its_exact_solution() {
+    let binary = build_file(&crate::root().join("tests/data/v2/candidates_combined.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "101"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let error = crate::exact_error(&run.stderr);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+        let th = run.column("th");
+        let last = run.rows.last().unwrap();
+        assert!(
+            (last[th] - 3.0 * std::f64::consts::PI).abs() < 1e-9,
+            "{method}: stopped at th = {}",
+            last[th]
+        );
+        // The speed along the blade is v0 M0 / M: 2 after the burnout.
+        assert!((last[run.column("speed")] - 2.0).abs() < 1e-8);
+        assert!(run.stderr.contains("events: "), "{}", run.stderr);
+    }
+}
