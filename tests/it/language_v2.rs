@@ -778,3 +778,112 @@ fn every_construct_with_several_candidates_runs_to_its_exact_solution() {
         assert!(run.stderr.contains("events: "), "{}", run.stderr);
     }
 }
+
+/// A point turning through every angle read back by atan2
+/// (tests/data/v2/atan2_through_axes.lag): through cos(q) = 0, where
+/// atan2's derivative was 0/0, both methods run to the exact solution;
+/// atan2's one switch is y = 0, located where the force jumps at the cut
+/// (q = π, 3π, 5π) and where it is smooth (q = 2π, 4π, 6π): 6 events
+/// (13 with the old switch on x too); the energy is kept. (cos(q) is never
+/// exactly 0 here, so the old lowering ran too, its field keeping the
+/// energy to 2.3e-9 where this one keeps it to 1e-11: the four-bar below
+/// and `ir::lower::atan2_and_its_derivatives_are_defined_through_x_0` are
+/// the ones that failed.)
+#[test]
+fn atan2_runs_through_x_0_and_jumps_at_its_cut() {
+    let binary = build_file(&crate::root().join("tests/data/v2/atan2_through_axes.lag"));
+    for method in METHODS {
+        let run = run(
+            &binary,
+            &[
+                "--method",
+                method,
+                "--rtol",
+                "1e-10",
+                "--atol",
+                "1e-12",
+                "--samples",
+                "601",
+            ],
+        );
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let error = crate::exact_error(&run.stderr);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+        assert!(
+            run.stderr.contains("events: 6;"),
+            "{method}: {}",
+            run.stderr
+        );
+        let drift = drift(&run, "E");
+        assert!(drift < 1e-8, "{method}: E drifts {drift:e}");
+        let (q, wrapped) = (run.column("q"), run.column("wrapped"));
+        for r in &run.rows {
+            let expected = r[q].sin().atan2(r[q].cos());
+            assert!(
+                (r[wrapped] - expected).abs() < 1e-12,
+                "{method}: wrapped at t = {}: {} for {expected}",
+                r[0],
+                r[wrapped]
+            );
+        }
+    }
+}
+
+/// A four-bar whose coupler angle is read by atan2 through the coupler's
+/// vertical (tests/data/v2/four_bar_atan2.lag) stopped with exit 3 where
+/// atan2's x-argument crossed 0; now it runs t = 0 .. 100 with both
+/// methods and agrees with the same closure written with acos and atan
+/// (four_bar_acos.lag, at rtol 1e-13 the reference), as that does.
+#[test]
+fn a_four_bar_closed_by_atan2_agrees_with_its_acos_form() {
+    let atan2 = build_file(&crate::root().join("tests/data/v2/four_bar_atan2.lag"));
+    let acos = build_file(&crate::root().join("tests/data/v2/four_bar_acos.lag"));
+    let tight = [
+        "--method",
+        "direct",
+        "--rtol",
+        "1e-13",
+        "--atol",
+        "1e-15",
+        "--samples",
+        "101",
+    ];
+    let reference = run(&acos, &tight);
+    assert_eq!(reference.code, 0, "{}", reference.stderr);
+    // The two closures themselves agree (at the tight tolerance).
+    let tight_atan2 = run(&atan2, &tight);
+    assert_eq!(tight_atan2.code, 0, "{}", tight_atan2.stderr);
+    let difference = |a: &Run, b: &Run| {
+        a.rows
+            .iter()
+            .zip(&b.rows)
+            .map(|(x, y)| crate::largest_difference(&x[..3], &y[..3]))
+            .fold(0.0, f64::max)
+    };
+    let closures = difference(&tight_atan2, &reference);
+    assert!(closures < 1e-9, "the closures differ by {closures:e}");
+    for (binary, form) in [(&atan2, "atan2"), (&acos, "acos")] {
+        for method in METHODS {
+            let args = [
+                "--method",
+                method,
+                "--rtol",
+                "1e-10",
+                "--atol",
+                "1e-12",
+                "--samples",
+                "101",
+            ];
+            let run = run(binary, &args);
+            assert_eq!(run.code, 0, "{form} {method}: {}", run.stderr);
+            assert_eq!(run.rows.last().unwrap()[0], 100.0, "{form} {method}");
+            let error = difference(&run, &reference);
+            assert!(
+                error < 1e-6,
+                "{form} {method}: {error:e} from the reference"
+            );
+            let drift = drift(&run, "E");
+            assert!(drift < 1e-8, "{form} {method}: E drifts {drift:e}");
+        }
+    }
+}
