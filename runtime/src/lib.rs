@@ -16,6 +16,7 @@
 //! | `system`, `stepper` | what integrators integrate, and their interface |
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
+//! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
 // Numerical kernels index several arrays with one loop variable; and
 // `!(x > 0.0)` is meant: it is true for NaN.
@@ -48,3 +49,4 @@ pub mod stepper;
 pub mod summary;
 pub mod system;
 pub mod tolerance;
+pub mod watch;

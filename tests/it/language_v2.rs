@@ -190,7 +190,8 @@ fn a_single_candidate_whose_pivot_vanishes_stops_naming_the_constraint() {
         let run = run(&binary, &["--method", method]);
         assert_eq!(run.code, 3, "{method}: {}", run.stderr);
         assert!(
-            run.stderr.contains("sin(th)*x' - cos(th)*y' = 0")
+            run.stderr
+                .contains("the constraint `sin(th) * x' = cos(th) * y' for y'`")
                 && run.stderr.contains("at t = 1.5707963"),
             "{method}: {}",
             run.stderr
