@@ -20,6 +20,7 @@ use crate::progress::Progress;
 use crate::solution::{Piece, Solution};
 use crate::solver::{Report, Solver};
 use crate::tolerance::Tolerance;
+use crate::watch::ConstraintWatch;
 
 /// How to integrate.
 #[derive(Clone, Debug, PartialEq)]
@@ -414,6 +415,7 @@ fn run_with(
         });
     }
     check_masses(model, t0)?;
+    let watch = ConstraintWatch::start(model, t0, x0)?;
     // The mass matrix's scale at the start, which only the diagnosis of a
     // failure reads: an LU and a norm estimate, computed up front only when
     // the regime (on which the mass matrix may depend) can change during
@@ -423,7 +425,7 @@ fn run_with(
     let early_scale = regime_may_change.then(|| MassScale::at(model, t0, x0));
     let scale = |model: &dyn DynModel| early_scale.unwrap_or_else(|| MassScale::at(model, t0, x0));
     let mut solver = make_solver(model, options, t0, x0, h_max)
-        .map_err(|f| diagnose(model, f, x0, &scale(model)))?;
+        .map_err(|f| watch.diagnose(model, diagnose(model, f, x0, &scale(model)), t0, x0))?;
     let mut progress = Progress::new(options.progress, t0, t1);
     let mut g_now = vec![0.0; model.switches()];
     let mut x_event = vec![0.0; n];
@@ -452,7 +454,8 @@ fn run_with(
             }
             let x = solver.state().to_vec();
             progress.finish();
-            return Err(diagnose(model, failure, &x, &scale(model)));
+            let failure = diagnose(model, failure, &x, &scale(model));
+            return Err(watch.diagnose(model, failure, solver.time(), &x));
         }
         progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
@@ -556,6 +559,21 @@ fn run_with(
                         last.until = last.until.min(t_event);
                     }
                 }
+                if let Some(failure) = watch.step(model, solver.as_mut(), ta, t_event)? {
+                    // The rows up to where it ended.
+                    let t = failure.time;
+                    emit_until(
+                        model,
+                        solver.as_mut(),
+                        &mut keeper,
+                        regime.mode,
+                        &mut next_sample,
+                        t,
+                        &mut sample,
+                    )?;
+                    progress.finish();
+                    return Err(failure);
+                }
                 emit_until(
                     model,
                     solver.as_mut(),
@@ -643,6 +661,23 @@ fn run_with(
                             continue;
                         }
                     }
+                }
+                // A constraint's branch that ended within the step stops
+                // the run there (the reduced system may not see it).
+                if let Some(failure) = watch.step(model, solver.as_mut(), ta, tb)? {
+                    // The rows up to where it ended.
+                    let t = failure.time;
+                    emit_until(
+                        model,
+                        solver.as_mut(),
+                        &mut keeper,
+                        regime.mode,
+                        &mut next_sample,
+                        t,
+                        &mut sample,
+                    )?;
+                    progress.finish();
+                    return Err(failure);
                 }
                 emit_until(
                     model,

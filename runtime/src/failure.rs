@@ -64,6 +64,16 @@ pub enum FailureKind {
     /// `component` by `residual`, far beyond any drift the tolerance lets
     /// a step carry.
     ConstraintLeft { component: String, residual: f64 },
+    /// A constraint as written reaches an end of its domain: the argument
+    /// of a square root, logarithm, arcsine or arccosine reaches 0 (its
+    /// branch ends) or passes it (not defined), or a failure happened at
+    /// a pole of it (`argument`, what it divides by, vanishes).
+    ConstraintDomainEnds {
+        constraint: String,
+        kind: crate::model::DomainKind,
+        argument: String,
+        value: f64,
+    },
     /// At the initial state a constraint hardly determines its first
     /// candidate, the one the initial values take as fixed (its pivot a
     /// vanishing fraction of another's): that value is not determined.
@@ -239,6 +249,12 @@ impl fmt::Display for Failure {
                  it. An explicit root (`y' = sqrt(…)`) holds one branch only: write the \
                  constraint implicitly (`… for {component} or …`) to pass onto the other"
             ),
+            FailureKind::ConstraintDomainEnds {
+                constraint,
+                kind,
+                argument,
+                value,
+            } => domain_end(f, t, constraint, *kind, argument, *value),
             FailureKind::InitialCandidateVanishes {
                 constraint,
                 candidate,
@@ -283,3 +299,61 @@ impl fmt::Display for Failure {
 }
 
 impl std::error::Error for Failure {}
+
+/// [`FailureKind::ConstraintDomainEnds`] in words.
+fn domain_end(
+    f: &mut fmt::Formatter<'_>,
+    t: f64,
+    constraint: &str,
+    kind: crate::model::DomainKind,
+    argument: &str,
+    value: f64,
+) -> fmt::Result {
+    use crate::model::DomainKind;
+    let function = match kind {
+        DomainKind::Root => "square root",
+        DomainKind::Power => "fractional power",
+        DomainKind::Logarithm => "logarithm",
+        DomainKind::Arcsine => "arcsine",
+        DomainKind::Arccosine => "arccosine",
+        DomainKind::Pole => {
+            return write!(
+                f,
+                "at t = {t:e}: the constraint `{constraint}` is singular here: it divides \
+                 by `{argument}`, which vanishes ({argument} = {value:.3e}), so it no longer \
+                 determines its dependent derivative; write it implicitly with another \
+                 candidate (`… for y' or x'`)"
+            );
+        }
+    };
+    let negative = value < 0.0 || value.is_nan();
+    match (kind, negative) {
+        (DomainKind::Arcsine | DomainKind::Arccosine, true) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` is not defined here: the \
+             argument of its {function} is outside [-1, 1] (`{argument}` = {value:.3e}); \
+             its branch ended where that reached 0, and the motion past it is not on \
+             this branch"
+        ),
+        (DomainKind::Arcsine | DomainKind::Arccosine, false) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` reaches the end of its branch: \
+             the argument of its {function} reaches ±1 (`{argument}` falls to \
+             {value:.3e}; 0 ends it: the constraint's derivative is infinite there); \
+             past it the {function} is not defined, and the motion is not on this branch"
+        ),
+        (_, true) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` is not defined here: the \
+             {function} of a negative number (`{argument}` = {value:.3e}); its branch \
+             ended where that reached 0, and the motion past it is not on this branch"
+        ),
+        (_, false) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` reaches the end of its branch: \
+             `{argument}` under its {function} falls to {value:.3e} (0 ends it: the \
+             constraint's derivative is infinite there); past it the {function} of a \
+             negative number, and the motion is not on this branch"
+        ),
+    }
+}

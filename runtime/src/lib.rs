@@ -17,6 +17,7 @@
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
+//! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
 // Numerical kernels index several arrays with one loop variable; and
 // `!(x > 0.0)` is meant: it is true for NaN.
@@ -51,3 +52,4 @@ pub mod stepper;
 pub mod summary;
 pub mod system;
 pub mod tolerance;
+pub mod watch;

@@ -34,6 +34,38 @@ pub struct Candidates {
     pub names: &'static [&'static str],
 }
 
+/// How a constraint as written ends at a [`Domain`]'s argument.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DomainKind {
+    /// The argument of a square root (or of a power below 1): 0 ends the
+    /// branch (the constraint's derivative is infinite there), below it
+    /// the root of a negative number.
+    Root,
+    /// The argument of a fractional power above 1: undefined below 0.
+    Power,
+    /// The argument of a logarithm: 0 ends it.
+    Logarithm,
+    /// `1 − u²` of an arcsine of `u`: 0 ends it.
+    Arcsine,
+    /// `1 − u²` of an arccosine of `u`: 0 ends it.
+    Arccosine,
+    /// What the constraint divides by (the cosine under a tangent): a
+    /// pole, named when a failure happens at it.
+    Pole,
+}
+
+/// Where a constraint as written is defined: its `argument` positive (a
+/// pole: non-zero). The run stops naming the constraint where a branch
+/// ends, instead of passing it silently (issue 28).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Domain {
+    /// The constraint as written.
+    pub constraint: &'static str,
+    pub kind: DomainKind,
+    /// The argument, as text.
+    pub argument: &'static str,
+}
+
 /// The discrete state of a run between two events: which reduced system
 /// (mode) is integrated and which branch every switch is on. Within a
 /// segment the right side is smooth; an event changes the regime and
@@ -86,6 +118,8 @@ pub trait Model: Clone {
     /// The conditions of the model's `when` statements (impacts), as
     /// written, in order.
     const IMPACTS: &'static [&'static str] = &[];
+    /// Where the constraints as written end ([`Model::domain_values`]).
+    const DOMAINS: &'static [Domain] = &[];
     /// The reduced system (7) is affine in the state: the linear field
     /// ansatz is a complete solution and [`Model::coefficients`] is given.
     const AFFINE: bool = false;
@@ -210,6 +244,10 @@ pub trait Model: Clone {
     /// The pivots `∂h/∂dep` of every candidate of every implicit
     /// constraint, flattened in [`Model::CONSTRAINTS`] order.
     fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+
+    /// Every [`Model::DOMAINS`] argument's value and its scale (the sum of
+    /// its terms' magnitudes), as pairs: `out[2 i]`, `out[2 i + 1]`.
+    fn domain_values(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
 
     /// The mass laws' values at `t`, in [`Model::MASSES`] order.
     fn masses(&self, _t: f64, _out: &mut [f64]) {}
@@ -336,6 +374,10 @@ pub trait DynModel {
     fn impact_reset(&self, w: usize, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::pivots`].
     fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]);
+    /// [`Model::DOMAINS`].
+    fn domains(&self) -> &'static [Domain];
+    /// [`Model::domain_values`].
+    fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::masses`].
     fn masses(&self, t: f64, out: &mut [f64]);
     /// [`Model::mass_matrix`].
@@ -467,6 +509,12 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::pivots(self, t, x, out);
+    }
+    fn domains(&self) -> &'static [Domain] {
+        M::DOMAINS
+    }
+    fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::domain_values(self, t, x, out);
     }
     fn masses(&self, t: f64, out: &mut [f64]) {
         Model::masses(self, t, out);

@@ -81,6 +81,7 @@ impl Checker<'_> {
                 order,
                 rhs: rhs.clone(),
                 span,
+                text: String::new(),
                 implicit,
             });
         }

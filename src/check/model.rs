@@ -138,6 +138,11 @@ pub struct Constraint {
     pub order: u32,
     pub rhs: Expr,
     pub span: Span,
+    /// The statement as written, for run-time messages (`y' = sqrt(c^2 -
+    /// x'^2)`, `sin(th) * x' = cos(th) * y' for y' or x'`): filled by the
+    /// front end, which has the text ([`crate::frontend::frontend`]);
+    /// empty for a model checked from an AST alone.
+    pub text: String,
     /// `Some` for `constraint lhs = rhs for q' [or …];`.
     pub implicit: Option<Implicit>,
 }

@@ -1,6 +1,7 @@
 //! The regime of a run (SPEC §2.2): the switches' branches the right side
 //! reads, the switching functions the runtime watches, `stop when`, the
-//! impacts (`when`, SPEC §2.3) and the `output` columns.
+//! impacts (`when`, SPEC §2.3), the `output` columns, and where the
+//! constraints as written end.
 
 use super::names::{Source, SymbolNames};
 use crate::kernel::{BranchCond, Kernel};
@@ -66,7 +67,27 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
         let texts = kernel.impacts.iter().map(|i| i.text.as_str());
         quote! { const IMPACTS: &'static [&'static str] = &[#(#texts),*]; }
     };
-    quote! { #switches #outputs #constraints #impacts }
+
+    let domains = if kernel.domains.is_empty() {
+        TokenStream::new()
+    } else {
+        let entries = kernel.domains.iter().map(|d| {
+            let constraint = &d.constraint;
+            let argument = &d.text;
+            let kind = proc_macro2::Ident::new(d.kind.variant(), proc_macro2::Span::call_site());
+            quote! {
+                lagc_runtime::model::Domain {
+                    constraint: #constraint,
+                    kind: lagc_runtime::model::DomainKind::#kind,
+                    argument: #argument,
+                }
+            }
+        });
+        quote! {
+            const DOMAINS: &'static [lagc_runtime::model::Domain] = &[#(#entries),*];
+        }
+    };
+    quote! { #switches #outputs #constraints #impacts #domains }
 }
 
 /// `set_regime`, `switching_functions`, `stop`, `outputs`.
@@ -101,6 +122,21 @@ pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
             .flat_map(|c| c.pivots.iter().copied())
             .collect();
         items.push(values_fn(kernel, names, from_x, &roots, "pivots", "out"));
+    }
+    if !kernel.domains.is_empty() {
+        let roots: Vec<_> = kernel
+            .domains
+            .iter()
+            .flat_map(|d| [d.argument, d.scale])
+            .collect();
+        items.push(values_fn(
+            kernel,
+            names,
+            from_x,
+            &roots,
+            "domain_values",
+            "out",
+        ));
     }
     if !kernel.switches.functions.is_empty() {
         let roots = &kernel.switches.functions;

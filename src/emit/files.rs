@@ -89,6 +89,7 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/tolerance.rs",
         include_str!("../../runtime/src/tolerance.rs"),
     ),
+    ("src/watch.rs", include_str!("../../runtime/src/watch.rs")),
 ];
 
 /// The runtime crate's sources `(path relative to its root, contents)`; a

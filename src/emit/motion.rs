@@ -46,6 +46,16 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
         all_inherent.extend(super::modes::renamed(&items, &helpers, m + 1));
     }
     let dispatch = super::modes::dispatch(&trait_items, kernel.modes.len() + 1);
+    // The mass matrix is the current mode's too (mode 0's alone named
+    // `mass_system`, which the modes rename: rustc E0599).
+    let mut conditions = vec![condition];
+    for mode in &kernel.modes {
+        let mut mode_names = SymbolNames::new(&mode.arena, &mode.state);
+        mode_names.branches = super::modes::shared_branches(kernel, mode);
+        conditions.push(mass_condition(mode, &mut mode_names, &from_x));
+    }
+    let (condition, condition_inherent) = super::modes::mass_dispatch(&conditions);
+    all_inherent.extend(condition_inherent);
     (quote! { #dispatch #condition #events }, all_inherent)
 }
 

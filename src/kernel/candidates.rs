@@ -2,7 +2,7 @@
 //! §2.2): the pivots `∂h/∂candidate` the run compares to choose (and
 //! switch) the reduced system.
 
-use crate::check::model::Model;
+use crate::check::model::{Constraint, Model};
 use crate::ir::{lower, Arena, ExprId, Symbol};
 
 /// One implicit constraint.
@@ -36,10 +36,19 @@ pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
             pivots.push(arena.diff(h, symbol));
         }
         found.push(KernelCandidates {
-            text: format!("{} = 0", arena.display(h)),
+            text: constraint_text(arena, c, h),
             names,
             pivots,
         });
     }
     found
+}
+
+/// The constraint as written (the front end's text), else `h = 0`.
+pub fn constraint_text(arena: &Arena, c: &Constraint, h: ExprId) -> String {
+    if c.text.is_empty() {
+        format!("{} = 0", arena.display(h))
+    } else {
+        c.text.clone()
+    }
 }

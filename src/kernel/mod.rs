@@ -11,6 +11,7 @@
 //! | `text.rs` | the kernel's text form (snapshots) |
 
 mod candidates;
+pub mod domains;
 mod impacts;
 mod items;
 mod motion;
@@ -83,6 +84,9 @@ pub struct Kernel {
     /// along the constraints' normals (a dependent velocity alone would be
     /// moved by the residual over a pivot that may be poor).
     pub kept_gradient: Vec<(usize, usize, ExprId)>,
+    /// Where the constraints as written end (square roots, logarithms,
+    /// arcsines, poles): the runtime names the constraint there.
+    pub domains: Vec<domains::KernelDomain>,
     /// The kernels of modes 1, 2, …: the same model with other candidates
     /// (their motion only).
     pub modes: Vec<Kernel>,
@@ -160,6 +164,26 @@ fn build_with(
     } else {
         Vec::new()
     };
+    let domains = if first_mode {
+        // Those the state determines and that move: an argument with a
+        // highest derivative (a constraint of order k = u) or of params
+        // alone is not watched.
+        let mut found = domains::domains(&mut arena, model);
+        found.retain(|d| {
+            let symbols = arena.free_symbols(d.argument);
+            let moves = symbols
+                .iter()
+                .any(|s| matches!(s, Symbol::Time | Symbol::Jet { .. } | Symbol::Mass(_)));
+            moves
+                && symbols.iter().all(|s| match s {
+                    Symbol::Jet { .. } => reduced.state.contains(s),
+                    _ => true,
+                })
+        });
+        found
+    } else {
+        Vec::new()
+    };
     let mut switches = Switches::new(&arena, &masses);
     let mut motion = motion;
     let mut coefficients = coefficients;
@@ -202,6 +226,7 @@ fn build_with(
         candidates,
         kept,
         kept_gradient,
+        domains,
         modes: Vec::new(),
     })
 }

@@ -292,7 +292,9 @@ fn an_unrelated_change_renames_nothing_in_other_items() {
 #[test]
 fn generated_crates_pass_clippy() {
     // Contrasting systems: affine/linear, Riccati with a mass law, local
-    // field, Newton, k = 3 consistency, impacts (with a constraint).
+    // field, Newton, k = 3 consistency, impacts (with a constraint); several
+    // candidates with a numeric solve of each mode's mass matrix, and with
+    // every construct.
     for name in [
         "paper",
         "incline_bounce",
@@ -302,24 +304,33 @@ fn generated_crates_pass_clippy() {
         "nonlinear_second_order",
         "third_order_constraint",
     ] {
-        let generated = generate(name);
-        let base = root().join("target/generated-crates");
-        let dir = base.join("crates").join(&generated.package);
-        write(&generated, &dir);
-        let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-        let output = Command::new(&cargo)
-            .args(["clippy", "--release", "--quiet", "--manifest-path"])
-            .arg(dir.join("Cargo.toml"))
-            .env("CARGO_TARGET_DIR", base.join("target"))
-            .env("RUSTFLAGS", "-D warnings")
-            .output()
-            .unwrap();
-        assert!(
-            output.status.success(),
-            "{name}: clippy:\n{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
+        clippy_file(&root().join(format!("examples/{name}.lag")));
     }
+    for name in ["parallel_velocities", "candidates_combined"] {
+        clippy_file(&root().join(format!("tests/data/v2/{name}.lag")));
+    }
+}
+
+/// `cargo clippy` of the crate of the model in `path`, warnings as errors.
+pub(crate) fn clippy_file(path: &Path) {
+    let generated = generate_file(path);
+    let base = root().join("target/generated-crates");
+    let dir = base.join("crates").join(&generated.package);
+    write(&generated, &dir);
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let output = Command::new(&cargo)
+        .args(["clippy", "--release", "--quiet", "--manifest-path"])
+        .arg(dir.join("Cargo.toml"))
+        .env("CARGO_TARGET_DIR", base.join("target"))
+        .env("RUSTFLAGS", "-D warnings")
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}: clippy:\n{}",
+        path.display(),
+        String::from_utf8_lossy(&output.stderr)
+    );
 }
 
 /// `--ensemble K`: one field for K initial states agrees with K direct
