@@ -286,13 +286,14 @@ fn an_unrelated_change_renames_nothing_in_other_items() {
 #[test]
 fn generated_crates_pass_clippy() {
     // Contrasting systems: affine/linear, Riccati with a mass law, local
-    // field, Newton, k = 3 consistency.
+    // field, Newton, k = 3 consistency, a mass law of the state.
     for name in [
         "paper",
         "mass_loss_stiff_spring",
         "knife_edge",
         "nonlinear_second_order",
         "third_order_constraint",
+        "cayley_chain",
     ] {
         let generated = generate(name);
         let base = root().join("target/generated-crates");
