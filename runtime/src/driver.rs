@@ -414,7 +414,7 @@ fn run_with(
             kept: keeper.map(|k| k.kept()),
         });
     }
-    check_masses(model, t0)?;
+    check_masses(model, t0, x0)?;
     let watch = ConstraintWatch::start(model, t0, x0)?;
     // The mass matrix's scale at the start, which only the diagnosis of a
     // failure reads: an LU and a norm estimate, computed up front only when
@@ -910,14 +910,14 @@ fn switch_candidates(
     Ok(())
 }
 
-/// A mass law at or below zero at `t` stops the run (the equations divide
-/// by it).
-fn check_masses(model: &dyn DynModel, t: f64) -> Result<(), Failure> {
+/// A mass law at or below zero at `(t, x)` stops the run (the equations
+/// divide by it; a law of the state, `rho * x`, needs the state).
+fn check_masses(model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
     if model.mass_names().is_empty() {
         return Ok(());
     }
     let mut masses = vec![0.0; model.mass_names().len()];
-    model.masses(t, &mut masses);
+    model.masses(t, x, &mut masses);
     match masses.iter().position(|&m| !(m > 0.0)) {
         Some(i) => Err(Failure::new(
             t,
@@ -956,7 +956,7 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
         failure.kind,
         FailureKind::InconsistentInitialValue { .. }
             | FailureKind::BadTimeSpan { .. }
-            | FailureKind::StepBudgetExhausted { .. }
+            | FailureKind::StepBudgetExhausted { stalled: None, .. }
             | FailureKind::AnchorCancels { .. }
             | FailureKind::ConstraintPivotVanishes { .. }
             | FailureKind::ConstraintUndefined { .. }
@@ -964,16 +964,31 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
     ) {
         return failure;
     }
+    // Steps that stall may stall at a mass reaching zero (a law of the
+    // state, `rho * x`, whose motion the field's windows chase to it).
     let t = failure.time;
     if !model.mass_names().is_empty() {
         let mut now = vec![0.0; model.mass_names().len()];
         let mut ahead = vec![0.0; model.mass_names().len()];
-        model.masses(t, &mut now);
-        // The integrator gives up just before the mass reaches zero.
+        model.masses(t, x, &mut now);
+        // The integrator gives up just before the mass reaches zero; a law
+        // of the state (`rho * x`) is looked at ahead along the state's
+        // rate where that is finite.
         let dt = 1e-6 * t.abs().max(1e-3);
-        model.masses(t + dt, &mut ahead);
+        let mut rate = vec![0.0; x.len()];
+        let x_ahead: Vec<f64> = match model.rhs(t, x, &mut rate) {
+            Ok(()) if rate.iter().all(|r| r.is_finite()) => {
+                x.iter().zip(&rate).map(|(&xi, &ri)| xi + dt * ri).collect()
+            }
+            _ => x.to_vec(),
+        };
+        model.masses(t + dt, &x_ahead, &mut ahead);
+        // A law of the state is NaN at a state that is not finite: that
+        // names the state, not the mass.
+        let finite = x.iter().all(|v| v.is_finite());
+        let vanishes = |m: f64| !(m > 0.0) && (finite || !m.is_nan());
         for (i, (&m, &a)) in now.iter().zip(&ahead).enumerate() {
-            if !(m > 0.0) || !(a > 0.0) {
+            if vanishes(m) || vanishes(a) {
                 return Failure::new(
                     t,
                     FailureKind::MassVanishes {

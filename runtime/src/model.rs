@@ -252,6 +252,13 @@ pub trait Model: Clone {
     /// The mass laws' values at `t`, in [`Model::MASSES`] order.
     fn masses(&self, _t: f64, _out: &mut [f64]) {}
 
+    /// The mass laws' values at `(t, x)`, in [`Model::MASSES`] order: a
+    /// model with a law of the state (`rho * x`) implements this one; by
+    /// default the laws of `t`, [`Model::masses`].
+    fn masses_at(&self, t: f64, _x: &[f64], out: &mut [f64]) {
+        self.masses(t, out);
+    }
+
     /// The mass matrix of the highest derivatives at `(t, x)`, for naming
     /// a singular one as the cause of a failure (evaluated only then, and
     /// once at the start for scale).
@@ -378,8 +385,8 @@ pub trait DynModel {
     fn domains(&self) -> &'static [Domain];
     /// [`Model::domain_values`].
     fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]);
-    /// [`Model::masses`].
-    fn masses(&self, t: f64, out: &mut [f64]);
+    /// [`Model::masses_at`].
+    fn masses(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::mass_matrix`].
     fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix>;
 }
@@ -516,8 +523,8 @@ impl<M: Model + 'static> DynModel for M {
     fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::domain_values(self, t, x, out);
     }
-    fn masses(&self, t: f64, out: &mut [f64]) {
-        Model::masses(self, t, out);
+    fn masses(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::masses_at(self, t, x, out);
     }
     fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix> {
         Model::mass_matrix(self, t, x)

@@ -126,7 +126,9 @@ pub struct Coord {
 pub struct MassLaw {
     pub name: String,
     pub span: Span,
-    /// An expression of `t`, params and numbers.
+    /// An expression of `t`, params, numbers and coordinates (no
+    /// derivatives): frozen inside the Lagrangian, its `Ṁ` along the
+    /// motion in the reactive forces (SPEC §1.1, §1.3, §2.3).
     pub law: Expr,
 }
 
@@ -178,7 +180,8 @@ pub struct Output {
 pub struct Point {
     pub name: String,
     pub span: Span,
-    /// The point's mass: an expression of `t`, params and masses.
+    /// The point's mass: an expression of `t`, params, masses and
+    /// coordinates (no derivatives).
     pub mass: Expr,
     pub position: Vec<Expr>,
     pub velocity: EjectaVelocity,

@@ -4,6 +4,7 @@
 
 use crate::check::model::{Constraint, Model};
 use crate::ir::{lower, Arena, ExprId, Symbol};
+use std::collections::HashMap;
 
 /// One implicit constraint.
 #[derive(Debug, Clone)]
@@ -16,7 +17,12 @@ pub struct KernelCandidates {
     pub pivots: Vec<ExprId>,
 }
 
-pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
+/// `state_laws`: the mass laws of the state, by their expressions.
+pub fn candidates(
+    arena: &mut Arena,
+    model: &Model,
+    state_laws: &HashMap<Symbol, ExprId>,
+) -> Vec<KernelCandidates> {
     let mut found = Vec::new();
     for c in &model.constraints {
         let Some(implicit) = &c.implicit else {
@@ -33,7 +39,12 @@ pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
                 order: c.order,
             };
             names.push(arena.symbol_name(symbol));
-            pivots.push(arena.diff(h, symbol));
+            let pivot = arena.diff(h, symbol);
+            pivots.push(if state_laws.is_empty() {
+                pivot
+            } else {
+                arena.subst(pivot, state_laws)
+            });
         }
         found.push(KernelCandidates {
             text: constraint_text(arena, c, h),

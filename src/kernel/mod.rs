@@ -48,6 +48,10 @@ pub struct Kernel {
     /// and the indices of those the reduced system still holds.
     pub masses: Vec<(String, ExprId)>,
     pub remaining_masses: Vec<u32>,
+    /// The indices of the mass laws of the state (SPEC §2.3): their
+    /// functions take the state, and no expression here holds their
+    /// symbols (each is its law of `q`).
+    pub state_laws: Vec<u32>,
     pub time_span: (ExprId, ExprId),
     pub initial: KernelInitial,
     pub motion: Motion,
@@ -149,8 +153,15 @@ fn build_with(
                 .collect()
         })
         .collect();
+    // A mass law of the state is its expression of `q` wherever the run
+    // evaluates it (the reduced system has it so already).
+    let state_laws: std::collections::HashMap<Symbol, ExprId> = derivation
+        .state_laws
+        .iter()
+        .map(|&(i, law)| (Symbol::Mass(i), law))
+        .collect();
     let (outputs, stop) = if first_mode {
-        outputs::outputs(&mut arena, model, &motion, reduced)?
+        outputs::outputs(&mut arena, model, &motion, reduced, &state_laws)?
     } else {
         (Vec::new(), None)
     };
@@ -160,7 +171,7 @@ fn build_with(
         (Vec::new(), Vec::new())
     };
     let candidates = if first_mode {
-        candidates::candidates(&mut arena, model)
+        candidates::candidates(&mut arena, model, &state_laws)
     } else {
         Vec::new()
     };
@@ -211,6 +222,7 @@ fn build_with(
         params,
         masses,
         remaining_masses: reduced.mass_laws.iter().map(|&(i, _)| i).collect(),
+        state_laws: derivation.state_laws.iter().map(|&(i, _)| i).collect(),
         time_span,
         initial,
         motion,

@@ -13,14 +13,17 @@ type Lowered = (Vec<(String, ExprId)>, Option<Cond>);
 
 /// The outputs, flattened (`E`, or `p.x`, `p.y`), and the stop condition.
 /// A highest derivative `q^(u)` is replaced by the reduced system's value
-/// where that is an expression (explicit systems).
+/// where that is an expression (explicit systems), and a mass law of the
+/// state by its expression (`state_laws`).
 pub fn outputs(
     arena: &mut Arena,
     model: &Model,
     motion: &Motion,
     reduced: &ReducedSystem,
+    state_laws: &HashMap<Symbol, ExprId>,
 ) -> Result<Lowered, Vec<Diagnostic>> {
-    let highest = highest_values(motion, reduced);
+    let mut highest = highest_values(motion, reduced);
+    highest.extend(state_laws.iter().map(|(&s, &law)| (s, law)));
     let mut errors = Vec::new();
     let mut columns = Vec::new();
     for output in &model.outputs {

@@ -19,8 +19,13 @@ impl fmt::Display for Kernel {
         for p in &self.params {
             writeln!(f, "param {} = {}", p.name, a.display(p.value))?;
         }
-        for (m, law) in &self.masses {
-            writeln!(f, "mass {m}(t) = {}", a.display(*law))?;
+        for (i, (m, law)) in self.masses.iter().enumerate() {
+            let args = if self.state_laws.contains(&(i as u32)) {
+                "t, q"
+            } else {
+                "t"
+            };
+            writeln!(f, "mass {m}({args}) = {}", a.display(*law))?;
         }
         writeln!(
             f,

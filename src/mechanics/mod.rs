@@ -43,6 +43,7 @@ use crate::check::model::Model;
 use crate::diagnostic::Diagnostic;
 use crate::ir::{names_of, Arena, ExprId, Symbol};
 use star::Elimination;
+use std::collections::HashMap;
 use symbols::Symbolic;
 
 /// Everything the mechanics derived from one model.
@@ -68,6 +69,13 @@ pub struct Derivation {
     pub equations: Vec<Equation4>,
     /// For each equation: the mass divided out of it in the reduced system.
     pub divided_out: Vec<Option<u32>>,
+    /// `(i, law_i)` for every mass law of the state (SPEC §2.3), in index
+    /// order: a symbol in `L` and (4), its expression in (7) and after.
+    pub state_laws: Vec<(u32, ExprId)>,
+    /// With laws of the state: `R_j + Q_j` again, each point's `Ṁ` the
+    /// total derivative of its mass through those laws (the cross-check's
+    /// route along the motion); empty without them.
+    pub forces_along_motion: Vec<ExprId>,
     /// The reduced system (7).
     pub reduced: ReducedSystem,
     /// The model's lets that the derivation used, by name, as lowered
@@ -116,13 +124,29 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     let mut arena = Arena::new(names_of(model));
     let symbolic = Symbolic::lower(&mut arena, model)?;
     let mut elimination = Elimination::new(symbolic.k, &symbolic.constraints);
-    let reactive = reactive_forces::reactive_forces(&mut arena, model, &symbolic.laws)?;
+    let none = HashMap::new();
+    let reactive = reactive_forces::reactive_forces(&mut arena, model, &symbolic.laws, &none)?;
     let generalized = generalized_forces::generalized_forces(&mut arena, model)?;
     let forces: Vec<ExprId> = reactive
         .iter()
         .zip(&generalized)
         .map(|(&r, &q)| arena.add(&[r, q]))
         .collect();
+    // With laws of the state, the forces again with each point's Ṁ the
+    // total derivative of its mass written through those laws: the
+    // cross-check's route along the motion.
+    let state_laws = symbolic.state_laws(&arena);
+    let forces_along_motion: Vec<ExprId> = if state_laws.is_empty() {
+        Vec::new()
+    } else {
+        let reactive =
+            reactive_forces::reactive_forces(&mut arena, model, &symbolic.laws, &state_laws)?;
+        reactive
+            .iter()
+            .zip(&generalized)
+            .map(|(&r, &q)| arena.add(&[r, q]))
+            .collect()
+    };
     let mut equations = equations::equations(&mut arena, &symbolic, &mut elimination, &forces);
     // sin² + cos² = 1 again: differentiation brings squares of sums apart.
     for e in &mut equations {
@@ -132,7 +156,18 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     let rows: Vec<ExprId> = equations.iter().map(|e| arena.sub(e.lhs, e.rhs)).collect();
     let divided =
         mass_factor::divide_out_masses(&mut arena, &rows, &symbolic.laws, &symbolic.param_defaults);
-    let rows: Vec<ExprId> = divided.iter().map(|d| d.row).collect();
+    // From (7) on a mass law of the state is its expression of `q`: the
+    // reduced system must see the mass move with the state (its ∂X/∂x).
+    let rows: Vec<ExprId> = divided
+        .iter()
+        .map(|d| {
+            if state_laws.is_empty() {
+                d.row
+            } else {
+                arena.subst(d.row, &state_laws)
+            }
+        })
+        .collect();
     let reduction = reduce::reduce(
         &mut arena,
         &symbolic,
@@ -186,6 +221,14 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         .into_iter()
         .filter_map(|i| symbolic.laws.get(i as usize).map(|&law| (i, law)))
         .collect();
+    let mut state_laws: Vec<(u32, ExprId)> = state_laws
+        .into_iter()
+        .filter_map(|(s, law)| match s {
+            Symbol::Mass(i) => Some((i, law)),
+            _ => None,
+        })
+        .collect();
+    state_laws.sort_unstable();
     let arena_lets = arena.lowered_lets();
     Ok(Derivation {
         arena,
@@ -198,6 +241,8 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         forces,
         equations,
         divided_out: divided.iter().map(|d| d.mass).collect(),
+        state_laws,
+        forces_along_motion,
         reduced,
         param_defaults: symbolic.param_defaults,
         lets: model

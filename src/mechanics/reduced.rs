@@ -20,7 +20,8 @@ pub struct ReducedSystem {
     pub mass_matrix: Vec<Vec<ExprId>>,
     /// Mass laws still present in `highest` after the masses that factor out
     /// were divided out: `(i, law)` with `law` an expression of `t` and params
-    /// standing for `Symbol::Mass(i)`.
+    /// standing for `Symbol::Mass(i)` (a law of the state is never here: (7)
+    /// holds it as its expression, `Derivation::state_laws`).
     pub mass_laws: Vec<(u32, ExprId)>,
     /// Initial values of every state component, in state order.
     pub initial: Vec<InitialValue>,

@@ -107,6 +107,16 @@ impl Derivation {
                 let _ = writeln!(out, "  {lhs} = {rhs}");
             }
         }
+        if !self.state_laws.is_empty() {
+            out.push_str(
+                "\nmass laws of the state (frozen in L and (4); their rates M' along the \
+                 motion in the reactive forces; their laws in (7)):\n",
+            );
+            for (m, law, rate) in self.state_law_rates(a, Style::Text) {
+                let _ = writeln!(out, "  {m} = {law}");
+                let _ = writeln!(out, "  {m}' = {rate}");
+            }
+        }
         out.push_str("\nequations (4):\n");
         for eq in &self.equations {
             let lhs = sum(a, eq.lhs, Style::Text);
@@ -211,6 +221,14 @@ impl Derivation {
             let rhs = sum(a, phi, Style::Latex);
             out.push_str(&crate::latex::equation(&lhs, &rhs, "\\text{constraint}"));
         }
+        for (m, law, rate) in self.state_law_rates(a, Style::Latex) {
+            out.push_str(&crate::latex::equation(&m, &law, "\\text{mass law}"));
+            out.push_str(&crate::latex::equation(
+                &format!("{m}'"),
+                &rate,
+                "\\text{along the motion}",
+            ));
+        }
         for eq in &self.equations {
             let lhs = sum(a, eq.lhs, Style::Latex);
             let rhs = sum(a, eq.rhs, Style::Latex);
@@ -223,6 +241,22 @@ impl Derivation {
         }
         self.write_reduced(a, &mut out, Style::Latex);
         out
+    }
+
+    /// `(M, law, Ṁ)` for every mass law of the state: `Ṁ = ∂M/∂t +
+    /// Σ ∂M/∂q_j q_j'`, the rate the reactive forces use.
+    fn state_law_rates(&self, a: &mut Arena, style: Style) -> Vec<(String, String, String)> {
+        self.state_laws
+            .iter()
+            .map(|&(i, law)| {
+                let rate = super::reactive_forces::rate_along_motion(a, law);
+                (
+                    name(a, Symbol::Mass(i), style),
+                    sum(a, law, style),
+                    sum(a, rate, style),
+                )
+            })
+            .collect()
     }
 
     fn write_reduced(&self, a: &mut Arena, out: &mut String, style: Style) {

@@ -292,9 +292,9 @@ fn an_unrelated_change_renames_nothing_in_other_items() {
 #[test]
 fn generated_crates_pass_clippy() {
     // Contrasting systems: affine/linear, Riccati with a mass law, local
-    // field, Newton, k = 3 consistency, impacts (with a constraint); several
-    // candidates with a numeric solve of each mode's mass matrix, and with
-    // every construct.
+    // field, Newton, k = 3 consistency, impacts (with a constraint), a mass
+    // law of the state; several candidates with a numeric solve of each
+    // mode's mass matrix, and with every construct.
     for name in [
         "paper",
         "incline_bounce",
@@ -303,6 +303,7 @@ fn generated_crates_pass_clippy() {
         "knife_edge",
         "nonlinear_second_order",
         "third_order_constraint",
+        "cayley_chain",
     ] {
         clippy_file(&root().join(format!("examples/{name}.lag")));
     }
