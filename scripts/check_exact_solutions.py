@@ -96,7 +96,7 @@ def split_top(text, sep=","):
 class Parser:
     def __init__(self):
         self.model = Model()
-        self.names = {"t": T}
+        self.names = {"t": T, "pi": sp.pi}
 
     def expr(self, src):
         """A .lag expression -> sympy, with q'' -> jet symbol q__d2."""
@@ -217,7 +217,7 @@ def derive(mod):
     R = {c: sp.Integer(0) for c in coords}
     for pt in mod.points:
         mass = pt["mass"].subs(mass_sub)
-        mdot = sp.diff(mass, T)
+        mdot = total_derivative(mass, coords)  # along the motion (SPEC 2.3)
         r = pt["position"]
         rdot = [total_derivative(x, coords) for x in r]
         if pt["kind"] == "absolute":

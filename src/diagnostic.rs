@@ -307,6 +307,12 @@ pub mod codes {
     /// reduced systems switch (`if`, `abs`, …) on a function the first
     /// candidate's does not: every mode reads the first mode's branches.
     pub const UNSHARED_SWITCHES: &str = "E0040";
+    // Impacts (SPEC §2.3):
+    /// A `when` that resets a component the run does not integrate freely:
+    /// a dependent derivative a constraint fixes (lagc recomputes it after
+    /// the reset), or any component where the fixed ones change along the
+    /// run (several candidates) or follow from (4) (constraints of order ≥ 3).
+    pub const RESET_OF_FIXED_COMPONENT: &str = "E0041";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

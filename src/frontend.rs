@@ -19,7 +19,31 @@ pub const STACK_SIZE: usize = 256 * 1024 * 1024;
 /// Parses and checks a `.lag` source text.
 pub fn frontend(source: &str) -> Result<Model, Vec<Diagnostic>> {
     let ast = syntax::parse(source)?;
-    check::check(&ast)
+    let mut model = check::check(&ast)?;
+    for constraint in &mut model.constraints {
+        constraint.text = statement_text(source, constraint.span, "constraint");
+    }
+    Ok(model)
+}
+
+/// A statement's text as written, for run-time messages: on one line,
+/// without its keyword, its `;`, comments or runs of white space.
+pub fn statement_text(source: &str, span: Span, keyword: &str) -> String {
+    let Some(text) = source.get(span.range()) else {
+        return String::new();
+    };
+    let words: Vec<&str> = text
+        .lines()
+        .map(|line| line.split("//").next().unwrap_or(""))
+        .flat_map(str::split_whitespace)
+        .collect();
+    let joined = words.join(" ");
+    let joined = joined.strip_prefix(keyword).unwrap_or(&joined).trim();
+    joined
+        .strip_suffix(';')
+        .unwrap_or(joined)
+        .trim()
+        .to_string()
 }
 
 /// The front end, the derivation and the kernel: every diagnostic a model

@@ -618,8 +618,7 @@ fn estimate(
 /// Member `k` of an ensemble: the model's initial state for `k = 0`,
 /// otherwise each component moved by up to `spread·max(|x0_i|, 1)` along a
 /// Weyl sequence (deterministic, well spread). The moved states are states
-/// of the reduced system (7); they need not satisfy the constraints, which
-/// does not matter for comparing two ways of integrating (7).
+/// of the reduced system (7), put back on the constraints by the caller.
 pub fn ensemble_member(x0: &[f64], k: usize, spread: f64) -> Vec<f64> {
     x0.iter()
         .enumerate()
@@ -647,9 +646,20 @@ fn ensemble(
     count: usize,
 ) -> ExitCode {
     use crate::driver::run_ensemble;
-    let members: Vec<Vec<f64>> = (0..count)
-        .map(|k| ensemble_member(x0, k, inv.spread))
-        .collect();
+    // Moved states are put back on the constraints, as every state of a
+    // run is: a member off them would be projected by its direct run and
+    // not by the field.
+    let mut keeper = crate::keep::Keeper::new(model, inv.options.tol);
+    let mut members: Vec<Vec<f64>> = Vec::with_capacity(count);
+    for k in 0..count {
+        let mut member = ensemble_member(x0, k, inv.spread);
+        if let Some(keeper) = keeper.as_mut() {
+            if let Err(failure) = keeper.put_on(model, 0, t0, &mut member) {
+                return fail(inv.json, &failure);
+            }
+        }
+        members.push(member);
+    }
     let n = x0.len();
     let quiet = Options {
         progress: false,

@@ -1,8 +1,9 @@
 //! Holonomic constraints `f(t, q) = 0` at position level (SPEC §2.3):
-//! Newton over the dependent coordinates, for the initial positions
-//! (completed from the given ones) and for keeping the positions on the
-//! constraints during a run. The generated code supplies `f` and its
-//! Jacobian in the dependent coordinates.
+//! Newton over the dependent coordinates for the initial positions
+//! (completed from the given ones), and the projection of a run's state
+//! onto the constraints along their normals, which the keeper
+//! (`crate::keep`) makes before it keeps the velocities. The generated code
+//! supplies `f` and its partials.
 
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{Lu, Matrix};
@@ -211,101 +212,6 @@ pub fn project(
         }
     }
     Ok(())
-}
-
-/// The state after an accepted step is projected when its distance from
-/// the constraints exceeds this fraction of the tolerance (below, the
-/// drift is left to the next step: a projection restarts the method).
-pub const PROJECT_ABOVE: f64 = 0.1;
-
-/// What the summary says of the holonomic constraints kept.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PositionsKept {
-    /// The largest distance of an accepted step's state from the
-    /// constraints (the correction that projection made), relative to the
-    /// tolerance `atol + rtol·|x|`, and where.
-    pub largest: f64,
-    pub largest_at: f64,
-    pub projections: usize,
-}
-
-/// Keeps a run's state on the holonomic constraints (SPEC §2.3): the
-/// dependent positions by Newton on `f(t, q) = 0`, then the derivatives the
-/// constraints fix at them ([`crate::model::Model::constrained`]).
-#[derive(Clone, Debug)]
-pub struct PositionKeeper {
-    tol: crate::tolerance::Tolerance,
-    kept: Vec<f64>,
-    /// The largest correction an accepted step needed, relative to the
-    /// tolerance, and where.
-    pub largest: f64,
-    pub largest_at: f64,
-    /// Projections after steps.
-    pub projections: usize,
-}
-
-impl PositionKeeper {
-    /// `None` for a model without holonomic constraints.
-    pub fn new(
-        model: &dyn crate::model::DynModel,
-        tol: crate::tolerance::Tolerance,
-    ) -> Option<PositionKeeper> {
-        model.keeps_positions().then(|| PositionKeeper {
-            tol,
-            kept: vec![0.0; model.dim()],
-            largest: 0.0,
-            largest_at: f64::NAN,
-            projections: 0,
-        })
-    }
-
-    /// Projects `x` in place; the correction relative to the tolerance.
-    pub fn project(
-        &mut self,
-        model: &dyn crate::model::DynModel,
-        t: f64,
-        x: &mut [f64],
-    ) -> Result<f64, Failure> {
-        self.kept.copy_from_slice(x);
-        model.constrained(t, x, &mut self.kept)?;
-        let mut relative = 0.0_f64;
-        for (v, &k) in x.iter_mut().zip(&self.kept) {
-            let scale = self.tol.atol + self.tol.rtol * v.abs().max(k.abs());
-            relative = relative.max((k - *v).abs() / scale);
-            *v = k;
-        }
-        Ok(relative)
-    }
-
-    pub fn kept(&self) -> PositionsKept {
-        PositionsKept {
-            largest: self.largest,
-            largest_at: self.largest_at,
-            projections: self.projections,
-        }
-    }
-
-    /// After an accepted step: the projected state when the step's state
-    /// is farther than [`PROJECT_ABOVE`] from the constraints.
-    pub fn after_step(
-        &mut self,
-        model: &dyn crate::model::DynModel,
-        t: f64,
-        x: &[f64],
-    ) -> Result<Option<Vec<f64>>, Failure> {
-        let mut projected = x.to_vec();
-        let relative = self.project(model, t, &mut projected)?;
-        if relative > self.largest {
-            self.largest = relative;
-            self.largest_at = t;
-        }
-        if relative > PROJECT_ABOVE {
-            self.projections += 1;
-            Ok(Some(projected))
-        } else {
-            Ok(None)
-        }
-    }
 }
 
 #[cfg(test)]

@@ -12,12 +12,15 @@ use crate::failure::{Failure, FailureKind};
 use crate::field::affine::AffineField;
 use crate::field::quasilinear::QuasilinearField;
 use crate::field::{Anchor, FieldOptions};
+use crate::impacts::{AtEvent, Impacts};
+use crate::keep::Keeper;
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Regime};
 use crate::progress::Progress;
 use crate::solution::{Piece, Solution};
 use crate::solver::{Report, Solver};
 use crate::tolerance::Tolerance;
+use crate::watch::ConstraintWatch;
 
 /// How to integrate.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,6 +82,16 @@ pub enum Ending {
     End,
     /// `stop when` became true at this time.
     Stopped(f64),
+    /// The impacts of the `when` whose condition is `impact` left the
+    /// motion on its boundary at `at`: they accumulate at `accumulation`
+    /// (a ball with restitution below 1 comes to rest there), or (`None`)
+    /// the last one stopped the motion instead of turning it back. The
+    /// run ends at `at`, its last row the state after that impact.
+    Rest {
+        impact: &'static str,
+        at: f64,
+        accumulation: Option<f64>,
+    },
 }
 
 /// What a run did.
@@ -90,10 +103,9 @@ pub struct Outcome {
     pub events: usize,
     /// Steps drawn from the budget.
     pub budget_used: usize,
-    /// Holonomic constraints: the largest distance of an accepted step's
-    /// state from them (relative to the tolerance), where, and the
-    /// projections made.
-    pub positions_kept: Option<crate::closure::PositionsKept>,
+    /// The constraints' residuals and projections (models whose
+    /// constraints fix state components).
+    pub kept: Option<crate::keep::Kept>,
 }
 
 /// The initial regime at `(t0, x0)`: branches from the switching
@@ -240,7 +252,7 @@ pub fn mode_index(model: &dyn DynModel, choice: &[usize]) -> usize {
     mode
 }
 
-fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
+pub(crate) fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
     let mut rest = mode;
     model
         .constraints()
@@ -351,16 +363,16 @@ fn run_with(
         branches: initial_branches(model, t0, x0),
     };
     model.set_regime(&regime);
-    let volumes = pivot_volumes(model, t0, x0);
     let mut next_sample = 0;
     let mut events = 0;
+    let mut keeper = Keeper::new(model, options.tol);
+    let volumes = pivot_volumes(model, t0, x0);
     // The sample buffer, allocated once (emit_until runs after every step).
     let mut x_sample = vec![0.0; n];
-    // Holonomic constraints: the positions kept on them (SPEC §2.3).
-    let mut keeper = crate::closure::PositionKeeper::new(model, options.tol);
     let mut emit_until = |model: &dyn DynModel,
                           solver: &mut dyn Solver,
-                          keeper: &mut Option<crate::closure::PositionKeeper>,
+                          keeper: &mut Option<Keeper>,
+                          mode: usize,
                           next: &mut usize,
                           until: f64,
                           sample: &mut Sample<'_>|
@@ -371,7 +383,7 @@ fn run_with(
             solver.dense(model, t, x)?;
             // No output is off the constraints.
             if let Some(keeper) = keeper.as_mut() {
-                keeper.project(model, t, x)?;
+                keeper.project(model, mode, t, x)?;
             }
             sample(model, t, x)?;
             *next += 1;
@@ -400,10 +412,11 @@ fn run_with(
             ending: Ending::Stopped(t0),
             events,
             budget_used: 0,
-            positions_kept: keeper.as_ref().map(|k| k.kept()),
+            kept: keeper.map(|k| k.kept()),
         });
     }
-    check_masses(model, t0)?;
+    check_masses(model, t0, x0)?;
+    let watch = ConstraintWatch::start(model, t0, x0)?;
     // The mass matrix's scale at the start, which only the diagnosis of a
     // failure reads: an LU and a norm estimate, computed up front only when
     // the regime (on which the mass matrix may depend) can change during
@@ -413,7 +426,7 @@ fn run_with(
     let early_scale = regime_may_change.then(|| MassScale::at(model, t0, x0));
     let scale = |model: &dyn DynModel| early_scale.unwrap_or_else(|| MassScale::at(model, t0, x0));
     let mut solver = make_solver(model, options, t0, x0, h_max)
-        .map_err(|f| diagnose(model, f, x0, &scale(model)))?;
+        .map_err(|f| watch.diagnose(model, diagnose(model, f, x0, &scale(model)), t0, x0))?;
     let mut progress = Progress::new(options.progress, t0, t1);
     let mut g_now = vec![0.0; model.switches()];
     let mut x_event = vec![0.0; n];
@@ -423,6 +436,7 @@ fn run_with(
     let mut pivot_limit: Option<f64> = None;
     // The functions at the last step's start and quarters, for the pace.
     let mut g_quarters = vec![g_now.clone(); 4];
+    let mut impacts = Impacts::new(model);
     probe_pace(model, t0, x0, t1 - t0, &mut pace);
     while solver.time() < t1 {
         // Where the solution stands: after the last step, or where an
@@ -442,7 +456,8 @@ fn run_with(
             let x = solver.state().to_vec();
             progress.finish();
             let failure = diagnose(model, failure, &x, &scale(model));
-            return Err(near_singular_configuration(model, failure, &x, &volumes));
+            let failure = near_singular_configuration(model, failure, &x, &volumes);
+            return Err(watch.diagnose(model, failure, solver.time(), &x));
         }
         progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
@@ -481,7 +496,10 @@ fn run_with(
                         model.switching_functions(t, &x_event, &mut g_now);
                     }
                     changed = (0..model.switches())
-                        .filter(|&k| (g_now[k] > 0.0) != regime.branches[k])
+                        .filter(|&k| {
+                            let g = impacts.as_seen(k, g_now[k], regime.branches[k]);
+                            (g > 0.0) != regime.branches[k]
+                        })
                         .collect();
                     if !changed.is_empty() {
                         (t_check, t_from) = (t, start);
@@ -505,10 +523,11 @@ fn run_with(
                 for &k in &changed {
                     let mut x = vec![0.0; n];
                     let mut g = vec![0.0; model.switches()];
+                    let positive = regime.branches[k];
                     let mut phi = |t: f64| -> Result<f64, Failure> {
                         solver.dense(model, t, &mut x)?;
                         model.switching_functions(t, &x, &mut g);
-                        Ok(g[k])
+                        Ok(impacts.as_seen(k, g[k], positive))
                     };
                     let g_a = {
                         let v = phi(ta)?;
@@ -542,17 +561,33 @@ fn run_with(
                         last.until = last.until.min(t_event);
                     }
                 }
+                if let Some(failure) = watch.step(model, solver.as_mut(), ta, t_event)? {
+                    // The rows up to where it ended.
+                    let t = failure.time;
+                    emit_until(
+                        model,
+                        solver.as_mut(),
+                        &mut keeper,
+                        regime.mode,
+                        &mut next_sample,
+                        t,
+                        &mut sample,
+                    )?;
+                    progress.finish();
+                    return Err(failure);
+                }
                 emit_until(
                     model,
                     solver.as_mut(),
                     &mut keeper,
+                    regime.mode,
                     &mut next_sample,
                     t_event,
                     &mut sample,
                 )?;
                 solver.dense(model, t_event, &mut x_event)?;
                 if let Some(keeper) = keeper.as_mut() {
-                    keeper.project(model, t_event, &mut x_event)?;
+                    keeper.project(model, regime.mode, t_event, &mut x_event)?;
                 }
                 observe_to_event(
                     model,
@@ -562,11 +597,35 @@ fn run_with(
                     &switches,
                     &mut pace,
                 )?;
-                for k in switches {
+                let before = regime.branches.clone();
+                for &k in &switches {
                     regime.branches[k] = !regime.branches[k];
                 }
                 events += 1;
-                if model.stop(&regime.branches) {
+                let mut ending = model
+                    .stop(&regime.branches)
+                    .then_some(Ending::Stopped(t_event));
+                if ending.is_none() && !model.impacts().is_empty() {
+                    // A `when` whose condition became true resets the
+                    // state; after it `stop when` may hold.
+                    let at = impacts.at_event(
+                        model,
+                        &mut regime,
+                        &before,
+                        &switches,
+                        t_event,
+                        &mut x_event,
+                        options.tol,
+                    )?;
+                    ending = match at {
+                        AtEvent::Stop(end) => Some(end),
+                        AtEvent::Reset if model.stop(&regime.branches) => {
+                            Some(Ending::Stopped(t_event))
+                        }
+                        AtEvent::Reset | AtEvent::None => None,
+                    };
+                }
+                if let Some(ending) = ending {
                     model.set_regime(&regime);
                     let already = next_sample > 0 && times[next_sample - 1] == t_event;
                     if !already {
@@ -575,10 +634,10 @@ fn run_with(
                     progress.finish();
                     return Ok(Outcome {
                         report: solver.report(),
-                        ending: Ending::Stopped(t_event),
+                        ending,
                         events,
                         budget_used: budget.used(),
-                        positions_kept: keeper.as_ref().map(|k| k.kept()),
+                        kept: keeper.map(|k| k.kept()),
                     });
                 }
                 model.set_regime(&regime);
@@ -605,18 +664,44 @@ fn run_with(
                         }
                     }
                 }
-                emit_until(
+                // A constraint's branch that ended within the step stops
+                // the run there (the reduced system may not see it).
+                if let Some(failure) = watch.step(model, solver.as_mut(), ta, tb)? {
+                    // The rows up to where it ended.
+                    let t = failure.time;
+                    emit_until(
+                        model,
+                        solver.as_mut(),
+                        &mut keeper,
+                        regime.mode,
+                        &mut next_sample,
+                        t,
+                        &mut sample,
+                    )?;
+                    progress.finish();
+                    return Err(failure);
+                }
+                let mut kept = emit_until(
                     model,
                     solver.as_mut(),
                     &mut keeper,
+                    regime.mode,
                     &mut next_sample,
                     tb,
                     &mut sample,
-                )?;
-                if let Some(keeper) = keeper.as_mut() {
-                    if let Some(x) = keeper.after_step(model, tb, solver.state())? {
-                        solver.project(model, tb, &x)?;
-                    }
+                );
+                if let (Ok(()), Some(keeper)) = (&kept, keeper.as_mut()) {
+                    kept = match keeper.after_step(model, regime.mode, tb, solver.state()) {
+                        Ok(Some(x)) => solver.project(model, tb, x),
+                        Ok(None) => Ok(()),
+                        Err(failure) => Err(failure),
+                    };
+                }
+                // A state that cannot be kept on the constraints near a
+                // singular configuration is named as that.
+                if let Err(failure) = kept {
+                    let x = solver.state().to_vec();
+                    return Err(near_singular_configuration(model, failure, &x, &volumes));
                 }
                 if !model.constraints().is_empty() {
                     switch_candidates(model, &mut regime, solver.as_mut(), tb, &volumes)?;
@@ -628,6 +713,7 @@ fn run_with(
         model,
         solver.as_mut(),
         &mut keeper,
+        regime.mode,
         &mut next_sample,
         f64::INFINITY,
         &mut sample,
@@ -638,7 +724,7 @@ fn run_with(
         ending: Ending::End,
         events,
         budget_used: budget.used(),
-        positions_kept: keeper.as_ref().map(|k| k.kept()),
+        kept: keeper.map(|k| k.kept()),
     })
 }
 
@@ -910,8 +996,9 @@ fn singular_configuration(
 }
 
 /// A failure of the integration (a step size that underflows, a value
-/// that is not finite) near a singular configuration is named as that:
-/// the equations divide by the vanishing determinants there.
+/// that is not finite) or of keeping the constraints near a singular
+/// configuration is named as that: the equations divide by the vanishing
+/// determinants there.
 fn near_singular_configuration(
     model: &dyn DynModel,
     failure: Failure,
@@ -923,6 +1010,9 @@ fn near_singular_configuration(
         FailureKind::StepSizeUnderflow { .. }
             | FailureKind::NonFiniteState { .. }
             | FailureKind::NonFiniteRate { .. }
+            | FailureKind::ConstraintLeft { .. }
+            | FailureKind::ConstraintUndefined { .. }
+            | FailureKind::PositionsLeftConstraint { .. }
     ) || model.constraints().is_empty()
         || !x.iter().all(|v| v.is_finite())
     {
@@ -944,14 +1034,14 @@ fn near_singular_configuration(
     failure
 }
 
-/// A mass law at or below zero at `t` stops the run (the equations divide
-/// by it).
-fn check_masses(model: &dyn DynModel, t: f64) -> Result<(), Failure> {
+/// A mass law at or below zero at `(t, x)` stops the run (the equations
+/// divide by it; a law of the state, `rho * x`, needs the state).
+fn check_masses(model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
     if model.mass_names().is_empty() {
         return Ok(());
     }
     let mut masses = vec![0.0; model.mass_names().len()];
-    model.masses(t, &mut masses);
+    model.masses(t, x, &mut masses);
     match masses.iter().position(|&m| !(m > 0.0)) {
         Some(i) => Err(Failure::new(
             t,
@@ -990,23 +1080,40 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
         failure.kind,
         FailureKind::InconsistentInitialValue { .. }
             | FailureKind::BadTimeSpan { .. }
-            | FailureKind::StepBudgetExhausted { .. }
+            | FailureKind::StepBudgetExhausted { stalled: None, .. }
             | FailureKind::AnchorCancels { .. }
             | FailureKind::ConstraintPivotVanishes { .. }
             | FailureKind::SingularConfiguration { .. }
+            | FailureKind::ConstraintUndefined { .. }
+            | FailureKind::ConstraintLeft { .. }
     ) {
         return failure;
     }
+    // Steps that stall may stall at a mass reaching zero (a law of the
+    // state, `rho * x`, whose motion the field's windows chase to it).
     let t = failure.time;
     if !model.mass_names().is_empty() {
         let mut now = vec![0.0; model.mass_names().len()];
         let mut ahead = vec![0.0; model.mass_names().len()];
-        model.masses(t, &mut now);
-        // The integrator gives up just before the mass reaches zero.
+        model.masses(t, x, &mut now);
+        // The integrator gives up just before the mass reaches zero; a law
+        // of the state (`rho * x`) is looked at ahead along the state's
+        // rate where that is finite.
         let dt = 1e-6 * t.abs().max(1e-3);
-        model.masses(t + dt, &mut ahead);
+        let mut rate = vec![0.0; x.len()];
+        let x_ahead: Vec<f64> = match model.rhs(t, x, &mut rate) {
+            Ok(()) if rate.iter().all(|r| r.is_finite()) => {
+                x.iter().zip(&rate).map(|(&xi, &ri)| xi + dt * ri).collect()
+            }
+            _ => x.to_vec(),
+        };
+        model.masses(t + dt, &x_ahead, &mut ahead);
+        // A law of the state is NaN at a state that is not finite: that
+        // names the state, not the mass.
+        let finite = x.iter().all(|v| v.is_finite());
+        let vanishes = |m: f64| !(m > 0.0) && (finite || !m.is_nan());
         for (i, (&m, &a)) in now.iter().zip(&ahead).enumerate() {
-            if !(m > 0.0) || !(a > 0.0) {
+            if vanishes(m) || vanishes(a) {
                 return Failure::new(
                     t,
                     FailureKind::MassVanishes {
@@ -1015,6 +1122,24 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
                     },
                 );
             }
+        }
+    }
+    if matches!(
+        failure.kind,
+        FailureKind::StepSizeUnderflow { .. }
+            | FailureKind::NonFiniteState { .. }
+            | FailureKind::NonFiniteRate { .. }
+            | FailureKind::SingularMassMatrix { .. }
+            | FailureKind::SingularConditionMatrix { .. }
+            | FailureKind::FieldNotConverging { .. }
+    ) && x.iter().all(|v| v.is_finite())
+    {
+        // A constraint whose value or slope is not finite where the motion
+        // stands (the root of `y' = sqrt(c² − x'²)` at its apex, where its
+        // slope is infinite and so is the mass matrix): the constraint is
+        // the cause, not the matrix it makes singular.
+        if let Some(component) = undefined_constraint(model, t, x) {
+            return Failure::new(t, FailureKind::ConstraintUndefined { component });
         }
     }
     if matches!(
@@ -1038,6 +1163,22 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
         }
     }
     failure
+}
+
+/// The fixed component whose constrained value, or its slope in the
+/// velocities, is not finite at `(t, x)`.
+fn undefined_constraint(model: &dyn DynModel, t: f64, x: &[f64]) -> Option<String> {
+    if !model.keeps_constraints() {
+        return None;
+    }
+    let n = x.len();
+    let mut kept = x.to_vec();
+    let mut gradient = crate::linalg::Matrix::zeros(n, n);
+    model.constrained(t, x, &mut kept).ok()?;
+    model.kept_gradient(t, x, &mut gradient).ok()?;
+    let row =
+        (0..n).find(|&j| !kept[j].is_finite() || (0..n).any(|i| !gradient[(j, i)].is_finite()))?;
+    Some(model.state_names()[row].to_string())
 }
 
 /// Integrates `members` (at least one; the first is the reference)
@@ -1091,6 +1232,6 @@ pub fn run_ensemble(
         ending: Ending::End,
         events: 0,
         budget_used: budget.used(),
-        positions_kept: None,
+        kept: None,
     })
 }

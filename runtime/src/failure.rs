@@ -68,6 +68,24 @@ pub enum FailureKind {
     /// configuration: every choice of dependents vanishes (their Jacobian
     /// lost rank; `ratio`: the pivots' volume against the run's start).
     SingularConfiguration { constraint: String, ratio: f64 },
+    /// The constraint that fixes `component` has no finite value at the
+    /// state reached: its branch ends there (the root of a negative
+    /// number, a division by zero).
+    ConstraintUndefined { component: String },
+    /// Within one accepted step the state left the constraint that fixes
+    /// `component` by `residual`, far beyond any drift the tolerance lets
+    /// a step carry.
+    ConstraintLeft { component: String, residual: f64 },
+    /// A constraint as written reaches an end of its domain: the argument
+    /// of a square root, logarithm, arcsine or arccosine reaches 0 (its
+    /// branch ends) or passes it (not defined), or a failure happened at
+    /// a pole of it (`argument`, what it divides by, vanishes).
+    ConstraintDomainEnds {
+        constraint: String,
+        kind: crate::model::DomainKind,
+        argument: String,
+        value: f64,
+    },
     /// At the initial state a constraint hardly determines its first
     /// candidate, the one the initial values take as fixed (its pivot a
     /// vanishing fraction of another's): that value is not determined.
@@ -255,6 +273,31 @@ impl fmt::Display for Failure {
                  value at the start). The motion cannot be followed through it: a \
                  change point of a linkage, where branches of motion meet"
             ),
+            FailureKind::ConstraintUndefined { component } => write!(
+                f,
+                "at t = {t:e}: the constraint that fixes `{component}` has no finite value \
+                 here: its branch ends (a root of a negative number, or a division by \
+                 zero); the motion past this point is not on it. Write the constraint \
+                 implicitly (`… for {component} or …`) to let it pass onto another \
+                 branch, or end the time span before"
+            ),
+            FailureKind::ConstraintLeft {
+                component,
+                residual,
+            } => write!(
+                f,
+                "at t = {t:e}: the motion left the constraint that fixes `{component}` \
+                 (its residual {residual:.3e} in one step, far beyond the tolerance): the \
+                 constraint's branch ends here or the motion passes a singular point of \
+                 it. An explicit root (`y' = sqrt(…)`) holds one branch only: write the \
+                 constraint implicitly (`… for {component} or …`) to pass onto the other"
+            ),
+            FailureKind::ConstraintDomainEnds {
+                constraint,
+                kind,
+                argument,
+                value,
+            } => domain_end(f, t, constraint, *kind, argument, *value),
             FailureKind::InitialCandidateVanishes {
                 constraint,
                 candidate,
@@ -314,3 +357,61 @@ impl fmt::Display for Failure {
 }
 
 impl std::error::Error for Failure {}
+
+/// [`FailureKind::ConstraintDomainEnds`] in words.
+fn domain_end(
+    f: &mut fmt::Formatter<'_>,
+    t: f64,
+    constraint: &str,
+    kind: crate::model::DomainKind,
+    argument: &str,
+    value: f64,
+) -> fmt::Result {
+    use crate::model::DomainKind;
+    let function = match kind {
+        DomainKind::Root => "square root",
+        DomainKind::Power => "fractional power",
+        DomainKind::Logarithm => "logarithm",
+        DomainKind::Arcsine => "arcsine",
+        DomainKind::Arccosine => "arccosine",
+        DomainKind::Pole => {
+            return write!(
+                f,
+                "at t = {t:e}: the constraint `{constraint}` is singular here: it divides \
+                 by `{argument}`, which vanishes ({argument} = {value:.3e}), so it no longer \
+                 determines its dependent derivative; write it implicitly with another \
+                 candidate (`… for y' or x'`)"
+            );
+        }
+    };
+    let negative = value < 0.0 || value.is_nan();
+    match (kind, negative) {
+        (DomainKind::Arcsine | DomainKind::Arccosine, true) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` is not defined here: the \
+             argument of its {function} is outside [-1, 1] (`{argument}` = {value:.3e}); \
+             its branch ended where that reached 0, and the motion past it is not on \
+             this branch"
+        ),
+        (DomainKind::Arcsine | DomainKind::Arccosine, false) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` reaches the end of its branch: \
+             the argument of its {function} reaches ±1 (`{argument}` falls to \
+             {value:.3e}; 0 ends it: the constraint's derivative is infinite there); \
+             past it the {function} is not defined, and the motion is not on this branch"
+        ),
+        (_, true) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` is not defined here: the \
+             {function} of a negative number (`{argument}` = {value:.3e}); its branch \
+             ended where that reached 0, and the motion past it is not on this branch"
+        ),
+        (_, false) => write!(
+            f,
+            "at t = {t:e}: the constraint `{constraint}` reaches the end of its branch: \
+             `{argument}` under its {function} falls to {value:.3e} (0 ends it: the \
+             constraint's derivative is infinite there); past it the {function} of a \
+             negative number, and the motion is not on this branch"
+        ),
+    }
+}

@@ -17,6 +17,8 @@
 //! | `system`, `stepper` | what integrators integrate, and their interface |
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
+//! | `events`, `impacts` | locating events; the resets of `when` at them |
+//! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
 // Numerical kernels index several arrays with one loop variable; and
 // `!(x > 0.0)` is meant: it is true for NaN.
@@ -35,6 +37,8 @@ pub mod events;
 pub mod failure;
 pub mod field;
 pub mod highest;
+pub mod impacts;
+pub mod keep;
 pub mod linalg;
 pub mod magnus;
 pub mod math;
@@ -50,3 +54,4 @@ pub mod stepper;
 pub mod summary;
 pub mod system;
 pub mod tolerance;
+pub mod watch;

@@ -34,6 +34,38 @@ pub struct Candidates {
     pub names: &'static [&'static str],
 }
 
+/// How a constraint as written ends at a [`Domain`]'s argument.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DomainKind {
+    /// The argument of a square root (or of a power below 1): 0 ends the
+    /// branch (the constraint's derivative is infinite there), below it
+    /// the root of a negative number.
+    Root,
+    /// The argument of a fractional power above 1: undefined below 0.
+    Power,
+    /// The argument of a logarithm: 0 ends it.
+    Logarithm,
+    /// `1 − u²` of an arcsine of `u`: 0 ends it.
+    Arcsine,
+    /// `1 − u²` of an arccosine of `u`: 0 ends it.
+    Arccosine,
+    /// What the constraint divides by (the cosine under a tangent): a
+    /// pole, named when a failure happens at it.
+    Pole,
+}
+
+/// Where a constraint as written is defined: its `argument` positive (a
+/// pole: non-zero). The run stops naming the constraint where a branch
+/// ends, instead of passing it silently (issue 28).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Domain {
+    /// The constraint as written.
+    pub constraint: &'static str,
+    pub kind: DomainKind,
+    /// The argument, as text.
+    pub argument: &'static str,
+}
+
 /// The discrete state of a run between two events: which reduced system
 /// (mode) is integrated and which branch every switch is on. Within a
 /// segment the right side is smooth; an event changes the regime and
@@ -83,6 +115,11 @@ pub trait Model: Clone {
     const SWITCHES: usize = 0;
     /// Implicit constraints with run-time candidates.
     const CONSTRAINTS: &'static [Candidates] = &[];
+    /// The conditions of the model's `when` statements (impacts), as
+    /// written, in order.
+    const IMPACTS: &'static [&'static str] = &[];
+    /// Where the constraints as written end ([`Model::domain_values`]).
+    const DOMAINS: &'static [Domain] = &[];
     /// The reduced system (7) is affine in the state: the linear field
     /// ansatz is a complete solution and [`Model::coefficients`] is given.
     const AFFINE: bool = false;
@@ -91,9 +128,18 @@ pub trait Model: Clone {
     const COEFFICIENTS_LINEAR: bool = false;
     /// The model states exact solutions (`exact` lines).
     const EXACT: bool = false;
-    /// Holonomic constraints fix some positions (SPEC §2.3):
-    /// [`Model::constrained`] is given, and the run keeps the state on them.
+    /// Constraints fix some state components (the dependent velocities of
+    /// first-order constraints): [`Model::constrained`] is given, and the
+    /// run keeps the state on them (SPEC §2.3).
+    const KEEPS_CONSTRAINTS: bool = false;
+    /// Holonomic constraints (SPEC §2.3): [`Model::project_closure`] is
+    /// given, and the run keeps the positions (and their derivatives) on
+    /// them.
     const KEEPS_POSITIONS: bool = false;
+    /// For each mode, the state components the constraints fix (the
+    /// indices [`Model::constrained`] writes); empty: those of
+    /// [`Model::INITIAL`], mapped by the candidates' names.
+    const FIXED: &'static [&'static [usize]] = &[];
 
     /// Every param's value: param `i` is `overrides[i]` when given, else
     /// its expression evaluated with the values before it (so an override
@@ -168,10 +214,21 @@ pub trait Model: Clone {
 
     /// The values the current mode's constraints require of the state
     /// components they fix, written into `kept` at those components'
-    /// indices (the others are left as they are): the dependent positions
-    /// of holonomic constraints brought onto them by Newton from `x`'s,
-    /// and the derivatives the constraints fix at those positions.
+    /// indices (the others are left as they are).
     fn constrained(&self, _t: f64, _x: &[f64], _kept: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+
+    /// `jac[(j, i)] = ∂kept_j/∂x_i`: the partials of the values
+    /// [`Model::constrained`] writes in the velocities (zeroed by the
+    /// caller; rows of the fixed components, columns of the velocities).
+    fn kept_gradient(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
+    }
+
+    /// Projects the state `x` in place onto the holonomic constraints
+    /// along their normals (positions, then each derivative block).
+    fn project_closure(&self, _t: f64, _x: &mut [f64]) -> Result<(), Failure> {
         Ok(())
     }
 
@@ -186,12 +243,35 @@ pub trait Model: Clone {
         false
     }
 
+    /// Whether the condition of impact `w` ([`Model::IMPACTS`]) holds with
+    /// these branches.
+    fn impact_holds(&self, _w: usize, _branches: &[bool]) -> bool {
+        false
+    }
+
+    /// Impact `w`'s resets: `out` holds the state `x` before the impact on
+    /// entry; the reset components are written with their new values (all
+    /// read from `x`), then every component the constraints fix is
+    /// recomputed from the new state.
+    fn impact_reset(&self, _w: usize, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+
     /// The pivots `∂h/∂dep` of every candidate of every implicit
     /// constraint, flattened in [`Model::CONSTRAINTS`] order.
     fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
 
+    /// Every [`Model::DOMAINS`] argument's value and its scale (the sum of
+    /// its terms' magnitudes), as pairs: `out[2 i]`, `out[2 i + 1]`.
+    fn domain_values(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+
     /// The mass laws' values at `t`, in [`Model::MASSES`] order.
     fn masses(&self, _t: f64, _out: &mut [f64]) {}
+
+    /// The mass laws' values at `(t, x)`, in [`Model::MASSES`] order: a
+    /// model with a law of the state (`rho * x`) implements this one; by
+    /// default the laws of `t`, [`Model::masses`].
+    fn masses_at(&self, t: f64, _x: &[f64], out: &mut [f64]) {
+        self.masses(t, out);
+    }
 
     /// The mass matrix of the highest derivatives at `(t, x)`, for naming
     /// a singular one as the cause of a failure (evaluated only then, and
@@ -256,14 +336,20 @@ pub trait DynModel {
     fn switches(&self) -> usize;
     /// [`Model::CONSTRAINTS`].
     fn constraints(&self) -> &'static [Candidates];
+    /// [`Model::IMPACTS`].
+    fn impacts(&self) -> &'static [&'static str];
     /// [`Model::AFFINE`].
     fn affine(&self) -> bool;
     /// [`Model::COEFFICIENTS_LINEAR`].
     fn coefficients_linear(&self) -> bool;
     /// [`Model::EXACT`].
     fn states_exact(&self) -> bool;
+    /// [`Model::KEEPS_CONSTRAINTS`].
+    fn keeps_constraints(&self) -> bool;
     /// [`Model::KEEPS_POSITIONS`].
     fn keeps_positions(&self) -> bool;
+    /// [`Model::FIXED`].
+    fn fixed_components(&self) -> &'static [&'static [usize]];
 
     /// [`Model::parameters`].
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64>;
@@ -299,16 +385,28 @@ pub trait DynModel {
     fn exact(&self, t: f64, out: &mut [Option<f64>]);
     /// [`Model::constrained`].
     fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure>;
+    /// [`Model::kept_gradient`].
+    fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+    /// [`Model::project_closure`].
+    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::outputs`].
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::switching_functions`].
     fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]);
     /// [`Model::stop`].
     fn stop(&self, branches: &[bool]) -> bool;
+    /// [`Model::impact_holds`].
+    fn impact_holds(&self, w: usize, branches: &[bool]) -> bool;
+    /// [`Model::impact_reset`].
+    fn impact_reset(&self, w: usize, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::pivots`].
     fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]);
-    /// [`Model::masses`].
-    fn masses(&self, t: f64, out: &mut [f64]);
+    /// [`Model::DOMAINS`].
+    fn domains(&self) -> &'static [Domain];
+    /// [`Model::domain_values`].
+    fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]);
+    /// [`Model::masses_at`].
+    fn masses(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::mass_matrix`].
     fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix>;
 }
@@ -347,6 +445,9 @@ impl<M: Model + 'static> DynModel for M {
     fn constraints(&self) -> &'static [Candidates] {
         M::CONSTRAINTS
     }
+    fn impacts(&self) -> &'static [&'static str] {
+        M::IMPACTS
+    }
     fn affine(&self) -> bool {
         M::AFFINE
     }
@@ -356,8 +457,14 @@ impl<M: Model + 'static> DynModel for M {
     fn states_exact(&self) -> bool {
         M::EXACT
     }
+    fn keeps_constraints(&self) -> bool {
+        M::KEEPS_CONSTRAINTS
+    }
     fn keeps_positions(&self) -> bool {
         M::KEEPS_POSITIONS
+    }
+    fn fixed_components(&self) -> &'static [&'static [usize]] {
+        M::FIXED
     }
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
         M::parameters(overrides)
@@ -415,6 +522,12 @@ impl<M: Model + 'static> DynModel for M {
     fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure> {
         Model::constrained(self, t, x, kept)
     }
+    fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        Model::kept_gradient(self, t, x, jac)
+    }
+    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        Model::project_closure(self, t, x)
+    }
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::outputs(self, t, x, out);
     }
@@ -424,11 +537,23 @@ impl<M: Model + 'static> DynModel for M {
     fn stop(&self, branches: &[bool]) -> bool {
         Model::stop(self, branches)
     }
+    fn impact_holds(&self, w: usize, branches: &[bool]) -> bool {
+        Model::impact_holds(self, w, branches)
+    }
+    fn impact_reset(&self, w: usize, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::impact_reset(self, w, t, x, out);
+    }
     fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::pivots(self, t, x, out);
     }
-    fn masses(&self, t: f64, out: &mut [f64]) {
-        Model::masses(self, t, out);
+    fn domains(&self) -> &'static [Domain] {
+        M::DOMAINS
+    }
+    fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::domain_values(self, t, x, out);
+    }
+    fn masses(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        Model::masses_at(self, t, x, out);
     }
     fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix> {
         Model::mass_matrix(self, t, x)

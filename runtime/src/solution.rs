@@ -132,7 +132,7 @@ impl Solution {
     /// when` ended it).
     pub fn end(&self) -> f64 {
         match self.outcome.ending {
-            Ending::Stopped(t) => t,
+            Ending::Stopped(t) | Ending::Rest { at: t, .. } => t,
             Ending::End => self.pieces.last().map_or(self.t0, |p| p.until),
         }
     }

@@ -50,20 +50,48 @@ impl Summary {
             "; wall time: {:.3} ms",
             self.wall_time.as_secs_f64() * 1e3
         );
-        if let Ending::Stopped(t) = self.outcome.ending {
-            let _ = write!(s, "\nstopped at t = {t} (`stop when` became true)");
+        match self.outcome.ending {
+            Ending::End => {}
+            Ending::Stopped(t) => {
+                let _ = write!(s, "\nstopped at t = {t} (`stop when` became true)");
+            }
+            Ending::Rest {
+                impact,
+                at,
+                accumulation: Some(limit),
+            } => {
+                let _ = write!(
+                    s,
+                    "\nstopped at t = {at} (the impacts of `when {impact}` accumulate at \
+                     t ≈ {limit}: the motion stays on its boundary from there, a contact \
+                     the equations of motion do not describe)"
+                );
+            }
+            Ending::Rest {
+                impact,
+                at,
+                accumulation: None,
+            } => {
+                let _ = write!(
+                    s,
+                    "\nstopped at t = {at} (after the impact of `when {impact}` the motion \
+                     stays on its boundary, a contact the equations of motion do not \
+                     describe)"
+                );
+            }
         }
         for note in &r.notes {
             let _ = write!(s, "\nnote: {note}");
         }
-        if let Some(kept) = self.outcome.positions_kept {
+        if let Some(kept) = &self.outcome.kept {
             let _ = write!(
                 s,
-                "\nholonomic constraints kept: the state came at most {:.2e} of the \
-                 tolerance off them{}, {} projections after steps (every output projected)",
+                "\nconstraints kept: largest residual {:.3e} ({:.2} of the tolerance{}), \
+                 {} projections after steps",
+                kept.largest_absolute,
                 kept.largest,
                 if kept.largest_at.is_finite() {
-                    format!(" (t = {:e})", kept.largest_at)
+                    format!(", at t = {:e}", kept.largest_at)
                 } else {
                     String::new()
                 },
@@ -86,16 +114,20 @@ impl Summary {
     /// One JSON object (written by hand: the runtime has no dependencies).
     pub fn json(&self) -> String {
         let r = &self.outcome.report;
-        let stopped = match self.outcome.ending {
-            Ending::End => "null".to_string(),
-            Ending::Stopped(t) => json_number(Some(t)),
+        let (stopped, accumulation) = match self.outcome.ending {
+            Ending::End => ("null".to_string(), "null".to_string()),
+            Ending::Stopped(t) => (json_number(Some(t)), "null".to_string()),
+            Ending::Rest {
+                at, accumulation, ..
+            } => (json_number(Some(at)), json_number(accumulation)),
         };
         format!(
             "{{\"method\":{},\"steps\":{},\"rejected_steps\":{},\"rhs_evaluations\":{},\
              \"jacobian_evaluations\":{},\"linearizations\":{},\"windows\":{},\
              \"predictor_steps\":{},\"largest_condition\":{},\"reanchorings\":{},\
-             \"events\":{},\"stopped_at\":{},\"budget_used\":{},\"wall_time_s\":{},\
-             \"runs\":{},\"exact_error\":{},\"estimated_error\":{}}}",
+             \"events\":{},\"stopped_at\":{},\"impacts_accumulate_at\":{},\"budget_used\":{},\"wall_time_s\":{},\
+             \"runs\":{},\"exact_error\":{},\"estimated_error\":{},\
+             \"constraint_residual\":{},\"projections\":{}}}",
             json_string(&r.method),
             r.stats.accepted_steps,
             r.stats.rejected_steps,
@@ -109,11 +141,16 @@ impl Summary {
             r.reanchorings.map_or("null".to_string(), |c| c.to_string()),
             self.outcome.events,
             stopped,
+            accumulation,
             self.outcome.budget_used,
             json_number(Some(self.wall_time.as_secs_f64())),
             self.runs,
             json_number(self.exact_error),
             json_number(self.estimated_error),
+            json_number(self.outcome.kept.map(|k| k.largest_absolute)),
+            self.outcome
+                .kept
+                .map_or("null".to_string(), |k| k.projections.to_string()),
         )
     }
 }

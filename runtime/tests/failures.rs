@@ -9,7 +9,7 @@ use lagc_runtime::failure::FailureKind;
 use lagc_runtime::field::Anchor;
 use lagc_runtime::method::Method;
 use lagc_runtime::model::Model;
-use models::{Oscillator, VanishingMass};
+use models::{ChainOntoHeap, Oscillator, VanishingMass};
 
 fn fails<M: Model + 'static>(
     model: &mut M,
@@ -43,6 +43,52 @@ fn a_mass_reaching_zero_is_named_by_every_method() {
         );
         assert!(failure.to_string().contains("reaches zero"));
     }
+}
+
+/// A mass law of the state (`M = rho x`): the driver evaluates it at the
+/// state, at the start and where the integrator gives up.
+#[test]
+fn a_mass_of_the_state_reaching_zero_is_named_by_every_method() {
+    for method in [Method::Direct, Method::Field] {
+        let failure = fails(
+            &mut ChainOntoHeap::new(&[]),
+            &Options {
+                method,
+                // The field's windows chase the singularity until the
+                // budget stalls (a million steps take a minute unoptimised).
+                max_steps: 50_000,
+                ..Options::default()
+            },
+            1.0,
+        );
+        assert!(
+            matches!(&failure.kind, FailureKind::MassVanishes { mass, .. } if mass == "M"),
+            "{method:?}: {failure}"
+        );
+        assert!(
+            (failure.time - ChainOntoHeap::T_STAR).abs() < 1e-6,
+            "{method:?}: at {}",
+            failure.time
+        );
+    }
+    // At the start: `x = 0` is a chain of no mass.
+    let mut model = ChainOntoHeap::new(&[]);
+    let x0 = model.initial_state(&[Some(0.0), Some(0.0)]).unwrap();
+    let failure = run(
+        &mut model,
+        &Options::default(),
+        0.0,
+        1.0,
+        &x0,
+        &[1.0],
+        |_, _, _| Ok(()),
+    )
+    .expect_err("a chain of no mass cannot start");
+    assert!(
+        matches!(&failure.kind, FailureKind::MassVanishes { mass, value } if mass == "M" && *value == 0.0),
+        "{failure}"
+    );
+    assert_eq!(failure.time, 0.0);
 }
 
 #[test]

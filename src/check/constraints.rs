@@ -82,6 +82,7 @@ impl Checker<'_> {
                 order,
                 rhs: rhs.clone(),
                 span,
+                text: String::new(),
                 implicit,
             });
             held.push(Vec::new());
@@ -543,6 +544,7 @@ impl Checker<'_> {
             order: 0,
             rhs: rhs.clone(),
             span,
+            text: String::new(),
             implicit: Some(Implicit {
                 lhs: lhs.clone(),
                 candidates: named,

@@ -23,6 +23,9 @@ pub struct Allowed {
     pub coord_order: Option<u32>,
     /// The code for a coordinate where none may appear.
     pub coord_code: &'static str,
+    /// The code for a derivative above `coord_order` (a mass law's
+    /// velocity is E0005, not the general E0021).
+    pub order_code: &'static str,
     /// Lets with an index below this may be used (a let may use only
     /// earlier ones); `usize::MAX` for all.
     pub lets_before: usize,
@@ -38,6 +41,7 @@ impl Allowed {
             masses: false,
             coord_order: None,
             coord_code: codes::NAME_NOT_ALLOWED,
+            order_code: codes::DERIVATIVE_ORDER_NOT_ALLOWED,
             lets_before: usize::MAX,
         }
     }
@@ -51,6 +55,7 @@ impl Allowed {
             masses: true,
             coord_order: Some(MAX_DERIVATIVE_ORDER),
             coord_code: codes::NAME_NOT_ALLOWED,
+            order_code: codes::DERIVATIVE_ORDER_NOT_ALLOWED,
             lets_before,
         }
     }
@@ -144,13 +149,18 @@ impl Checker<'_> {
                 };
                 let max_order = max_order.min(MAX_DERIVATIVE_ORDER);
                 if primes > max_order {
-                    self.report(order_not_allowed(
-                        allowed.what,
-                        name,
-                        primes,
-                        max_order,
-                        span,
-                    ));
+                    let diagnostic = if allowed.order_code == codes::MASS_DEPENDS_ON_STATE {
+                        mass_of_velocity(
+                            allowed.what,
+                            name,
+                            primes,
+                            span,
+                            "a derivative of a coordinate used here",
+                        )
+                    } else {
+                        order_not_allowed(allowed.what, name, primes, max_order, span)
+                    };
+                    self.report(diagnostic);
                     return None;
                 }
                 Some(CoordUse {
@@ -230,6 +240,35 @@ fn primes_on_non_coordinate(name: &str, kind: Name, span: Span, declared: Span) 
         ),
         _ => diagnostic,
     }
+}
+
+/// A mass law (or a point's mass) that holds a derivative of a coordinate:
+/// a mass may follow the configuration (`rho * x`, SPEC §2.3), not the
+/// motion's velocities.
+pub(super) fn mass_of_velocity(
+    what: &str,
+    name: &str,
+    order: u32,
+    span: Span,
+    label: &str,
+) -> Diagnostic {
+    let primes = "'".repeat(order as usize);
+    Diagnostic::error(
+        codes::MASS_DEPENDS_ON_STATE,
+        format!("{what} cannot depend on the derivative `{name}{primes}`"),
+    )
+    .with_primary(span, label)
+    .with_note(
+        "a mass may depend on `t` and the coordinates; its rate along the motion, \
+         Ṁ = ∂M/∂t + Σ ∂M/∂q_j q_j', enters the reactive forces. A law of velocities \
+         would carry the accelerations into Ṁ (and the mass matrix), and a mass that \
+         follows the speed, gained and given back as the body speeds up and slows down, \
+         is no accretion or ejection of matter",
+    )
+    .with_help(format!(
+        "write the mass as a function of time or of the coordinates (for an accretion \
+         that grows with the distance travelled, a law of `{name}`)"
+    ))
 }
 
 fn order_not_allowed(what: &str, name: &str, order: u32, max: u32, span: Span) -> Diagnostic {

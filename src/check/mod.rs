@@ -9,6 +9,7 @@ mod constraints;
 mod declarations;
 mod eval;
 mod expressions;
+mod impacts;
 mod initial;
 pub mod model;
 mod points;
@@ -46,6 +47,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let integrator = checker.integrator();
     let outputs = checker.outputs();
     let stop = checker.stop();
+    let impacts = checker.impacts(constraint_order, &constraints);
 
     let mut diagnostics = checker.diagnostics;
     let (Some(lagrangian), Some(time), true) = (lagrangian, time, diagnostics.is_empty()) else {
@@ -77,6 +79,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
         lets,
         outputs,
         stop,
+        impacts,
         names: checker
             .names
             .iter()

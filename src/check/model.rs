@@ -44,6 +44,8 @@ pub struct Model {
     pub outputs: Vec<Output>,
     /// `stop when cond;`: a condition of `t`, the state and params.
     pub stop: Option<Expr>,
+    /// `when cond then y' = …;` statements in source order (SPEC §2.3).
+    pub impacts: Vec<Impact>,
     /// Every declared name (params, coordinates, masses, points, lets,
     /// outputs).
     pub names: HashMap<String, Name>,
@@ -131,7 +133,9 @@ pub struct Coord {
 pub struct MassLaw {
     pub name: String,
     pub span: Span,
-    /// An expression of `t`, params and numbers.
+    /// An expression of `t`, params, numbers and coordinates (no
+    /// derivatives): frozen inside the Lagrangian, its `Ṁ` along the
+    /// motion in the reactive forces (SPEC §1.1, §1.3, §2.3).
     pub law: Expr,
 }
 
@@ -143,6 +147,11 @@ pub struct Constraint {
     pub order: u32,
     pub rhs: Expr,
     pub span: Span,
+    /// The statement as written, for run-time messages (`y' = sqrt(c^2 -
+    /// x'^2)`, `sin(th) * x' = cos(th) * y' for y' or x'`): filled by the
+    /// front end, which has the text ([`crate::frontend::frontend`]);
+    /// empty for a model checked from an AST alone.
+    pub text: String,
     /// `Some` for `constraint lhs = rhs for q' [or …];`.
     pub implicit: Option<Implicit>,
 }
@@ -202,7 +211,8 @@ pub struct Output {
 pub struct Point {
     pub name: String,
     pub span: Span,
-    /// The point's mass: an expression of `t`, params and masses.
+    /// The point's mass: an expression of `t`, params, masses and
+    /// coordinates (no derivatives).
     pub mass: Expr,
     pub position: Vec<Expr>,
     pub velocity: EjectaVelocity,
@@ -220,6 +230,29 @@ pub enum EjectaVelocity {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Force {
     pub coord: usize,
+    pub value: Expr,
+    pub span: Span,
+}
+
+/// `when cond then y' = …, x = …;`: where `cond` becomes true, the
+/// targets (free components of the state) are reset to their values, all
+/// evaluated at the state before the impact.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Impact {
+    /// The condition as written, for messages (`y < 0`).
+    pub text: String,
+    /// A condition of `t`, the state and params.
+    pub cond: Expr,
+    pub resets: Vec<ImpactReset>,
+    pub span: Span,
+}
+
+/// `coord^(order) = value` in a `when`; `value` an expression of `t`,
+/// params, masses and the state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImpactReset {
+    pub coord: usize,
+    pub order: u32,
     pub value: Expr,
     pub span: Span,
 }

@@ -12,7 +12,8 @@ use crate::syntax::ast::{Expr, ExprKind, Ident, ItemKind, PointField, PointField
 const POINT_MASS: Allowed = Allowed {
     time: true,
     masses: true,
-    coord_code: codes::MASS_DEPENDS_ON_STATE,
+    coord_order: Some(0),
+    order_code: codes::MASS_DEPENDS_ON_STATE,
     ..Allowed::constants("a point's mass")
 };
 const POSITION: Allowed = Allowed {

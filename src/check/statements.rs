@@ -42,9 +42,12 @@ impl<'a> Checker<'a> {
     }
 
     pub(super) fn masses(&mut self) -> Vec<MassLaw> {
+        // A mass law may follow the configuration (SPEC §2.3: `rho * x`),
+        // not the velocities (E0005, `mass_of_velocity`).
         let allowed = Allowed {
             time: true,
-            coord_code: codes::MASS_DEPENDS_ON_STATE,
+            coord_order: Some(0),
+            order_code: codes::MASS_DEPENDS_ON_STATE,
             ..Allowed::constants("a mass law")
         };
         let mut masses = Vec::new();

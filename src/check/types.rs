@@ -509,6 +509,28 @@ impl Checker<'_> {
                     ok = false;
                     break;
                 }
+                Some(max)
+                    if order > max.min(MAX_DERIVATIVE_ORDER)
+                        && allowed.order_code == codes::MASS_DEPENDS_ON_STATE =>
+                {
+                    let diagnostic = super::expressions::mass_of_velocity(
+                        allowed.what,
+                        &coord_name,
+                        order,
+                        span,
+                        &format!("let `{name}` used here"),
+                    )
+                    .with_secondary(
+                        used.span,
+                        format!(
+                            "`{coord_name}{}` used here",
+                            "'".repeat(used.order as usize)
+                        ),
+                    );
+                    self.report(diagnostic);
+                    ok = false;
+                    break;
+                }
                 Some(max) if order > max.min(MAX_DERIVATIVE_ORDER) => {
                     let diagnostic = Diagnostic::error(
                         codes::DERIVATIVE_ORDER_NOT_ALLOWED,

@@ -1,6 +1,7 @@
 //! The regime of a run (SPEC §2.2): the switches' branches the right side
-//! reads, the switching functions the runtime watches, `stop when`, and
-//! the `output` columns.
+//! reads, the switching functions the runtime watches, `stop when`, the
+//! impacts (`when`, SPEC §2.3), the `output` columns, and where the
+//! constraints as written end.
 
 use super::names::{Source, SymbolNames};
 use crate::kernel::{BranchCond, Kernel};
@@ -60,7 +61,33 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
             const CONSTRAINTS: &'static [lagc_runtime::model::Candidates] = &[#(#entries),*];
         }
     };
-    quote! { #switches #outputs #constraints }
+    let impacts = if kernel.impacts.is_empty() {
+        TokenStream::new()
+    } else {
+        let texts = kernel.impacts.iter().map(|i| i.text.as_str());
+        quote! { const IMPACTS: &'static [&'static str] = &[#(#texts),*]; }
+    };
+
+    let domains = if kernel.domains.is_empty() {
+        TokenStream::new()
+    } else {
+        let entries = kernel.domains.iter().map(|d| {
+            let constraint = &d.constraint;
+            let argument = &d.text;
+            let kind = proc_macro2::Ident::new(d.kind.variant(), proc_macro2::Span::call_site());
+            quote! {
+                lagc_runtime::model::Domain {
+                    constraint: #constraint,
+                    kind: lagc_runtime::model::DomainKind::#kind,
+                    argument: #argument,
+                }
+            }
+        });
+        quote! {
+            const DOMAINS: &'static [lagc_runtime::model::Domain] = &[#(#entries),*];
+        }
+    };
+    quote! { #switches #outputs #constraints #impacts #domains }
 }
 
 /// `set_regime`, `switching_functions`, `stop`, `outputs`.
@@ -96,6 +123,21 @@ pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
             .collect();
         items.push(values_fn(kernel, names, from_x, &roots, "pivots", "out"));
     }
+    if !kernel.domains.is_empty() {
+        let roots: Vec<_> = kernel
+            .domains
+            .iter()
+            .flat_map(|d| [d.argument, d.scale])
+            .collect();
+        items.push(values_fn(
+            kernel,
+            names,
+            from_x,
+            &roots,
+            "domain_values",
+            "out",
+        ));
+    }
     if !kernel.switches.functions.is_empty() {
         let roots = &kernel.switches.functions;
         items.push(values_fn(
@@ -115,11 +157,95 @@ pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
             }
         });
     }
+    if !kernel.impacts.is_empty() {
+        items.push(impact_items(kernel, names, from_x));
+    }
     if !kernel.outputs.is_empty() {
         let roots: Vec<_> = kernel.outputs.iter().map(|&(_, e)| e).collect();
         items.push(values_fn(kernel, names, from_x, &roots, "outputs", "out"));
     }
     quote! { #(#items)* }
+}
+
+/// `impact_holds` and `impact_reset`: each `when`'s condition on the
+/// branches, and its resets (read from `x`, the state before the impact)
+/// followed by the components the constraints fix (read from `out`, the
+/// state after it).
+fn impact_items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
+    let numbers: Vec<Literal> = (0..kernel.impacts.len())
+        .map(Literal::usize_unsuffixed)
+        .collect();
+    let conditions = kernel.impacts.iter().map(|i| condition(&i.condition));
+    let (mut uses_time, mut uses_x) = (false, false);
+    let mut arms = Vec::new();
+    for (w, impact) in numbers.iter().zip(&kernel.impacts) {
+        let roots: Vec<_> = impact.resets.iter().map(|&(_, e)| e).collect();
+        let code = names.code(&kernel.arena, &roots, from_x);
+        uses_time |= code.uses_time;
+        uses_x |= code.uses_source;
+        let statements = code.statements(quote! { self.params });
+        let slots = impact
+            .resets
+            .iter()
+            .map(|&(k, _)| Literal::usize_unsuffixed(k));
+        let values = &code.roots;
+        arms.push(quote! {
+            if w == #w {
+                #statements
+                #(out[#slots] = #values;)*
+            }
+        });
+    }
+    let constrained = if kernel.constrained.is_empty() {
+        TokenStream::new()
+    } else {
+        let position: std::collections::HashMap<_, _> = kernel
+            .state
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| (s, Literal::usize_unsuffixed(i)))
+            .collect();
+        let from_out = move |s| position.get(&s).map(|i| quote! { out[#i] });
+        let roots: Vec<_> = kernel.constrained.iter().map(|&(_, e)| e).collect();
+        let code = names.code(&kernel.arena, &roots, &from_out);
+        uses_time |= code.uses_time;
+        let statements = code.statements(quote! { self.params });
+        let slots = kernel
+            .constrained
+            .iter()
+            .map(|&(k, _)| Literal::usize_unsuffixed(k));
+        let values = &code.roots;
+        quote! {
+            // The derivatives the constraints fix, from the new state.
+            {
+                #statements
+                #(out[#slots] = #values;)*
+            }
+        }
+    };
+    let t = if uses_time {
+        quote! { t }
+    } else {
+        quote! { _t }
+    };
+    let x = if uses_x {
+        quote! { x }
+    } else {
+        quote! { _x }
+    };
+    quote! {
+        fn impact_holds(&self, w: usize, branches: &[bool]) -> bool {
+            match w {
+                #(#numbers => #conditions,)*
+                _ => false,
+            }
+        }
+
+        fn impact_reset(&self, w: usize, #t: f64, #x: &[f64], out: &mut [f64]) {
+            #(#arms)*
+            #constrained
+        }
+    }
 }
 
 /// A condition on the branches (`branches[k]`: `g_k > 0`), without outer

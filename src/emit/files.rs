@@ -57,6 +57,11 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/highest.rs",
         include_str!("../../runtime/src/highest.rs"),
     ),
+    (
+        "src/impacts.rs",
+        include_str!("../../runtime/src/impacts.rs"),
+    ),
+    ("src/keep.rs", include_str!("../../runtime/src/keep.rs")),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
     ("src/magnus.rs", include_str!("../../runtime/src/magnus.rs")),
@@ -88,6 +93,7 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/tolerance.rs",
         include_str!("../../runtime/src/tolerance.rs"),
     ),
+    ("src/watch.rs", include_str!("../../runtime/src/watch.rs")),
 ];
 
 /// The runtime crate's sources `(path relative to its root, contents)`; a

@@ -10,11 +10,20 @@ use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 use std::collections::HashMap;
 
-/// One free function per mass law, `mass_<name>(p, t)`.
+/// One free function per mass law, `mass_<name>(p, t)`, or
+/// `mass_<name>(p, t, x)` for a law of the state (its coordinates from `x`).
 pub fn mass_fns(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     let mut items = Vec::new();
     for (i, (name, law)) in kernel.masses.iter().enumerate() {
-        let code = names.code(&kernel.arena, &[*law], &|_| None);
+        let of_state = kernel.state_laws.contains(&(i as u32));
+        let from_x = |s: Symbol| match s {
+            Symbol::Jet { coord, order: 0 } => {
+                let k = index(coord as usize);
+                Some(quote! { x[#k] })
+            }
+            _ => None,
+        };
+        let code = names.code(&kernel.arena, &[*law], &from_x);
         let statements = code.statements_in_p();
         let root = &code.roots[0];
         let t = code.time_arg();
@@ -24,13 +33,18 @@ pub fn mass_fns(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
             quote! { _p }
         };
         let f = &names.mass_fns[i];
+        let (args, state) = if of_state {
+            ("t, q", quote! { , x: &[f64] })
+        } else {
+            ("t", TokenStream::new())
+        };
         let doc = format!(
-            " The mass law `{name}(t) = {}`.",
+            " The mass law `{name}({args}) = {}`.",
             kernel.arena.display(*law)
         );
         items.push(quote! {
             #[doc = #doc]
-            fn #f(#p: &Params, #t: f64) -> f64 {
+            fn #f(#p: &Params, #t: f64 #state) -> f64 {
                 #statements
                 #root
             }
@@ -64,12 +78,27 @@ pub fn data_items(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     };
     let masses = if kernel.masses.is_empty() {
         TokenStream::new()
-    } else {
+    } else if kernel.state_laws.is_empty() {
         let fns = &names.mass_fns;
         let slots: Vec<Literal> = (0..fns.len()).map(index).collect();
         quote! {
             fn masses(&self, t: f64, out: &mut [f64]) {
                 #(out[#slots] = #fns(&self.params, t);)*
+            }
+        }
+    } else {
+        // Laws of the state: the masses at `(t, x)`.
+        let values = names.mass_fns.iter().enumerate().map(|(i, f)| {
+            let slot = index(i);
+            if kernel.state_laws.contains(&(i as u32)) {
+                quote! { out[#slot] = #f(&self.params, t, x); }
+            } else {
+                quote! { out[#slot] = #f(&self.params, t); }
+            }
+        });
+        quote! {
+            fn masses_at(&self, t: f64, x: &[f64], out: &mut [f64]) {
+                #(#values)*
             }
         }
     };
@@ -275,10 +304,28 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
     } else {
         quote! { const EXACT: bool = true; }
     };
+    let kept = if kernel.kept.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! { const KEEPS_CONSTRAINTS: bool = true; }
+    };
     let keeps = if kernel.closure.is_some() {
         quote! { const KEEPS_POSITIONS: bool = true; }
     } else {
         TokenStream::new()
+    };
+    // Which components each mode fixes: with groups of constraints solved
+    // together (or holonomic ones), a mode's are not found from the first
+    // mode's by the candidates' names.
+    let modes = std::iter::once(kernel).chain(&kernel.modes);
+    let fixed = if kernel.modes.is_empty() || modes.clone().all(|k| k.kept.is_empty()) {
+        TokenStream::new()
+    } else {
+        let tables = modes.map(|k| {
+            let indices = k.kept.iter().map(|&(i, _)| index(i));
+            quote! { &[#(#indices),*] }
+        });
+        quote! { const FIXED: &'static [&'static [usize]] = &[#(#tables),*]; }
     };
     quote! {
         const NAME: &'static str = #model_name;
@@ -291,6 +338,8 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
         #integrator
         #affine
         #exact
+        #kept
         #keeps
+        #fixed
     }
 }

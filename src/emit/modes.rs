@@ -5,13 +5,16 @@
 use crate::ir::Symbol;
 use crate::kernel::switches::switch_index;
 use crate::kernel::Kernel;
-use proc_macro2::{Group, Ident, TokenStream, TokenTree};
+use proc_macro2::{Group, Ident, Span, TokenStream, TokenTree};
 use quote::quote;
 use std::collections::HashMap;
 
 /// The motion's methods (trait items and their inherent helpers).
-const METHODS: [&str; 8] = [
+const METHODS: [&str; 11] = [
     "rhs",
+    "constrained",
+    "kept_gradient",
+    "mass_matrix",
     "jacobian",
     "time_partial",
     "linearize",
@@ -22,8 +25,10 @@ const METHODS: [&str; 8] = [
 ];
 
 /// The trait methods a mode implements, with their argument lists.
-const DISPATCHED: [(&str, &[&str]); 4] = [
+const DISPATCHED: [(&str, &[&str]); 6] = [
     ("rhs", &["t", "x", "dx"]),
+    ("constrained", &["t", "x", "kept"]),
+    ("kept_gradient", &["t", "x", "jac"]),
     ("jacobian", &["t", "x", "jac"]),
     ("time_partial", &["t", "x", "dxdt"]),
     ("linearize", &["t", "x", "dx", "jac"]),
@@ -107,7 +112,8 @@ pub fn dispatch(trait_items: &TokenStream, modes: usize) -> TokenStream {
         });
         let signature = match name {
             "rhs" => quote! { t: f64, x: &[f64], dx: &mut [f64] },
-            "jacobian" => quote! { t: f64, x: &[f64], jac: &mut Matrix },
+            "constrained" => quote! { t: f64, x: &[f64], kept: &mut [f64] },
+            "jacobian" | "kept_gradient" => quote! { t: f64, x: &[f64], jac: &mut Matrix },
             "time_partial" => quote! { t: f64, x: &[f64], dxdt: &mut [f64] },
             _ => quote! { t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix },
         };
@@ -120,6 +126,35 @@ pub fn dispatch(trait_items: &TokenStream, modes: usize) -> TokenStream {
         });
     }
     quote! { #(#items)* }
+}
+
+/// `mass_matrix` over the modes: each mode's own (`conditions[m]`, empty
+/// when the mode has none) as an inherent `mass_matrix_modeM`, the trait's
+/// method dispatching on the current mode. `(trait item, inherent items)`.
+pub fn mass_dispatch(conditions: &[TokenStream]) -> (TokenStream, TokenStream) {
+    if conditions.iter().all(TokenStream::is_empty) {
+        return (TokenStream::new(), TokenStream::new());
+    }
+    let mut inherent = TokenStream::new();
+    let mut arms = Vec::new();
+    for (m, condition) in conditions.iter().enumerate() {
+        let pattern = proc_macro2::Literal::usize_unsuffixed(m);
+        if condition.is_empty() {
+            continue;
+        }
+        inherent.extend(rename(condition.clone(), m));
+        let target = Ident::new(&format!("mass_matrix_mode{m}"), Span::call_site());
+        arms.push(quote! { #pattern => self.#target(t, x), });
+    }
+    let item = quote! {
+        fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix> {
+            match self.mode {
+                #(#arms)*
+                _ => None,
+            }
+        }
+    };
+    (item, inherent)
 }
 
 /// A mode's branch symbols mapped to the first mode's switches: the same

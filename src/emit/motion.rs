@@ -33,8 +33,9 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
     let (trait_items, inherent) = motion_of(kernel, names, &from_x);
     let condition = mass_condition(kernel, names, &from_x);
     let events = super::events::items(kernel, names, &from_x);
-    let kept = closure_kept(kernel, names);
-    let condition = quote! { #condition #kept };
+    // The same in every mode: one trait item.
+    let closure = closure_kept(kernel, names);
+    let events = quote! { #events #closure };
     if kernel.modes.is_empty() {
         return (quote! { #trait_items #condition #events }, inherent);
     }
@@ -48,6 +49,16 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
         all_inherent.extend(super::modes::renamed(&items, &helpers, m + 1));
     }
     let dispatch = super::modes::dispatch(&trait_items, kernel.modes.len() + 1);
+    // The mass matrix is the current mode's too (mode 0's alone named
+    // `mass_system`, which the modes rename: rustc E0599).
+    let mut conditions = vec![condition];
+    for mode in &kernel.modes {
+        let mut mode_names = SymbolNames::new(&mode.arena, &mode.state);
+        mode_names.branches = super::modes::shared_branches(kernel, mode);
+        conditions.push(mass_condition(mode, &mut mode_names, &from_x));
+    }
+    let (condition, condition_inherent) = super::modes::mass_dispatch(&conditions);
+    all_inherent.extend(condition_inherent);
     (quote! { #dispatch #condition #events }, all_inherent)
 }
 
@@ -64,21 +75,62 @@ fn motion_of(
     let shift_cols: Vec<Literal> = (0..shifted).map(|i| index(i + c)).collect();
     let shifts = quote! { #(dx[#shift_rows] = x[#shift_cols];)* };
     let shift_jacobian = quote! { #(jac[(#shift_rows, #shift_cols)] = 1.0;)* };
-    match &kernel.motion {
+    let kept = kept_code(kernel, names, from_x);
+    let (items, helpers) = match &kernel.motion {
         Motion::Explicit(e) => (
             explicit(kernel, names, e, from_x, &shifts, &shift_jacobian),
             TokenStream::new(),
         ),
         Motion::Implicit(i) => implicit(kernel, names, i, from_x, &shifts, &shift_jacobian),
+    };
+    (quote! { #items #kept }, helpers)
+}
+
+/// `constrained`: the values the constraints require of the components
+/// they fix (nothing for a model without first-order constraints).
+fn kept_code(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
+    if kernel.kept.is_empty() {
+        return TokenStream::new();
+    }
+    let body = bodies::body(names, &kernel.arena, &kernel.kept, from_x, "x", "kept");
+    let (t, x, statements, rows) = (&body.t, &body.source, &body.statements, &body.assignments);
+    let gradient = bodies::body(
+        names,
+        &kernel.arena,
+        &kernel.kept_gradient,
+        from_x,
+        "x",
+        "jac",
+    );
+    let (g_t, g_x, g_out, g_statements, g_cells) = (
+        &gradient.t,
+        &gradient.source,
+        &gradient.out,
+        &gradient.statements,
+        &gradient.assignments,
+    );
+    quote! {
+        fn constrained(&self, #t: f64, #x: &[f64], kept: &mut [f64]) -> Result<(), Failure> {
+            #statements
+            #(#rows)*
+            Ok(())
+        }
+
+        fn kept_gradient(&self, #g_t: f64, #g_x: &[f64], #g_out: &mut Matrix) -> Result<(), Failure> {
+            #g_statements
+            #(#g_cells)*
+            Ok(())
+        }
     }
 }
 
-/// `constrained` of a model with holonomic constraints (SPEC §2.3): the
-/// state projected onto them along their normals — Gauss–Newton on
+/// `project_closure` of a model with holonomic constraints (SPEC §2.3):
+/// the state projected onto them along their normals — Gauss–Newton on
 /// `f(t, q) = 0` with the smallest correction of the positions, then each
 /// derivative `q^(r)` onto `D^r f = 0` (linear in it, the same normals) —
-/// written into `kept`. The same in every mode (it does not depend on the
-/// dependents chosen).
+/// in place. The same in every mode (it does not depend on the dependents
+/// chosen); the runtime's keeper then keeps the velocities the mode's
+/// constraints fix (`constrained`).
 fn closure_kept(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     let Some(closure) = &kernel.closure else {
         return TokenStream::new();
@@ -140,11 +192,10 @@ fn closure_kept(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     let levels = index(closure.levels.len());
     let rows = index(m);
     quote! {
-        fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure> {
-            kept.copy_from_slice(x);
+        fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
             lagc_runtime::closure::project(
                 t,
-                kept,
+                x,
                 (#rows, #coordinates, #levels),
                 #text,
                 &mut |#state: &[f64], #level: usize, #f: &mut [f64], #normals: &mut Matrix| {

@@ -327,17 +327,34 @@ fn call(
             }
         }
         Builtin::Atan2 => {
-            // atan(y/x) in the right half-plane, shifted by ±π in the left
-            // one: the switches are x = 0 and, left of it, y = 0 (the cut).
+            // Half-angle formulas about the y axis, one per half-plane:
+            // π/2 − 2·atan(x/(r + y)) where y ≥ 0 and −π/2 + 2·atan(x/(r − y))
+            // where y < 0, r = √(x² + y²). Each is atan2 on its closed
+            // half-plane, well conditioned (r ± y ≥ r) with its derivative
+            // (x dy − y dx)/r² defined everywhere but the origin. The one
+            // switch is y = 0: across it the value is smooth where x > 0
+            // and jumps by 2π on the cut (x < 0). (atan(y/x) ± π, switched
+            // on x, had the derivative 0/0 at x = 0: exit 3 there.)
             let (y, x) = (number(0)?, number(1)?);
-            let ratio = arena.div(y, x);
-            let base = arena.func(Func::Atan, ratio);
-            let pi = arena.constant(std::f64::consts::PI);
-            let minus_pi = arena.constant(-std::f64::consts::PI);
-            let below = arena.add(&[base, minus_pi]);
-            let above = arena.add(&[base, pi]);
-            let left = arena.select(y, below, above);
-            arena.select(x, left, base)
+            let (x2, y2) = (arena.powi(x, 2), arena.powi(y, 2));
+            let sum = arena.add(&[x2, y2]);
+            let r = arena.func(Func::Sqrt, sum);
+            let half_angle = |arena: &mut Arena, y: ExprId| {
+                let denominator = arena.add(&[r, y]);
+                let ratio = arena.div(x, denominator);
+                let angle = arena.func(Func::Atan, ratio);
+                let two = arena.constant(2.0);
+                arena.mul(&[two, angle])
+            };
+            let upper = half_angle(arena, y);
+            let minus_y = arena.neg(y);
+            let lower = half_angle(arena, minus_y);
+            let upper = arena.neg(upper);
+            let half_pi = arena.constant(std::f64::consts::FRAC_PI_2);
+            let minus_half_pi = arena.constant(-std::f64::consts::FRAC_PI_2);
+            let above = arena.add(&[half_pi, upper]);
+            let below = arena.add(&[minus_half_pi, lower]);
+            arena.select(y, below, above)
         }
         Builtin::Dot | Builtin::Norm => {
             let u = lowered.first().cloned().unwrap_or_default();

@@ -7,7 +7,7 @@
 //! candidates as coordinates (its pivots `∂f/∂q` equal those of `D^k f`
 //! in `q^(k)`).
 
-use crate::check::model::Model;
+use crate::check::model::{Constraint, Model};
 use crate::ir::{lower, Arena, ExprId, Symbol};
 use crate::mechanics::coupled;
 use std::collections::HashMap;
@@ -23,7 +23,12 @@ pub struct KernelCandidates {
     pub pivots: Vec<ExprId>,
 }
 
-pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
+/// `state_laws`: the mass laws of the state, by their expressions.
+pub fn candidates(
+    arena: &mut Arena,
+    model: &Model,
+    state_laws: &HashMap<Symbol, ExprId>,
+) -> Vec<KernelCandidates> {
     let laws: HashMap<Symbol, ExprId> = model
         .masses
         .iter()
@@ -44,7 +49,7 @@ pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
             let lhs = lower(arena, &implicit.lhs, model);
             let rhs = lower(arena, &c.rhs, model);
             let h = arena.sub(lhs, rhs);
-            texts.push(format!("{} = 0", arena.display(h)));
+            texts.push(constraint_text(arena, c, h));
             let h = if implicit.holonomic {
                 arena.subst(h, &laws)
             } else {
@@ -72,10 +77,15 @@ pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
                 .zip(&symbols)
                 .map(|(&(h, _), row)| row.iter().map(|&z| arena.diff(h, z)).collect())
                 .collect();
-            pivots.push(if block.len() == 1 {
+            let pivot = if block.len() == 1 {
                 block[0][0]
             } else {
                 coupled::determinant(arena, &block)
+            };
+            pivots.push(if state_laws.is_empty() {
+                pivot
+            } else {
+                arena.subst(pivot, state_laws)
             });
             // Named by the first row's order: coordinates for a holonomic
             // group, derivatives for the others.
@@ -89,4 +99,13 @@ pub fn candidates(arena: &mut Arena, model: &Model) -> Vec<KernelCandidates> {
         });
     }
     found
+}
+
+/// The constraint as written (the front end's text), else `h = 0`.
+pub fn constraint_text(arena: &Arena, c: &Constraint, h: ExprId) -> String {
+    if c.text.is_empty() {
+        format!("{} = 0", arena.display(h))
+    } else {
+        c.text.clone()
+    }
 }

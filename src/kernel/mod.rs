@@ -11,6 +11,8 @@
 //! | `text.rs` | the kernel's text form (snapshots) |
 
 mod candidates;
+pub mod domains;
+mod impacts;
 mod items;
 mod motion;
 mod outputs;
@@ -19,6 +21,7 @@ mod text;
 pub mod time;
 
 pub use candidates::KernelCandidates;
+pub use impacts::KernelImpact;
 pub use items::{
     Coefficients, InitialKind, InitialSource, KernelClosure, KernelInitial, KernelParam,
 };
@@ -47,6 +50,10 @@ pub struct Kernel {
     /// and the indices of those the reduced system still holds.
     pub masses: Vec<(String, ExprId)>,
     pub remaining_masses: Vec<u32>,
+    /// The indices of the mass laws of the state (SPEC §2.3): their
+    /// functions take the state, and no expression here holds their
+    /// symbols (each is its law of `q`).
+    pub state_laws: Vec<u32>,
     pub time_span: (ExprId, ExprId),
     pub initial: KernelInitial,
     pub motion: Motion,
@@ -62,6 +69,12 @@ pub struct Kernel {
     pub outputs: Vec<(String, ExprId)>,
     /// `stop when`, on the switches' branches.
     pub stop: Option<BranchCond>,
+    /// Every `when` (SPEC §2.3): its condition on the branches and its
+    /// resets.
+    pub impacts: Vec<KernelImpact>,
+    /// `(state index, value)` of every component the constraints fix,
+    /// recomputed after an impact's resets (empty without impacts).
+    pub constrained: Vec<(usize, ExprId)>,
     /// The switching functions of every selection a run evaluates.
     pub switches: Switches,
     /// Every implicit constraint with its candidates' pivots.
@@ -69,6 +82,20 @@ pub struct Kernel {
     /// The holonomic constraints at position level, with this mode's
     /// dependent coordinates as the unknowns.
     pub closure: Option<KernelClosure>,
+    /// The state components a constraint fixes, with the value it requires
+    /// at `(t, x)` — `(state index, value)`, the dependent velocities of
+    /// first-order constraints (SPEC §2.3): the state is brought back onto
+    /// them after steps and at outputs (latched like the motion; this
+    /// mode's dependents).
+    pub kept: Vec<(usize, ExprId)>,
+    /// `(fixed component, velocity component, ∂value/∂velocity)`, non-zero
+    /// entries: the projection onto the constraints moves the velocities
+    /// along the constraints' normals (a dependent velocity alone would be
+    /// moved by the residual over a pivot that may be poor).
+    pub kept_gradient: Vec<(usize, usize, ExprId)>,
+    /// Where the constraints as written end (square roots, logarithms,
+    /// arcsines, poles): the runtime names the constraint there.
+    pub domains: Vec<domains::KernelDomain>,
     /// The kernels of modes 1, 2, …: the same model with other candidates
     /// (their motion only).
     pub modes: Vec<Kernel>,
@@ -84,8 +111,8 @@ pub fn build(
 }
 
 /// The kernel of one more mode of a model with implicit constraints (its
-/// motion; the initial state, exact solution, outputs and stop are mode
-/// 0's).
+/// motion; the initial state, exact solution, outputs, stop and impacts
+/// are mode 0's).
 pub fn build_mode(
     model: &Model,
     derivation: &Derivation,
@@ -131,13 +158,45 @@ fn build_with(
                 .collect()
         })
         .collect();
+    // A mass law of the state is its expression of `q` wherever the run
+    // evaluates it (the reduced system has it so already).
+    let state_laws: std::collections::HashMap<Symbol, ExprId> = derivation
+        .state_laws
+        .iter()
+        .map(|&(i, law)| (Symbol::Mass(i), law))
+        .collect();
     let (outputs, stop) = if first_mode {
-        outputs::outputs(&mut arena, model, &motion, reduced)?
+        outputs::outputs(&mut arena, model, &motion, reduced, &state_laws)?
     } else {
         (Vec::new(), None)
     };
+    let (impacts, constrained) = if first_mode {
+        impacts::impacts(&mut arena, model, &motion, reduced)?
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let candidates = if first_mode {
-        candidates::candidates(&mut arena, model)
+        candidates::candidates(&mut arena, model, &state_laws)
+    } else {
+        Vec::new()
+    };
+    let domains = if first_mode {
+        // Those the state determines and that move: an argument with a
+        // highest derivative (a constraint of order k = u) or of params
+        // alone is not watched.
+        let mut found = domains::domains(&mut arena, model);
+        found.retain(|d| {
+            let symbols = arena.free_symbols(d.argument);
+            let moves = symbols
+                .iter()
+                .any(|s| matches!(s, Symbol::Time | Symbol::Jet { .. } | Symbol::Mass(_)));
+            moves
+                && symbols.iter().all(|s| match s {
+                    Symbol::Jet { .. } => reduced.state.contains(s),
+                    _ => true,
+                })
+        });
+        found
     } else {
         Vec::new()
     };
@@ -157,6 +216,9 @@ fn build_with(
         &mut mass_matrix,
     );
     let stop = stop.map(|c| switches.condition(&mut arena, &c));
+    let kept = kept(&mut arena, &mut switches, reduced);
+    let kept_gradient = kept_gradient(&mut arena, &kept, &reduced.state);
+    let impacts = impacts::on_branches(&mut arena, &mut switches, impacts);
     let closure = items::closure(&mut arena, reduced);
     Ok(Kernel {
         arena,
@@ -166,6 +228,7 @@ fn build_with(
         params,
         masses,
         remaining_masses: reduced.mass_laws.iter().map(|&(i, _)| i).collect(),
+        state_laws: derivation.state_laws.iter().map(|&(i, _)| i).collect(),
         time_span,
         initial,
         motion,
@@ -175,11 +238,36 @@ fn build_with(
         integrator: model.integrator.map(|d| d.choice),
         outputs,
         stop,
+        impacts,
+        constrained,
         switches,
         candidates,
         closure,
+        kept,
+        kept_gradient,
+        domains,
         modes: Vec::new(),
     })
+}
+
+/// The values the constraints require of the state components they fix
+/// (`ReducedSystem::fixed`: the same expressions as their initial values),
+/// on the motion's branches. Integrated as free state, a dependent velocity
+/// drifts from them wherever `φ` depends on a dependent coordinate
+/// (`e' = −φ_{q_d} e`, shared/notes/constraint-drift.md).
+fn kept(
+    arena: &mut Arena,
+    switches: &mut Switches,
+    reduced: &crate::mechanics::ReducedSystem,
+) -> Vec<(usize, ExprId)> {
+    reduced
+        .fixed
+        .iter()
+        .map(|&(i, e)| {
+            let e = crate::mechanics::tidy::simplify(arena, e);
+            (i, switches.latch(arena, e))
+        })
+        .collect()
 }
 
 impl Kernel {
@@ -200,4 +288,34 @@ impl Kernel {
             }
         }
     }
+}
+
+/// The non-zero partials of the kept values in the velocities (the state's
+/// highest block, `q^(u−1)`).
+fn kept_gradient(
+    arena: &mut Arena,
+    kept: &[(usize, ExprId)],
+    state: &[Symbol],
+) -> Vec<(usize, usize, ExprId)> {
+    let top = state
+        .iter()
+        .filter_map(|s| match s {
+            Symbol::Jet { order, .. } => Some(*order),
+            _ => None,
+        })
+        .max()
+        .unwrap_or(0);
+    let mut entries = Vec::new();
+    for &(i, e) in kept {
+        for (j, &s) in state.iter().enumerate() {
+            if !matches!(s, Symbol::Jet { order, .. } if order == top) {
+                continue;
+            }
+            let d = arena.diff(e, s);
+            if !arena.is_zero(d) {
+                entries.push((i, j, crate::mechanics::tidy::simplify(arena, d)));
+            }
+        }
+    }
+    entries
 }

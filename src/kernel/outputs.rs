@@ -13,30 +13,17 @@ type Lowered = (Vec<(String, ExprId)>, Option<Cond>);
 
 /// The outputs, flattened (`E`, or `p.x`, `p.y`), and the stop condition.
 /// A highest derivative `q^(u)` is replaced by the reduced system's value
-/// where that is an expression (explicit systems).
+/// where that is an expression (explicit systems), and a mass law of the
+/// state by its expression (`state_laws`).
 pub fn outputs(
     arena: &mut Arena,
     model: &Model,
     motion: &Motion,
     reduced: &ReducedSystem,
+    state_laws: &HashMap<Symbol, ExprId>,
 ) -> Result<Lowered, Vec<Diagnostic>> {
-    let highest: HashMap<Symbol, ExprId> = match motion {
-        Motion::Explicit(m) => m
-            .rhs
-            .iter()
-            .enumerate()
-            .map(|(j, &e)| {
-                (
-                    Symbol::Jet {
-                        coord: j as u32,
-                        order: reduced.order,
-                    },
-                    e,
-                )
-            })
-            .collect(),
-        Motion::Implicit(_) => HashMap::new(),
-    };
+    let mut highest = highest_values(motion, reduced);
+    highest.extend(state_laws.iter().map(|(&s, &law)| (s, law)));
     let mut errors = Vec::new();
     let mut columns = Vec::new();
     for output in &model.outputs {
@@ -85,7 +72,29 @@ pub fn outputs(
     }
 }
 
-fn substitute(arena: &mut Arena, cond: &Cond, map: &HashMap<Symbol, ExprId>) -> Cond {
+/// The highest derivatives `q^(u)` by the reduced system's value, where
+/// that is an expression (explicit systems).
+pub(super) fn highest_values(motion: &Motion, reduced: &ReducedSystem) -> HashMap<Symbol, ExprId> {
+    match motion {
+        Motion::Explicit(m) => m
+            .rhs
+            .iter()
+            .enumerate()
+            .map(|(j, &e)| {
+                (
+                    Symbol::Jet {
+                        coord: j as u32,
+                        order: reduced.order,
+                    },
+                    e,
+                )
+            })
+            .collect(),
+        Motion::Implicit(_) => HashMap::new(),
+    }
+}
+
+pub(super) fn substitute(arena: &mut Arena, cond: &Cond, map: &HashMap<Symbol, ExprId>) -> Cond {
     match cond {
         Cond::Negative(g) => Cond::Negative(arena.subst(*g, map)),
         Cond::Not(c) => Cond::Not(Box::new(substitute(arena, c, map))),
@@ -102,7 +111,7 @@ fn substitute(arena: &mut Arena, cond: &Cond, map: &HashMap<Symbol, ExprId>) -> 
 
 /// A derivative the run does not have: above the state's order (or the
 /// highest one of an implicit system).
-fn beyond_state(
+pub(super) fn beyond_state(
     arena: &Arena,
     e: ExprId,
     reduced: &ReducedSystem,
@@ -127,7 +136,7 @@ fn beyond_state(
     )
 }
 
-fn internal(span: Span) -> Diagnostic {
+pub(super) fn internal(span: Span) -> Diagnostic {
     Diagnostic::error(
         codes::NAME_NOT_ALLOWED,
         "internal error: this statement could not be lowered",

@@ -19,8 +19,13 @@ impl fmt::Display for Kernel {
         for p in &self.params {
             writeln!(f, "param {} = {}", p.name, a.display(p.value))?;
         }
-        for (m, law) in &self.masses {
-            writeln!(f, "mass {m}(t) = {}", a.display(*law))?;
+        for (i, (m, law)) in self.masses.iter().enumerate() {
+            let args = if self.state_laws.contains(&(i as u32)) {
+                "t, q"
+            } else {
+                "t"
+            };
+            writeln!(f, "mass {m}({args}) = {}", a.display(*law))?;
         }
         writeln!(
             f,
@@ -71,6 +76,12 @@ impl fmt::Display for Kernel {
                 }
             }
         }
+        for &(i, e) in &self.kept {
+            writeln!(f, "kept {} = {}", name(i), a.display(e))?;
+        }
+        for &(i, j, d) in &self.kept_gradient {
+            writeln!(f, "∂kept {}/∂{} = {}", name(i), name(j), a.display(d))?;
+        }
         if let Some(c) = &self.coefficients {
             let kind = if c.linear { "linear" } else { "Riccati" };
             writeln!(f, "coefficient system ({kind}):")?;
@@ -80,6 +91,15 @@ impl fmt::Display for Kernel {
         }
         for &(k, e) in &self.exact {
             writeln!(f, "exact {} = {}", name(k), a.display(e))?;
+        }
+        for impact in &self.impacts {
+            writeln!(f, "when {} ({:?}):", impact.text, impact.condition)?;
+            for &(k, e) in &impact.resets {
+                writeln!(f, "  {} := {}", name(k), a.display(e))?;
+            }
+        }
+        for &(k, e) in &self.constrained {
+            writeln!(f, "after an impact {} := {}", name(k), a.display(e))?;
         }
         Ok(())
     }

@@ -200,7 +200,11 @@ pub fn closure(
     let mut texts = Vec::new();
     for c in model.constraints.iter().filter(|c| c.is_holonomic()) {
         let f = position_residual(arena, model, c, &HashMap::new())?;
-        texts.push(format!("{} = 0", arena.display(f)));
+        texts.push(if c.text.is_empty() {
+            format!("{} = 0", arena.display(f))
+        } else {
+            c.text.clone()
+        });
         residual.push(arena.subst(f, laws));
         unknowns.push(Symbol::Jet {
             coord: c.coord as u32,

@@ -45,6 +45,7 @@ use crate::check::model::Model;
 use crate::diagnostic::Diagnostic;
 use crate::ir::{names_of, Arena, ExprId, Symbol};
 use star::Elimination;
+use std::collections::HashMap;
 use symbols::Symbolic;
 
 /// Everything the mechanics derived from one model.
@@ -70,6 +71,13 @@ pub struct Derivation {
     pub equations: Vec<Equation4>,
     /// For each equation: the mass divided out of it in the reduced system.
     pub divided_out: Vec<Option<u32>>,
+    /// `(i, law_i)` for every mass law of the state (SPEC §2.3), in index
+    /// order: a symbol in `L` and (4), its expression in (7) and after.
+    pub state_laws: Vec<(u32, ExprId)>,
+    /// With laws of the state: `R_j + Q_j` again, each point's `Ṁ` the
+    /// total derivative of its mass through those laws (the cross-check's
+    /// route along the motion); empty without them.
+    pub forces_along_motion: Vec<ExprId>,
     /// The reduced system (7).
     pub reduced: ReducedSystem,
     /// The model's lets that the derivation used, by name, as lowered
@@ -126,13 +134,29 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     let mut arena = Arena::new(names_of(model));
     let symbolic = Symbolic::lower(&mut arena, model)?;
     let mut elimination = Elimination::new(symbolic.k, &symbolic.constraints);
-    let reactive = reactive_forces::reactive_forces(&mut arena, model, &symbolic.laws)?;
+    let none = HashMap::new();
+    let reactive = reactive_forces::reactive_forces(&mut arena, model, &symbolic.laws, &none)?;
     let generalized = generalized_forces::generalized_forces(&mut arena, model)?;
     let forces: Vec<ExprId> = reactive
         .iter()
         .zip(&generalized)
         .map(|(&r, &q)| arena.add(&[r, q]))
         .collect();
+    // With laws of the state, the forces again with each point's Ṁ the
+    // total derivative of its mass written through those laws: the
+    // cross-check's route along the motion.
+    let state_laws = symbolic.state_laws(&arena);
+    let forces_along_motion: Vec<ExprId> = if state_laws.is_empty() {
+        Vec::new()
+    } else {
+        let reactive =
+            reactive_forces::reactive_forces(&mut arena, model, &symbolic.laws, &state_laws)?;
+        reactive
+            .iter()
+            .zip(&generalized)
+            .map(|(&r, &q)| arena.add(&[r, q]))
+            .collect()
+    };
     let mut equations = equations::equations(&mut arena, &symbolic, &mut elimination, &forces);
     // sin² + cos² = 1 again: differentiation brings squares of sums apart.
     for e in &mut equations {
@@ -142,7 +166,18 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     let rows: Vec<ExprId> = equations.iter().map(|e| arena.sub(e.lhs, e.rhs)).collect();
     let divided =
         mass_factor::divide_out_masses(&mut arena, &rows, &symbolic.laws, &symbolic.param_defaults);
-    let rows: Vec<ExprId> = divided.iter().map(|d| d.row).collect();
+    // From (7) on a mass law of the state is its expression of `q`: the
+    // reduced system must see the mass move with the state (its ∂X/∂x).
+    let rows: Vec<ExprId> = divided
+        .iter()
+        .map(|d| {
+            if state_laws.is_empty() {
+                d.row
+            } else {
+                arena.subst(d.row, &state_laws)
+            }
+        })
+        .collect();
     let reduction = reduce::reduce(
         &mut arena,
         &symbolic,
@@ -158,6 +193,18 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             (0..model.coords.len() as u32).map(move |coord| Symbol::Jet { coord, order })
         })
         .collect();
+    // The state components the constraints fix (dependent derivatives of
+    // order ≥ k within the state), with the values they require: every
+    // mode keeps its own.
+    let mut fixed = Vec::new();
+    for (i, &symbol) in state.iter().enumerate() {
+        if let Symbol::Jet { coord, order } = symbol {
+            let dependent = symbolic.constraints.iter().any(|&(d, _)| d == coord);
+            if dependent && order >= symbolic.k {
+                fixed.push((i, elimination.image(&mut arena, coord, order)));
+            }
+        }
+    }
     let laws: std::collections::HashMap<Symbol, ExprId> = symbolic
         .laws
         .iter()
@@ -194,6 +241,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         mass_matrix: reduction.mass_matrix,
         mass_laws: Vec::new(),
         initial,
+        fixed,
         consistency: reduction.consistency,
         closure,
     };
@@ -210,6 +258,14 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             .unwrap_or(f);
         holonomic.push((f, h));
     }
+    let mut state_laws: Vec<(u32, ExprId)> = state_laws
+        .into_iter()
+        .filter_map(|(s, law)| match s {
+            Symbol::Mass(i) => Some((i, law)),
+            _ => None,
+        })
+        .collect();
+    state_laws.sort_unstable();
     let arena_lets = arena.lowered_lets();
     Ok(Derivation {
         arena,
@@ -222,6 +278,8 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         forces,
         equations,
         divided_out: divided.iter().map(|d| d.mass).collect(),
+        state_laws,
+        forces_along_motion,
         reduced,
         param_defaults: symbolic.param_defaults,
         holonomic,

@@ -20,10 +20,17 @@ pub struct ReducedSystem {
     pub mass_matrix: Vec<Vec<ExprId>>,
     /// Mass laws still present in `highest` after the masses that factor out
     /// were divided out: `(i, law)` with `law` an expression of `t` and params
-    /// standing for `Symbol::Mass(i)`.
+    /// standing for `Symbol::Mass(i)` (a law of the state is never here: (7)
+    /// holds it as its expression, `Derivation::state_laws`).
     pub mass_laws: Vec<(u32, ExprId)>,
     /// Initial values of every state component, in state order.
     pub initial: Vec<InitialValue>,
+    /// The state components the constraints fix — `(state index, value)`,
+    /// the dependent derivatives of order ≥ k the state holds (the
+    /// dependent velocities when k = 1) — and the values they require, in
+    /// `t`, params, masses and the free components (the values of the
+    /// `Constraint` initial values, for every mode).
+    pub fixed: Vec<(usize, ExprId)>,
     /// For k ≥ 3: how the independent `q_i^(2..k−1)` at `t0` follow from
     /// (4) and its derivatives, one stage per order (2, 3, …, k−1), solved
     /// in order (stage r may use the values of stages before it). Empty

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 #[derive(Debug, Clone)]
 pub struct Symbolic {
     pub lagrangian: ExprId,
-    /// Mass law `i` as an expression of `t` and params.
+    /// Mass law `i` as an expression of `t`, params and coordinates.
     pub laws: Vec<ExprId>,
     /// The constraint order used by equation (4): the model's `k`, or 1 for
     /// a holonomic model (then every coordinate is independent, s = n).
@@ -161,6 +161,11 @@ impl Symbolic {
         self.constraints.iter().map(|&(d, _)| d).collect()
     }
 
+    /// `M_i → law_i` for every mass law of the state (SPEC §2.3: `rho * x`).
+    pub fn state_laws(&self, arena: &Arena) -> HashMap<Symbol, ExprId> {
+        state_laws(arena, &self.laws)
+    }
+
     /// `u = max(2, k)`: the order of the reduced system.
     pub fn u(&self) -> u32 {
         self.k.max(2)
@@ -173,6 +178,29 @@ impl Symbolic {
             .map(|&coord| Symbol::Jet { coord, order })
             .collect()
     }
+}
+
+/// Whether a mass law depends on the state (a coordinate), not only on `t`.
+pub fn is_state_law(arena: &Arena, law: ExprId) -> bool {
+    arena
+        .free_symbols(law)
+        .iter()
+        .any(|s| matches!(s, Symbol::Jet { .. }))
+}
+
+/// `M_i → law_i` for every law of `laws` that depends on the state.
+///
+/// Inside the Lagrangian a mass is frozen (SPEC §1.1), so equations (4)
+/// hold it as the symbol `M_i`; the reduced system (7) is a function of
+/// `(t, x)` and its `∂X/∂x` must see the mass move with the state, so from
+/// (7) on a law of the state is its expression (a law of `t` alone stays a
+/// symbol, its time dependence known to `kernel/time.rs`).
+pub fn state_laws(arena: &Arena, laws: &[ExprId]) -> HashMap<Symbol, ExprId> {
+    laws.iter()
+        .enumerate()
+        .filter(|&(_, &law)| is_state_law(arena, law))
+        .map(|(i, &law)| (Symbol::Mass(i as u32), law))
+        .collect()
 }
 
 /// `lhs = rhs` solved for its candidate `q_d^(k)`: the constraint must be

@@ -120,6 +120,16 @@ impl Derivation {
                 let _ = writeln!(out, "  {lhs} = {rhs}");
             }
         }
+        if !self.state_laws.is_empty() {
+            out.push_str(
+                "\nmass laws of the state (frozen in L and (4); their rates M' along the \
+                 motion in the reactive forces; their laws in (7)):\n",
+            );
+            for (m, law, rate) in self.state_law_rates(a, Style::Text) {
+                let _ = writeln!(out, "  {m} = {law}");
+                let _ = writeln!(out, "  {m}' = {rate}");
+            }
+        }
         out.push_str("\nequations (4):\n");
         for eq in &self.equations {
             let lhs = sum(a, eq.lhs, Style::Text);
@@ -234,6 +244,14 @@ impl Derivation {
             let rhs = sum(a, phi, Style::Latex);
             out.push_str(&crate::latex::equation(&lhs, &rhs, "\\text{constraint}"));
         }
+        for (m, law, rate) in self.state_law_rates(a, Style::Latex) {
+            out.push_str(&crate::latex::equation(&m, &law, "\\text{mass law}"));
+            out.push_str(&crate::latex::equation(
+                &format!("{m}'"),
+                &rate,
+                "\\text{along the motion}",
+            ));
+        }
         for eq in &self.equations {
             let lhs = sum(a, eq.lhs, Style::Latex);
             let rhs = sum(a, eq.rhs, Style::Latex);
@@ -246,6 +264,22 @@ impl Derivation {
         }
         self.write_reduced(a, &mut out, Style::Latex);
         out
+    }
+
+    /// `(M, law, Ṁ)` for every mass law of the state: `Ṁ = ∂M/∂t +
+    /// Σ ∂M/∂q_j q_j'`, the rate the reactive forces use.
+    fn state_law_rates(&self, a: &mut Arena, style: Style) -> Vec<(String, String, String)> {
+        self.state_laws
+            .iter()
+            .map(|&(i, law)| {
+                let rate = super::reactive_forces::rate_along_motion(a, law);
+                (
+                    name(a, Symbol::Mass(i), style),
+                    sum(a, law, style),
+                    sum(a, rate, style),
+                )
+            })
+            .collect()
     }
 
     fn write_reduced(&self, a: &mut Arena, out: &mut String, style: Style) {
@@ -315,4 +349,108 @@ impl Derivation {
             }
         }
     }
+}
+
+impl Derivation {
+    /// The resets of `model`'s `when` statements (SPEC §2.3) as text
+    /// lines: each condition, the new values (read from the state before
+    /// the impact), and the derivatives the constraints fix, recomputed
+    /// from the new state. Empty without `when`.
+    pub fn impacts_text(&self, model: &crate::check::model::Model) -> String {
+        self.impact_lines(model, Style::Text)
+    }
+
+    /// [`Derivation::impacts_text`] as LaTeX lines (`y'^{+}` the value
+    /// after the impact).
+    pub fn impacts_latex_lines(&self, model: &crate::check::model::Model) -> String {
+        self.impact_lines(model, Style::Latex)
+    }
+
+    fn impact_lines(&self, model: &crate::check::model::Model, style: Style) -> String {
+        let mut out = String::new();
+        if model.impacts.is_empty() {
+            return out;
+        }
+        let mut arena = self.arena.clone();
+        let a = &mut arena;
+        if style == Style::Text {
+            out.push_str(
+                "\nimpacts (at the event where the condition becomes true; every new value \
+                 is read from the state before the impact):\n",
+            );
+        }
+        for impact in &model.impacts {
+            if style == Style::Text {
+                let _ = writeln!(out, "  when {}:", impact.text);
+            }
+            for reset in &impact.resets {
+                let value = crate::ir::lower(a, &reset.value, model);
+                let rhs = sum(a, value, style);
+                let lhs = name(a, jet(reset.coord as u32, reset.order), style);
+                match style {
+                    Style::Text => {
+                        let _ = writeln!(out, "    {lhs} := {rhs}");
+                    }
+                    Style::Latex => {
+                        let tag = format!("\\text{{when {}}}", latex_text(&impact.text));
+                        out.push_str(&crate::latex::equation(
+                            &format!("{{{lhs}}}^{{+}}"),
+                            &rhs,
+                            &tag,
+                        ));
+                    }
+                }
+            }
+        }
+        let fixed: Vec<(Symbol, ExprId)> = self
+            .reduced
+            .state
+            .iter()
+            .zip(&self.reduced.initial)
+            .filter_map(|(&s, v)| match v {
+                InitialValue::Constraint(e) => Some((s, *e)),
+                _ => None,
+            })
+            .collect();
+        if !fixed.is_empty() && style == Style::Text {
+            out.push_str("  then, from the new state, what the constraints fix:\n");
+        }
+        for (s, e) in fixed {
+            let rhs = sum(a, e, style);
+            let lhs = name(a, s, style);
+            match style {
+                Style::Text => {
+                    let _ = writeln!(out, "    {lhs} := {rhs}");
+                }
+                Style::Latex => {
+                    out.push_str(&crate::latex::equation(
+                        &format!("{{{lhs}}}^{{+}}"),
+                        &rhs,
+                        "\\text{after an impact}",
+                    ));
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Plain text inside `\text{…}`: LaTeX's special characters escaped.
+fn latex_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\\' => out.push_str("\\textbackslash{}"),
+            '{' | '}' | '$' | '&' | '#' | '_' | '%' => {
+                out.push('\\');
+                out.push(c);
+            }
+            '^' => out.push_str("\\^{}"),
+            '~' => out.push_str("\\~{}"),
+            '<' => out.push_str("$<$"),
+            '>' => out.push_str("$>$"),
+            _ => out.push(c),
+        }
+    }
+    out
 }

@@ -294,6 +294,22 @@ pub enum ItemKind {
     Output { name: Ident, value: Expr },
     /// `stop when cond;`
     Stop(Expr),
+    /// `when cond then y' = expr, x = expr;` — an impact (SPEC §2.3):
+    /// where `cond` becomes true the targets are reset.
+    When {
+        cond: Expr,
+        /// The condition as written (whitespace collapsed), for messages.
+        text: String,
+        resets: Vec<Reset>,
+    },
+}
+
+/// `y' = -e * y'` in a `when`: the target is a `Var` (validated by `check`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reset {
+    pub target: Expr,
+    pub value: Expr,
+    pub span: Span,
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -5,7 +5,8 @@
 pub struct LagParser;
 
 /// The keywords that begin a statement (`param`, `coord`, …, `let`,
-/// `output`, `stop`): the parser skips them as punctuation, and a syntax
+/// `output`, `stop`; `when` is punctuation of `stop when` and of an
+/// impact, see `parser::is_punctuation`): the parser skips them as punctuation, and a syntax
 /// error before one says a statement was expected.
 pub fn is_statement_keyword(rule: Rule) -> bool {
     matches!(

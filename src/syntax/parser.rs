@@ -113,6 +113,20 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
             value: expr(children.expect(Rule::expr)?)?,
         },
         Rule::stop => ItemKind::Stop(expr(children.expect(Rule::expr)?)?),
+        Rule::impact => {
+            let cond_pair = children.expect(Rule::expr)?;
+            let text = cond_pair
+                .as_str()
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ");
+            let cond = expr(cond_pair)?;
+            let mut resets = Vec::new();
+            for pair in children.by_ref() {
+                resets.push(reset(pair)?);
+            }
+            ItemKind::When { cond, text, resets }
+        }
         _ => return Err(unexpected_tree(span)),
     };
     Ok(Item { kind, span })
@@ -143,6 +157,16 @@ fn point_field(pair: Pair<Rule>) -> Converted<PointField> {
         _ => return Err(unexpected_tree(span)),
     };
     Ok(PointField { kind, span })
+}
+
+fn reset(pair: Pair<Rule>) -> Converted<Reset> {
+    let span = Span::from(pair.as_span());
+    let mut children = Children::of(pair);
+    Ok(Reset {
+        target: expr(children.expect(Rule::expr)?)?,
+        value: expr(children.expect(Rule::expr)?)?,
+        span,
+    })
 }
 
 fn initial_value(pair: Pair<Rule>) -> Converted<InitialValue> {

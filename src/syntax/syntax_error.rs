@@ -6,7 +6,7 @@ use crate::span::Span;
 use pest::error::{Error, ErrorVariant, InputLocation};
 
 const STATEMENT_KEYWORDS: &str =
-    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact`, `integrator`, `let`, `output` or `stop`";
+    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact`, `integrator`, `let`, `output`, `stop` or `when`";
 const POINT_FIELDS: &str =
     "`mass = …;`, `position = (…);`, `absolute velocity = (…);` or `relative velocity = (…);`";
 
@@ -37,8 +37,16 @@ fn expected(positives: &[Rule], source: &str, found_span: Span, found: &str) -> 
     }
     let in_point = positives.iter().any(|&rule| is_point_field(rule));
     let mut words: Vec<&'static str> = Vec::new();
+    // `when` after `stop` is a keyword expected; where a statement may
+    // start, it begins one (an impact).
+    let at_statement = positives.iter().any(|&rule| is_statement(rule));
     for &rule in positives {
-        if let Some(word) = describe(rule, in_point) {
+        let word = if rule == Rule::kw_when && at_statement {
+            Some("a statement")
+        } else {
+            describe(rule, in_point)
+        };
+        if let Some(word) = word {
             if !words.contains(&word) {
                 words.push(word);
             }
@@ -166,7 +174,8 @@ fn describe(rule: Rule, in_point: bool) -> Option<&'static str> {
         | Rule::number
         | Rule::var
         | Rule::neg
-        | Rule::initial_value => "an expression",
+        | Rule::initial_value
+        | Rule::reset => "an expression",
         Rule::ident => "a name",
         Rule::kw_mass | Rule::mass if in_point => "a point field",
         rule if is_point_field(rule) => "a point field",
@@ -208,6 +217,7 @@ fn is_statement(rule: Rule) -> bool {
                 | Rule::let_def
                 | Rule::output
                 | Rule::stop
+                | Rule::impact
         )
 }
 

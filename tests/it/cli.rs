@@ -318,3 +318,60 @@ fn a_build_that_fails_for_the_machine_is_explained_in_lagcs_words() {
     );
     assert!(output.stdout.is_empty());
 }
+
+/// Issue 28: the note N0001 (the local field method; about nine lines) is
+/// shown when `lagc run` builds the model's crate, not on every run; lagc's
+/// own `--verbose` shows it on every run and is not passed to the binary.
+#[test]
+fn the_local_field_note_is_shown_once_per_build_or_with_verbose() {
+    let cache = crate::root().join("target/lagc-cache");
+    let dir = crate::root().join("target/notes-once");
+    std::fs::create_dir_all(&dir).unwrap();
+    // A new text (so a new build) on every test run, at one path (so one
+    // crate in the cache).
+    let stamp = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_nanos();
+    let model = std::fs::read_to_string(crate::root().join("examples/knife_edge.lag")).unwrap();
+    let file = dir.join("knife_edge.lag");
+    std::fs::write(&file, format!("{model}// {stamp}\n")).unwrap();
+    let run = |extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .arg("run")
+            .arg(&file)
+            .args(["--samples", "3"])
+            .args(extra)
+            .env("LAGC_CACHE_DIR", &cache)
+            .env("RUSTFLAGS", "-D warnings")
+            .output()
+            .expect("lagc runs");
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(0), "{stderr}");
+        (String::from_utf8(out.stdout).unwrap(), stderr)
+    };
+    let note = "note[N0001]";
+    let (built, stderr) = run(&[]);
+    assert!(stderr.contains(note), "the build shows the note:\n{stderr}");
+    assert_eq!(stderr.matches(note).count(), 1);
+    let (again, stderr) = run(&[]);
+    assert!(!stderr.contains(note), "shown again:\n{stderr}");
+    assert_eq!(again, built);
+    let (verbose, stderr) = run(&["--verbose"]);
+    assert!(stderr.contains(note), "--verbose shows it:\n{stderr}");
+    assert_eq!(verbose, built);
+    let (_, help) = {
+        let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .arg("run")
+            .arg(&file)
+            .arg("--help")
+            .env("LAGC_CACHE_DIR", &cache)
+            .output()
+            .expect("lagc runs");
+        (
+            out.status,
+            String::from_utf8_lossy(&out.stdout).into_owned(),
+        )
+    };
+    assert!(help.contains("--verbose"), "{help}");
+}

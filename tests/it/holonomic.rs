@@ -61,14 +61,14 @@ fn angle_difference(a: f64, b: f64) -> f64 {
     d.min(2.0 * PI - d)
 }
 
-/// The summary's largest distance from the holonomic constraints, in
-/// tolerances.
+/// The summary's largest distance from the constraints, in tolerances.
 fn kept_distance(stderr: &str) -> f64 {
     let line = stderr
         .lines()
-        .find_map(|l| l.strip_prefix("holonomic constraints kept: the state came at most "))
+        .find(|l| l.starts_with("constraints kept: "))
         .unwrap_or_else(|| panic!("no constraints kept in the summary:\n{stderr}"));
-    line.split_whitespace().next().unwrap().parse().unwrap()
+    let (_, rest) = line.split_once(" (").unwrap();
+    rest.split_whitespace().next().unwrap().parse().unwrap()
 }
 
 #[test]
@@ -97,13 +97,23 @@ fn a_cartesian_pendulum_keeps_its_length_and_swings_as_in_its_angle() {
         // Between projections the state stays within a few tolerances of
         // the circle (the field projects after each window).
         let distance = kept_distance(&stderr);
-        assert!(distance <= 100.0, "{method}: {distance} tolerances off");
+        let allowed = if method == "direct" { 10.0 } else { 100.0 };
+        assert!(distance <= allowed, "{method}: {distance} tolerances off");
     }
 }
 
 #[test]
 fn a_four_bar_closed_by_holonomic_constraints_follows_its_crank_angle_form() {
-    let binary = build("four_bar_closure");
+    four_bar_follows_its_crank_angle_form("four_bar_closure");
+}
+
+#[test]
+fn a_four_bar_closed_by_coupled_velocity_constraints_follows_its_crank_angle_form() {
+    four_bar_follows_its_crank_angle_form("four_bar_velocity");
+}
+
+fn four_bar_follows_its_crank_angle_form(name: &str) {
+    let binary = build(name);
     let times = FOUR_BAR.map(|(t, ..)| t.to_string()).join(",");
     for method in METHODS {
         let args = [
@@ -124,7 +134,13 @@ fn a_four_bar_closed_by_holonomic_constraints_follows_its_crank_angle_form() {
             // The energy (an output) is conserved.
             assert!((row[7] - rows[0][7]).abs() <= 1e-6 * rows[0][7].abs());
         }
+        // Direct integration projects after every step that drifts past
+        // a tenth of the tolerance, the field after each window.
         let distance = kept_distance(&stderr);
-        assert!(distance <= 10.0, "{method}: {distance} tolerances off");
+        let allowed = if method == "direct" { 10.0 } else { 100.0 };
+        assert!(
+            distance <= allowed,
+            "{name} {method}: {distance} tolerances off"
+        );
     }
 }

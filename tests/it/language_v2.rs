@@ -190,7 +190,8 @@ fn a_single_candidate_whose_pivot_vanishes_stops_naming_the_constraint() {
         let run = run(&binary, &["--method", method]);
         assert_eq!(run.code, 3, "{method}: {}", run.stderr);
         assert!(
-            run.stderr.contains("sin(th)*x' - cos(th)*y' = 0")
+            run.stderr
+                .contains("the constraint `sin(th) * x' = cos(th) * y' for y'`")
                 && run.stderr.contains("at t = 1.5707963"),
             "{method}: {}",
             run.stderr
@@ -720,6 +721,170 @@ fn every_function_and_operator_runs_and_outputs_what_it_means() {
                     r[0]
                 );
             }
+        }
+    }
+}
+
+/// Two particles whose velocities stay parallel, an implicit constraint
+/// with two candidates whose modes solve their mass matrices numerically
+/// (tests/data/v2/parallel_velocities.lag): the crate builds (it did not:
+/// rustc E0599 on `mass_system`), and both methods keep the energy and the
+/// constraint and agree.
+#[test]
+fn parallel_velocities_of_two_candidates_build_and_keep_their_energy() {
+    let binary = build_file(&crate::root().join("tests/data/v2/parallel_velocities.lag"));
+    let mut ends = Vec::new();
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "201"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let drift = drift(&run, "E");
+        assert!(drift < 1e-8, "{method}: E drifts {drift:e}");
+        let cross = run.column("cross");
+        let residual = run.rows.iter().map(|r| r[cross].abs()).fold(0.0, f64::max);
+        assert!(residual < 1e-8, "{method}: residual {residual:e}");
+        // Particle 1 comes to rest: x1' = 0, the pivot of y2', is reached.
+        let x1d = run.column("x1'");
+        assert!(run.rows.last().unwrap()[x1d].abs() < 1e-6);
+        ends.push(run.rows.last().unwrap().clone());
+    }
+    let difference = crate::largest_difference(&ends[0], &ends[1]);
+    assert!(
+        difference < 1e-7,
+        "field and direct differ by {difference:e}"
+    );
+}
+
+/// Several candidates with a variable mass (an `if` burnout and a point),
+/// forces with a kink (`abs`) and a state switch (`min`), vector outputs,
+/// `stop when` and exact lines (tests/data/v2/candidates_combined.lag):
+/// builds, runs with both methods to its exact solution and stops after
+/// one and a half turns.
+#[test]
+fn every_construct_with_several_candidates_runs_to_its_exact_solution() {
+    let binary = build_file(&crate::root().join("tests/data/v2/candidates_combined.lag"));
+    for method in METHODS {
+        let run = run(&binary, &["--method", method, "--samples", "101"]);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let error = crate::exact_error(&run.stderr);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+        let th = run.column("th");
+        let last = run.rows.last().unwrap();
+        assert!(
+            (last[th] - 3.0 * std::f64::consts::PI).abs() < 1e-9,
+            "{method}: stopped at th = {}",
+            last[th]
+        );
+        // The speed along the blade is v0 M0 / M: 2 after the burnout.
+        assert!((last[run.column("speed")] - 2.0).abs() < 1e-8);
+        assert!(run.stderr.contains("events: "), "{}", run.stderr);
+    }
+}
+
+/// A point turning through every angle read back by atan2
+/// (tests/data/v2/atan2_through_axes.lag): through cos(q) = 0, where
+/// atan2's derivative was 0/0, both methods run to the exact solution;
+/// atan2's one switch is y = 0, located where the force jumps at the cut
+/// (q = π, 3π, 5π) and where it is smooth (q = 2π, 4π, 6π): 6 events
+/// (13 with the old switch on x too); the energy is kept. (cos(q) is never
+/// exactly 0 here, so the old lowering ran too, its field keeping the
+/// energy to 2.3e-9 where this one keeps it to 1e-11: the four-bar below
+/// and `ir::lower::atan2_and_its_derivatives_are_defined_through_x_0` are
+/// the ones that failed.)
+#[test]
+fn atan2_runs_through_x_0_and_jumps_at_its_cut() {
+    let binary = build_file(&crate::root().join("tests/data/v2/atan2_through_axes.lag"));
+    for method in METHODS {
+        let run = run(
+            &binary,
+            &[
+                "--method",
+                method,
+                "--rtol",
+                "1e-10",
+                "--atol",
+                "1e-12",
+                "--samples",
+                "601",
+            ],
+        );
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let error = crate::exact_error(&run.stderr);
+        assert!(error < 1e-8, "{method}: error {error:e}");
+        assert!(
+            run.stderr.contains("events: 6;"),
+            "{method}: {}",
+            run.stderr
+        );
+        let drift = drift(&run, "E");
+        assert!(drift < 1e-8, "{method}: E drifts {drift:e}");
+        let (q, wrapped) = (run.column("q"), run.column("wrapped"));
+        for r in &run.rows {
+            let expected = r[q].sin().atan2(r[q].cos());
+            assert!(
+                (r[wrapped] - expected).abs() < 1e-12,
+                "{method}: wrapped at t = {}: {} for {expected}",
+                r[0],
+                r[wrapped]
+            );
+        }
+    }
+}
+
+/// A four-bar whose coupler angle is read by atan2 through the coupler's
+/// vertical (tests/data/v2/four_bar_atan2.lag) stopped with exit 3 where
+/// atan2's x-argument crossed 0; now it runs t = 0 .. 100 with both
+/// methods and agrees with the same closure written with acos and atan
+/// (four_bar_acos.lag, at rtol 1e-13 the reference), as that does.
+#[test]
+fn a_four_bar_closed_by_atan2_agrees_with_its_acos_form() {
+    let atan2 = build_file(&crate::root().join("tests/data/v2/four_bar_atan2.lag"));
+    let acos = build_file(&crate::root().join("tests/data/v2/four_bar_acos.lag"));
+    let tight = [
+        "--method",
+        "direct",
+        "--rtol",
+        "1e-13",
+        "--atol",
+        "1e-15",
+        "--samples",
+        "101",
+    ];
+    let reference = run(&acos, &tight);
+    assert_eq!(reference.code, 0, "{}", reference.stderr);
+    // The two closures themselves agree (at the tight tolerance).
+    let tight_atan2 = run(&atan2, &tight);
+    assert_eq!(tight_atan2.code, 0, "{}", tight_atan2.stderr);
+    let difference = |a: &Run, b: &Run| {
+        a.rows
+            .iter()
+            .zip(&b.rows)
+            .map(|(x, y)| crate::largest_difference(&x[..3], &y[..3]))
+            .fold(0.0, f64::max)
+    };
+    let closures = difference(&tight_atan2, &reference);
+    assert!(closures < 1e-9, "the closures differ by {closures:e}");
+    for (binary, form) in [(&atan2, "atan2"), (&acos, "acos")] {
+        for method in METHODS {
+            let args = [
+                "--method",
+                method,
+                "--rtol",
+                "1e-10",
+                "--atol",
+                "1e-12",
+                "--samples",
+                "101",
+            ];
+            let run = run(binary, &args);
+            assert_eq!(run.code, 0, "{form} {method}: {}", run.stderr);
+            assert_eq!(run.rows.last().unwrap()[0], 100.0, "{form} {method}");
+            let error = difference(&run, &reference);
+            assert!(
+                error < 1e-6,
+                "{form} {method}: {error:e} from the reference"
+            );
+            let drift = drift(&run, "E");
+            assert!(drift < 1e-8, "{form} {method}: E drifts {drift:e}");
         }
     }
 }

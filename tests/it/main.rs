@@ -9,6 +9,7 @@ mod expect;
 mod field;
 mod generated;
 mod holonomic;
+mod impacts;
 mod ir;
 mod kernel;
 mod language_v2;

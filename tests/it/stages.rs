@@ -89,7 +89,7 @@ fn every_example_has_a_snapshot_per_stage() {
         // settings (the snapshot's suffix) are bound.
         let [ast, ir, coefficients, kernel, lib_rs] = lagc::on_big_stack(|| {
             let ast = lagc::syntax::parse(&source).unwrap_or_else(|d| panic!("{name}: {d:?}"));
-            let model = lagc::check::check(&ast).unwrap_or_else(|d| panic!("{name}: {d:?}"));
+            let model = lagc::frontend(&source).unwrap_or_else(|d| panic!("{name}: {d:?}"));
             let (derivation, _) =
                 lagc::mechanics::derive_checked(&model).unwrap_or_else(|d| panic!("{name}: {d:?}"));
             let ir = ir_text(&derivation);

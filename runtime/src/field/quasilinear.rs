@@ -595,6 +595,16 @@ impl Solver for QuasilinearField {
         Ok(())
     }
 
+    fn project(&mut self, _model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        // A projection onto the constraints is no change of regime: the
+        // step sizes learnt go on.
+        self.t = t;
+        self.t_prev = t;
+        self.x = x.to_vec();
+        self.accepted = None;
+        Ok(())
+    }
+
     fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure> {
         let Some(window) = self.accepted.as_mut() else {
             return Ok(Vec::new());

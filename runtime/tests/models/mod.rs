@@ -696,3 +696,61 @@ impl Model for VanishingMass {
         out[0] = 10.0 - t;
     }
 }
+
+/// Cayley's chain thrown back onto its heap: `x'' = g − x'^2/x` with the
+/// mass of the state `M = rho x` (`g = 9.81`, `rho = 2`), from `x = 1`,
+/// `x' = −3`. With `x² x'² = 2g x³/3 + 2C` the chain is back on the heap,
+/// `M = 0`, at `t* = ∫_0^1 x dx / √(2g x³/3 + 2C) = 0.23531632015820`
+/// (`C = 1.23`; SciPy's quad). The span runs to 1.
+#[derive(Clone, Debug)]
+pub struct ChainOntoHeap {
+    pub params: Vec<f64>,
+}
+
+impl ChainOntoHeap {
+    pub const T_STAR: f64 = 0.235_316_320_158_2;
+}
+
+impl Model for ChainOntoHeap {
+    const NAME: &'static str = "chain_onto_heap";
+    const SOURCE_HASH: &'static str = "test";
+    const PARAMS: &'static [&'static str] = &[];
+    const STATE: &'static [&'static str] = &["x", "x'"];
+    const COORDINATES: usize = 1;
+    const INITIAL: &'static [Initial] = &[Initial::Given, Initial::Given];
+    const MASSES: &'static [&'static str] = &["M"];
+
+    fn parameters(_o: &[Option<f64>]) -> Vec<f64> {
+        Vec::new()
+    }
+    fn new(_p: &[f64]) -> Self {
+        ChainOntoHeap { params: Vec::new() }
+    }
+    fn param_values(&self) -> &[f64] {
+        &self.params
+    }
+    fn time_span(&self) -> (f64, f64) {
+        (0.0, 1.0)
+    }
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+        Ok(given_or(given, &[1.0, -3.0]))
+    }
+    fn rhs(&self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        dx[0] = x[1];
+        dx[1] = 9.81 - x[1] * x[1] / x[0];
+        Ok(())
+    }
+    fn jacobian(&self, _t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        jac[(0, 1)] = 1.0;
+        jac[(1, 0)] = x[1] * x[1] / (x[0] * x[0]);
+        jac[(1, 1)] = -2.0 * x[1] / x[0];
+        Ok(())
+    }
+    fn time_partial(&self, _t: f64, _x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
+        dxdt.fill(0.0);
+        Ok(())
+    }
+    fn masses_at(&self, _t: f64, x: &[f64], out: &mut [f64]) {
+        out[0] = 2.0 * x[0];
+    }
+}

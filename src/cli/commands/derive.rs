@@ -18,15 +18,16 @@ pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
         for mode in 1..model.mode_count() {
             others.push(lagc::mechanics::derive_mode_checked(&model.in_mode(mode))?);
         }
-        Ok(((first, others), Vec::new()))
+        Ok(((first, others, model), Vec::new()))
     };
     status(compile(
         &args.file,
         stage,
-        |((derivation, check), others)| {
+        |((derivation, check), others, model)| {
             match args.format {
                 Format::Text => {
                     print!("{}", derivation.text());
+                    print!("{}", derivation.impacts_text(&model));
                     let reduced = derivation.reduced.clone();
                     let mut arena = derivation.arena.clone();
                     let field = lagc::field::field_system(&mut arena, &reduced);
@@ -47,8 +48,9 @@ pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
                     let mut arena = derivation.arena.clone();
                     let field = lagc::field::field_system(&mut arena, &reduced);
                     print!(
-                        "\\begin{{align*}}\n{}{}\\end{{align*}}\n",
+                        "\\begin{{align*}}\n{}{}{}\\end{{align*}}\n",
                         derivation.latex_lines(),
+                        derivation.impacts_latex_lines(&model),
                         field.latex_lines(&arena, &reduced.state)
                     );
                 }

@@ -42,6 +42,17 @@ pub(crate) fn compile<T, R: Send>(
     stage: impl FnOnce(&str) -> Result<(T, Vec<Diagnostic>), Vec<Diagnostic>> + Send,
     then: impl FnOnce(T) -> R + Send,
 ) -> Result<R, ExitCode> {
+    compile_with(file, stage, then, true).map(|(value, _)| value)
+}
+
+/// [`compile`], the notes rendered and returned instead of printed when
+/// `print_notes` is false (warnings and errors are printed either way).
+fn compile_with<T, R: Send>(
+    file: &Path,
+    stage: impl FnOnce(&str) -> Result<(T, Vec<Diagnostic>), Vec<Diagnostic>> + Send,
+    then: impl FnOnce(T) -> R + Send,
+    print_notes: bool,
+) -> Result<(R, String), ExitCode> {
     let file_name = file.display().to_string();
     let bytes = match super::read_model_file(file) {
         Ok(bytes) => bytes,
@@ -57,8 +68,12 @@ pub(crate) fn compile<T, R: Send>(
         match result {
             Ok((value, notes)) => {
                 eprint!("{}", render(&warnings, &file_name, &source, color));
-                eprint!("{}", render(&notes, &file_name, &source, color));
-                Ok(then(value))
+                let mut notes = render(&notes, &file_name, &source, color);
+                if print_notes {
+                    eprint!("{notes}");
+                    notes.clear();
+                }
+                Ok((then(value), notes))
             }
             Err(mut diagnostics) => {
                 diagnostics.extend(warnings);
@@ -83,23 +98,37 @@ pub(crate) fn count(n: usize, noun: &str) -> String {
     format!("{n} {noun}{plural}")
 }
 
-/// Reads, checks and generates the crate of `file`, printing diagnostics
-/// and notes; `Err(status)` when that fails.
 /// The crate of `file` for `lagc run` and `lagc report`: built against the
-/// runtime in the cache, keyed by the file's canonical path.
-pub(crate) fn generate_cached(file: &Path) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
-    generate(
+/// runtime in the cache, keyed by the file's canonical path. Diagnostics
+/// are printed; the notes (the local field method, N0001) are returned
+/// rendered, for the caller to show when it builds the crate (or asked).
+pub(crate) fn generate_cached(
+    file: &Path,
+) -> Result<(lagc::emit::GeneratedCrate, String), ExitCode> {
+    generate_with(
         file,
         &crate::cli::runtime_path_from_cache(),
         Some(crate::cli::path_key(file)),
+        false,
     )
 }
 
+/// Reads, checks and generates the crate of `file`, printing diagnostics
+/// and notes; `Err(status)` when that fails.
 pub(crate) fn generate(
     file: &Path,
     runtime_path: &str,
     package_key: Option<String>,
 ) -> Result<lagc::emit::GeneratedCrate, ExitCode> {
+    generate_with(file, runtime_path, package_key, true).map(|(generated, _)| generated)
+}
+
+fn generate_with(
+    file: &Path,
+    runtime_path: &str,
+    package_key: Option<String>,
+    print_notes: bool,
+) -> Result<(lagc::emit::GeneratedCrate, String), ExitCode> {
     let model_name = file
         .file_stem()
         .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
@@ -112,5 +141,5 @@ pub(crate) fn generate(
         };
         lagc::compile(source, &options)
     };
-    compile(file, stage, |generated| generated)
+    compile_with(file, stage, |generated| generated, print_notes)
 }

@@ -23,7 +23,10 @@ pub(crate) fn report(args: &ReportArgs) -> ExitCode {
         return ExitCode::from(EXIT_USAGE);
     }
     let generated = match generate_cached(&args.file) {
-        Ok(generated) => generated,
+        Ok((generated, notes)) => {
+            eprint!("{notes}");
+            generated
+        }
         Err(status) => return status,
     };
     let binary = match build_cached(&generated, &args.file) {

@@ -6,34 +6,60 @@ use crate::cli::args::RunArgs;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// `lagc run`'s own option, taken out of the options passed on: the
+/// model's notes on every run, not only when its crate is built.
+const VERBOSE: &str = "--verbose";
+
+const VERBOSE_USAGE: &str = concat!(
+    "  --verbose              (lagc run) show the model's notes (N0001: the\n",
+    "                         local field method) on every run, not only when\n",
+    "                         lagc builds its crate"
+);
+
 pub(crate) fn run(args: &RunArgs) -> ExitCode {
-    let generated = match generate_cached(&args.file) {
+    let (generated, notes) = match generate_cached(&args.file) {
         Ok(generated) => generated,
         Err(status) => return status,
     };
+    let verbose = args.args.iter().any(|a| a == VERBOSE);
+    let options: Vec<String> = args
+        .args
+        .iter()
+        .filter(|a| *a != VERBOSE)
+        .cloned()
+        .collect();
     // The model's binary parses its options; the same parser checks them
     // here first, so that bad usage is reported before anything is built.
     // They are passed on as they came.
     let params: Vec<&str> = generated.params.iter().map(String::as_str).collect();
     let state: Vec<&str> = generated.state.iter().map(String::as_str).collect();
     let outputs: Vec<&str> = generated.outputs.iter().map(String::as_str).collect();
-    let parsed = lagc_runtime::cli::parse(&args.args, &params, &state, &outputs);
+    let parsed = lagc_runtime::cli::parse(&options, &params, &state, &outputs);
     match parsed {
         Err(message) => {
-            eprintln!("error: {message}\n\n{}", lagc_runtime::cli::USAGE);
+            eprintln!(
+                "error: {message}\n\n{}\n{VERBOSE_USAGE}",
+                lagc_runtime::cli::USAGE
+            );
             return ExitCode::from(EXIT_USAGE);
         }
         Ok(lagc_runtime::cli::Command::Help) => {
-            println!("{}", lagc_runtime::cli::USAGE);
+            println!("{}\n{VERBOSE_USAGE}", lagc_runtime::cli::USAGE);
             return ExitCode::SUCCESS;
         }
         Ok(_) => {}
+    }
+    // The notes once per build: when this model's binary is not in the
+    // cache yet (new, changed, or built by another lagc), or when asked.
+    // They hold about nine lines for every non-affine model.
+    if verbose || !built(&generated) {
+        eprint!("{notes}");
     }
     let binary = match build_cached(&generated, &args.file) {
         Ok(binary) => binary,
         Err(status) => return status,
     };
-    match crate::cli::run_binary(&binary, &args.args) {
+    match crate::cli::run_binary(&binary, &options) {
         Ok(status) => match status.code() {
             Some(code) => ExitCode::from(u8::try_from(code).unwrap_or(1)),
             None => ExitCode::FAILURE,
@@ -43,6 +69,21 @@ pub(crate) fn run(args: &RunArgs) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether the cache holds this model's binary, built from this very
+/// source by this lagc and runtime (it answers the source hash).
+fn built(generated: &lagc::emit::GeneratedCrate) -> bool {
+    let Some(cache) = crate::cli::cache_dir() else {
+        return false;
+    };
+    let binary = cache.join("target").join("release").join(format!(
+        "{}{}",
+        generated.package,
+        std::env::consts::EXE_SUFFIX
+    ));
+    binary.is_file()
+        && crate::cli::binary_hash(&binary).as_deref() == Some(generated.source_hash.as_str())
 }
 
 /// Writes the crate into the cache and builds it there; the binary's path.

@@ -102,6 +102,7 @@ fn paper_model() -> Model {
         lets: Vec::new(),
         outputs: Vec::new(),
         stop: None,
+        impacts: Vec::new(),
         names: HashMap::from([
             ("M0".to_string(), Name::Param(0)),
             ("alpha".to_string(), Name::Param(1)),
@@ -181,5 +182,49 @@ fn paper_equation_four() {
             a.display(lhs),
             a.display(expected)
         );
+    }
+}
+
+/// Issue 28: `atan2` lowered is `f64::atan2`, and its derivatives are
+/// `∂/∂x = −y/r²`, `∂/∂y = x/r²` on either side of x = 0 and at it (the
+/// branch the selection keeps), where `atan(y/x) ± π` had the derivative
+/// 0/0 (the runs stopped with exit 3); the one jump is the cut (x < 0,
+/// y = 0), between the branches of y's sign.
+#[test]
+fn atan2_and_its_derivatives_are_defined_through_x_0() {
+    let source = "coord x, y; lagrangian = x'^2 + y'^2; output a = atan2(y, x);\n\
+                  initial x = 1, y = 0, x' = 0, y' = 0; time 0 .. 1;";
+    let ast = lagc::syntax::parse(source).unwrap();
+    let model = lagc::check::check(&ast).unwrap();
+    let mut arena = Arena::new(names_of(&model));
+    let angle = lower(&mut arena, &model.outputs[0].value, &model);
+    let (x, y) = (q(0, 0), q(1, 0));
+    let by_x = arena.diff(angle, x);
+    let by_y = arena.diff(angle, y);
+    let small = [1e-300, 1e-12, 1e-6, 0.1, 1.0, 7.0];
+    let mut values: Vec<f64> = small.iter().flat_map(|&v| [v, -v]).collect();
+    values.push(0.0);
+    for &xv in &values {
+        for &yv in &values {
+            if xv == 0.0 && yv == 0.0 || xv.hypot(yv) < 1e-200 {
+                continue;
+            }
+            let env = |s: Symbol| if s == x { xv } else { yv };
+            let got = arena.eval(angle, &env);
+            let expected = yv.atan2(xv);
+            assert!(
+                (got - expected).abs() <= 4.0 * f64::EPSILON * expected.abs().max(1.0),
+                "atan2({yv:e}, {xv:e}) = {got}, expected {expected}"
+            );
+            // Relative to the gradient's size 1/r.
+            let r = xv.hypot(yv);
+            for (what, d, exact) in [("x", by_x, -yv / r / r), ("y", by_y, xv / r / r)] {
+                let got = arena.eval(d, &env);
+                assert!(
+                    (got - exact).abs() <= 1e-13 / r,
+                    "∂atan2/∂{what} at ({xv:e}, {yv:e}) = {got:e}, expected {exact:e}"
+                );
+            }
+        }
     }
 }
