@@ -144,3 +144,69 @@ fn four_bar_follows_its_crank_angle_form(name: &str) {
         );
     }
 }
+
+#[test]
+fn a_holonomic_constraint_beside_a_second_order_one_is_differentiated_twice() {
+    // x at t = 2.5, 5, 7.5, 10 from the motion in the angle (SciPy DOP853
+    // at rtol 1e-13; rtol 1e-12 agrees to 2e-14): see the model's header.
+    const X: [(f64, f64); 4] = [
+        (2.5, 0.4957675679972425),
+        (5.0, 0.20708085795105685),
+        (7.5, -0.1651212554830279),
+        (10.0, -0.4704198703441878),
+    ];
+    let binary = crate::generated::build_file(
+        &crate::root().join("tests/data/v2/holonomic_second_order.lag"),
+    );
+    for method in METHODS {
+        let args = [
+            "--method",
+            method,
+            "--rtol",
+            "1e-10",
+            "--atol",
+            "1e-12",
+            "--times",
+            "2.5,5,7.5,10",
+        ];
+        let (rows, _) = run(&binary, &args);
+        for (row, &(t, x)) in rows.iter().zip(&X) {
+            let (xs, ys) = (row[1], row[2]);
+            assert!(
+                (xs - x).abs() <= 1e-8,
+                "{method} at t = {t}: x = {xs}, not {x}"
+            );
+            assert!(
+                (xs * xs + ys * ys - 1.0).abs() <= 1e-12,
+                "{method}: off the circle"
+            );
+            // y' is kept on D f = 0.
+            let (vx, vy) = (row[4], row[5]);
+            assert!(
+                (xs * vx + ys * vy).abs() <= 1e-9,
+                "{method}: x x' + y y' ≠ 0"
+            );
+        }
+    }
+}
+
+#[test]
+fn initial_positions_off_the_constraint_are_moved_or_refused_at_run_time() {
+    let binary = build("cartesian_pendulum");
+    // A rough dependent position is Newton's start: the run starts on the
+    // circle, on the branch it was near.
+    let (rows, _) = run(&binary, &["--init", "y=-0.5", "--samples", "2"]);
+    assert!((rows[0][2] + 0.8).abs() <= 1e-15, "y0 = {}", rows[0][2]);
+    // No configuration near the given positions: exit 2 naming the
+    // constraint as written.
+    let output = std::process::Command::new(&binary)
+        .args(["--init", "x=2", "--samples", "2"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("no initial positions on the constraint `x^2 + y^2 = l^2`"),
+        "{stderr}"
+    );
+}
