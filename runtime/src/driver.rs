@@ -943,7 +943,8 @@ fn switch_candidates(
 /// (a four-bar at its change point, where two branches of motion meet).
 const SINGULAR_VOLUME: f64 = 1e-6;
 
-/// Each group's pivot volume at `(t, x)` (see [`SINGULAR_VOLUME`]).
+/// Each group's pivot volume `sqrt(Σ pivot²)` at `(t, x)`: below 1e-6 of its
+/// value at the start, a singular configuration.
 pub fn pivot_volumes(model: &dyn DynModel, t: f64, x: &[f64]) -> Vec<f64> {
     let constraints = model.constraints();
     let total: usize = constraints.iter().map(|c| c.names.len()).sum();
