@@ -221,13 +221,32 @@ fn solve_implicit(
     // derivative 0 there, yet the candidate does not enter linearly.
     if arena.depends_on(pivot, dep) || arena.switches_on(h, dep) {
         let name = arena.symbol_name(dep);
+        // Its derivative is linear in the next derivatives and keeps every
+        // branch: `x'^2 + y'^2 = c^2` becomes `2*x'*x'' + 2*y'*y'' = 0`. An
+        // explicit root holds one branch and stops where it ends.
+        let next = Symbol::Jet {
+            coord: c.coord as u32,
+            order: c.order + 1,
+        };
+        let differentiated = arena.total_derivative(h);
+        let help = if arena.switches_on(h, dep) {
+            format!("solve the constraint for `{name}` and write it explicitly: `constraint {name} = …;`")
+        } else {
+            format!(
+                "differentiate it: `constraint {} = 0 for {};` is linear in the next derivatives and \
+                 keeps every branch (the initial velocities must satisfy the constraint as written); \
+                 an explicit root `constraint {name} = …;` holds one branch and stops where it ends",
+                arena.display(differentiated),
+                arena.symbol_name(next),
+            )
+        };
         return Err(Diagnostic::error(
             codes::BAD_CANDIDATE,
             format!("the constraint is not linear in `{name}`"),
         )
         .with_primary(c.span, format!("`{name}` enters non-linearly"))
         .with_note("lagc solves an implicit constraint for its candidate symbolically, which needs it to enter linearly")
-        .with_help(format!("solve the constraint for `{name}` and write it explicitly: `constraint {name} = …;`")));
+        .with_help(help));
     }
     if arena.is_zero(pivot) {
         let name = arena.symbol_name(dep);
