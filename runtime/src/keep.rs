@@ -246,10 +246,16 @@ impl Keeper {
                     .map(|i| self.tol.atol + self.tol.rtol * x[i].abs())
                     .fold(f64::INFINITY, f64::min);
                 if norm <= PROJECT_ABOVE * smallest {
-                    let relative = norm / smallest;
+                    // The holonomic constraints' correction (already in
+                    // `projected`) counts too.
+                    let (relative, absolute) = if closure.0 > norm / smallest {
+                        closure
+                    } else {
+                        (norm / smallest, norm)
+                    };
                     if relative > self.largest {
                         (self.largest, self.largest_absolute, self.largest_at) =
-                            (relative, norm, t);
+                            (relative, absolute, t);
                     }
                     self.scratch = scratch;
                     return Ok(relative);
