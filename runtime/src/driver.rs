@@ -559,30 +559,22 @@ fn run_with(
                         last.until = last.until.min(t_event);
                     }
                 }
-                if let Some(failure) = watch.step(model, solver.as_mut(), ta, t_event)? {
-                    // The rows up to where it ended.
-                    let t = failure.time;
-                    emit_until(
-                        model,
-                        solver.as_mut(),
-                        &mut keeper,
-                        regime.mode,
-                        &mut next_sample,
-                        t,
-                        &mut sample,
-                    )?;
-                    progress.finish();
-                    return Err(failure);
-                }
+                // A constraint's branch that ended within the step stops
+                // the run there, its rows written up to where it ended.
+                let ended = watch.step(model, solver.as_mut(), ta, t_event)?;
                 emit_until(
                     model,
                     solver.as_mut(),
                     &mut keeper,
                     regime.mode,
                     &mut next_sample,
-                    t_event,
+                    ended.as_ref().map_or(t_event, |f| f.time),
                     &mut sample,
                 )?;
+                if let Some(failure) = ended {
+                    progress.finish();
+                    return Err(failure);
+                }
                 solver.dense(model, t_event, &mut x_event)?;
                 if let Some(keeper) = keeper.as_mut() {
                     keeper.project(model, regime.mode, t_event, &mut x_event)?;
@@ -663,33 +655,29 @@ fn run_with(
                     }
                 }
                 // A constraint's branch that ended within the step stops
-                // the run there (the reduced system may not see it).
-                if let Some(failure) = watch.step(model, solver.as_mut(), ta, tb)? {
-                    // The rows up to where it ended.
-                    let t = failure.time;
-                    emit_until(
-                        model,
-                        solver.as_mut(),
-                        &mut keeper,
-                        regime.mode,
-                        &mut next_sample,
-                        t,
-                        &mut sample,
-                    )?;
-                    progress.finish();
-                    return Err(failure);
-                }
+                // the run there, its rows written up to where it ended.
+                let ended = watch.step(model, solver.as_mut(), ta, tb)?;
                 emit_until(
                     model,
                     solver.as_mut(),
                     &mut keeper,
                     regime.mode,
                     &mut next_sample,
-                    tb,
+                    ended.as_ref().map_or(tb, |f| f.time),
                     &mut sample,
                 )?;
+                if let Some(failure) = ended {
+                    progress.finish();
+                    return Err(failure);
+                }
                 if let Some(keeper) = keeper.as_mut() {
-                    if let Some(x) = keeper.after_step(model, regime.mode, tb, solver.state())? {
+                    // A state off its constraint near a pole or an end of
+                    // one is named after it.
+                    let x_b = solver.state().to_vec();
+                    let projected = keeper
+                        .after_step(model, regime.mode, tb, &x_b)
+                        .map_err(|f| watch.diagnose(model, f, tb, &x_b))?;
+                    if let Some(x) = projected {
                         solver.project(model, tb, x)?;
                     }
                 }
