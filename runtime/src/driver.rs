@@ -457,6 +457,9 @@ fn run_with(
             progress.finish();
             let failure = diagnose(model, failure, &x, &scale(model));
             let failure = near_singular_configuration(model, failure, &x, &volumes);
+            if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+                return Err(failure);
+            }
             return Err(watch.diagnose(model, failure, solver.time(), &x));
         }
         progress.update(solver.time());
@@ -561,30 +564,22 @@ fn run_with(
                         last.until = last.until.min(t_event);
                     }
                 }
-                if let Some(failure) = watch.step(model, solver.as_mut(), ta, t_event)? {
-                    // The rows up to where it ended.
-                    let t = failure.time;
-                    emit_until(
-                        model,
-                        solver.as_mut(),
-                        &mut keeper,
-                        regime.mode,
-                        &mut next_sample,
-                        t,
-                        &mut sample,
-                    )?;
-                    progress.finish();
-                    return Err(failure);
-                }
+                // A constraint's branch that ended within the step stops
+                // the run there, its rows written up to where it ended.
+                let ended = watch.step(model, solver.as_mut(), ta, t_event)?;
                 emit_until(
                     model,
                     solver.as_mut(),
                     &mut keeper,
                     regime.mode,
                     &mut next_sample,
-                    t_event,
+                    ended.as_ref().map_or(t_event, |f| f.time),
                     &mut sample,
                 )?;
+                if let Some(failure) = ended {
+                    progress.finish();
+                    return Err(failure);
+                }
                 solver.dense(model, t_event, &mut x_event)?;
                 if let Some(keeper) = keeper.as_mut() {
                     keeper.project(model, regime.mode, t_event, &mut x_event)?;
@@ -665,43 +660,47 @@ fn run_with(
                     }
                 }
                 // A constraint's branch that ended within the step stops
-                // the run there (the reduced system may not see it).
-                if let Some(failure) = watch.step(model, solver.as_mut(), ta, tb)? {
-                    // The rows up to where it ended.
-                    let t = failure.time;
-                    emit_until(
-                        model,
-                        solver.as_mut(),
-                        &mut keeper,
-                        regime.mode,
-                        &mut next_sample,
-                        t,
-                        &mut sample,
-                    )?;
-                    progress.finish();
-                    return Err(failure);
-                }
-                let mut kept = emit_until(
+                // the run there, its rows written up to where it ended.
+                let ended = watch.step(model, solver.as_mut(), ta, tb)?;
+                let kept = emit_until(
                     model,
                     solver.as_mut(),
                     &mut keeper,
                     regime.mode,
                     &mut next_sample,
-                    tb,
+                    ended.as_ref().map_or(tb, |f| f.time),
                     &mut sample,
                 );
-                if let (Ok(()), Some(keeper)) = (&kept, keeper.as_mut()) {
-                    kept = match keeper.after_step(model, regime.mode, tb, solver.state()) {
-                        Ok(Some(x)) => solver.project(model, tb, x),
-                        Ok(None) => Ok(()),
-                        Err(failure) => Err(failure),
-                    };
+                let mut kept = kept.map(|()| ended);
+                if let Ok(None) = &kept {
+                    if let Some(keeper) = keeper.as_mut() {
+                        // A state off its constraint near a pole or an end
+                        // of one is named after it.
+                        let x_b = solver.state().to_vec();
+                        kept = match keeper.after_step(model, regime.mode, tb, &x_b) {
+                            Ok(Some(x)) => solver.project(model, tb, x).map(|()| None),
+                            Ok(None) => Ok(None),
+                            Err(f) => Err(f),
+                        };
+                    }
                 }
-                // A state that cannot be kept on the constraints near a
-                // singular configuration is named as that.
-                if let Err(failure) = kept {
-                    let x = solver.state().to_vec();
-                    return Err(near_singular_configuration(model, failure, &x, &volumes));
+                match kept {
+                    Ok(None) => {}
+                    Ok(Some(failure)) => {
+                        progress.finish();
+                        return Err(failure);
+                    }
+                    // A state that cannot be kept on the constraints near
+                    // a singular configuration is named as that, else
+                    // after a pole or an end of a constraint near it.
+                    Err(failure) => {
+                        let x = solver.state().to_vec();
+                        let failure = near_singular_configuration(model, failure, &x, &volumes);
+                        if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+                            return Err(failure);
+                        }
+                        return Err(watch.diagnose(model, failure, tb, &x));
+                    }
                 }
                 if !model.constraints().is_empty() {
                     switch_candidates(model, &mut regime, solver.as_mut(), tb, &volumes)?;

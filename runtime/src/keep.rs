@@ -136,9 +136,7 @@ impl Keeper {
         t: f64,
         x: &mut [f64],
     ) -> Result<(), Failure> {
-        self.project_from(model, mode, t, x, true, false)?;
-        x.copy_from_slice(&self.projected);
-        Ok(())
+        self.project_in_place(model, mode, t, x, true)
     }
 
     /// Puts a state that was made, not integrated (an ensemble's member
@@ -151,7 +149,18 @@ impl Keeper {
         t: f64,
         x: &mut [f64],
     ) -> Result<(), Failure> {
-        self.project_from(model, mode, t, x, false, false)?;
+        self.project_in_place(model, mode, t, x, false)
+    }
+
+    fn project_in_place(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+        judged: bool,
+    ) -> Result<(), Failure> {
+        self.project_from(model, mode, t, x, judged, false)?;
         x.copy_from_slice(&self.projected);
         Ok(())
     }

@@ -108,6 +108,8 @@ impl ConstraintWatch {
                 | FailureKind::ConditionMatrixCrossedSingularity { .. }
                 | FailureKind::FieldNotConverging { .. }
                 | FailureKind::NewtonNonConvergence { .. }
+                | FailureKind::ConstraintLeft { .. }
+                | FailureKind::ConstraintUndefined { .. }
         );
         if !numerical || !x.iter().all(|v| v.is_finite()) {
             return failure;

@@ -115,6 +115,13 @@ fn run(binary: &Path, args: &[&str]) -> Result<Run, String> {
     Ok(Run { csv, stderr })
 }
 
+/// The summary's `constraints kept: largest residual R` (models whose
+/// constraints fix state components).
+fn constraint_residual(stderr: &str) -> Option<f64> {
+    let rest = stderr.split("constraints kept: largest residual ").nth(1)?;
+    rest.split_whitespace().next()?.parse().ok()
+}
+
 fn exact_error(run: &Run) -> f64 {
     crate::exact_error(&run.stderr)
 }
@@ -146,13 +153,32 @@ fn every_example_meets_its_exact_solution_as_its_header_states() {
             let args: Vec<&str> = args.iter().map(String::as_str).collect();
             let label = format!("{name} {}", args.join(" "));
             runs += 1;
-            let error = match run(&binary, &args) {
-                Ok(result) => exact_error(&result),
+            let (error, carried) = match run(&binary, &args) {
+                Ok(result) => (exact_error(&result), constraint_residual(&result.stderr)),
                 Err(stderr) => {
                     failures.push(format!("{label}: {stderr}"));
                     continue;
                 }
             };
+            // No run ends with exit 0 having carried its state far from
+            // its constraints (issue 28: 1e-6 at the most, or 10·rtol for
+            // a loose tolerance).
+            if let Some(residual) = carried {
+                let rtol: f64 = args
+                    .windows(2)
+                    .find(|w| w[0] == "--rtol")
+                    .and_then(|w| w[1].parse().ok())
+                    .unwrap_or(1e-10);
+                let bound = (10.0 * rtol).max(1e-6);
+                report.push_str(&format!(
+                    "{label}: constraints kept within {residual:.1e}\n"
+                ));
+                if residual.is_nan() || residual > bound {
+                    failures.push(format!(
+                        "{label}: constraint residual {residual:e} > {bound:e}"
+                    ));
+                }
+            }
             report.push_str(&format!("{label}: {error:.2e} (stated {tol:e})\n"));
             if error.is_nan() || error > tol {
                 failures.push(format!("{label}: {error:e} > {tol:e}"));
