@@ -318,6 +318,9 @@ pub mod codes {
     /// linear ansatz (10) is not a complete solution, and the generated
     /// crate uses the local field method.
     pub const LOCAL_FIELD_METHOD: &str = "N0001";
+    /// A given initial position of a holonomic constraint's dependent
+    /// coordinate that Newton moved onto the constraints (SPEC §2.3).
+    pub const INITIAL_POSITION_CORRECTED: &str = "N0002";
     // Warnings (a model that still compiles) get their own series.
     /// A number literal too small for f64: it is read as 0.
     pub const LITERAL_UNDERFLOWS: &str = "W0001";

@@ -41,9 +41,8 @@ pub fn kernel_of(
 ) -> Result<(Kernel, Vec<Diagnostic>), Vec<Diagnostic>> {
     let reduced = derivation.reduced.clone();
     let field = field_system(&mut derivation.arena, &reduced);
-    let notes: Vec<Diagnostic> = local_field_note(&field, model.lagrangian.span)
-        .into_iter()
-        .collect();
+    let mut notes: Vec<Diagnostic> = derivation.notes.clone();
+    notes.extend(local_field_note(&field, model.lagrangian.span));
     let mut kernel = crate::kernel::build(model, &derivation, &field)?;
     for mode in 1..model.mode_count() {
         let other = mode_kernel(&model.in_mode(mode))?;

@@ -366,6 +366,7 @@ fn run_with(
     let mut next_sample = 0;
     let mut events = 0;
     let mut keeper = Keeper::new(model, options.tol);
+    let volumes = pivot_volumes(model, t0, x0);
     // The sample buffer, allocated once (emit_until runs after every step).
     let mut x_sample = vec![0.0; n];
     let mut emit_until = |model: &dyn DynModel,
@@ -455,6 +456,10 @@ fn run_with(
             let x = solver.state().to_vec();
             progress.finish();
             let failure = diagnose(model, failure, &x, &scale(model));
+            let failure = near_singular_configuration(model, failure, &x, &volumes);
+            if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+                return Err(failure);
+            }
             return Err(watch.diagnose(model, failure, solver.time(), &x));
         }
         progress.update(solver.time());
@@ -637,7 +642,7 @@ fn run_with(
                 // A step across a vanishing pivot is not a solution: it is
                 // taken again with another candidate, or the run stops.
                 if !model.constraints().is_empty() {
-                    match pivot_crossed(model, &mut regime, solver.as_mut(), ta, tb)? {
+                    match pivot_crossed(model, &mut regime, solver.as_mut(), (ta, tb), &volumes)? {
                         PivotCrossing::None => {}
                         crossing => {
                             if let Some(pieces) = pieces.as_deref_mut() {
@@ -657,7 +662,7 @@ fn run_with(
                 // A constraint's branch that ended within the step stops
                 // the run there, its rows written up to where it ended.
                 let ended = watch.step(model, solver.as_mut(), ta, tb)?;
-                emit_until(
+                let kept = emit_until(
                     model,
                     solver.as_mut(),
                     &mut keeper,
@@ -665,24 +670,40 @@ fn run_with(
                     &mut next_sample,
                     ended.as_ref().map_or(tb, |f| f.time),
                     &mut sample,
-                )?;
-                if let Some(failure) = ended {
-                    progress.finish();
-                    return Err(failure);
+                );
+                let mut kept = kept.map(|()| ended);
+                if let Ok(None) = &kept {
+                    if let Some(keeper) = keeper.as_mut() {
+                        // A state off its constraint near a pole or an end
+                        // of one is named after it.
+                        let x_b = solver.state().to_vec();
+                        kept = match keeper.after_step(model, regime.mode, tb, &x_b) {
+                            Ok(Some(x)) => solver.project(model, tb, x).map(|()| None),
+                            Ok(None) => Ok(None),
+                            Err(f) => Err(f),
+                        };
+                    }
                 }
-                if let Some(keeper) = keeper.as_mut() {
-                    // A state off its constraint near a pole or an end of
-                    // one is named after it.
-                    let x_b = solver.state().to_vec();
-                    let projected = keeper
-                        .after_step(model, regime.mode, tb, &x_b)
-                        .map_err(|f| watch.diagnose(model, f, tb, &x_b))?;
-                    if let Some(x) = projected {
-                        solver.project(model, tb, x)?;
+                match kept {
+                    Ok(None) => {}
+                    Ok(Some(failure)) => {
+                        progress.finish();
+                        return Err(failure);
+                    }
+                    // A state that cannot be kept on the constraints near
+                    // a singular configuration is named as that, else
+                    // after a pole or an end of a constraint near it.
+                    Err(failure) => {
+                        let x = solver.state().to_vec();
+                        let failure = near_singular_configuration(model, failure, &x, &volumes);
+                        if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+                            return Err(failure);
+                        }
+                        return Err(watch.diagnose(model, failure, tb, &x));
                     }
                 }
                 if !model.constraints().is_empty() {
-                    switch_candidates(model, &mut regime, solver.as_mut(), tb)?;
+                    switch_candidates(model, &mut regime, solver.as_mut(), tb, &volumes)?;
                 }
             }
         }
@@ -809,8 +830,8 @@ fn pivot_crossed(
     model: &mut dyn DynModel,
     regime: &mut Regime,
     solver: &mut dyn Solver,
-    ta: f64,
-    tb: f64,
+    (ta, tb): (f64, f64),
+    volumes: &[f64],
 ) -> Result<PivotCrossing, Failure> {
     let total: usize = model.constraints().iter().map(|c| c.names.len()).sum();
     let n = solver.state().len();
@@ -822,7 +843,7 @@ fn pivot_crossed(
     model.pivots(tb, &x_b, &mut p_b);
     let digits = mode_digits(model, regime.mode);
     let mut at = 0;
-    for (c, &digit) in model.constraints().iter().zip(&digits) {
+    for (index, (c, &digit)) in model.constraints().iter().zip(&digits).enumerate() {
         let (a, b) = (p_a[at + digit], p_b[at + digit]);
         if a * b < 0.0 {
             let (best, best_pivot) = largest_pivot(&p_a[at..at + c.names.len()]);
@@ -840,6 +861,19 @@ fn pivot_crossed(
             if c.names.len() > 1 && resolvable {
                 solver.restart(model, ta, &x_a)?;
                 return Ok(PivotCrossing::Retry(halfway));
+            }
+            // No other choice is better where this one vanishes: every
+            // choice vanishes together, a singular configuration.
+            if c.names.len() > 1 {
+                let now = volumes_of(model.constraints(), &p_b);
+                let start = volumes.get(index).copied().unwrap_or(f64::NAN);
+                return Err(Failure::new(
+                    t_zero,
+                    FailureKind::SingularConfiguration {
+                        constraint: c.text.to_string(),
+                        ratio: now[index] / start,
+                    },
+                ));
             }
             return Err(Failure::new(
                 t_zero,
@@ -862,11 +896,13 @@ fn switch_candidates(
     regime: &mut Regime,
     solver: &mut dyn Solver,
     t: f64,
+    volumes: &[f64],
 ) -> Result<(), Failure> {
     let x = solver.state().to_vec();
     let total: usize = model.constraints().iter().map(|c| c.names.len()).sum();
     let mut pivots = vec![0.0; total];
     model.pivots(t, &x, &mut pivots);
+    singular_configuration(model, t, &pivots, volumes)?;
     let mut digits = mode_digits(model, regime.mode);
     let mut changed = false;
     let mut at = 0;
@@ -896,6 +932,106 @@ fn switch_candidates(
         solver.restart(model, t, &x)?;
     }
     Ok(())
+}
+
+/// A group of constraints with several choices of dependents is at a
+/// singular configuration when their pivots' volume `sqrt(Σ pivot²)` —
+/// by Cauchy–Binet `sqrt(det(J Jᵀ))` of the group's Jacobian in its
+/// candidates — has fallen below this fraction of its value at the start:
+/// the Jacobian has lost rank, and no choice determines the dependents
+/// (a four-bar at its change point, where two branches of motion meet).
+const SINGULAR_VOLUME: f64 = 1e-6;
+
+/// Each group's pivot volume `sqrt(Σ pivot²)` at `(t, x)`: below 1e-6 of its
+/// value at the start, a singular configuration.
+pub fn pivot_volumes(model: &dyn DynModel, t: f64, x: &[f64]) -> Vec<f64> {
+    let constraints = model.constraints();
+    let total: usize = constraints.iter().map(|c| c.names.len()).sum();
+    let mut pivots = vec![0.0; total];
+    model.pivots(t, x, &mut pivots);
+    volumes_of(constraints, &pivots)
+}
+
+fn volumes_of(constraints: &[crate::model::Candidates], pivots: &[f64]) -> Vec<f64> {
+    let mut at = 0;
+    constraints
+        .iter()
+        .map(|c| {
+            let v = pivots[at..at + c.names.len()]
+                .iter()
+                .map(|p| p * p)
+                .sum::<f64>()
+                .sqrt();
+            at += c.names.len();
+            v
+        })
+        .collect()
+}
+
+/// A failure naming the group whose pivot volume fell below
+/// [`SINGULAR_VOLUME`] of `start` (groups with several choices only).
+fn singular_configuration(
+    model: &dyn DynModel,
+    t: f64,
+    pivots: &[f64],
+    start: &[f64],
+) -> Result<(), Failure> {
+    let constraints = model.constraints();
+    for ((c, &now), &start) in constraints
+        .iter()
+        .zip(&volumes_of(constraints, pivots))
+        .zip(start)
+    {
+        if c.names.len() > 1 && start > 0.0 && now < SINGULAR_VOLUME * start {
+            return Err(Failure::new(
+                t,
+                FailureKind::SingularConfiguration {
+                    constraint: c.text.to_string(),
+                    ratio: now / start,
+                },
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A failure of the integration (a step size that underflows, a value
+/// that is not finite) or of keeping the constraints near a singular
+/// configuration is named as that: the equations divide by the vanishing
+/// determinants there.
+fn near_singular_configuration(
+    model: &dyn DynModel,
+    failure: Failure,
+    x: &[f64],
+    start: &[f64],
+) -> Failure {
+    if !matches!(
+        failure.kind,
+        FailureKind::StepSizeUnderflow { .. }
+            | FailureKind::NonFiniteState { .. }
+            | FailureKind::NonFiniteRate { .. }
+            | FailureKind::ConstraintLeft { .. }
+            | FailureKind::ConstraintUndefined { .. }
+            | FailureKind::PositionsLeftConstraint { .. }
+    ) || model.constraints().is_empty()
+        || !x.iter().all(|v| v.is_finite())
+    {
+        return failure;
+    }
+    let t = failure.time;
+    let now = pivot_volumes(model, t, x);
+    for ((c, &now), &start) in model.constraints().iter().zip(&now).zip(start) {
+        if c.names.len() > 1 && start > 0.0 && now < 1e-3 * start {
+            return Failure::new(
+                t,
+                FailureKind::SingularConfiguration {
+                    constraint: c.text.to_string(),
+                    ratio: now / start,
+                },
+            );
+        }
+    }
+    failure
 }
 
 /// A mass law at or below zero at `(t, x)` stops the run (the equations
@@ -947,6 +1083,7 @@ pub fn diagnose(model: &dyn DynModel, failure: Failure, x: &[f64], scale: &MassS
             | FailureKind::StepBudgetExhausted { stalled: None, .. }
             | FailureKind::AnchorCancels { .. }
             | FailureKind::ConstraintPivotVanishes { .. }
+            | FailureKind::SingularConfiguration { .. }
             | FailureKind::ConstraintUndefined { .. }
             | FailureKind::ConstraintLeft { .. }
     ) {

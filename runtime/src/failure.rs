@@ -56,6 +56,18 @@ pub enum FailureKind {
     /// The pivot `∂h/∂dep` of an implicit constraint vanished and no other
     /// candidate is better.
     ConstraintPivotVanishes { constraint: String, pivot: f64 },
+    /// Newton found no positions on the holonomic constraints near the
+    /// integrated ones: the motion has left them (or reached a point where
+    /// their Jacobian in the dependent coordinates is singular).
+    PositionsLeftConstraint {
+        constraint: String,
+        residual: f64,
+        singular: bool,
+    },
+    /// A group of constraints solved together reached a singular
+    /// configuration: every choice of dependents vanishes (their Jacobian
+    /// lost rank; `ratio`: the pivots' volume against the run's start).
+    SingularConfiguration { constraint: String, ratio: f64 },
     /// The constraint that fixes `component` has no finite value at the
     /// state reached: its branch ends there (the root of a negative
     /// number, a division by zero).
@@ -82,6 +94,14 @@ pub enum FailureKind {
         candidate: String,
         better: String,
         ratio: f64,
+    },
+    /// Newton found no initial positions on the holonomic constraints
+    /// near the given ones (`singular`: their Jacobian in the dependent
+    /// coordinates is singular there).
+    InitialPositionsOffConstraint {
+        constraint: String,
+        residual: f64,
+        singular: bool,
     },
     /// A stated initial value of a dependent component disagrees with the
     /// value the constraints require.
@@ -132,6 +152,7 @@ impl Failure {
     pub fn exit_status(&self) -> u8 {
         match self.kind {
             FailureKind::InconsistentInitialValue { .. }
+            | FailureKind::InitialPositionsOffConstraint { .. }
             | FailureKind::InitialCandidateVanishes { .. }
             | FailureKind::BadTimeSpan { .. }
             | FailureKind::NonFiniteInitialValue { .. }
@@ -230,6 +251,28 @@ impl fmt::Display for Failure {
                  dependent derivative (pivot {pivot:.3e}); name another candidate with \
                  `for … or …`"
             ),
+            FailureKind::PositionsLeftConstraint {
+                constraint,
+                residual,
+                singular,
+            } => write!(
+                f,
+                "at t = {t:e}: the positions cannot be brought back onto the constraint \
+                 `{constraint}` ({}, residual {residual:.3e}): the motion has left it",
+                if *singular {
+                    "its Jacobian in the dependent coordinates is singular there"
+                } else {
+                    "Newton does not converge"
+                }
+            ),
+            FailureKind::SingularConfiguration { constraint, ratio } => write!(
+                f,
+                "at t = {t:e}: the constraints `{constraint}` reach a singular \
+                 configuration: no choice of dependent coordinates determines them \
+                 (their Jacobian loses rank; the pivots' volume is {ratio:.1e} of its \
+                 value at the start). The motion cannot be followed through it: a \
+                 change point of a linkage, where branches of motion meet"
+            ),
             FailureKind::ConstraintUndefined { component } => write!(
                 f,
                 "at t = {t:e}: the constraint that fixes `{component}` has no finite value \
@@ -267,6 +310,21 @@ impl fmt::Display for Failure {
                  and the initial values take `{candidate}`, its first candidate, as the \
                  one it fixes. Start where `{candidate}` is determined, or name `{better}` \
                  first in the model (`for {better} or …`) and give `{candidate}`"
+            ),
+            FailureKind::InitialPositionsOffConstraint {
+                constraint,
+                residual,
+                singular,
+            } => write!(
+                f,
+                "at t = {t:e}: Newton finds no initial positions on the constraint \
+                 `{constraint}` near the given ones ({}, residual {residual:.3e}); give \
+                 the dependent coordinates closer to a configuration that satisfies it",
+                if *singular {
+                    "its Jacobian in the dependent coordinates is singular there"
+                } else {
+                    "no convergence"
+                }
             ),
             FailureKind::InconsistentInitialValue {
                 component,

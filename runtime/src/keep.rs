@@ -94,7 +94,7 @@ impl Keeper {
     pub fn new(model: &dyn DynModel, tol: Tolerance) -> Option<Keeper> {
         let n = model.dim();
         let coordinates = model.coordinates();
-        model.keeps_constraints().then(|| Keeper {
+        (model.keeps_constraints() || model.keeps_positions()).then(|| Keeper {
             tol,
             mode: None,
             fixed: Vec::new(),
@@ -196,6 +196,31 @@ impl Keeper {
             self.mode = Some(mode);
         }
         self.projected.copy_from_slice(x);
+        // Holonomic constraints first: the positions and their derivatives
+        // along the constraints' normals (the same in every mode).
+        let mut closure = (0.0_f64, 0.0_f64);
+        if model.keeps_positions() {
+            model.project_closure(t, &mut self.projected)?;
+            let mut worst = 0;
+            for (i, (&before, &after)) in x.iter().zip(&self.projected).enumerate() {
+                let delta = (after - before).abs();
+                let scale = self.tol.atol + self.tol.rtol * before.abs().max(after.abs());
+                if delta / scale > closure.0 {
+                    worst = i;
+                }
+                closure = (closure.0.max(delta / scale), closure.1.max(delta));
+            }
+            let size = x[worst].abs().max(self.projected[worst].abs()).max(1.0);
+            if judged && closure.0 > BROKEN_TIMES_TOLERANCE && closure.1 > BROKEN_ABOVE * size {
+                return Err(Failure::new(
+                    t,
+                    FailureKind::ConstraintLeft {
+                        component: model.state_names()[worst].to_string(),
+                        residual: closure.1,
+                    },
+                ));
+            }
+        }
         let m = self.fixed.len();
         let mut scratch = std::mem::take(&mut self.scratch);
         scratch.residual.resize(m, 0.0);
@@ -230,10 +255,16 @@ impl Keeper {
                     .map(|i| self.tol.atol + self.tol.rtol * x[i].abs())
                     .fold(f64::INFINITY, f64::min);
                 if norm <= PROJECT_ABOVE * smallest {
-                    let relative = norm / smallest;
+                    // The holonomic constraints' correction (already in
+                    // `projected`) counts too.
+                    let (relative, absolute) = if closure.0 > norm / smallest {
+                        closure
+                    } else {
+                        (norm / smallest, norm)
+                    };
                     if relative > self.largest {
                         (self.largest, self.largest_absolute, self.largest_at) =
-                            (relative, norm, t);
+                            (relative, absolute, t);
                     }
                     self.scratch = scratch;
                     return Ok(relative);
@@ -304,6 +335,11 @@ impl Keeper {
         }
         self.scratch = scratch;
         let (relative, absolute) = distance.unwrap_or((0.0, 0.0));
+        let (relative, absolute) = if closure.0 > relative {
+            closure
+        } else {
+            (relative, absolute)
+        };
         if judged && relative > self.largest {
             self.largest = relative;
             self.largest_absolute = absolute;
@@ -328,10 +364,15 @@ impl Keeper {
     }
 }
 
-/// The state components the constraints fix in `mode`: those the initial
-/// values take as fixed (mode 0), each implicit constraint's first
-/// candidate replaced by the mode's.
+/// The state components the constraints fix in `mode`: the model's table
+/// ([`crate::model::Model::FIXED`]), else those the initial values take as
+/// fixed (mode 0), each implicit constraint's first candidate replaced by
+/// the mode's.
 fn fixed_components(model: &dyn DynModel, mode: usize) -> Vec<usize> {
+    // The generated table, where the model has one (several modes).
+    if let Some(fixed) = model.fixed_components().get(mode) {
+        return fixed.to_vec();
+    }
     let names = model.state_names();
     let mut fixed: Vec<usize> = (0..names.len())
         .filter(|&j| model.initial_kinds()[j] == Initial::Constraint)

@@ -9,6 +9,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | `model` | the trait generated code implements |
+//! | `closure` | Newton on holonomic constraints (initial positions, keeping) |
 //! | `failure` | run-time failures with their physical cause (exit 3) |
 //! | `linalg` | dense matrices, LU, fixed-size LU and `L D Lᵀ` solves, `expm` |
 //! | `math` | `sin_cos`: a sine and a cosine in one call |
@@ -26,6 +27,7 @@
 pub mod api;
 pub mod budget;
 pub mod cli;
+pub mod closure;
 pub mod controller;
 pub mod direct;
 pub mod dop853;

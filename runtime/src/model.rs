@@ -132,6 +132,14 @@ pub trait Model: Clone {
     /// first-order constraints): [`Model::constrained`] is given, and the
     /// run keeps the state on them (SPEC §2.3).
     const KEEPS_CONSTRAINTS: bool = false;
+    /// Holonomic constraints (SPEC §2.3): [`Model::project_closure`] is
+    /// given, and the run keeps the positions (and their derivatives) on
+    /// them.
+    const KEEPS_POSITIONS: bool = false;
+    /// For each mode, the state components the constraints fix (the
+    /// indices [`Model::constrained`] writes); empty: those of
+    /// [`Model::INITIAL`], mapped by the candidates' names.
+    const FIXED: &'static [&'static [usize]] = &[];
 
     /// Every param's value: param `i` is `overrides[i]` when given, else
     /// its expression evaluated with the values before it (so an override
@@ -215,6 +223,12 @@ pub trait Model: Clone {
     /// [`Model::constrained`] writes in the velocities (zeroed by the
     /// caller; rows of the fixed components, columns of the velocities).
     fn kept_gradient(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
+    }
+
+    /// Projects the state `x` in place onto the holonomic constraints
+    /// along their normals (positions, then each derivative block).
+    fn project_closure(&self, _t: f64, _x: &mut [f64]) -> Result<(), Failure> {
         Ok(())
     }
 
@@ -332,6 +346,10 @@ pub trait DynModel {
     fn states_exact(&self) -> bool;
     /// [`Model::KEEPS_CONSTRAINTS`].
     fn keeps_constraints(&self) -> bool;
+    /// [`Model::KEEPS_POSITIONS`].
+    fn keeps_positions(&self) -> bool;
+    /// [`Model::FIXED`].
+    fn fixed_components(&self) -> &'static [&'static [usize]];
 
     /// [`Model::parameters`].
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64>;
@@ -369,6 +387,8 @@ pub trait DynModel {
     fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::kept_gradient`].
     fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+    /// [`Model::project_closure`].
+    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::outputs`].
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::switching_functions`].
@@ -440,6 +460,12 @@ impl<M: Model + 'static> DynModel for M {
     fn keeps_constraints(&self) -> bool {
         M::KEEPS_CONSTRAINTS
     }
+    fn keeps_positions(&self) -> bool {
+        M::KEEPS_POSITIONS
+    }
+    fn fixed_components(&self) -> &'static [&'static [usize]] {
+        M::FIXED
+    }
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
         M::parameters(overrides)
     }
@@ -498,6 +524,9 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
         Model::kept_gradient(self, t, x, jac)
+    }
+    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        Model::project_closure(self, t, x)
     }
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::outputs(self, t, x, out);

@@ -1,18 +1,26 @@
-//! Constraints `q^(k) = φ`: the left side names a dependent coordinate, all
-//! share one order k, and no right side holds a dependent derivative of
-//! order ≥ k (which would make the constraints implicit).
+//! Constraints: explicit `q^(k) = φ` (the left side names a dependent
+//! coordinate; no right side holds a dependent derivative of order ≥ k),
+//! implicit `lhs = rhs for q^(k) or …`, and holonomic `f(t, q) = g(t, q)`
+//! (no derivatives; differentiated to the common order k). Implicit and
+//! holonomic constraints that share candidates, or hold each other's, form
+//! a group solved together (SPEC §2.3).
 
 use super::expressions::Allowed;
-use super::model::{Constraint, Implicit, Name};
+use super::model::{Constraint, Group, Implicit, Name};
 use super::{Checker, MAX_DERIVATIVE_ORDER};
 use crate::diagnostic::{codes, Diagnostic};
 use crate::span::Span;
 use crate::syntax::ast::{Expr, ExprKind, ItemKind};
 
 impl Checker<'_> {
-    /// Returns the common order k and the constraints, in source order.
-    pub(super) fn constraints(&mut self) -> (Option<u32>, Vec<Constraint>) {
+    /// Returns the common order k, the constraints in source order and the
+    /// groups of implicit constraints solved together (SPEC §2.3).
+    pub(super) fn constraints(&mut self) -> (Option<u32>, Vec<Constraint>, Vec<Group>) {
         let mut constraints: Vec<Constraint> = Vec::new();
+        // Per constraint: the coordinates whose derivative of the
+        // constraint's order it holds (for an implicit constraint; the
+        // coordinates themselves for a holonomic one).
+        let mut held: Vec<Vec<usize>> = Vec::new();
         let mut right_sides = Vec::new();
         for (item, span) in self.items() {
             let ItemKind::Constraint {
@@ -23,6 +31,15 @@ impl Checker<'_> {
             else {
                 continue;
             };
+            if self.is_holonomic(lhs, rhs) {
+                let Some((constraint, coords)) = self.holonomic(lhs, rhs, candidates, span) else {
+                    self.constraints_incomplete = true;
+                    continue;
+                };
+                constraints.push(constraint);
+                held.push(coords);
+                continue;
+            }
             let (coord, order, implicit) = if candidates.is_empty() {
                 let Some((coord, order)) = self.constraint_lhs(lhs) else {
                     self.constraints_incomplete = true;
@@ -39,30 +56,14 @@ impl Checker<'_> {
                 let implicit = Implicit {
                     lhs: lhs.clone(),
                     candidates: owned,
+                    holonomic: false,
                 };
                 (implicit.candidates[0], order, Some(implicit))
             };
-            let mine = owned_by(coord, implicit.as_ref());
-            if let Some(first) = constraints.iter().find(|c| {
-                owned_by(c.coord, c.implicit.as_ref())
-                    .iter()
-                    .any(|j| mine.contains(j))
-            }) {
-                let name = &self.coords[coord].name;
-                let diagnostic = Diagnostic::error(
-                    codes::DOUBLE_CONSTRAINT,
-                    format!("coordinate `{name}` is constrained twice"),
-                )
-                .with_primary(lhs.span, "second constraint on it here")
-                .with_secondary(first.span, "first constraint here")
-                .with_help(
-                    "each constraint makes one coordinate dependent; constrain another coordinate",
-                );
-                self.report(diagnostic);
-                self.constraints_incomplete = true;
+            if !self.constrained_once(coord, implicit.as_ref(), lhs.span, &constraints) {
                 continue;
             }
-            if let Some(first) = constraints.first() {
+            if let Some(first) = constraints.iter().find(|c| !c.is_holonomic()) {
                 if first.order != order {
                     let diagnostic = Diagnostic::error(
                         codes::MIXED_CONSTRAINT_ORDERS,
@@ -84,11 +85,27 @@ impl Checker<'_> {
                 text: String::new(),
                 implicit,
             });
+            held.push(Vec::new());
         }
-        let order = constraints.first().map(|c| c.order);
+        // Holonomic constraints are differentiated to the others' order
+        // (1 when there are none).
+        let k = constraints
+            .iter()
+            .find(|c| !c.is_holonomic())
+            .map_or(1, |c| c.order);
+        let order = (!constraints.is_empty()).then_some(k);
+        for c in &mut constraints {
+            if c.is_holonomic() {
+                c.order = k;
+            }
+        }
+        self.holonomic_candidates(&mut constraints, &held);
         for index in 0..constraints.len() {
             if let Some(implicit) = constraints[index].implicit.clone() {
-                self.implicit_residual(&constraints[index], &implicit, &constraints);
+                if !implicit.holonomic {
+                    held[index] =
+                        self.implicit_residual(&constraints[index], &implicit, &constraints);
+                }
             }
         }
         if let Some(k) = order {
@@ -98,6 +115,7 @@ impl Checker<'_> {
                 self.constraint_rhs(rhs, span, own_order.unwrap_or(k), &constraints);
             }
         }
+        let groups = self.groups(&mut constraints, &held);
         if !self.coords.is_empty() && constraints.len() >= self.coords.len() {
             if let Some(last) = constraints.last() {
                 let diagnostic = Diagnostic::error(
@@ -112,7 +130,43 @@ impl Checker<'_> {
                 self.report(diagnostic);
             }
         }
-        (order, constraints)
+        (order, constraints, groups)
+    }
+
+    /// Reports a coordinate made dependent by two constraints, one of them
+    /// explicit (implicit constraints that share candidates are solved
+    /// together instead); true when there is none.
+    fn constrained_once(
+        &mut self,
+        coord: usize,
+        implicit: Option<&Implicit>,
+        span: Span,
+        constraints: &[Constraint],
+    ) -> bool {
+        let mine = owned_by(coord, implicit);
+        let Some(first) = constraints.iter().find(|c| {
+            (implicit.is_none() || c.implicit.is_none())
+                && owned_by(c.coord, c.implicit.as_ref())
+                    .iter()
+                    .any(|j| mine.contains(j))
+        }) else {
+            return true;
+        };
+        let shared = owned_by(first.coord, first.implicit.as_ref())
+            .into_iter()
+            .find(|j| mine.contains(j))
+            .unwrap_or(coord);
+        let name = &self.coords[shared].name;
+        let diagnostic = Diagnostic::error(
+            codes::DOUBLE_CONSTRAINT,
+            format!("coordinate `{name}` is constrained twice"),
+        )
+        .with_primary(span, "second constraint on it here")
+        .with_secondary(first.span, "first constraint here")
+        .with_help("each constraint makes one coordinate dependent; constrain another coordinate");
+        self.report(diagnostic);
+        self.constraints_incomplete = true;
+        false
     }
 
     /// The coordinate and order of `q'`, `q''`, … on a constraint's left side.
@@ -135,8 +189,8 @@ impl Checker<'_> {
         };
         if *primes == 0 {
             let diagnostic = bad_lhs(lhs.span, "a coordinate, not a derivative")
-                .with_note("lagc handles non-holonomic constraints; a holonomic constraint `q2 = f(q1)` is best eliminated by choosing fewer coordinates")
-                .with_help(format!("differentiate it: `constraint {}' = …;`", name.name));
+                .with_note("a constraint without derivatives, `q2 = f(t, q1)`, is holonomic; this one holds derivatives, so its left side must be the derivative it fixes")
+                .with_help(format!("write `constraint {}' = …;`, or name the derivative it is solved for: `… for {}'`", name.name, name.name));
             self.report(diagnostic);
             return None;
         }
@@ -183,6 +237,11 @@ impl Checker<'_> {
                 // The constraint's own statement span helps place the error.
                 let diagnostic = if dependent.span == span {
                     diagnostic.with_help("a constraint cannot refer to the derivative it defines")
+                } else if dependent.implicit.is_some() {
+                    diagnostic.with_help(
+                        "write this constraint implicitly (`constraint … = … for …;`): \
+                         implicit constraints that share derivatives are solved together",
+                    )
                 } else {
                     diagnostic.with_help("substitute that coordinate's constraint into this one")
                 };
@@ -238,9 +297,17 @@ impl Checker<'_> {
     }
 
     /// Checks `lhs = rhs` of an implicit constraint: its order is the
-    /// candidates', every candidate occurs in it, and no other constraint's
-    /// dependent derivative of order ≥ k does.
-    fn implicit_residual(&mut self, own: &Constraint, implicit: &Implicit, all: &[Constraint]) {
+    /// candidates', every candidate occurs in it, and no explicit
+    /// constraint's dependent derivative of order ≥ k does (another
+    /// implicit constraint's candidate couples the two: they are solved
+    /// together). Returns the coordinates whose derivative of order k it
+    /// holds.
+    fn implicit_residual(
+        &mut self,
+        own: &Constraint,
+        implicit: &Implicit,
+        all: &[Constraint],
+    ) -> Vec<usize> {
         let k = own.order;
         let allowed = Allowed {
             time: true,
@@ -252,8 +319,15 @@ impl Checker<'_> {
         let mut uses = self.check_expr(&implicit.lhs, allowed);
         uses.extend(self.check_expr(&own.rhs, allowed));
         if self.diagnostics.len() > errors {
-            return;
+            return Vec::new();
         }
+        let mut held: Vec<usize> = uses
+            .iter()
+            .filter(|u| u.order == k)
+            .map(|u| u.coord)
+            .collect();
+        held.sort_unstable();
+        held.dedup();
         for &candidate in &implicit.candidates {
             if !uses.iter().any(|u| u.coord == candidate && u.order == k) {
                 let name = &self.coords[candidate].name;
@@ -275,7 +349,7 @@ impl Checker<'_> {
             }
             if let Some(other) = all
                 .iter()
-                .find(|c| owned_by(c.coord, c.implicit.as_ref()).contains(&used.coord))
+                .find(|c| c.implicit.is_none() && c.coord == used.coord)
             {
                 let name = &self.coords[used.coord].name;
                 let diagnostic = Diagnostic::error(
@@ -291,6 +365,7 @@ impl Checker<'_> {
                 self.report(diagnostic);
             }
         }
+        held
     }
 }
 
@@ -309,4 +384,483 @@ fn bad_lhs(span: Span, label: &str) -> Diagnostic {
     )
     .with_primary(span, label.to_string())
     .with_help("write it as `constraint q2' = …;`: the coordinate it makes dependent, with primes")
+}
+
+/// At most this many constraints are solved together: the dependents of
+/// a coupled group are solved symbolically by Cramer's rule over shared
+/// minors (2^m of them), and the mechanics differentiates the solution.
+pub const MAX_COUPLED: usize = 4;
+/// At most this many reduced systems (modes) are derived for the choices
+/// of dependents; each is a derivation and a part of the generated crate.
+pub const MAX_MODES: usize = 64;
+
+impl Checker<'_> {
+    /// A constraint without any derivative on either side, whose left side
+    /// is not one (`constraint x^2 + y^2 = l^2;`, `constraint y = x^2;`).
+    fn is_holonomic(&self, lhs: &Expr, rhs: &Expr) -> bool {
+        !self.holds_derivative(lhs) && !self.holds_derivative(rhs)
+    }
+
+    /// Whether `expr` holds a derivative, through a let included.
+    fn holds_derivative(&self, expr: &Expr) -> bool {
+        match &expr.kind {
+            ExprKind::Number(_) => false,
+            ExprKind::Var { name, primes } => {
+                *primes > 0
+                    || match self.names.get(&name.name).map(|d| d.name) {
+                        Some(Name::Let(i)) => self
+                            .lets
+                            .get(i)
+                            .is_some_and(|l| l.uses.coords.iter().any(|u| u.order > 0)),
+                        _ => false,
+                    }
+            }
+            ExprKind::Neg(e) | ExprKind::Not(e) => self.holds_derivative(e),
+            ExprKind::Component { base, .. } => self.holds_derivative(base),
+            ExprKind::Binary { lhs, rhs, .. }
+            | ExprKind::Compare { lhs, rhs, .. }
+            | ExprKind::Logic { lhs, rhs, .. } => {
+                self.holds_derivative(lhs) || self.holds_derivative(rhs)
+            }
+            ExprKind::Call { args, .. } | ExprKind::Vector(args) => {
+                args.iter().any(|a| self.holds_derivative(a))
+            }
+            ExprKind::If {
+                cond,
+                then,
+                otherwise,
+            } => {
+                self.holds_derivative(cond)
+                    || self.holds_derivative(then)
+                    || self.holds_derivative(otherwise)
+            }
+        }
+    }
+
+    /// A holonomic constraint `lhs = rhs` (SPEC §2.3): both sides checked
+    /// as expressions of `t`, params, masses and coordinates; its
+    /// candidates are the coordinates named after `for`, or (computed once
+    /// every constraint is known, [`Checker::holonomic_candidates`]) the
+    /// coordinate on its left side, else every coordinate it holds. Returns
+    /// the constraint (of order 0 until the model's order is known) and the
+    /// coordinates it holds.
+    fn holonomic(
+        &mut self,
+        lhs: &Expr,
+        rhs: &Expr,
+        candidates: &[Expr],
+        span: Span,
+    ) -> Option<(Constraint, Vec<usize>)> {
+        let allowed = Allowed {
+            time: true,
+            masses: true,
+            coord_order: Some(0),
+            ..Allowed::constants("a constraint")
+        };
+        let errors = self.diagnostics.len();
+        let mut uses = self.check_expr(lhs, allowed);
+        uses.extend(self.check_expr(rhs, allowed));
+        if self.diagnostics.len() > errors {
+            return None;
+        }
+        let mut held: Vec<usize> = uses.iter().map(|u| u.coord).collect();
+        held.sort_unstable();
+        held.dedup();
+        if held.is_empty() {
+            let diagnostic = Diagnostic::error(
+                codes::CONSTRAINT_LHS,
+                "a constraint without derivatives must hold a coordinate",
+            )
+            .with_primary(span, "no coordinate here")
+            .with_help(
+                "a holonomic constraint `f(t, q) = 0` relates coordinates, e.g. \
+                 `constraint x^2 + y^2 = l^2;`",
+            );
+            self.report(diagnostic);
+            return None;
+        }
+        let mut named = Vec::new();
+        for candidate in candidates {
+            let ExprKind::Var { name, primes } = &candidate.kind else {
+                self.report(bad_lhs(candidate.span, "not a coordinate"));
+                return None;
+            };
+            let coord = match self.names.get(&name.name).map(|d| d.name) {
+                Some(Name::Coord(coord)) if *primes == 0 => coord,
+                Some(Name::Coord(_)) => {
+                    let diagnostic = Diagnostic::error(
+                        codes::BAD_CANDIDATE,
+                        format!(
+                            "`for` names `{}{}`, but the constraint holds no derivative",
+                            name.name,
+                            "'".repeat(*primes as usize)
+                        ),
+                    )
+                    .with_primary(candidate.span, "a derivative")
+                    .with_help(format!(
+                        "a constraint without derivatives is solved for coordinates: `for {}`",
+                        name.name
+                    ));
+                    self.report(diagnostic);
+                    return None;
+                }
+                _ => {
+                    self.constraint_lhs(candidate);
+                    return None;
+                }
+            };
+            if named.contains(&coord) {
+                let diagnostic =
+                    Diagnostic::error(codes::BAD_CANDIDATE, "a candidate is named twice")
+                        .with_primary(candidate.span, "named again here");
+                self.report(diagnostic);
+                return None;
+            }
+            if !held.contains(&coord) {
+                let diagnostic = Diagnostic::error(
+                    codes::BAD_CANDIDATE,
+                    format!("the constraint does not hold `{}`", name.name),
+                )
+                .with_primary(
+                    candidate.span,
+                    "solved for a coordinate it does not contain",
+                )
+                .with_help("name after `for` coordinates that occur in the constraint");
+                self.report(diagnostic);
+                return None;
+            }
+            named.push(coord);
+        }
+        // `constraint y = f(x);`: solved for `y`, as `y' = …` is for `y'`.
+        if named.is_empty() {
+            if let ExprKind::Var { name, primes: 0 } = &lhs.kind {
+                if let Some(Name::Coord(coord)) = self.names.get(&name.name).map(|d| d.name) {
+                    named.push(coord);
+                }
+            }
+        }
+        let constraint = Constraint {
+            coord: named.first().copied().unwrap_or(held[0]),
+            order: 0,
+            rhs: rhs.clone(),
+            span,
+            text: String::new(),
+            implicit: Some(Implicit {
+                lhs: lhs.clone(),
+                candidates: named,
+                holonomic: true,
+            }),
+        };
+        Some((constraint, held))
+    }
+
+    /// Completes the candidates of the holonomic constraints: those named
+    /// (or the left side's coordinate) must not be an explicit
+    /// constraint's dependent; without them, every coordinate the
+    /// constraint holds that no explicit constraint makes dependent, the
+    /// last declared first.
+    fn holonomic_candidates(&mut self, constraints: &mut [Constraint], held: &[Vec<usize>]) {
+        let explicit: Vec<(usize, Span)> = constraints
+            .iter()
+            .filter(|c| c.implicit.is_none())
+            .map(|c| (c.coord, c.span))
+            .collect();
+        for (c, held) in constraints.iter_mut().zip(held) {
+            let Some(implicit) = c.implicit.as_mut().filter(|i| i.holonomic) else {
+                continue;
+            };
+            if implicit.candidates.is_empty() {
+                implicit.candidates = held
+                    .iter()
+                    .rev()
+                    .copied()
+                    .filter(|j| !explicit.iter().any(|&(e, _)| e == *j))
+                    .collect();
+            } else if let Some(&(j, first)) = explicit
+                .iter()
+                .find(|(e, _)| implicit.candidates.contains(e))
+            {
+                let name = &self.coords[j].name;
+                let diagnostic = Diagnostic::error(
+                    codes::DOUBLE_CONSTRAINT,
+                    format!("coordinate `{name}` is constrained twice"),
+                )
+                .with_primary(c.span, "second constraint on it here")
+                .with_secondary(first, "first constraint here")
+                .with_help("solve this constraint for another coordinate: `for …`");
+                self.report(diagnostic);
+                self.constraints_incomplete = true;
+                implicit.candidates.clear();
+            }
+            if implicit.candidates.is_empty() {
+                if !self.constraints_incomplete {
+                    let diagnostic = Diagnostic::error(
+                        codes::DOUBLE_CONSTRAINT,
+                        "every coordinate of this constraint is already dependent",
+                    )
+                    .with_primary(c.span, "no coordinate left to solve it for")
+                    .with_help("each constraint makes one coordinate dependent");
+                    self.report(diagnostic);
+                }
+                self.constraints_incomplete = true;
+                continue;
+            }
+            c.coord = implicit.candidates[0];
+        }
+    }
+
+    /// The groups of implicit constraints solved together: connected by a
+    /// shared candidate, or by one holding another's candidate at the
+    /// constraint order. Each group of m constraints is solved for m of
+    /// the union of its candidates (in order: each constraint's candidates
+    /// as written, then the next constraint's new ones); a choice is kept
+    /// when every constraint can be matched to a chosen coordinate it holds
+    /// (otherwise the block of the chosen derivatives is singular whatever
+    /// the state). The constraints' `coord` is set from the first choice.
+    fn groups(&mut self, constraints: &mut [Constraint], held: &[Vec<usize>]) -> Vec<Group> {
+        let implicit: Vec<usize> = (0..constraints.len())
+            .filter(|&i| {
+                constraints[i]
+                    .implicit
+                    .as_ref()
+                    .is_some_and(|im| !im.candidates.is_empty())
+            })
+            .collect();
+        let candidate_lists: Vec<Vec<usize>> = constraints
+            .iter()
+            .map(|c| {
+                c.implicit
+                    .as_ref()
+                    .map_or(Vec::new(), |im| im.candidates.clone())
+            })
+            .collect();
+        let candidates_of = |i: usize| -> &[usize] { &candidate_lists[i] };
+        // Union–find by the smallest index.
+        let mut root: Vec<usize> = (0..constraints.len()).collect();
+        fn find(root: &mut [usize], i: usize) -> usize {
+            let mut r = i;
+            while root[r] != r {
+                r = root[r];
+            }
+            root[i] = r;
+            r
+        }
+        for (x, &a) in implicit.iter().enumerate() {
+            for &b in &implicit[x + 1..] {
+                let touches = |p: usize, q: usize| {
+                    candidates_of(q)
+                        .iter()
+                        .any(|j| candidates_of(p).contains(j) || held[p].contains(j))
+                };
+                if touches(a, b) || touches(b, a) {
+                    let (ra, rb) = (find(&mut root, a), find(&mut root, b));
+                    root[ra.max(rb)] = ra.min(rb);
+                }
+            }
+        }
+        let mut groups = Vec::new();
+        let mut modes: usize = 1;
+        for &first in &implicit {
+            if find(&mut root, first) != first {
+                continue;
+            }
+            let members: Vec<usize> = implicit
+                .iter()
+                .copied()
+                .filter(|&i| find(&mut root, i) == first)
+                .collect();
+            let mut union: Vec<usize> = Vec::new();
+            for &i in &members {
+                for &j in candidates_of(i) {
+                    if !union.contains(&j) {
+                        union.push(j);
+                    }
+                }
+            }
+            let last = constraints[*members.last().unwrap_or(&first)].span;
+            if members.len() > MAX_COUPLED {
+                let diagnostic = Diagnostic::error(
+                    codes::BAD_CANDIDATE,
+                    format!(
+                        "{} constraints are coupled; lagc solves at most {MAX_COUPLED} together",
+                        members.len()
+                    ),
+                )
+                .with_primary(last, "coupled with the constraints before it")
+                .with_note(
+                    "constraints that share candidates (or hold each other's) are solved \
+                     together, symbolically",
+                )
+                .with_help("name fewer candidates after `for`, or choose coordinates that decouple the constraints");
+                self.report(diagnostic);
+                continue;
+            }
+            let mut choices: Vec<Vec<usize>> = subsets(union.len(), members.len())
+                .into_iter()
+                .filter_map(|subset| {
+                    let chosen: Vec<usize> = subset.iter().map(|&u| union[u]).collect();
+                    matching(&members, &chosen, held, constraints)
+                })
+                .collect();
+            // The first choice: each constraint its first candidate that an
+            // earlier one has not taken (what `for y' or x'` on each says),
+            // when that works.
+            let mut greedy: Vec<usize> = Vec::new();
+            for &i in &members {
+                if let Some(&j) = candidates_of(i).iter().find(|j| !greedy.contains(j)) {
+                    greedy.push(j);
+                }
+            }
+            let same_set = |a: &[usize], b: &[usize]| a.iter().all(|j| b.contains(j));
+            if greedy.len() == members.len() {
+                if let Some(at) = choices.iter().position(|c| same_set(c, &greedy)) {
+                    choices.remove(at);
+                    choices.insert(0, greedy);
+                }
+            }
+            if choices.is_empty() {
+                let names: Vec<String> = union
+                    .iter()
+                    .map(|&j| format!("`{}`", self.coords[j].name))
+                    .collect();
+                let mut diagnostic = Diagnostic::error(
+                    codes::DOUBLE_CONSTRAINT,
+                    format!(
+                        "{} constraints solved together have too few candidates ({})",
+                        members.len(),
+                        names.join(", ")
+                    ),
+                )
+                .with_primary(last, "no candidate left for this constraint");
+                for &i in &members[..members.len() - 1] {
+                    diagnostic =
+                        diagnostic.with_secondary(constraints[i].span, "solved together with it");
+                }
+                let diagnostic = diagnostic.with_help(
+                    "each constraint makes one coordinate dependent: name another candidate \
+                     after `for` (`for y' or x'`)",
+                );
+                self.report(diagnostic);
+                self.constraints_incomplete = true;
+                continue;
+            }
+            modes = modes.saturating_mul(choices.len());
+            if modes > MAX_MODES {
+                let diagnostic = Diagnostic::error(
+                    codes::BAD_CANDIDATE,
+                    format!(
+                        "the constraints' candidates make more than {MAX_MODES} reduced systems"
+                    ),
+                )
+                .with_primary(
+                    last,
+                    format!("{} choices of dependents here", choices.len()),
+                )
+                .with_note(
+                    "lagc derives one reduced system for each choice of dependent coordinates \
+                     and switches between them at run time",
+                )
+                .with_help("name the candidates after `for` (`for y or x`) to choose among fewer");
+                self.report(diagnostic);
+                continue;
+            }
+            for (&i, &j) in members.iter().zip(&choices[0]) {
+                constraints[i].coord = j;
+            }
+            groups.push(Group {
+                constraints: members,
+                choices,
+            });
+        }
+        groups
+    }
+}
+
+/// Every `m`-subset of `0..n`, in lexicographic order.
+fn subsets(n: usize, m: usize) -> Vec<Vec<usize>> {
+    let mut all = Vec::new();
+    if m > n {
+        return all;
+    }
+    let mut current: Vec<usize> = (0..m).collect();
+    loop {
+        all.push(current.clone());
+        let Some(i) = (0..m).rev().find(|&i| current[i] < n - m + i) else {
+            return all;
+        };
+        current[i] += 1;
+        for j in i + 1..m {
+            current[j] = current[j - 1] + 1;
+        }
+    }
+}
+
+/// A coordinate of `chosen` for each of `members`, one it holds, all
+/// distinct (a perfect matching by augmenting paths; the first found,
+/// preferring each constraint's candidates in its own order), or `None`.
+fn matching(
+    members: &[usize],
+    chosen: &[usize],
+    held: &[Vec<usize>],
+    constraints: &[Constraint],
+) -> Option<Vec<usize>> {
+    let holds = |i: usize, j: usize| {
+        let own = constraints[i]
+            .implicit
+            .as_ref()
+            .is_some_and(|im| im.candidates.contains(&j));
+        own || held[i].contains(&j)
+    };
+    // Each constraint's options: its own candidates first, in its order.
+    let options: Vec<Vec<usize>> = members
+        .iter()
+        .map(|&i| {
+            let own: Vec<usize> = constraints[i]
+                .implicit
+                .as_ref()
+                .map_or(Vec::new(), |im| im.candidates.clone());
+            let mut o: Vec<usize> = own.into_iter().filter(|j| chosen.contains(j)).collect();
+            let more: Vec<usize> = chosen
+                .iter()
+                .copied()
+                .filter(|&j| holds(i, j) && !o.contains(&j))
+                .collect();
+            o.extend(more);
+            o
+        })
+        .collect();
+    let mut owner: Vec<Option<usize>> = vec![None; chosen.len()];
+    fn augment(
+        m: usize,
+        options: &[Vec<usize>],
+        chosen: &[usize],
+        owner: &mut [Option<usize>],
+        seen: &mut [bool],
+    ) -> bool {
+        for &j in &options[m] {
+            let slot = chosen.iter().position(|&c| c == j).unwrap_or(0);
+            if seen[slot] {
+                continue;
+            }
+            seen[slot] = true;
+            if owner[slot].is_none_or(|other| augment(other, options, chosen, owner, seen)) {
+                owner[slot] = Some(m);
+                return true;
+            }
+        }
+        false
+    }
+    for m in 0..members.len() {
+        let mut seen = vec![false; chosen.len()];
+        if !augment(m, &options, chosen, &mut owner, &mut seen) {
+            return None;
+        }
+    }
+    let mut assigned = vec![0; members.len()];
+    for (slot, o) in owner.iter().enumerate() {
+        if let Some(m) = o {
+            assigned[*m] = chosen[slot];
+        }
+    }
+    Some(assigned)
 }

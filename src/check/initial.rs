@@ -87,8 +87,14 @@ impl Checker<'_> {
         first_statement: Option<crate::span::Span>,
     ) {
         for coord in 0..self.coords.len() {
-            let dependent = constraints.iter().any(|c| c.coord == coord);
-            let required_below = if dependent { k } else { 2 };
+            // A holonomic constraint's dependent needs its position only
+            // (a starting value for Newton); its derivatives below k
+            // follow from the constraint's.
+            let required_below = match constraints.iter().find(|c| c.coord == coord) {
+                Some(c) if c.is_holonomic() => 1,
+                Some(_) => k,
+                None => 2,
+            };
             let missing: Vec<String> = (0..required_below)
                 .filter(|&order| !initial.iter().any(|i| (i.coord, i.order) == (coord, order)))
                 .map(|order| {

@@ -37,7 +37,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let params = checker.params();
     let lets = checker.lets();
     let masses = checker.masses();
-    let (constraint_order, constraints) = checker.constraints();
+    let (constraint_order, constraints, groups) = checker.constraints();
     let lagrangian = checker.lagrangian();
     let forces = checker.forces();
     let points = checker.points();
@@ -69,6 +69,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
         lagrangian,
         constraint_order,
         constraints,
+        groups,
         points,
         forces,
         initial,

@@ -27,6 +27,9 @@ pub struct Model {
     /// The common order `k` of the constraints; `None` for a holonomic model.
     pub constraint_order: Option<u32>,
     pub constraints: Vec<Constraint>,
+    /// The implicit (and holonomic) constraints in groups solved together,
+    /// in the order of their first constraints.
+    pub groups: Vec<Group>,
     pub points: Vec<Point>,
     pub forces: Vec<Force>,
     pub initial: Vec<Initial>,
@@ -81,29 +84,33 @@ impl Model {
         self.constraints.iter().map(|c| c.coord).collect()
     }
 
-    /// The number of modes: combinations of the implicit constraints'
-    /// candidates (1 when none has several).
+    /// The number of modes: combinations of the groups' choices of
+    /// dependents (1 when none has several).
     pub fn mode_count(&self) -> usize {
-        self.constraints
-            .iter()
-            .map(|c| c.implicit.as_ref().map_or(1, |i| i.candidates.len()))
-            .product()
+        self.groups.iter().map(|g| g.choices.len()).product()
     }
 
-    /// The model of mode `mode`: each implicit constraint solved for the
-    /// candidate of its digit (mixed radix, the first constraint lowest, as
+    /// The model of mode `mode`: each group of implicit constraints solved
+    /// for the choice of its digit (mixed radix, the first group lowest, as
     /// the runtime counts modes).
     pub fn in_mode(&self, mode: usize) -> Model {
         let mut model = self.clone();
         let mut rest = mode;
-        for c in &mut model.constraints {
-            if let Some(implicit) = &c.implicit {
-                let n = implicit.candidates.len();
-                c.coord = implicit.candidates[rest % n];
-                rest /= n;
+        for g in &self.groups {
+            let n = g.choices.len();
+            for (&i, &j) in g.constraints.iter().zip(&g.choices[rest % n]) {
+                model.constraints[i].coord = j;
             }
+            rest /= n;
         }
         model
+    }
+
+    /// The group a constraint belongs to, if it is implicit.
+    pub fn group_of(&self, constraint: usize) -> Option<&Group> {
+        self.groups
+            .iter()
+            .find(|g| g.constraints.contains(&constraint))
     }
 }
 
@@ -155,6 +162,30 @@ pub struct Constraint {
 pub struct Implicit {
     pub lhs: Expr,
     pub candidates: Vec<usize>,
+    /// `lhs = rhs` holds no derivative (SPEC §2.3): the constraint of
+    /// order k is its k-th total derivative, and the candidates are
+    /// coordinates (named `for y or x`, else the left side's coordinate,
+    /// else all it holds, the last declared first).
+    pub holonomic: bool,
+}
+
+impl Constraint {
+    pub fn is_holonomic(&self) -> bool {
+        self.implicit.as_ref().is_some_and(|i| i.holonomic)
+    }
+}
+
+/// Implicit constraints solved together (they share candidates, or hold
+/// each other's): `m = constraints.len()` equations linear in the order-k
+/// derivatives of `m` dependents, chosen among their candidates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Group {
+    /// Indices into [`Model::constraints`], in source order.
+    pub constraints: Vec<usize>,
+    /// The choices of dependents, the runtime's digit order: for each, the
+    /// dependent coordinate of each constraint of the group (distinct; a
+    /// coordinate it holds). The first is the initial values'.
+    pub choices: Vec<Vec<usize>>,
 }
 
 /// `let NAME = value;`: `size` 1 for a number, 2 or 3 for a vector.

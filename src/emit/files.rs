@@ -10,6 +10,10 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/budget.rs", include_str!("../../runtime/src/budget.rs")),
     ("src/cli.rs", include_str!("../../runtime/src/cli.rs")),
     (
+        "src/closure.rs",
+        include_str!("../../runtime/src/closure.rs"),
+    ),
+    (
         "src/controller.rs",
         include_str!("../../runtime/src/controller.rs"),
     ),

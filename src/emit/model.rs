@@ -128,6 +128,13 @@ fn initial_state(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
             InitialSource::Given { index: k, value } => (kernel.state[k], value, Some(k)),
             InitialSource::Constraint { index: k, value } => (kernel.state[k], value, None),
             InitialSource::Solved { symbol, value } => (symbol, value, None),
+            InitialSource::Closure => {
+                if let Some(closure) = &kernel.closure {
+                    statements.push(closure_newton(kernel, names, closure, &known));
+                    uses_time = true;
+                }
+                continue;
+            }
         };
         let lookup: Source = &|s| known.get(&s).cloned();
         let code = names.code(arena, &[value], lookup);
@@ -188,6 +195,66 @@ fn initial_state(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     }
 }
 
+/// Newton on the holonomic constraints from the given positions (in
+/// scope by their names in `known`): the dependent ones are rebound to
+/// the root.
+fn closure_newton(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    closure: &crate::kernel::KernelClosure,
+    known: &HashMap<Symbol, TokenStream>,
+) -> TokenStream {
+    let arena = &kernel.arena;
+    let z = names.namer.fresh("closure_z");
+    let f = names.namer.fresh("closure_f");
+    let jac = names.namer.fresh("closure_jac");
+    let unknowns: Vec<Symbol> = closure.unknowns.iter().map(|&k| kernel.state[k]).collect();
+    let lookup = |s: Symbol| match unknowns.iter().position(|&u| u == s) {
+        Some(i) => {
+            let i = index(i);
+            Some(quote! { #z[#i] })
+        }
+        None => known.get(&s).cloned(),
+    };
+    let mut roots = closure.residual.clone();
+    roots.extend(closure.jacobian.iter().map(|&(_, _, e)| e));
+    let code = names.code(arena, &roots, &lookup);
+    let statements = code.statements(quote! { self.params });
+    let m = closure.residual.len();
+    let rows = (0..m).map(|r| {
+        let (i, value) = (index(r), &code.roots[r]);
+        quote! { #f[#i] = #value; }
+    });
+    let entries = closure.jacobian.iter().enumerate().map(|(e, &(r, c, _))| {
+        let (r, c, value) = (index(r), index(c), &code.roots[m + e]);
+        quote! { #jac[(#r, #c)] = #value; }
+    });
+    let starts: Vec<TokenStream> = unknowns
+        .iter()
+        .map(|s| known.get(s).cloned().unwrap_or_else(|| quote! { f64::NAN }))
+        .collect();
+    let rebound = unknowns.iter().enumerate().map(|(i, s)| {
+        let name = known.get(s).cloned().unwrap_or_else(|| quote! { _unused });
+        let i = index(i);
+        quote! { let #name = #z[#i]; }
+    });
+    let text = &closure.text;
+    quote! {
+        let mut #z = [#(#starts),*];
+        lagc_runtime::closure::initial(
+            t,
+            &mut #z,
+            #text,
+            &mut |#z: &[f64], #f: &mut [f64], #jac: &mut Matrix| {
+                #statements
+                #(#rows)*
+                #(#entries)*
+            },
+        )?;
+        #(#rebound)*
+    }
+}
+
 /// The consts of the trait impl.
 pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStream {
     let arena = &kernel.arena;
@@ -242,6 +309,24 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
     } else {
         quote! { const KEEPS_CONSTRAINTS: bool = true; }
     };
+    let keeps = if kernel.closure.is_some() {
+        quote! { const KEEPS_POSITIONS: bool = true; }
+    } else {
+        TokenStream::new()
+    };
+    // Which components each mode fixes: with groups of constraints solved
+    // together (or holonomic ones), a mode's are not found from the first
+    // mode's by the candidates' names.
+    let modes = std::iter::once(kernel).chain(&kernel.modes);
+    let fixed = if kernel.modes.is_empty() || modes.clone().all(|k| k.kept.is_empty()) {
+        TokenStream::new()
+    } else {
+        let tables = modes.map(|k| {
+            let indices = k.kept.iter().map(|&(i, _)| index(i));
+            quote! { &[#(#indices),*] }
+        });
+        quote! { const FIXED: &'static [&'static [usize]] = &[#(#tables),*]; }
+    };
     quote! {
         const NAME: &'static str = #model_name;
         const SOURCE_HASH: &'static str = #source_hash;
@@ -254,5 +339,7 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
         #affine
         #exact
         #kept
+        #keeps
+        #fixed
     }
 }

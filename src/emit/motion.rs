@@ -33,6 +33,9 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
     let (trait_items, inherent) = motion_of(kernel, names, &from_x);
     let condition = mass_condition(kernel, names, &from_x);
     let events = super::events::items(kernel, names, &from_x);
+    // The same in every mode: one trait item.
+    let closure = closure_kept(kernel, names);
+    let events = quote! { #events #closure };
     if kernel.modes.is_empty() {
         return (quote! { #trait_items #condition #events }, inherent);
     }
@@ -117,6 +120,90 @@ fn kept_code(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
             #g_statements
             #(#g_cells)*
             Ok(())
+        }
+    }
+}
+
+/// `project_closure` of a model with holonomic constraints (SPEC §2.3):
+/// the state projected onto them along their normals — Gauss–Newton on
+/// `f(t, q) = 0` with the smallest correction of the positions, then each
+/// derivative `q^(r)` onto `D^r f = 0` (linear in it, the same normals) —
+/// in place. The same in every mode (it does not depend on the dependents
+/// chosen); the runtime's keeper then keeps the velocities the mode's
+/// constraints fix (`constrained`).
+fn closure_kept(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
+    let Some(closure) = &kernel.closure else {
+        return TokenStream::new();
+    };
+    let arena = &kernel.arena;
+    let state = names.namer.fresh("closure_x");
+    let level = names.namer.fresh("closure_level");
+    let f = names.namer.fresh("closure_f");
+    let normals = names.namer.fresh("closure_normals");
+    let position: HashMap<Symbol, usize> = kernel
+        .state
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| (s, i))
+        .collect();
+    let lookup = |s: Symbol| {
+        position.get(&s).map(|&i| {
+            let i = index(i);
+            quote! { #state[#i] }
+        })
+    };
+    let m = closure.residual.len();
+    let mut roots = closure.residual.clone();
+    roots.extend(closure.normals.iter().map(|&(_, _, e)| e));
+    let code = names.code(arena, &roots, &lookup);
+    let statements = code.statements(quote! { self.params });
+    let rows = (0..m).map(|r| {
+        let (i, value) = (index(r), &code.roots[r]);
+        quote! { #f[#i] = #value; }
+    });
+    let entries = closure.normals.iter().enumerate().map(|(e, &(r, c, _))| {
+        let (r, c, value) = (index(r), index(c), &code.roots[m + e]);
+        quote! { #normals[(#r, #c)] = #value; }
+    });
+    let mut arms = vec![quote! {
+        0 => {
+            #statements
+            #(#rows)*
+            #(#entries)*
+        }
+    }];
+    for (r, residuals) in closure.levels.iter().enumerate() {
+        let code = names.code(arena, residuals, &lookup);
+        let statements = code.statements(quote! { self.params });
+        let rows = code.roots.iter().enumerate().map(|(i, value)| {
+            let i = index(i);
+            quote! { #f[#i] = #value; }
+        });
+        let pattern = if r + 1 == closure.levels.len() {
+            quote! { _ }
+        } else {
+            let r = index(r + 1);
+            quote! { #r }
+        };
+        arms.push(quote! { #pattern => { #statements #(#rows)* } });
+    }
+    let text = &closure.text;
+    let coordinates = index(kernel.coordinates);
+    let levels = index(closure.levels.len());
+    let rows = index(m);
+    quote! {
+        fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+            lagc_runtime::closure::project(
+                t,
+                x,
+                (#rows, #coordinates, #levels),
+                #text,
+                &mut |#state: &[f64], #level: usize, #f: &mut [f64], #normals: &mut Matrix| {
+                    match #level {
+                        #(#arms)*
+                    }
+                },
+            )
         }
     }
 }

@@ -57,6 +57,9 @@ pub enum InitialKind {
 pub enum InitialSource {
     /// A value the model states (overridable): an expression of params.
     Given { index: usize, value: ExprId },
+    /// The dependent positions of the holonomic constraints, moved onto
+    /// them by Newton from the given values ([`Kernel::closure`]).
+    Closure,
     /// Fixed by a constraint from the given values (and `t0`, masses).
     Constraint { index: usize, value: ExprId },
     /// An independent derivative of order 2..k−1, solved from (4).
@@ -99,6 +102,9 @@ pub fn initial(
             }
             InitialValue::Solved => kinds.push(InitialKind::Solved),
         }
+    }
+    if reduced.closure.is_some() {
+        sources.push(InitialSource::Closure);
     }
     sources.extend(constrained);
     for stage in &reduced.consistency {
@@ -189,5 +195,71 @@ pub fn coefficients(
         jacobian,
         time_partial,
         linear: system.linear,
+    })
+}
+
+/// The holonomic constraints at position level in the kernel: `f_ν` and
+/// its non-zero partials in the dependent coordinates, by state index.
+#[derive(Debug, Clone)]
+pub struct KernelClosure {
+    /// The state indices of the dependent coordinates (the unknowns).
+    pub unknowns: Vec<usize>,
+    pub residual: Vec<ExprId>,
+    /// `(row, column, ∂f_row/∂z_column)`, non-zero entries.
+    pub jacobian: Vec<(usize, usize, ExprId)>,
+    /// The constraints as written, for messages.
+    pub text: String,
+    /// `(row, coordinate, ∂f_row/∂q_coordinate)`, non-zero entries: the
+    /// normals of the projection (`Closure::normals`).
+    pub normals: Vec<(usize, usize, ExprId)>,
+    /// `D^r f` for r = 1..u−1 (`Closure::levels`).
+    pub levels: Vec<Vec<ExprId>>,
+}
+
+pub fn closure(arena: &mut Arena, reduced: &ReducedSystem) -> Option<KernelClosure> {
+    let closure = reduced.closure.as_ref()?;
+    let unknowns = closure
+        .unknowns
+        .iter()
+        .filter_map(|z| reduced.state.iter().position(|s| s == z))
+        .collect();
+    let residual = closure
+        .residual
+        .iter()
+        .map(|&e| crate::mechanics::tidy::simplify(arena, e))
+        .collect();
+    let mut jacobian = Vec::new();
+    for (r, row) in closure.jacobian.iter().enumerate() {
+        for (c, &e) in row.iter().enumerate() {
+            if !arena.is_zero(e) {
+                jacobian.push((r, c, crate::mechanics::tidy::simplify(arena, e)));
+            }
+        }
+    }
+    let mut normals = Vec::new();
+    for (r, row) in closure.normals.iter().enumerate() {
+        for (c, &e) in row.iter().enumerate() {
+            if !arena.is_zero(e) {
+                normals.push((r, c, crate::mechanics::tidy::simplify(arena, e)));
+            }
+        }
+    }
+    let levels = closure
+        .levels
+        .iter()
+        .map(|level| {
+            level
+                .iter()
+                .map(|&e| crate::mechanics::tidy::simplify(arena, e))
+                .collect()
+        })
+        .collect();
+    Some(KernelClosure {
+        unknowns,
+        residual,
+        jacobian,
+        text: closure.text.clone(),
+        normals,
+        levels,
     })
 }

@@ -22,7 +22,9 @@ pub mod time;
 
 pub use candidates::KernelCandidates;
 pub use impacts::KernelImpact;
-pub use items::{Coefficients, InitialKind, InitialSource, KernelInitial, KernelParam};
+pub use items::{
+    Coefficients, InitialKind, InitialSource, KernelClosure, KernelInitial, KernelParam,
+};
 pub use motion::{Explicit, Implicit, Motion};
 pub use switches::{BranchCond, Switches};
 
@@ -77,6 +79,9 @@ pub struct Kernel {
     pub switches: Switches,
     /// Every implicit constraint with its candidates' pivots.
     pub candidates: Vec<KernelCandidates>,
+    /// The holonomic constraints at position level, with this mode's
+    /// dependent coordinates as the unknowns.
+    pub closure: Option<KernelClosure>,
     /// The state components a constraint fixes, with the value it requires
     /// at `(t, x)` — `(state index, value)`, the dependent velocities of
     /// first-order constraints (SPEC §2.3): the state is brought back onto
@@ -214,6 +219,7 @@ fn build_with(
     let kept = kept(&mut arena, &mut switches, reduced);
     let kept_gradient = kept_gradient(&mut arena, &kept, &reduced.state);
     let impacts = impacts::on_branches(&mut arena, &mut switches, impacts);
+    let closure = items::closure(&mut arena, reduced);
     Ok(Kernel {
         arena,
         state: reduced.state.clone(),
@@ -236,6 +242,7 @@ fn build_with(
         constrained,
         switches,
         candidates,
+        closure,
         kept,
         kept_gradient,
         domains,

@@ -4,7 +4,7 @@
 //! that the constraints or the equations fix is checked at `t0` with the
 //! params at their defaults (E0013).
 
-use super::reduced::{Consistency, InitialValue};
+use super::reduced::{Closure, Consistency, InitialValue};
 use super::star::Elimination;
 use super::symbols::{lower_checked, Symbolic};
 use crate::check::model::Model;
@@ -19,6 +19,13 @@ const TOLERANCE: f64 = 1e-9;
 const NEWTON_STEPS: usize = 50;
 
 /// The state's initial values, in state order.
+/// With holonomic constraints, the given positions of their dependents
+/// are starting values: Newton (at the params' defaults here, at run time
+/// in the generated code) moves them onto the constraints, and a move
+/// beyond the agreement required of given values is a note. `levels`:
+/// for k ≥ 2, the dependents' derivatives of order 1..k−1 that the
+/// holonomic constraints fix.
+#[allow(clippy::too_many_arguments)]
 pub fn initial_values(
     arena: &mut Arena,
     model: &Model,
@@ -26,7 +33,9 @@ pub fn initial_values(
     elimination: &mut Elimination,
     state: &[Symbol],
     consistency: &[Consistency],
-) -> Result<Vec<InitialValue>, Vec<Diagnostic>> {
+    closure: Option<&Closure>,
+    levels: &HashMap<Symbol, ExprId>,
+) -> Result<(Vec<InitialValue>, Vec<Diagnostic>), Vec<Diagnostic>> {
     let mut errors = Vec::new();
     let t0 = lower_checked(arena, &model.time.start, model)
         .map(|e| arena.eval(e, &|s| param_env(symbolic, s)))
@@ -63,6 +72,10 @@ pub fn initial_values(
             initial.push(InitialValue::Constraint(fixed));
             continue;
         }
+        if let Some(&fixed) = levels.get(&symbol) {
+            initial.push(InitialValue::Constraint(fixed));
+            continue;
+        }
         if !dependent && order >= 2 {
             initial.push(InitialValue::Solved);
             continue;
@@ -81,7 +94,72 @@ pub fn initial_values(
     if !errors.is_empty() {
         return Err(errors);
     }
-    // Pass 2: the values the constraints fix (they depend on given values only).
+    // Pass 2: the positions the holonomic constraints fix, by Newton from
+    // the given ones.
+    let mut notes = Vec::new();
+    if let Some(closure) = closure {
+        let env_values = values.clone();
+        let start: Vec<f64> = closure
+            .unknowns
+            .iter()
+            .map(|z| env_values.get(z).copied().unwrap_or(f64::NAN))
+            .collect();
+        let env = |s: Symbol| at(symbolic, t0, &laws_at_t0, &env_values, s);
+        match closure_newton(arena, closure, &start, &env) {
+            Ok(solution) => {
+                for ((&z, &from), &to) in closure.unknowns.iter().zip(&start).zip(&solution) {
+                    if !close(from, to) {
+                        if let Some(&(_, user)) = given.get(&z) {
+                            let name = arena.symbol_name(z);
+                            notes.push(
+                                Diagnostic::note_diagnostic(
+                                    codes::INITIAL_POSITION_CORRECTED,
+                                    format!("the initial value of `{name}` is moved onto the constraints"),
+                                )
+                                .with_primary(user.span, format!("`{name}` = {from} here"))
+                                .with_note(format!(
+                                    "at t = {t0}, Newton on `{}` from the given positions \
+                                     gives `{name}` = {to} (params at their defaults); the \
+                                     run starts there",
+                                    closure.text
+                                ))
+                                .with_help(format!("give `{name}` = {to} to start there as written")),
+                            );
+                        }
+                    }
+                    values.insert(z, to);
+                }
+            }
+            Err(why) => {
+                let z = closure.unknowns[0];
+                let name = arena.symbol_name(z);
+                let mut diagnostic = Diagnostic::error(
+                    codes::INCONSISTENT_INITIAL,
+                    format!(
+                        "the initial positions cannot be brought onto `{}`",
+                        closure.text
+                    ),
+                )
+                .with_note(format!(
+                    "at t = {t0}, Newton on the dependent coordinates from the given values \
+                     (params at their defaults): {why}"
+                ))
+                .with_help(format!(
+                    "give `{name}` (and the other dependent coordinates) closer to a \
+                     configuration that satisfies the constraints"
+                ));
+                diagnostic = match given.get(&z) {
+                    Some(&(_, user)) => {
+                        diagnostic.with_primary(user.span, "starting from this value")
+                    }
+                    None => diagnostic.with_primary(model.time.span, "the motion starts here"),
+                };
+                errors.push(diagnostic);
+                return Err(errors);
+            }
+        }
+    }
+    // Pass 3: the values the constraints fix (they depend on given values only).
     let env_values = values.clone();
     for (&symbol, value) in state.iter().zip(&initial) {
         if let InitialValue::Constraint(fixed) = value {
@@ -107,7 +185,7 @@ pub fn initial_values(
             values.insert(symbol, required);
         }
     }
-    // Pass 3: the consistency stages (k ≥ 3), in order.
+    // Pass 4: the consistency stages (k ≥ 3), in order.
     for stage in consistency {
         let env_values = values.clone();
         let Some(solution) = solve_stage(arena, stage, &|s| {
@@ -140,10 +218,92 @@ pub fn initial_values(
         }
     }
     if errors.is_empty() {
-        Ok(initial)
+        Ok((initial, notes))
     } else {
         Err(errors)
     }
+}
+
+/// Newton on `f(t0, q) = 0` over the closure's unknowns from `start`,
+/// halving a step that does not decrease the residual; the solution, or
+/// why there is none.
+fn closure_newton(
+    arena: &Arena,
+    closure: &Closure,
+    start: &[f64],
+    env: &dyn Fn(Symbol) -> f64,
+) -> Result<Vec<f64>, String> {
+    let n = start.len();
+    let mut z = start.to_vec();
+    let entries: Vec<ExprId> = closure.jacobian.iter().flatten().copied().collect();
+    let residual = |z: &[f64]| {
+        let lookup = |s: Symbol| match closure.unknowns.iter().position(|&u| u == s) {
+            Some(i) => z[i],
+            None => env(s),
+        };
+        arena.eval_many(&closure.residual, &lookup)
+    };
+    let norm = |r: &[f64]| r.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if z.iter().any(|v| !v.is_finite()) {
+        return Err("a given value is not finite".to_string());
+    }
+    let mut r = residual(&z);
+    for _ in 0..NEWTON_STEPS {
+        if norm(&r) == 0.0 {
+            return Ok(z);
+        }
+        let lookup = |s: Symbol| match closure.unknowns.iter().position(|&u| u == s) {
+            Some(i) => z[i],
+            None => env(s),
+        };
+        let j = arena.eval_many(&entries, &lookup);
+        let Some(step) = DMatrix::from_row_slice(n, n, &j)
+            .lu()
+            .solve(&DVector::from_vec(r.clone()))
+        else {
+            return Err(format!(
+                "the constraints' Jacobian in the dependent coordinates is singular there \
+                 (residual {:.3e})",
+                norm(&r)
+            ));
+        };
+        let mut scale = 1.0;
+        let (mut next, mut r_next);
+        loop {
+            next = z
+                .iter()
+                .zip(step.iter())
+                .map(|(z, d)| z - scale * d)
+                .collect::<Vec<_>>();
+            r_next = residual(&next);
+            if norm(&r_next) < norm(&r) || scale < 1e-3 {
+                break;
+            }
+            scale *= 0.5;
+        }
+        let full = step.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let magnitude = z.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        if norm(&r_next) >= norm(&r) || norm(&r_next).is_nan() {
+            // Rounding: the residual no longer decreases, and the step
+            // that would reduce it is at the level of rounding.
+            if full <= 1e-9 * magnitude {
+                return Ok(z);
+            }
+            return Err(format!(
+                "it stalls with the residual {:.3e} (no configuration near the given one)",
+                norm(&r)
+            ));
+        }
+        z = next;
+        r = r_next;
+        if full <= 4.0 * f64::EPSILON * magnitude {
+            return Ok(z);
+        }
+    }
+    Err(format!(
+        "no convergence in {NEWTON_STEPS} steps (residual {:.3e})",
+        norm(&r)
+    ))
 }
 
 fn close(a: f64, b: f64) -> bool {

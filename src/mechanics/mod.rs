@@ -4,6 +4,7 @@
 //! | file | what |
 //! |---|---|
 //! | `symbols.rs` | the model lowered: L, mass laws, constraints φ |
+//! | `coupled.rs` | implicit and holonomic constraints solved together (Cramer) |
 //! | `star.rs` | the order-matched star; eliminating dependent derivatives |
 //! | `reactive_forces.rs` | `R_j` of the variable-mass points |
 //! | `generalized_forces.rs` | the declared `Q_j` |
@@ -18,6 +19,7 @@
 //! | `tidy.rs`, `text.rs` | readable text and LaTeX |
 //! | `sample.rs` | random points and rounding scales for numeric checks |
 
+pub mod coupled;
 mod equations;
 mod generalized_forces;
 mod initial;
@@ -27,7 +29,7 @@ mod reactive_forces;
 mod reduce;
 pub mod reduced;
 mod sample;
-pub use sample::Rng;
+pub use sample::{eval_scaled, Rng, Scaled};
 mod singular;
 mod solve;
 mod star;
@@ -37,7 +39,7 @@ pub mod tidy;
 
 pub use equations::Equation4;
 pub use multiplier_route::{cross_check, CrossCheck, CrossCheckFailure};
-pub use reduced::{Consistency, Highest, InitialValue, ReducedSystem};
+pub use reduced::{Closure, Consistency, Highest, InitialValue, ReducedSystem};
 
 use crate::check::model::Model;
 use crate::diagnostic::Diagnostic;
@@ -83,6 +85,14 @@ pub struct Derivation {
     pub lets: Vec<(String, Vec<ExprId>)>,
     /// Param defaults, for numeric checks.
     pub param_defaults: Vec<f64>,
+    /// The implicit constraints of order k as solved (`Symbolic::written`).
+    pub written: Vec<(String, ExprId)>,
+    /// The holonomic constraints `f = 0` as written (mass symbols kept)
+    /// and the form of order k the mechanics solves, `D^k f = 0`.
+    pub holonomic: Vec<(ExprId, ExprId)>,
+    /// Notes for the build (an initial position that Newton moved onto
+    /// the constraints).
+    pub notes: Vec<Diagnostic>,
 }
 
 impl Derivation {
@@ -195,7 +205,22 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             }
         }
     }
-    let initial = if with_initial {
+    let laws: std::collections::HashMap<Symbol, ExprId> = symbolic
+        .laws
+        .iter()
+        .enumerate()
+        .map(|(i, &law)| (Symbol::Mass(i as u32), law))
+        .collect();
+    let closure = coupled::closure(&mut arena, model, &laws).map_err(|d| vec![d])?;
+    let levels = match &closure {
+        Some(closure) if symbolic.k >= 2 => {
+            let span = model.constraints[0].span;
+            coupled::holonomic_levels(&mut arena, model, closure, symbolic.k, span)
+                .map_err(|d| vec![d])?
+        }
+        _ => Default::default(),
+    };
+    let (initial, notes) = if with_initial {
         initial::initial_values(
             &mut arena,
             model,
@@ -203,9 +228,11 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             &mut elimination,
             &state,
             &reduction.consistency,
+            closure.as_ref(),
+            &levels,
         )?
     } else {
-        Vec::new()
+        (Vec::new(), Vec::new())
     };
     let mut reduced = ReducedSystem {
         order: u,
@@ -216,11 +243,21 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         initial,
         fixed,
         consistency: reduction.consistency,
+        closure,
     };
     reduced.mass_laws = remaining_masses(&arena, &reduced)
         .into_iter()
         .filter_map(|i| symbolic.laws.get(i as usize).map(|&law| (i, law)))
         .collect();
+    let mut holonomic = Vec::new();
+    for c in model.constraints.iter().filter(|c| c.is_holonomic()) {
+        let f = coupled::position_residual(&mut arena, model, c, &Default::default())
+            .map_err(|d| vec![d])?;
+        let h = coupled::residual(&mut arena, model, c, &laws)
+            .map_err(|d| vec![d])?
+            .unwrap_or(f);
+        holonomic.push((f, h));
+    }
     let mut state_laws: Vec<(u32, ExprId)> = state_laws
         .into_iter()
         .filter_map(|(s, law)| match s {
@@ -245,6 +282,9 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         forces_along_motion,
         reduced,
         param_defaults: symbolic.param_defaults,
+        holonomic,
+        written: symbolic.written.clone(),
+        notes,
         lets: model
             .lets
             .iter()

@@ -50,6 +50,13 @@ pub enum CrossCheckFailure {
     },
     /// Too few random points gave finite values on both routes.
     TooFewPoints { found: usize },
+    /// The solved dependents `φ` do not satisfy an implicit (or
+    /// holonomic, differentiated) constraint as written.
+    ConstraintViolated {
+        constraint: String,
+        t: f64,
+        residual: f64,
+    },
     /// With mass laws of the state: the multiplier route's equation along
     /// the motion does not vanish at the reduced system's highest
     /// derivatives.
@@ -73,6 +80,15 @@ impl fmt::Display for CrossCheckFailure {
                 f,
                 "equation (4) for `{coord}` disagrees with the multiplier route at t = {t}: \
                  {via_equation_four} vs {via_multipliers}"
+            ),
+            CrossCheckFailure::ConstraintViolated {
+                constraint,
+                t,
+                residual,
+            } => write!(
+                f,
+                "the solved dependent derivatives leave the constraint `{constraint}` with \
+                 the residual {residual} at t = {t}"
             ),
             CrossCheckFailure::AlongMotion {
                 coord,
@@ -104,8 +120,9 @@ impl CrossCheckFailure {
         .with_primary(lagrangian, "equations (4) derived from this Lagrangian")
         .with_note(
             "equations (4) are checked against an independent route (the multiplier form \
-             `E_i + E_d ∂φ_d/∂q_i^(k)`) at random points; when the two cannot be compared \
-             or disagree, the equations cannot be trusted and nothing is integrated",
+             `E_i + E_d ∂φ_d/∂q_i^(k)`), and the solved constraints against the constraints \
+             as written, at random points; when they cannot be compared or disagree, the \
+             equations cannot be trusted and nothing is integrated",
         )
         .with_help(
             "look for a term that overflows or is not finite at ordinary values (such as \
@@ -267,11 +284,25 @@ fn along_motion(derivation: &mut Derivation) -> Option<AlongMotion> {
 pub fn cross_check(derivation: &mut Derivation) -> Result<CrossCheck, CrossCheckFailure> {
     let multipliers = multiplier_route(derivation);
     let along = along_motion(derivation);
+    // The constraints as written with the solved dependents: zero (an
+    // implicit or coupled solve, and a holonomic constraint's derivative,
+    // checked independently of the route both sides of (4) share).
+    let solved: std::collections::HashMap<crate::ir::Symbol, ExprId> = derivation
+        .constraints
+        .iter()
+        .map(|&(d, phi)| (jet(d, derivation.k), phi))
+        .collect();
+    let written: Vec<ExprId> = derivation
+        .written
+        .iter()
+        .map(|&(_, h)| derivation.arena.subst(h, &solved))
+        .collect();
     let arena = &derivation.arena;
     let mut roots: Vec<ExprId> = derivation.equations.iter().map(|e| e.lhs).collect();
     roots.extend(&multipliers);
     let along_rows: &[(u32, ExprId)] = along.as_ref().map_or(&[], |a| &a.rows);
     roots.extend(along_rows.iter().map(|&(_, e)| e));
+    roots.extend(&written);
     let rows = derivation.equations.len();
     let masses = arena.names().masses.len();
     let mut rng = Rng::new(0x6d75_6c74);
@@ -321,6 +352,20 @@ pub fn cross_check(derivation: &mut Derivation) -> Result<CrossCheck, CrossCheck
             }
             if r.scale > 0.0 {
                 worst = worst.max(r.value.abs() / r.scale);
+            }
+        }
+        for (w, (text, _)) in derivation.written.iter().enumerate() {
+            let h = values[2 * rows + along_rows.len() + w];
+            let zero = super::sample::Scaled {
+                value: 0.0,
+                scale: 0.0,
+            };
+            if !h.agrees(zero, CROSS_CHECK_TOLERANCE) {
+                return Err(CrossCheckFailure::ConstraintViolated {
+                    constraint: text.clone(),
+                    t: point.t,
+                    residual: h.value,
+                });
             }
         }
         points += 1;

@@ -36,6 +36,34 @@ pub struct ReducedSystem {
     /// in order (stage r may use the values of stages before it). Empty
     /// for k ≤ 2. (Added by the mechanics.)
     pub consistency: Vec<Consistency>,
+    /// The holonomic constraints at position level, `f_ν(t, q) = 0`, with
+    /// this mode's dependents as the unknowns: the initial positions are
+    /// completed by Newton from the given ones, and the run brings the
+    /// positions back onto them. `None` without holonomic constraints.
+    pub closure: Option<Closure>,
+}
+
+/// `f(t, q) = 0` for `z = unknowns` (`Symbol::Jet { coord: d, order: 0 }`,
+/// the dependent coordinates of the holonomic constraints in this mode):
+/// Newton with `jacobian = ∂f_ν/∂z_c` (row-major) moves only them.
+#[derive(Debug, Clone)]
+pub struct Closure {
+    pub unknowns: Vec<Symbol>,
+    /// `f_ν = lhs − rhs`, mass laws substituted (an expression of `t`,
+    /// params and coordinates).
+    pub residual: Vec<ExprId>,
+    pub jacobian: Vec<Vec<ExprId>>,
+    /// The constraints as written (`f = 0`, `; `-separated), for messages.
+    pub text: String,
+    /// `∂f_ν/∂q_j` over every coordinate `j` (row-major, `n` columns):
+    /// the normals along which the run projects the state onto the
+    /// constraints (the smallest correction, Gauss–Newton), in positions
+    /// and, since `D^r f` is linear in `q^(r)` with the same matrix, in
+    /// every derivative.
+    pub normals: Vec<Vec<ExprId>>,
+    /// `D^r f_ν` for r = 1..u−1: the constraints on the state's
+    /// derivatives (expressions of `t`, params and the state).
+    pub levels: Vec<Vec<ExprId>>,
 }
 
 /// `residual(t, x, z) = 0` for `z = unknowns = (q_i^(r))_i`, one order `r`.
@@ -81,7 +109,8 @@ pub enum InitialValue {
     /// Given by the user: an expression of params.
     Given(ExprId),
     /// Fixed by a constraint (or its derivatives): an expression of `t`,
-    /// params, masses and state components that are `Given` (never of
+    /// params, masses and state components that are `Given` (positions
+    /// after [`ReducedSystem::closure`] corrects the dependent ones; never of
     /// other `Constraint` or `Solved` ones — a dependent velocity may depend
     /// on an independent velocity declared after it, so "earlier in state
     /// order" would not hold).

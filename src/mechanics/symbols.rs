@@ -22,6 +22,11 @@ pub struct Symbolic {
     /// law, because constraints are differentiated with the true time
     /// derivative (only the Lagrangian freezes masses).
     pub constraints: Vec<(u32, ExprId)>,
+    /// The implicit constraints as the mechanics solves them, `h = 0` of
+    /// order k (a holonomic one's `D^k f`; mass symbols replaced by their
+    /// laws, explicit constraints' dependents by their right sides), with
+    /// their text: the cross-check verifies that `φ` satisfies them.
+    pub written: Vec<(String, ExprId)>,
     pub param_defaults: Vec<f64>,
 }
 
@@ -61,25 +66,79 @@ impl Symbolic {
             .enumerate()
             .map(|(i, &law)| (Symbol::Mass(i as u32), law))
             .collect();
-        let mut constraints = Vec::new();
+        let mut phis: Vec<Option<ExprId>> = vec![None; model.constraints.len()];
         let mut unsolved = Vec::new();
-        for c in &model.constraints {
-            let rhs = lower(arena, &c.rhs);
-            let phi = match &c.implicit {
-                None => rhs,
-                Some(implicit) => {
-                    let lhs = lower(arena, &implicit.lhs);
-                    match solve_implicit(arena, model, c, lhs, rhs) {
-                        Ok(phi) => phi,
-                        Err(d) => {
-                            unsolved.push(d);
-                            continue;
-                        }
+        // Explicit constraints first: an implicit one may hold their
+        // dependents (a holonomic constraint's derivative does), which are
+        // replaced by their right sides.
+        let mut explicit: HashMap<Symbol, ExprId> = HashMap::new();
+        for (i, c) in model.constraints.iter().enumerate() {
+            if c.implicit.is_none() {
+                let rhs = lower(arena, &c.rhs);
+                phis[i] = Some(rhs);
+                let rhs = arena.subst(rhs, &masses_to_laws);
+                explicit.insert(
+                    Symbol::Jet {
+                        coord: c.coord as u32,
+                        order: c.order,
+                    },
+                    rhs,
+                );
+            }
+        }
+        let mut written = Vec::new();
+        for group in &model.groups {
+            let mut residuals = Vec::new();
+            for &i in &group.constraints {
+                let c = &model.constraints[i];
+                match super::coupled::residual(arena, model, c, &masses_to_laws) {
+                    Ok(Some(h)) => {
+                        let h = arena.subst(h, &explicit);
+                        let shown = format!("{} = 0", arena.display(h));
+                        let with_laws = arena.subst(h, &masses_to_laws);
+                        written.push((shown, with_laws));
+                        residuals.push(h);
+                    }
+                    Ok(None) => {}
+                    Err(d) => errors.push(d),
+                }
+            }
+            if residuals.len() != group.constraints.len() {
+                continue;
+            }
+            if let [i] = group.constraints[..] {
+                let c = &model.constraints[i];
+                match solve_implicit(arena, model, c, residuals[0]) {
+                    Ok(phi) => phis[i] = Some(phi),
+                    Err(d) => unsolved.push(d),
+                }
+                continue;
+            }
+            let unknowns: Vec<Symbol> = group
+                .constraints
+                .iter()
+                .map(|&i| Symbol::Jet {
+                    coord: model.constraints[i].coord as u32,
+                    order: model.constraints[i].order,
+                })
+                .collect();
+            let span = model.constraints[group.constraints[0]].span;
+            match super::coupled::solve(arena, &residuals, &unknowns, span) {
+                Ok(solution) => {
+                    for (&i, phi) in group.constraints.iter().zip(solution) {
+                        phis[i] = Some(phi);
                     }
                 }
-            };
-            constraints.push((c.coord as u32, arena.subst(phi, &masses_to_laws)));
+                Err(d) => unsolved.push(d),
+            }
         }
+        let constraints: Vec<(u32, ExprId)> = model
+            .constraints
+            .iter()
+            .zip(&phis)
+            .filter_map(|(c, phi)| Some((c.coord as u32, (*phi)?)))
+            .map(|(d, phi)| (d, arena.subst(phi, &masses_to_laws)))
+            .collect();
         errors.extend(unsolved);
         if !errors.is_empty() {
             return Err(errors);
@@ -93,6 +152,7 @@ impl Symbolic {
             k: model.constraint_order.unwrap_or(1),
             independent: model.independent().iter().map(|&i| i as u32).collect(),
             constraints,
+            written,
             param_defaults: model.params.iter().map(|p| p.default).collect(),
         })
     }
@@ -150,10 +210,8 @@ fn solve_implicit(
     arena: &mut Arena,
     model: &Model,
     c: &crate::check::model::Constraint,
-    lhs: ExprId,
-    rhs: ExprId,
+    h: ExprId,
 ) -> Result<ExprId, Diagnostic> {
-    let h = arena.sub(lhs, rhs);
     let dep = Symbol::Jet {
         coord: c.coord as u32,
         order: c.order,

@@ -99,6 +99,19 @@ impl Derivation {
                 let _ = writeln!(out, "  {name} = {shown}");
             }
         }
+        if !self.holonomic.is_empty() {
+            let times = if self.k == 1 { "once" } else { "k times" };
+            let _ = writeln!(
+                out,
+                "\nholonomic constraints (kept at position level), differentiated {times}:"
+            );
+            for &(f, h) in &self.holonomic {
+                let f = sum(a, f, Style::Text);
+                let h = sum(a, h, Style::Text);
+                let _ = writeln!(out, "  {f} = 0");
+                let _ = writeln!(out, "    D^{}: {h} = 0", self.k);
+            }
+        }
         if !self.constraints.is_empty() {
             out.push_str("\nconstraints:\n");
             for &(d, phi) in &self.constraints {
@@ -215,6 +228,16 @@ impl Derivation {
             };
             let lhs = format!("\\mathit{{{name}}}");
             out.push_str(&crate::latex::equation(&lhs, &shown, "\\text{let}"));
+        }
+        for &(f, h) in &self.holonomic {
+            let f = sum(a, f, Style::Latex);
+            let h = sum(a, h, Style::Latex);
+            out.push_str(&crate::latex::equation(&f, "0", "\\text{holonomic}"));
+            out.push_str(&crate::latex::equation(
+                &h,
+                "0",
+                &format!("\\text{{its derivative of order {}}}", self.k),
+            ));
         }
         for &(d, phi) in &self.constraints {
             let lhs = name(a, jet(d, self.k), Style::Latex);

@@ -320,7 +320,8 @@ fn generated_crates_pass_clippy() {
     // Contrasting systems: affine/linear, Riccati with a mass law, local
     // field, Newton, k = 3 consistency, impacts (with a constraint), a mass
     // law of the state; several candidates with a numeric solve of each
-    // mode's mass matrix, and with every construct.
+    // mode's mass matrix, and with every construct; holonomic constraints
+    // solved together in several modes (Newton on the closure, projection).
     for name in [
         "paper",
         "incline_bounce",
@@ -330,6 +331,7 @@ fn generated_crates_pass_clippy() {
         "nonlinear_second_order",
         "third_order_constraint",
         "cayley_chain",
+        "four_bar_closure",
     ] {
         clippy_file(&root().join(format!("examples/{name}.lag")));
     }

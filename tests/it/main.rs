@@ -8,6 +8,7 @@ mod examples;
 mod expect;
 mod field;
 mod generated;
+mod holonomic;
 mod impacts;
 mod ir;
 mod kernel;

@@ -88,6 +88,7 @@ fn paper_model() -> Model {
         lagrangian,
         constraint_order: Some(1),
         constraints: Vec::new(),
+        groups: Vec::new(),
         points: Vec::new(),
         forces: Vec::new(),
         initial: Vec::new(),

@@ -1,0 +1,212 @@
+//! SPEC §2.3 through the generated crates: holonomic constraints kept at
+//! position level, and loops closed by coupled constraints, against
+//! references in minimal coordinates that lagc has no part in
+//! (`scripts/holonomic_references.py`: SciPy DOP853 at rtol 1e-13, the
+//! pendulum in its angle, the four-bar in its crank angle with the closure
+//! solved by acos and atan2; the references' own error, judged against
+//! rtol 1e-12, is below 1e-8).
+
+use crate::generated::build;
+use crate::rolling_bodies::run;
+use std::f64::consts::PI;
+
+const METHODS: [&str; 2] = ["field", "direct"];
+
+/// The pendulum's angle from the downward vertical: (t, theta).
+const PENDULUM: [(f64, f64); 5] = [
+    (100.0, -0.5970485988718583),
+    (250.0, -0.5299139627747715),
+    (500.0, 0.22601989309006695),
+    (750.0, 0.16142094230638404),
+    (1000.0, -0.4890086549702606),
+];
+
+/// The four-bar's crank, coupler and rocker angles: (t, a, b, c).
+const FOUR_BAR: [(f64, f64, f64, f64); 5] = [
+    (
+        10.0,
+        42.4983355353442,
+        1.1767919014964294,
+        -3.9304693049320365,
+    ),
+    (
+        25.0,
+        104.30469933514436,
+        0.8598803619068073,
+        -3.879806470465871,
+    ),
+    (
+        50.0,
+        208.69712189128208,
+        0.5298740847110759,
+        1.6486106858519667,
+    ),
+    (
+        75.0,
+        312.9636869901702,
+        1.2293625424062347,
+        -4.002692293105507,
+    ),
+    (
+        100.0,
+        416.33018624243147,
+        0.5089143085354101,
+        1.751491025760246,
+    ),
+];
+
+/// The difference of two angles, modulo 2π.
+fn angle_difference(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(2.0 * PI);
+    d.min(2.0 * PI - d)
+}
+
+/// The summary's largest distance from the constraints, in tolerances.
+fn kept_distance(stderr: &str) -> f64 {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("constraints kept: "))
+        .unwrap_or_else(|| panic!("no constraints kept in the summary:\n{stderr}"));
+    let (_, rest) = line.split_once(" (").unwrap();
+    rest.split_whitespace().next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn a_cartesian_pendulum_keeps_its_length_and_swings_as_in_its_angle() {
+    let binary = build("cartesian_pendulum");
+    let times = PENDULUM.map(|(t, _)| t.to_string()).join(",");
+    for method in METHODS {
+        let args = [
+            "--method", method, "--rtol", "1e-10", "--atol", "1e-12", "--times", &times,
+        ];
+        let (rows, stderr) = run(&binary, &args);
+        for (row, &(t, theta)) in rows.iter().zip(&PENDULUM) {
+            let (x, y) = (row[1], row[2]);
+            let length = (x * x + y * y).sqrt();
+            assert!(
+                (length - 1.0).abs() <= 1e-9,
+                "{method} at t = {t}: the length is off by {:e}",
+                length - 1.0
+            );
+            let error = (row[6] - theta).abs();
+            assert!(
+                error <= 1e-6,
+                "{method} at t = {t}: the angle is off by {error:e}"
+            );
+        }
+        // Between projections the state stays within a few tolerances of
+        // the circle (the field projects after each window).
+        let distance = kept_distance(&stderr);
+        let allowed = if method == "direct" { 10.0 } else { 100.0 };
+        assert!(distance <= allowed, "{method}: {distance} tolerances off");
+    }
+}
+
+#[test]
+fn a_four_bar_closed_by_holonomic_constraints_follows_its_crank_angle_form() {
+    four_bar_follows_its_crank_angle_form("four_bar_closure");
+}
+
+#[test]
+fn a_four_bar_closed_by_coupled_velocity_constraints_follows_its_crank_angle_form() {
+    four_bar_follows_its_crank_angle_form("four_bar_velocity");
+}
+
+fn four_bar_follows_its_crank_angle_form(name: &str) {
+    let binary = build(name);
+    let times = FOUR_BAR.map(|(t, ..)| t.to_string()).join(",");
+    for method in METHODS {
+        let args = [
+            "--method", method, "--rtol", "1e-10", "--atol", "1e-12", "--times", &times,
+        ];
+        let (rows, stderr) = run(&binary, &args);
+        for (row, &(t, a, b, c)) in rows.iter().zip(&FOUR_BAR) {
+            let errors = [
+                (row[1] - a).abs(),
+                angle_difference(row[2], b),
+                angle_difference(row[3], c),
+            ];
+            let worst = errors.iter().copied().fold(0.0, f64::max);
+            assert!(
+                worst <= 1e-6,
+                "{method} at t = {t}: (a, b, c) off by {errors:?}"
+            );
+            // The energy (an output) is conserved.
+            assert!((row[7] - rows[0][7]).abs() <= 1e-6 * rows[0][7].abs());
+        }
+        // Direct integration projects after every step that drifts past
+        // a tenth of the tolerance, the field after each window.
+        let distance = kept_distance(&stderr);
+        let allowed = if method == "direct" { 10.0 } else { 100.0 };
+        assert!(
+            distance <= allowed,
+            "{name} {method}: {distance} tolerances off"
+        );
+    }
+}
+
+#[test]
+fn a_holonomic_constraint_beside_a_second_order_one_is_differentiated_twice() {
+    // x at t = 2.5, 5, 7.5, 10 from the motion in the angle (SciPy DOP853
+    // at rtol 1e-13; rtol 1e-12 agrees to 2e-14): see the model's header.
+    const X: [(f64, f64); 4] = [
+        (2.5, 0.4957675679972425),
+        (5.0, 0.20708085795105685),
+        (7.5, -0.1651212554830279),
+        (10.0, -0.4704198703441878),
+    ];
+    let binary = crate::generated::build_file(
+        &crate::root().join("tests/data/v2/holonomic_second_order.lag"),
+    );
+    for method in METHODS {
+        let args = [
+            "--method",
+            method,
+            "--rtol",
+            "1e-10",
+            "--atol",
+            "1e-12",
+            "--times",
+            "2.5,5,7.5,10",
+        ];
+        let (rows, _) = run(&binary, &args);
+        for (row, &(t, x)) in rows.iter().zip(&X) {
+            let (xs, ys) = (row[1], row[2]);
+            assert!(
+                (xs - x).abs() <= 1e-8,
+                "{method} at t = {t}: x = {xs}, not {x}"
+            );
+            assert!(
+                (xs * xs + ys * ys - 1.0).abs() <= 1e-12,
+                "{method}: off the circle"
+            );
+            // y' is kept on D f = 0.
+            let (vx, vy) = (row[4], row[5]);
+            assert!(
+                (xs * vx + ys * vy).abs() <= 1e-9,
+                "{method}: x x' + y y' ≠ 0"
+            );
+        }
+    }
+}
+
+#[test]
+fn initial_positions_off_the_constraint_are_moved_or_refused_at_run_time() {
+    let binary = build("cartesian_pendulum");
+    // A rough dependent position is Newton's start: the run starts on the
+    // circle, on the branch it was near.
+    let (rows, _) = run(&binary, &["--init", "y=-0.5", "--samples", "2"]);
+    assert!((rows[0][2] + 0.8).abs() <= 1e-15, "y0 = {}", rows[0][2]);
+    // No configuration near the given positions: exit 2 naming the
+    // constraint as written.
+    let output = std::process::Command::new(&binary)
+        .args(["--init", "x=2", "--samples", "2"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("no initial positions on the constraint `x^2 + y^2 = l^2`"),
+        "{stderr}"
+    );
+}
