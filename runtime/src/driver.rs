@@ -252,7 +252,7 @@ pub fn mode_index(model: &dyn DynModel, choice: &[usize]) -> usize {
     mode
 }
 
-pub(crate) fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
+fn mode_digits(model: &dyn DynModel, mode: usize) -> Vec<usize> {
     let mut rest = mode;
     model
         .constraints()

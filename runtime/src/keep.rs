@@ -364,27 +364,14 @@ impl Keeper {
     }
 }
 
-/// The state components the constraints fix in `mode`: the model's table
-/// ([`crate::model::Model::FIXED`]), else those the initial values take as
-/// fixed (mode 0), each implicit constraint's first candidate replaced by
-/// the mode's.
+/// The state components the constraints fix in `mode`: the generated
+/// table's (a crate of several modes has one for each), else those the
+/// initial values take as fixed (a single mode).
 fn fixed_components(model: &dyn DynModel, mode: usize) -> Vec<usize> {
-    // The generated table, where the model has one (several modes).
     if let Some(fixed) = model.fixed_components().get(mode) {
         return fixed.to_vec();
     }
-    let names = model.state_names();
-    let mut fixed: Vec<usize> = (0..names.len())
+    (0..model.dim())
         .filter(|&j| model.initial_kinds()[j] == Initial::Constraint)
-        .collect();
-    let digits = crate::driver::mode_digits(model, mode);
-    for (c, &digit) in model.constraints().iter().zip(&digits) {
-        let index = |name: &str| names.iter().position(|&s| s == name);
-        if let (Some(first), Some(chosen)) = (index(c.names[0]), index(c.names[digit])) {
-            if let Some(slot) = fixed.iter_mut().find(|j| **j == first) {
-                *slot = chosen;
-            }
-        }
-    }
-    fixed
+        .collect()
 }

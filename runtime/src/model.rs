@@ -35,7 +35,7 @@ pub struct Candidates {
 }
 
 /// How a constraint as written ends at a [`Domain`]'s argument.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum DomainKind {
     /// The argument of a square root (or of a power below 1): 0 ends the
     /// branch (the constraint's derivative is infinite there), below it
@@ -137,8 +137,8 @@ pub trait Model: Clone {
     /// them.
     const KEEPS_POSITIONS: bool = false;
     /// For each mode, the state components the constraints fix (the
-    /// indices [`Model::constrained`] writes); empty: those of
-    /// [`Model::INITIAL`], mapped by the candidates' names.
+    /// indices [`Model::constrained`] writes); empty for a model of one
+    /// mode: those [`Model::INITIAL`] marks `Constraint`.
     const FIXED: &'static [&'static [usize]] = &[];
 
     /// Every param's value: param `i` is `overrides[i]` when given, else

@@ -74,7 +74,10 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
         let entries = kernel.domains.iter().map(|d| {
             let constraint = &d.constraint;
             let argument = &d.text;
-            let kind = proc_macro2::Ident::new(d.kind.variant(), proc_macro2::Span::call_site());
+            // The runtime's variant, by its name (the kernel holds the
+            // runtime's type).
+            let kind =
+                proc_macro2::Ident::new(&format!("{:?}", d.kind), proc_macro2::Span::call_site());
             quote! {
                 lagc_runtime::model::Domain {
                     constraint: #constraint,

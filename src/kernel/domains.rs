@@ -13,40 +13,10 @@ use crate::check::model::Model;
 use crate::ir::{lower, Arena, ExprId, Func, Node, Symbol};
 use std::collections::HashSet;
 
-/// What kind of end an argument marks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum DomainKind {
-    /// A square root, or a power below 1 (`x^-1.5`): 0 ends the branch
-    /// (the value's or its derivative's pole), below 0 is not defined.
-    Root,
-    /// A fractional power above 1 (`x^1.5`): only below 0 is undefined.
-    Power,
-    /// `ln(u)`: `u` reaching 0 ends it.
-    Logarithm,
-    /// `asin(u)`: the argument is `1 − u²`.
-    Arcsine,
-    /// `acos(u)`: the argument is `1 − u²`.
-    Arccosine,
-    /// A division by the argument, or `tan` (the argument is the cosine):
-    /// a pole, named when a failure happens at it.
-    Pole,
-}
+/// What kind of end an argument marks: the runtime's own type, as the
+/// generated crate names it (one definition for both sides).
+pub use lagc_runtime::model::DomainKind;
 
-impl DomainKind {
-    /// The runtime's variant's name (`lagc_runtime::model::DomainKind`).
-    pub fn variant(self) -> &'static str {
-        match self {
-            DomainKind::Root => "Root",
-            DomainKind::Power => "Power",
-            DomainKind::Logarithm => "Logarithm",
-            DomainKind::Arcsine => "Arcsine",
-            DomainKind::Arccosine => "Arccosine",
-            DomainKind::Pole => "Pole",
-        }
-    }
-}
-
-/// One end of one constraint's domain.
 #[derive(Debug, Clone)]
 pub struct KernelDomain {
     /// The constraint as written.
