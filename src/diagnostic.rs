@@ -313,6 +313,11 @@ pub mod codes {
     /// the reset), or any component where the fixed ones change along the
     /// run (several candidates) or follow from (4) (constraints of order ≥ 3).
     pub const RESET_OF_FIXED_COMPONENT: &str = "E0041";
+    /// An `input` where a signal set from outside cannot stand: in the
+    /// Lagrangian, a mass law, a position, a holonomic constraint, an
+    /// exact solution, an impact, a constant (SPEC §2.3), or a default
+    /// that is not a number.
+    pub const INPUT_NOT_ALLOWED: &str = "E0042";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

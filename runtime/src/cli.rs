@@ -9,6 +9,7 @@
 use crate::driver::{run, Ending, Options};
 use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
 use crate::field::Anchor;
+use crate::inputs::{run_driven, Interpolation, Schedule, Signal};
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Initial, Model};
 use crate::output::{sample_times, write_header, write_row};
@@ -36,6 +37,11 @@ usage: MODEL [OPTIONS]
   --param NAME=VALUE     override a param (params computed from it follow)
   --init NAME=VALUE      override an initial value (`q1`, \"q1'\"); values the
                          constraints fix are checked against them
+  --input NAME=FILE.csv  drive input NAME by the columns `t,NAME` of the file
+                         (repeatable); a change restarts the integration
+  --input-interp hold|linear
+                         between the file's rows: hold each value (default)
+                         or interpolate linearly
   --rtol R, --atol A     the per-step tolerance (default 1e-10, 1e-12): each
                          step's local error is kept below atol + rtol·|x|;
                          the global error is usually a modest multiple of it
@@ -95,6 +101,10 @@ pub struct Invocation {
     pub spread: f64,
     /// Warnings to print before running (e.g. a tolerance below rounding).
     pub warnings: Vec<String>,
+    /// `--input NAME=FILE`: `(name, file)`, checked against the model's
+    /// inputs and read when the run starts.
+    pub inputs: Vec<(String, String)>,
+    pub interpolation: Interpolation,
 }
 
 fn value<'a>(flag: &str, args: &mut impl Iterator<Item = &'a String>) -> Result<&'a str, String> {
@@ -159,6 +169,8 @@ pub fn parse(
         ensemble: None,
         spread: 0.1,
         warnings: Vec::new(),
+        inputs: Vec::new(),
+        interpolation: Interpolation::Hold,
     };
     let mut phase: Option<String> = None;
     let mut args = args.iter();
@@ -269,6 +281,21 @@ pub fn parse(
                 })?;
                 inv.params.push((index, number(flag, v)?));
             }
+            "--input" => {
+                let (name, file) = name_value(flag, value(flag, &mut args)?)?;
+                inv.inputs.push((name.to_string(), file.to_string()));
+            }
+            "--input-interp" => {
+                inv.interpolation = match value(flag, &mut args)? {
+                    "hold" => Interpolation::Hold,
+                    "linear" => Interpolation::Linear,
+                    other => {
+                        return Err(format!(
+                            "`--input-interp {other}`: expected `hold` or `linear`"
+                        ))
+                    }
+                }
+            }
             "--init" => {
                 let (name, v) = name_value(flag, value(flag, &mut args)?)?;
                 let index = state.iter().position(|s| *s == name).ok_or_else(|| {
@@ -352,15 +379,28 @@ pub struct Prepared {
 /// The model, its span and initial state for an invocation, with every
 /// check the file's own values get.
 pub fn prepare(prototype: &dyn DynModel, inv: &Invocation) -> Result<Prepared, Failure> {
+    prepare_driven(prototype, inv, None)
+}
+
+/// [`prepare`] for a run whose inputs follow `schedule`: the initial state
+/// (and its checks) under the inputs at `t0`.
+pub fn prepare_driven(
+    prototype: &dyn DynModel,
+    inv: &Invocation,
+    schedule: Option<&Schedule>,
+) -> Result<Prepared, Failure> {
     let mut overrides = vec![None; prototype.param_names().len()];
     for &(i, v) in &inv.params {
         overrides[i] = Some(v);
     }
     let params = prototype.parameters(&overrides);
-    let model = prototype.with_params(&params);
+    let mut model = prototype.with_params(&params);
     let (t0, t1) = model.time_span();
     if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
         return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
+    }
+    if let Some(schedule) = schedule {
+        model.set_inputs(&schedule.at(model.input_defaults(), t0));
     }
     let mut given = vec![None; model.dim()];
     for &(i, v) in &inv.inits {
@@ -442,12 +482,20 @@ fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     for warning in &inv.warnings {
         eprintln!("warning: {warning}");
     }
+    let schedule = match read_schedule(prototype, inv) {
+        Ok(schedule) => schedule,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return ExitCode::from(USAGE_EXIT_STATUS);
+        }
+    };
+    let schedule = schedule.as_ref();
     let Prepared {
         mut model,
         t0,
         t1,
         x0,
-    } = match prepare(prototype, inv) {
+    } = match prepare_driven(prototype, inv, schedule) {
         Ok(prepared) => prepared,
         Err(failure) => return fail(inv.json, &failure),
     };
@@ -489,9 +537,10 @@ fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     let first_start = Instant::now();
     // The first solve streams the CSV; `--repeat N` then times N more
     // solves without output and reports the fastest.
-    let first = run(
+    let first = drive(
         &mut *model,
         &inv.options,
+        schedule,
         t0,
         t1,
         &x0,
@@ -539,14 +588,16 @@ fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
                 progress: false,
                 ..inv.options.clone()
             };
-            if let Err(failure) = run(&mut *model, &quiet, t0, t1, &x0, &times, |_, _, _| Ok(())) {
+            let quietly = |_: &dyn DynModel, _, _: &[f64]| Ok(());
+            if let Err(failure) = drive(&mut *model, &quiet, schedule, t0, t1, &x0, &times, quietly)
+            {
                 return fail(inv.json, &failure);
             }
             fastest = fastest.min(start.elapsed());
         }
     }
     let estimated_error = if inv.estimate_error {
-        match estimate(&mut *model, inv, t0, t1, &x0, &plotted) {
+        match estimate(&mut *model, inv, schedule, t0, t1, &x0, &plotted) {
             Ok(e) => Some(e),
             Err(failure) => {
                 eprintln!("warning: the error estimate failed: {failure}");
@@ -589,6 +640,7 @@ fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
 fn estimate(
     model: &mut dyn DynModel,
     inv: &Invocation,
+    schedule: Option<&Schedule>,
     t0: f64,
     t1: f64,
     x0: &[f64],
@@ -601,7 +653,7 @@ fn estimate(
     let n = model.dim();
     let mut largest = 0.0_f64;
     let mut i = 0;
-    run(model, &options, t0, t1, x0, &times, |_, t, x| {
+    drive(model, &options, schedule, t0, t1, x0, &times, |_, t, x| {
         if let Some((ts, row)) = samples.get(i) {
             if *ts == t {
                 for (a, b) in row[..n].iter().zip(x) {
@@ -613,6 +665,64 @@ fn estimate(
         Ok(())
     })?;
     Ok(largest)
+}
+
+/// A run of the driver, or, for a model with inputs, a run restarted at
+/// every change of an input ([`run_driven`]; the summary counts them).
+#[allow(clippy::too_many_arguments)]
+fn drive(
+    model: &mut dyn DynModel,
+    options: &Options,
+    schedule: Option<&Schedule>,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+    sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
+) -> Result<crate::driver::Outcome, Failure> {
+    let Some(schedule) = schedule else {
+        return run(model, options, t0, t1, x0, times, sample);
+    };
+    let driven = run_driven(model, options, schedule, t0, t1, x0, times, sample)?;
+    let mut outcome = driven.outcome;
+    if driven.restarts > 0 {
+        outcome.report.notes.push(format!(
+            "inputs: restarted at {} change{}",
+            driven.restarts,
+            if driven.restarts == 1 { "" } else { "s" }
+        ));
+    }
+    Ok(outcome)
+}
+
+/// The inputs' schedule of a run: `None` for a model without inputs; the
+/// `--input` files read (an error in words for an unknown input, a file
+/// that cannot be read or a malformed one).
+fn read_schedule(model: &dyn DynModel, inv: &Invocation) -> Result<Option<Schedule>, String> {
+    let names = model.input_names();
+    if names.is_empty() {
+        return match inv.inputs.first() {
+            Some((name, _)) => Err(format!("`--input {name}`: the model has no inputs")),
+            None => Ok(None),
+        };
+    }
+    let mut schedule = Schedule {
+        signals: vec![None; names.len()],
+    };
+    for (name, file) in &inv.inputs {
+        let index = names.iter().position(|n| n == name).ok_or_else(|| {
+            format!(
+                "`--input`: no input `{name}` (inputs: {})",
+                names.join(", ")
+            )
+        })?;
+        let text = std::fs::read_to_string(file)
+            .map_err(|e| format!("`--input {name}={file}`: cannot read the file: {e}"))?;
+        let signal = Signal::from_csv(&text, name, inv.interpolation)
+            .map_err(|e| format!("`--input {name}={file}`: {e}"))?;
+        schedule.signals[index] = Some(signal);
+    }
+    Ok(Some(schedule))
 }
 
 /// Member `k` of an ensemble: the model's initial state for `k = 0`,

@@ -18,6 +18,7 @@
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
+//! | `inputs` | inputs set from outside: their values in the model, signals, runs restarted at their changes |
 //! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
 // Numerical kernels index several arrays with one loop variable; and
@@ -38,6 +39,7 @@ pub mod failure;
 pub mod field;
 pub mod highest;
 pub mod impacts;
+pub mod inputs;
 pub mod keep;
 pub mod linalg;
 pub mod magnus;

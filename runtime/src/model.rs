@@ -9,6 +9,7 @@
 //! coefficient system emits nothing for them.
 
 use crate::failure::Failure;
+pub use crate::inputs::Inputs;
 use crate::linalg::Matrix;
 use crate::method::IntegratorChoice;
 
@@ -106,6 +107,10 @@ pub trait Model: Clone {
     /// Extra CSV columns after the state (`output` statements, a vector
     /// output flattened to `p.x`, `p.y`).
     const OUTPUTS: &'static [&'static str] = &[];
+    /// The inputs (`input u = 0;`), in declaration order.
+    const INPUTS: &'static [&'static str] = &[];
+    /// Their defaults.
+    const INPUT_DEFAULTS: &'static [f64] = &[];
     /// The mass laws, for naming a mass that reaches zero.
     const MASSES: &'static [&'static str] = &[];
     /// The model's `integrator` statement.
@@ -163,6 +168,10 @@ pub trait Model: Clone {
 
     /// Selects the reduced system and the branches for the next segment.
     fn set_regime(&mut self, _regime: &Regime) {}
+
+    /// Sets the inputs for the next segment (a model without inputs
+    /// ignores it; a new model holds its defaults).
+    fn set_inputs(&mut self, _inputs: &Inputs) {}
 
     /// `dx = X(t, x)`, the right side of the reduced system (7).
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure>;
@@ -330,6 +339,10 @@ pub trait DynModel {
     fn output_names(&self) -> &'static [&'static str];
     /// [`Model::MASSES`].
     fn mass_names(&self) -> &'static [&'static str];
+    /// [`Model::INPUTS`].
+    fn input_names(&self) -> &'static [&'static str];
+    /// [`Model::INPUT_DEFAULTS`].
+    fn input_defaults(&self) -> &'static [f64];
     /// [`Model::DECLARED_INTEGRATOR`].
     fn declared_integrator(&self) -> Option<IntegratorChoice>;
     /// [`Model::SWITCHES`].
@@ -366,6 +379,8 @@ pub trait DynModel {
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure>;
     /// [`Model::set_regime`].
     fn set_regime(&mut self, regime: &Regime);
+    /// [`Model::set_inputs`].
+    fn set_inputs(&mut self, inputs: &Inputs);
     /// [`Model::rhs`].
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::jacobian`].
@@ -436,6 +451,12 @@ impl<M: Model + 'static> DynModel for M {
     fn mass_names(&self) -> &'static [&'static str] {
         M::MASSES
     }
+    fn input_names(&self) -> &'static [&'static str] {
+        M::INPUTS
+    }
+    fn input_defaults(&self) -> &'static [f64] {
+        M::INPUT_DEFAULTS
+    }
     fn declared_integrator(&self) -> Option<IntegratorChoice> {
         M::DECLARED_INTEGRATOR
     }
@@ -486,6 +507,9 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn set_regime(&mut self, regime: &Regime) {
         Model::set_regime(self, regime);
+    }
+    fn set_inputs(&mut self, inputs: &Inputs) {
+        Model::set_inputs(self, inputs);
     }
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         Model::rhs(self, t, x, dx)

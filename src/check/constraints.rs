@@ -214,6 +214,7 @@ impl Checker<'_> {
             time: true,
             masses: true,
             coord_order: Some(k),
+            inputs: true,
             ..Allowed::constants("a constraint")
         };
         for used in self.check_expr(rhs, allowed) {
@@ -313,6 +314,7 @@ impl Checker<'_> {
             time: true,
             masses: true,
             coord_order: Some(k),
+            inputs: true,
             ..Allowed::constants("a constraint")
         };
         let errors = self.diagnostics.len();

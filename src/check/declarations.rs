@@ -16,6 +16,7 @@ pub struct Declared {
 pub fn kind_name(name: Name) -> &'static str {
     match name {
         Name::Param(_) => "a param",
+        Name::Input(_) => "an input",
         Name::Coord(_) => "a coordinate",
         Name::Mass(_) => "a mass law",
         Name::Point(_) => "a point",
@@ -28,13 +29,17 @@ impl Checker<'_> {
     /// Declares every name in source order. Indices count every declaration
     /// of a kind, so they match the order of the checked model's vectors.
     pub(super) fn declare(&mut self) {
-        let (mut params, mut masses, mut points) = (0, 0, 0);
+        let (mut params, mut masses, mut points, mut inputs) = (0, 0, 0, 0);
         let (mut lets, mut outputs) = (0, 0);
         for (item, _) in self.items() {
             match item {
                 ItemKind::Param { name, .. } => {
                     self.declare_one(name, Name::Param(params));
                     params += 1;
+                }
+                ItemKind::Input { name, .. } => {
+                    self.declare_one(name, Name::Input(inputs));
+                    inputs += 1;
                 }
                 ItemKind::Coords(names) => {
                     for name in names {
@@ -107,7 +112,7 @@ impl Checker<'_> {
                 format!("first declared here as {}", kind_name(first.name)),
             )
             .with_help(
-                "params, coordinates, mass laws, points, lets and outputs share one namespace",
+                "params, inputs, coordinates, mass laws, points, lets and outputs share one namespace",
             );
             self.report(diagnostic);
             return false;

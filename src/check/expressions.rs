@@ -29,6 +29,9 @@ pub struct Allowed {
     /// Lets with an index below this may be used (a let may use only
     /// earlier ones); `usize::MAX` for all.
     pub lets_before: usize,
+    /// Inputs may be used (SPEC §2.3: where forces, the right sides of
+    /// velocity constraints and outputs may use `t`).
+    pub inputs: bool,
 }
 
 impl Allowed {
@@ -43,6 +46,7 @@ impl Allowed {
             coord_code: codes::NAME_NOT_ALLOWED,
             order_code: codes::DERIVATIVE_ORDER_NOT_ALLOWED,
             lets_before: usize::MAX,
+            inputs: false,
         }
     }
 
@@ -57,6 +61,7 @@ impl Allowed {
             coord_code: codes::NAME_NOT_ALLOWED,
             order_code: codes::DERIVATIVE_ORDER_NOT_ALLOWED,
             lets_before,
+            inputs: true,
         }
     }
 }
@@ -190,6 +195,11 @@ impl Checker<'_> {
                 None
             }
             Name::Param(_) => None,
+            Name::Input(_) if allowed.inputs => None,
+            Name::Input(_) => {
+                self.report(input_not_allowed(allowed, name, span, declared.span));
+                None
+            }
             Name::Mass(_) if allowed.masses => None,
             Name::Mass(_) => {
                 self.report(not_allowed("the mass law"));
@@ -213,7 +223,46 @@ impl Checker<'_> {
         }
         match crate::suggest::closest(name, self.known_names()) {
             Some(close) => diagnostic.with_help(format!("did you mean `{close}`?")),
-            None => diagnostic.with_help("declare it with `param`, `coord`, `mass` or `point`"),
+            None => {
+                diagnostic.with_help("declare it with `param`, `input`, `coord`, `mass` or `point`")
+            }
+        }
+    }
+}
+
+/// An input where it may not stand, with the reason for the kind of
+/// statement.
+pub(super) fn input_not_allowed(
+    allowed: Allowed,
+    name: &str,
+    span: Span,
+    declared: Span,
+) -> Diagnostic {
+    Diagnostic::error(
+        codes::INPUT_NOT_ALLOWED,
+        format!("{} cannot use the input `{name}`", allowed.what),
+    )
+    .with_primary(span, "input used here")
+    .with_secondary(declared, format!("`{name}` declared as an input here"))
+    .with_note(input_note(allowed))
+}
+
+/// Why inputs may not stand where `allowed` describes.
+pub(super) fn input_note(allowed: Allowed) -> &'static str {
+    match allowed.what {
+        "a constraint" if allowed.coord_order == Some(0) => {
+            "a holonomic constraint fixes positions: a jump of an input would move the \
+             body instantly; use the input in a velocity constraint or a force"
+        }
+        "the Lagrangian" | "a mass law" | "a point's mass" | "a position" => {
+            "an input changes between steps, and each change restarts the integration; \
+             the Lagrangian, the masses and the positions are differentiated in time \
+             (equations (4), the reactive forces), so a jump there would be an impulse \
+             or an ejection of matter that lagc does not model"
+        }
+        _ => {
+            "inputs may be used in forces, velocity constraints, points' velocities, \
+             outputs and `stop when`"
         }
     }
 }

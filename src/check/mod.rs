@@ -35,6 +35,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let mut checker = Checker::new(ast);
     checker.declare();
     let params = checker.params();
+    let inputs = checker.inputs();
     let lets = checker.lets();
     let masses = checker.masses();
     let (constraint_order, constraints, groups) = checker.constraints();
@@ -64,6 +65,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     };
     Ok(model::Model {
         params,
+        inputs,
         coords: checker.coords,
         masses,
         lagrangian,

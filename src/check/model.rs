@@ -21,6 +21,8 @@ use std::collections::HashMap;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Model {
     pub params: Vec<Param>,
+    /// `input` statements in source order (SPEC §2.3).
+    pub inputs: Vec<Input>,
     pub coords: Vec<Coord>,
     pub masses: Vec<MassLaw>,
     pub lagrangian: Expr,
@@ -55,6 +57,7 @@ pub struct Model {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Name {
     Param(usize),
+    Input(usize),
     Coord(usize),
     Mass(usize),
     Point(usize),
@@ -120,6 +123,18 @@ pub struct Param {
     pub span: Span,
     pub value: Expr,
     /// The value with every earlier param at its default.
+    pub default: f64,
+}
+
+/// A signal set from outside between steps (`input u = 0;`): held by the
+/// generated model and changed only where the integration restarts, so it
+/// is a constant (or, interpolated linearly, a line in `t`) on every
+/// segment the integrators see.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Input {
+    pub name: String,
+    pub span: Span,
+    /// Its value until it is set (a number).
     pub default: f64,
 }
 

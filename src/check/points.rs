@@ -24,6 +24,7 @@ const POSITION: Allowed = Allowed {
 const VELOCITY: Allowed = Allowed {
     time: true,
     coord_order: Some(1),
+    inputs: true,
     ..Allowed::constants("a velocity")
 };
 

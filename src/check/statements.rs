@@ -3,7 +3,8 @@
 
 use super::expressions::Allowed;
 use super::model::{
-    DeclaredIntegrator, Exact, Force, IntegratorChoice, MassLaw, Name, Output, Param, TimeSpan,
+    DeclaredIntegrator, Exact, Force, Input, IntegratorChoice, MassLaw, Name, Output, Param,
+    TimeSpan,
 };
 use super::types::{type_mismatch, Ty, Uses};
 use super::Checker;
@@ -39,6 +40,43 @@ impl<'a> Checker<'a> {
             });
         }
         params
+    }
+
+    /// Checks each input's default: a number (no param: an input's value
+    /// is the importer's, and a default that followed a param overridden
+    /// at run time would be a second way to set it).
+    pub(super) fn inputs(&mut self) -> Vec<Input> {
+        let mut inputs = Vec::new();
+        for (item, _) in self.items() {
+            let ItemKind::Input { name, default } = item else {
+                continue;
+            };
+            let errors_before = self.diagnostics.len();
+            self.check_expr(default, Allowed::constants("an input's default"));
+            let mut value = None;
+            if self.diagnostics.len() == errors_before {
+                let declared_pi = self.names.contains_key("pi");
+                let constant = |n: &str| n == "pi" && !declared_pi;
+                if let Some(used) = first_name(default, &constant) {
+                    let diagnostic = Diagnostic::error(
+                        codes::INPUT_NOT_ALLOWED,
+                        format!("the default of input `{}` must be a number", name.name),
+                    )
+                    .with_primary(used.span, format!("`{}` used here", used.name))
+                    .with_help("write the number; the input's value is set from outside");
+                    self.report(diagnostic);
+                } else {
+                    value = self
+                        .evaluate_finite(default, &format!("the default of input `{}`", name.name));
+                }
+            }
+            inputs.push(Input {
+                name: name.name.clone(),
+                span: name.span,
+                default: value.unwrap_or(f64::NAN),
+            });
+        }
+        inputs
     }
 
     pub(super) fn masses(&mut self) -> Vec<MassLaw> {
@@ -133,6 +171,7 @@ impl<'a> Checker<'a> {
             time: true,
             masses: true,
             coord_order: Some(1),
+            inputs: true,
             ..Allowed::constants("a generalized force")
         };
         let mut forces: Vec<Force> = Vec::new();
@@ -232,6 +271,7 @@ impl<'a> Checker<'a> {
             time: true,
             masses: true,
             coord_order: Some(super::MAX_DERIVATIVE_ORDER),
+            inputs: true,
             ..Allowed::constants("an output")
         };
         let mut outputs = Vec::new();
@@ -271,6 +311,7 @@ impl<'a> Checker<'a> {
             time: true,
             masses: true,
             coord_order: Some(super::MAX_DERIVATIVE_ORDER),
+            inputs: true,
             ..Allowed::constants("a stop condition")
         };
         let errors = self.diagnostics.len();
@@ -367,4 +408,26 @@ fn not_a_coordinate(what: &str, name: &str, span: Span) -> Diagnostic {
         format!("`{name}` is not a coordinate, but {what} needs one"),
     )
     .with_primary(span, "not a coordinate")
+}
+
+/// The first name an expression uses that is not a `constant` (`pi`).
+fn first_name<'e>(expr: &'e Expr, constant: &dyn Fn(&str) -> bool) -> Option<&'e Ident> {
+    let first = |e: &'e Expr| first_name(e, constant);
+    match &expr.kind {
+        ExprKind::Number(_) => None,
+        ExprKind::Var { name, primes: 0 } if constant(&name.name) => None,
+        ExprKind::Var { name, .. } => Some(name),
+        ExprKind::Neg(e) | ExprKind::Not(e) | ExprKind::Component { base: e, .. } => first(e),
+        ExprKind::Binary { lhs, rhs, .. }
+        | ExprKind::Compare { lhs, rhs, .. }
+        | ExprKind::Logic { lhs, rhs, .. } => first(lhs).or_else(|| first(rhs)),
+        ExprKind::Call { args, .. } | ExprKind::Vector(args) => args.iter().find_map(first),
+        ExprKind::If {
+            cond,
+            then,
+            otherwise,
+        } => first(cond)
+            .or_else(|| first(then))
+            .or_else(|| first(otherwise)),
+    }
 }

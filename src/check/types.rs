@@ -38,6 +38,8 @@ pub struct Uses {
     pub time: Option<Span>,
     /// The first use of a mass law.
     pub mass: Option<Span>,
+    /// The first use of an input.
+    pub input: Option<Span>,
 }
 
 /// A checked `let`: its type (`None` if its body has errors) and uses.
@@ -401,6 +403,9 @@ impl Checker<'_> {
                 if matches!(found, Some(Name::Mass(_))) && allowed.masses {
                     uses.mass.get_or_insert(span);
                 }
+                if matches!(found, Some(Name::Input(_))) && allowed.inputs {
+                    uses.input.get_or_insert(span);
+                }
                 if let Some(used) = self.check_var(&name.name, primes, span, allowed) {
                     uses.coords.push(used);
                 }
@@ -484,6 +489,25 @@ impl Checker<'_> {
                 self.report(
                     through("a mass law".to_string()).with_secondary(at, "mass law used here"),
                 );
+                ok = false;
+            }
+        }
+        if let Some(at) = info.uses.input {
+            if allowed.inputs {
+                uses.input.get_or_insert(at);
+            } else {
+                let diagnostic = Diagnostic::error(
+                    codes::INPUT_NOT_ALLOWED,
+                    format!(
+                        "{} cannot use let `{name}`: it depends on an input",
+                        allowed.what
+                    ),
+                )
+                .with_primary(span, "used here")
+                .with_secondary(at, "input used here")
+                .with_secondary(defined, format!("`{name}` defined here"))
+                .with_note(super::expressions::input_note(allowed));
+                self.report(diagnostic);
                 ok = false;
             }
         }

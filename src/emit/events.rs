@@ -21,6 +21,19 @@ pub fn branch_field(kernel: &Kernel) -> (TokenStream, TokenStream) {
         });
         init.extend(quote! { branches: [1.0; #k], });
     }
+    if !kernel.inputs.is_empty() {
+        field.extend(quote! {
+            /// The inputs on the current segment, set by the run between
+            /// segments (`Model::set_inputs`): the right side reads them
+            /// like params.
+            inputs: lagc_runtime::model::Inputs,
+        });
+        init.extend(quote! {
+            inputs: lagc_runtime::model::Inputs::held(
+                <Model as lagc_runtime::model::Model>::INPUT_DEFAULTS,
+            ),
+        });
+    }
     if !kernel.modes.is_empty() {
         field.extend(quote! {
             /// The reduced system in use: which candidate each implicit
@@ -40,6 +53,22 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
     } else {
         let k = Literal::usize_unsuffixed(k);
         quote! { const SWITCHES: usize = #k; }
+    };
+    let inputs = if kernel.inputs.is_empty() {
+        TokenStream::new()
+    } else {
+        let names = kernel.inputs.iter().map(|(n, _)| n.as_str());
+        let defaults = kernel
+            .inputs
+            .iter()
+            .map(|&(_, d)| super::expr::signed_literal(d));
+        quote! {
+            const INPUTS: &'static [&'static str] = &[#(#names),*];
+            const INPUT_DEFAULTS: &'static [f64] = &[#(#defaults),*];
+            fn set_inputs(&mut self, inputs: &lagc_runtime::model::Inputs) {
+                self.inputs.clone_from(inputs);
+            }
+        }
     };
     let outputs = if kernel.outputs.is_empty() {
         TokenStream::new()
@@ -90,7 +119,7 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
             const DOMAINS: &'static [lagc_runtime::model::Domain] = &[#(#entries),*];
         }
     };
-    quote! { #switches #outputs #constraints #impacts #domains }
+    quote! { #switches #inputs #outputs #constraints #impacts #domains }
 }
 
 /// `set_regime`, `switching_functions`, `stop`, `outputs`.

@@ -155,6 +155,11 @@ fn literal(v: f64) -> TokenStream {
     quote! { #lit }
 }
 
+/// A signed float literal as an expression: `-1.5_f64`.
+pub fn signed_literal(v: f64) -> TokenStream {
+    constant(v).0
+}
+
 fn constant(v: f64) -> (TokenStream, Prec) {
     if v < 0.0 {
         let lit = literal(-v);

@@ -100,6 +100,17 @@ impl SymbolNames {
                     let f = ident_tokens(self.mass_fns.get(i as usize));
                     prelude.push(quote! { let #name = #f(p, t); });
                 }
+                // The model holds its inputs; on a segment each is a line
+                // in `t` (`Inputs::at`), its rate a constant.
+                Symbol::Input(i) => {
+                    uses_time = true;
+                    let i = proc_macro2::Literal::u32_unsuffixed(i);
+                    prelude.push(quote! { let #name = self.inputs.at(#i, t); });
+                }
+                Symbol::InputRate(i) => {
+                    let i = proc_macro2::Literal::u32_unsuffixed(i);
+                    prelude.push(quote! { let #name = self.inputs.rate(#i); });
+                }
                 _ if self.branches.contains_key(&s) => {
                     let k = proc_macro2::Literal::usize_unsuffixed(self.branches[&s]);
                     prelude.push(quote! { let #name = self.branches[#k]; });

@@ -472,6 +472,8 @@ fn symbol_key(s: Symbol) -> (u8, u32, u32) {
         Symbol::Aux(i) => (2, i, 0),
         Symbol::Time => (3, 0, 0),
         Symbol::Jet { coord, order } => (4, coord, order),
+        Symbol::Input(i) => (5, i, 0),
+        Symbol::InputRate(i) => (6, i, 0),
     }
 }
 

@@ -72,6 +72,10 @@ impl Arena {
                 // Params, aux symbols and mass laws are constant under D
                 // (mass laws frozen: SPEC §1.1).
                 Symbol::Param(_) | Symbol::Mass(_) | Symbol::Aux(_) => self.zero(),
+                // An input is a line in `t` between the restarts at its
+                // changes; its rate is constant there.
+                Symbol::Input(i) => self.symbol(Symbol::InputRate(i)),
+                Symbol::InputRate(_) => self.zero(),
             },
         }
     }

@@ -61,6 +61,8 @@ impl Arena {
             Symbol::Time => "t".to_string(),
             Symbol::Param(i) => name_or(&self.names.params, i, "p"),
             Symbol::Mass(i) => name_or(&self.names.masses, i, "m"),
+            Symbol::Input(i) => name_or(&self.names.inputs, i, "u"),
+            Symbol::InputRate(i) => format!("{}'", name_or(&self.names.inputs, i, "u")),
             Symbol::Aux(i) => self
                 .aux_name(i)
                 .map_or_else(|| format!("aux{i}"), str::to_string),
@@ -79,6 +81,13 @@ impl Arena {
             Symbol::Time => "t".to_string(),
             Symbol::Param(i) => latex_name(&name_or(&self.names.params, i, "p")),
             Symbol::Mass(i) => latex_name(&name_or(&self.names.masses, i, "m")),
+            Symbol::Input(i) => latex_name(&name_or(&self.names.inputs, i, "u")),
+            Symbol::InputRate(i) => {
+                format!(
+                    "\\dot{{{}}}",
+                    latex_name(&name_or(&self.names.inputs, i, "u"))
+                )
+            }
             Symbol::Aux(i) => latex_name(&self.symbol_name(Symbol::Aux(i))),
             Symbol::Jet { coord, order } => {
                 let q = latex_name(&name_or(&self.names.coords, coord, "q"));

@@ -35,6 +35,13 @@ pub enum Symbol {
     },
     /// A named auxiliary symbol (field coefficients, …), see [`Arena::aux`].
     Aux(u32),
+    /// Input `i`'s value (SPEC §2.3): set from outside between steps, a
+    /// line in `t` on every segment the integrators see, so its total
+    /// derivative is [`Symbol::InputRate`].
+    Input(u32),
+    /// Input `i`'s rate on the current segment (0 when held, the slope
+    /// when interpolated linearly): constant under `D`.
+    InputRate(u32),
 }
 
 /// One node of the DAG. Canonical invariants (kept by the constructors):
@@ -92,6 +99,7 @@ pub struct Names {
     pub params: Vec<String>,
     pub coords: Vec<String>,
     pub masses: Vec<String>,
+    pub inputs: Vec<String>,
 }
 
 /// A small, fast, deterministic hasher (FxHash): the arena hashes millions of
@@ -363,7 +371,7 @@ impl Arena {
                 let slot = self.slot_for(*s);
                 Meta {
                     free: Box::new([slot]),
-                    varies: matches!(s, Symbol::Time | Symbol::Jet { .. }),
+                    varies: matches!(s, Symbol::Time | Symbol::Jet { .. } | Symbol::Input(_)),
                 }
             }
             Node::Add(ts) | Node::Mul(ts) => self.union_meta(ts),

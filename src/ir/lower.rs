@@ -25,6 +25,7 @@ pub fn names_of(model: &Model) -> Names {
         params: model.params.iter().map(|p| p.name.clone()).collect(),
         coords: model.coords.iter().map(|c| c.name.clone()).collect(),
         masses: model.masses.iter().map(|m| m.name.clone()).collect(),
+        inputs: model.inputs.iter().map(|u| u.name.clone()).collect(),
     }
 }
 
@@ -151,6 +152,7 @@ fn lower_value(arena: &mut Arena, expr: &Expr, model: &Model) -> Result<Value, L
                 ("t", _, 0) => Some(Symbol::Time),
                 (_, Some(Name::Param(i)), 0) => Some(Symbol::Param(i as u32)),
                 (_, Some(Name::Mass(i)), 0) => Some(Symbol::Mass(i as u32)),
+                (_, Some(Name::Input(i)), 0) => Some(Symbol::Input(i as u32)),
                 (_, Some(Name::Coord(j)), r) => Some(Symbol::Jet {
                     coord: j as u32,
                     order: r,

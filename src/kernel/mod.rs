@@ -46,6 +46,9 @@ pub struct Kernel {
     /// `u`: the state holds derivatives of order `0..u`.
     pub order: u32,
     pub params: Vec<KernelParam>,
+    /// `(name, default)` of every input (SPEC §2.3), `Symbol::Input(i)`:
+    /// the generated model holds their values and the runtime sets them.
+    pub inputs: Vec<(String, f64)>,
     /// Every mass law `(name, law)` (for naming a mass that reaches zero),
     /// and the indices of those the reduced system still holds.
     pub masses: Vec<(String, ExprId)>,
@@ -187,9 +190,12 @@ fn build_with(
         let mut found = domains::domains(&mut arena, model);
         found.retain(|d| {
             let symbols = arena.free_symbols(d.argument);
-            let moves = symbols
-                .iter()
-                .any(|s| matches!(s, Symbol::Time | Symbol::Jet { .. } | Symbol::Mass(_)));
+            let moves = symbols.iter().any(|s| {
+                matches!(
+                    s,
+                    Symbol::Time | Symbol::Jet { .. } | Symbol::Mass(_) | Symbol::Input(_)
+                )
+            });
             moves
                 && symbols.iter().all(|s| match s {
                     Symbol::Jet { .. } => reduced.state.contains(s),
@@ -226,6 +232,11 @@ fn build_with(
         coordinates: derivation.coordinates,
         order: reduced.order,
         params,
+        inputs: model
+            .inputs
+            .iter()
+            .map(|u| (u.name.clone(), u.default))
+            .collect(),
         masses,
         remaining_masses: reduced.mass_laws.iter().map(|&(i, _)| i).collect(),
         state_laws: derivation.state_laws.iter().map(|&(i, _)| i).collect(),

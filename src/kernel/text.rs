@@ -19,6 +19,9 @@ impl fmt::Display for Kernel {
         for p in &self.params {
             writeln!(f, "param {} = {}", p.name, a.display(p.value))?;
         }
+        for (name, default) in &self.inputs {
+            writeln!(f, "input {name} = {default:?}")?;
+        }
         for (i, (m, law)) in self.masses.iter().enumerate() {
             let args = if self.state_laws.contains(&(i as u32)) {
                 "t, q"

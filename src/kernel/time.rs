@@ -1,5 +1,6 @@
 //! The one place that knows every explicit time dependence of the reduced
-//! system: `t` itself and the mass laws still in it.
+//! system: `t` itself, the mass laws still in it and the inputs (each a
+//! line in `t` on a segment).
 //!
 //! Inside `D` of the Lagrangian a mass law is frozen (SPEC §1.1); after the
 //! reduction, `X(t, x)` is an ordinary function of `t` and its time partial
@@ -44,6 +45,16 @@ impl TimeDependence {
             let slope = arena.diff(e, mass);
             let m = arena.symbol(mass);
             terms.push(arena.mul(&[slope, m, rho]));
+        }
+        // Inputs move along their segment's line: `∂e/∂u_i · u_i'`.
+        for i in 0..arena.names().inputs.len() as u32 {
+            let input = Symbol::Input(i);
+            if !arena.depends_on(e, input) {
+                continue;
+            }
+            let slope = arena.diff(e, input);
+            let rate = arena.symbol(Symbol::InputRate(i));
+            terms.push(arena.mul(&[slope, rate]));
         }
         arena.add(&terms)
     }

@@ -329,6 +329,14 @@ fn at(symbolic: &Symbolic, t0: f64, laws: &[f64], values: &HashMap<Symbol, f64>,
         Symbol::Param(_) => param_env(symbolic, s),
         Symbol::Mass(i) => laws.get(i as usize).copied().unwrap_or(f64::NAN),
         Symbol::Jet { .. } => values.get(&s).copied().unwrap_or(f64::NAN),
+        // The model's own initial values are checked with its inputs at
+        // their defaults, held.
+        Symbol::Input(i) => symbolic
+            .input_defaults
+            .get(i as usize)
+            .copied()
+            .unwrap_or(f64::NAN),
+        Symbol::InputRate(_) => 0.0,
         Symbol::Aux(_) => f64::NAN,
     }
 }

@@ -93,6 +93,14 @@ impl SamplePoint {
                     rng.range(-1.0, 1.0)
                 }
             },
+            // Inputs and their rates are free symbols like params: a
+            // value in `[-1, 1)` of the point and the input.
+            Symbol::Input(i) | Symbol::InputRate(i) => {
+                let rate = u64::from(matches!(s, Symbol::InputRate(_)));
+                let key = (1u64 << 63) | (rate << 62) | u64::from(i);
+                let mut rng = Rng::new(self.jet_seed ^ key.wrapping_mul(0x2545_f491_4f6c_dd1d));
+                rng.range(-1.0, 1.0)
+            }
             Symbol::Aux(_) => f64::NAN,
         }
     }

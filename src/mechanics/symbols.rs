@@ -28,6 +28,9 @@ pub struct Symbolic {
     /// their text: the cross-check verifies that `φ` satisfies them.
     pub written: Vec<(String, ExprId)>,
     pub param_defaults: Vec<f64>,
+    /// Input defaults: the values the model's own initial values are
+    /// checked at.
+    pub input_defaults: Vec<f64>,
 }
 
 /// Lowers a checked expression; a name that does not lower is an internal
@@ -154,6 +157,7 @@ impl Symbolic {
             constraints,
             written,
             param_defaults: model.params.iter().map(|p| p.default).collect(),
+            input_defaults: model.inputs.iter().map(|u| u.default).collect(),
         })
     }
 

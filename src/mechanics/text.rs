@@ -87,6 +87,12 @@ impl Derivation {
             independent.join(", "),
             self.reduced.order
         );
+        let inputs = &a.names().inputs;
+        if !inputs.is_empty() {
+            // Set from outside between steps; `u'` is an input's rate on a
+            // segment (0 when held).
+            let _ = writeln!(out, "inputs: {}", inputs.join(", "));
+        }
         if !self.lets.is_empty() {
             out.push_str("\nlets:\n");
             for (name, value) in &self.lets {

@@ -259,6 +259,9 @@ pub struct Item {
 pub enum ItemKind {
     /// `param NAME = expr;`
     Param { name: Ident, value: Expr },
+    /// `input NAME = DEFAULT;` — a signal set from outside between steps
+    /// (SPEC §2.3); `check` requires the default to be a number.
+    Input { name: Ident, default: Expr },
     /// `coord q1, q2;`
     Coords(Vec<Ident>),
     /// `mass NAME = expr;`

@@ -12,6 +12,7 @@ pub fn is_statement_keyword(rule: Rule) -> bool {
     matches!(
         rule,
         Rule::kw_param
+            | Rule::kw_input
             | Rule::kw_coord
             | Rule::kw_mass
             | Rule::kw_lagrangian

@@ -58,6 +58,10 @@ fn statement(pair: Pair<Rule>) -> Converted<Item> {
             name: ident(children.expect(Rule::ident)?),
             value: expr(children.expect(Rule::expr)?)?,
         },
+        Rule::input => ItemKind::Input {
+            name: ident(children.expect(Rule::ident)?),
+            default: expr(children.expect(Rule::expr)?)?,
+        },
         Rule::coords => {
             let mut names = Vec::new();
             for name in children.by_ref() {

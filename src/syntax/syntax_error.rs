@@ -6,7 +6,7 @@ use crate::span::Span;
 use pest::error::{Error, ErrorVariant, InputLocation};
 
 const STATEMENT_KEYWORDS: &str =
-    "`param`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact`, `integrator`, `let`, `output`, `stop` or `when`";
+    "`param`, `input`, `coord`, `mass`, `lagrangian`, `constraint`, `point`, `force`, `initial`, `time`, `exact`, `integrator`, `let`, `output`, `stop` or `when`";
 const POINT_FIELDS: &str =
     "`mass = …;`, `position = (…);`, `absolute velocity = (…);` or `relative velocity = (…);`";
 
@@ -204,6 +204,7 @@ fn is_statement(rule: Rule) -> bool {
         || matches!(
             rule,
             Rule::param
+                | Rule::input
                 | Rule::coords
                 | Rule::mass
                 | Rule::lagrangian

@@ -62,7 +62,7 @@ fn check_against_spec_formulas(name: &str) {
                 .iter()
                 .position(|&c| c == Symbol::Aux(i))
                 .map_or(f64::NAN, |k| f[k]),
-            Symbol::Jet { .. } => f64::NAN,
+            Symbol::Jet { .. } | Symbol::Input(_) | Symbol::InputRate(_) => f64::NAN,
         };
         let a_num: Vec<Vec<f64>> = a.iter().map(|row| arena.eval_many(row, &env)).collect();
         let b_num = arena.eval_many(&b, &env);

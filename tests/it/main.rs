@@ -10,6 +10,7 @@ mod field;
 mod generated;
 mod holonomic;
 mod impacts;
+mod inputs;
 mod ir;
 mod kernel;
 mod language_v2;

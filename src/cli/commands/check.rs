@@ -17,7 +17,13 @@ pub(crate) fn check(args: &CheckArgs) -> ExitCode {
             None => "no constraints".to_string(),
         };
         let coords = count(model.coords.len(), "coordinate");
-        eprintln!("{file_name}: ok ({coords}, {constraints})");
+        let inputs = if model.inputs.is_empty() {
+            String::new()
+        } else {
+            let names: Vec<&str> = model.inputs.iter().map(|u| u.name.as_str()).collect();
+            format!(", {}: {}", count(names.len(), "input"), names.join(", "))
+        };
+        eprintln!("{file_name}: ok ({coords}, {constraints}{inputs})");
         ExitCode::SUCCESS
     }))
 }

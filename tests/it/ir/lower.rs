@@ -79,6 +79,7 @@ fn paper_model() -> Model {
     };
     Model {
         params: vec![param("M0", 1.0), param("alpha", 0.5)],
+        inputs: Vec::new(),
         coords: vec![coord("q1"), coord("q2")],
         masses: vec![MassLaw {
             name: "M".into(),

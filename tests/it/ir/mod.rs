@@ -14,6 +14,7 @@ pub fn arena() -> Arena {
         params: vec!["alpha".into(), "M0".into()],
         coords: vec!["q1".into(), "q2".into()],
         masses: vec!["M".into()],
+        inputs: Vec::new(),
     })
 }
 
@@ -45,6 +46,8 @@ pub fn env_at(seed: u64) -> impl Fn(Symbol) -> f64 {
             Symbol::Mass(i) => 200 + u64::from(i),
             Symbol::Jet { coord, order } => 1000 + 10 * u64::from(coord) + u64::from(order),
             Symbol::Aux(i) => 5000 + u64::from(i),
+            Symbol::Input(i) => 6000 + u64::from(i),
+            Symbol::InputRate(i) => 7000 + u64::from(i),
         };
         Rng::new(seed.wrapping_mul(7919).wrapping_add(key)).range(0.2, 1.4)
     }

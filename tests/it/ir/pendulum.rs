@@ -79,6 +79,7 @@ fn twelve_link_pendulum() {
         params: vec!["g".into()],
         coords: (1..=N).map(|i| format!("th{i}")).collect(),
         masses: Vec::new(),
+        inputs: Vec::new(),
     });
     let l = lagrangian(&mut a);
     let (e, m) = equations(&mut a, l);
