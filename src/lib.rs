@@ -30,4 +30,4 @@ pub use frontend::{
     check_and_derive, check_and_derive_bytes, decode_then, frontend, frontend_bytes,
     literal_warnings, on_big_stack,
 };
-pub use pipeline::compile;
+pub use pipeline::{compile, compile_fmu};

@@ -19,6 +19,19 @@ pub fn compile(
     generate_crate(&model, options)
 }
 
+/// [`compile`] for an FMI 2.0 co-simulation FMU: its crate (depending on
+/// the lagc-fmu library at `fmu_path`) and its modelDescription.xml.
+pub fn compile_fmu(
+    source: &str,
+    options: &EmitOptions,
+    fmu_path: &str,
+) -> Result<(crate::emit::FmuCrate, Vec<Diagnostic>), Vec<Diagnostic>> {
+    let model = crate::frontend::frontend(source)?;
+    let (derivation, _) = crate::mechanics::derive_checked(&model)?;
+    let (kernel, notes) = kernel_of(&model, derivation)?;
+    Ok((crate::emit::emit_fmu(&kernel, options, fmu_path)?, notes))
+}
+
 /// The generated crate of `model`, with the notes the build should show
 /// (e.g. that the local field method is used).
 pub fn generate_crate(

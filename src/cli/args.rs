@@ -112,6 +112,11 @@ pub struct BuildArgs {
     /// them together in one program.
     #[arg(long, value_name = "RUNTIME_DIR")]
     pub runtime: Option<PathBuf>,
+    /// Build an FMI 2.0 co-simulation FMU for Linux x86-64 instead: `-o`
+    /// names the `.fmu` file (the model's own integrators run inside
+    /// fmi2DoStep; cargo builds it in the cache).
+    #[arg(long, conflicts_with = "runtime")]
+    pub fmu: bool,
 }
 
 #[derive(Debug, Args)]

@@ -8,6 +8,7 @@ pub mod cargo;
 pub mod commands;
 pub mod progress;
 pub mod report;
+pub mod zip;
 
 pub use cargo::cargo_build;
 use lagc::emit::GeneratedCrate;

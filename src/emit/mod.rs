@@ -19,12 +19,14 @@
 //! | `motion.rs` | `rhs`, `jacobian`, `time_partial`, `linearize` |
 //! | `coefficients.rs` | the coefficient system |
 //! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
+//! | `fmu.rs` | the FMU's crate (a `cdylib` over lagc-fmu) and modelDescription.xml |
 
 mod bodies;
 mod coefficients;
 mod events;
 mod expr;
 mod files;
+mod fmu;
 mod initial;
 mod model;
 pub mod modes;
@@ -36,6 +38,7 @@ mod params;
 use crate::diagnostic::Diagnostic;
 use crate::kernel::Kernel;
 pub use files::{fnv1a, library_name, package_name, runtime_files, runtime_version};
+pub use fmu::{emit_fmu, fmu_library_files, model_description, FmuCrate};
 use names::SymbolNames;
 use quote::quote;
 

@@ -7,6 +7,7 @@ mod errors;
 mod examples;
 mod expect;
 mod field;
+mod fmu;
 mod generated;
 mod holonomic;
 mod impacts;

@@ -6,6 +6,9 @@ use crate::cli::args::BuildArgs;
 use std::process::ExitCode;
 
 pub(crate) fn build(args: &BuildArgs) -> ExitCode {
+    if args.fmu {
+        return super::fmu::build_fmu(args);
+    }
     let runtime_dir = args
         .runtime
         .clone()

@@ -6,6 +6,7 @@ mod build;
 mod cache;
 mod check;
 mod derive;
+mod fmu;
 mod report;
 mod run;
 

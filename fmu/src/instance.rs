@@ -1,0 +1,384 @@
+//! One FMU instance: the FMI 2.0 co-simulation state machine over a
+//! lagc model, in safe Rust (the C layer, `ffi.rs`, only converts).
+//!
+//! Value references number the model's variables in one sequence, the
+//! order lagc writes them into modelDescription.xml: the params
+//! (`Model::PARAMS`), the state (`Model::STATE`: `q1`, `der(q1)`, …), the
+//! outputs (`Model::OUTPUTS`), the inputs (`Model::INPUTS`).
+
+use lagc_runtime::driver::{run, Ending, Options};
+use lagc_runtime::failure::{Failure, FailureKind};
+use lagc_runtime::model::{DynModel, Initial, Inputs};
+
+/// Where an instance stands in FMI's state machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    Instantiated,
+    Initialization,
+    Stepping,
+    /// `stop when` ended the motion (the importer sees fmi2Terminated).
+    Ended,
+    Terminated,
+    /// A failure: only fmi2Reset, fmi2FreeInstance and the getters help.
+    Failed,
+}
+
+/// What a variable's value reference names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variable {
+    Param(usize),
+    State(usize),
+    Output(usize),
+    Input(usize),
+}
+
+/// An error: the message goes to the importer's logger, the status is
+/// fmi2Error (a bad call or a failure of the motion).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Error(pub String);
+
+impl From<Failure> for Error {
+    fn from(failure: Failure) -> Error {
+        Error(failure.to_string())
+    }
+}
+
+/// A step's result short of an error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stepped {
+    /// At the communication point asked for.
+    Done,
+    /// `stop when` ended the motion at this time (fmi2Discard, and
+    /// fmi2Terminated in the status).
+    Ended(f64),
+}
+
+/// A saved instance (fmi2GetFMUstate).
+pub struct Saved {
+    phase: Phase,
+    t: f64,
+    x: Vec<f64>,
+    inputs: Vec<f64>,
+    inputs_changed: bool,
+    model: Option<Box<dyn DynModel>>,
+}
+
+/// One instance of a model.
+pub struct Instance {
+    prototype: Box<dyn DynModel>,
+    pub phase: Phase,
+    /// Params the importer set (the others follow from them).
+    overrides: Vec<Option<f64>>,
+    /// Initial values the importer set (state components the model states).
+    given: Vec<Option<f64>>,
+    inputs: Vec<f64>,
+    /// An input changed since the last step: the next one restarts.
+    inputs_changed: bool,
+    pub options: Options,
+    start: Option<f64>,
+    stop: Option<f64>,
+    /// The model with the params, from initialization on.
+    model: Option<Box<dyn DynModel>>,
+    pub t: f64,
+    x: Vec<f64>,
+    outputs: Vec<f64>,
+}
+
+impl Instance {
+    /// A new instance of the model `prototype` is one of.
+    pub fn new(prototype: Box<dyn DynModel>) -> Instance {
+        let inputs = prototype.input_defaults().to_vec();
+        let params = prototype.param_names().len();
+        let dim = prototype.dim();
+        let outputs = prototype.output_names().len();
+        Instance {
+            phase: Phase::Instantiated,
+            overrides: vec![None; params],
+            given: vec![None; dim],
+            inputs,
+            inputs_changed: false,
+            options: Options::default(),
+            start: None,
+            stop: None,
+            model: None,
+            t: prototype.time_span().0,
+            x: vec![f64::NAN; dim],
+            outputs: vec![f64::NAN; outputs],
+            prototype,
+        }
+    }
+
+    /// The model's source hash: the FMU's GUID.
+    pub fn source_hash(&self) -> &'static str {
+        self.prototype.source_hash()
+    }
+
+    /// Back to the state after instantiation (fmi2Reset).
+    pub fn reset(&mut self) {
+        let prototype = self.prototype.boxed_clone();
+        *self = Instance::new(prototype);
+    }
+
+    /// The variable of value reference `vr`.
+    pub fn variable(&self, vr: u32) -> Result<Variable, Error> {
+        let m = &*self.prototype;
+        let sizes = [
+            m.param_names().len(),
+            m.dim(),
+            m.output_names().len(),
+            m.input_names().len(),
+        ];
+        let mut rest = vr as usize;
+        for (kind, size) in sizes.into_iter().enumerate() {
+            if rest < size {
+                return Ok(match kind {
+                    0 => Variable::Param(rest),
+                    1 => Variable::State(rest),
+                    2 => Variable::Output(rest),
+                    _ => Variable::Input(rest),
+                });
+            }
+            rest -= size;
+        }
+        Err(Error(format!("no variable has the value reference {vr}")))
+    }
+
+    /// fmi2SetupExperiment: the tolerance (relative; the absolute one is
+    /// scaled with it) and the span.
+    pub fn setup(
+        &mut self,
+        tolerance: Option<f64>,
+        start: f64,
+        stop: Option<f64>,
+    ) -> Result<(), Error> {
+        self.expect(&[Phase::Instantiated], "fmi2SetupExperiment")?;
+        if let Some(rtol) = tolerance {
+            if rtol.is_nan() || rtol <= 0.0 || rtol >= 1.0 {
+                return Err(Error(format!("the tolerance {rtol} is not in (0, 1)")));
+            }
+            let default = Options::default().tol;
+            self.options.tol.rtol = rtol;
+            self.options.tol.atol = default.atol * rtol / default.rtol;
+        }
+        let t0 = self.prototype.time_span().0;
+        if start != t0 {
+            return Err(Error(format!(
+                "the start time {start} is not the model's t0 = {t0}, where its initial \
+                 values are stated"
+            )));
+        }
+        if let Some(stop) = stop {
+            if stop.partial_cmp(&start) != Some(std::cmp::Ordering::Greater) {
+                return Err(Error(format!("the stop time {stop} is not after {start}")));
+            }
+        }
+        self.start = Some(start);
+        self.stop = stop;
+        Ok(())
+    }
+
+    pub fn enter_initialization(&mut self) -> Result<(), Error> {
+        self.expect(&[Phase::Instantiated], "fmi2EnterInitializationMode")?;
+        self.phase = Phase::Initialization;
+        Ok(())
+    }
+
+    /// The model with the params set and its initial state under the
+    /// initial values and inputs set, checked as `--param`/`--init` are.
+    fn initialize(&mut self) -> Result<(), Error> {
+        let params = self.prototype.parameters(&self.overrides);
+        let mut model = self.prototype.with_params(&params);
+        model.set_inputs(&Inputs::held(&self.inputs));
+        let (t0, t1) = model.time_span();
+        if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+            return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }).into());
+        }
+        let x0 = model.initial_state(&self.given)?;
+        if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
+            return Err(Failure::new(
+                t0,
+                FailureKind::NonFiniteInitialValue {
+                    component: model.state_names()[i].to_string(),
+                },
+            )
+            .into());
+        }
+        lagc_runtime::driver::check_initial_candidates(&*model, t0, &x0)?;
+        self.t = t0;
+        self.x = x0;
+        self.model = Some(model);
+        self.inputs_changed = false;
+        Ok(())
+    }
+
+    pub fn exit_initialization(&mut self) -> Result<(), Error> {
+        self.expect(&[Phase::Initialization], "fmi2ExitInitializationMode")?;
+        self.initialize()?;
+        self.phase = Phase::Stepping;
+        Ok(())
+    }
+
+    pub fn terminate(&mut self) -> Result<(), Error> {
+        self.expect(&[Phase::Stepping, Phase::Ended], "fmi2Terminate")?;
+        self.phase = Phase::Terminated;
+        Ok(())
+    }
+
+    fn expect(&self, phases: &[Phase], call: &str) -> Result<(), Error> {
+        if phases.contains(&self.phase) {
+            Ok(())
+        } else {
+            Err(Error(format!(
+                "{call} is not allowed now (the instance is {:?})",
+                self.phase
+            )))
+        }
+    }
+
+    pub fn get_real(&mut self, vr: u32) -> Result<f64, Error> {
+        let variable = self.variable(vr)?;
+        if matches!(variable, Variable::State(_) | Variable::Output(_))
+            && self.phase == Phase::Initialization
+        {
+            // The initial state as it stands (calculated values follow the
+            // params and start values set so far).
+            self.initialize()?;
+        }
+        let before = self.model.is_none();
+        Ok(match variable {
+            Variable::Param(i) => self.prototype.parameters(&self.overrides)[i],
+            Variable::Input(i) => self.inputs[i],
+            Variable::State(i) if before => self.given[i].unwrap_or(f64::NAN),
+            Variable::State(i) => self.x[i],
+            Variable::Output(_) if before => f64::NAN,
+            Variable::Output(i) => {
+                let model = self.model.as_ref().expect("made above");
+                model.outputs(self.t, &self.x, &mut self.outputs);
+                self.outputs[i]
+            }
+        })
+    }
+
+    pub fn set_real(&mut self, vr: u32, value: f64) -> Result<(), Error> {
+        let variable = self.variable(vr)?;
+        let before = matches!(self.phase, Phase::Instantiated | Phase::Initialization);
+        let name = |names: &[&str], i: usize| names.get(i).copied().unwrap_or("?").to_string();
+        if !value.is_finite() {
+            return Err(Error(format!(
+                "{value} is not a finite value (reference {vr})"
+            )));
+        }
+        match variable {
+            Variable::Param(i) if before => self.overrides[i] = Some(value),
+            Variable::Param(i) => {
+                return Err(Error(format!(
+                    "the param `{}` is fixed after initialization",
+                    name(self.prototype.param_names(), i)
+                )))
+            }
+            Variable::State(i) if before && self.prototype.initial_kinds()[i] == Initial::Given => {
+                self.given[i] = Some(value)
+            }
+            Variable::State(i) => {
+                return Err(Error(format!(
+                    "`{}` cannot be set: {}",
+                    name(self.prototype.state_names(), i),
+                    if before {
+                        "the constraints (or the equations of motion) fix it"
+                    } else {
+                        "the state is the motion's after initialization"
+                    }
+                )))
+            }
+            Variable::Output(i) => {
+                return Err(Error(format!(
+                    "the output `{}` cannot be set",
+                    name(self.prototype.output_names(), i)
+                )))
+            }
+            Variable::Input(i) => {
+                if self.inputs[i] != value {
+                    self.inputs[i] = value;
+                    self.inputs_changed = true;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// fmi2DoStep from `t` (which must be where the instance stands) over
+    /// `h`. An input changed since the last step is a discontinuity: the
+    /// step restarts the integration from the current state under the
+    /// new inputs, the components the constraints fix recomputed.
+    pub fn do_step(&mut self, t: f64, h: f64) -> Result<Stepped, Error> {
+        self.expect(&[Phase::Stepping], "fmi2DoStep")?;
+        let scale = t.abs().max(h.abs()).max(1.0);
+        if (t - self.t).abs() > 1e-12 * scale {
+            return Err(Error(format!(
+                "fmi2DoStep from t = {t}, but the instance stands at t = {}",
+                self.t
+            )));
+        }
+        if !h.is_finite() || h <= 0.0 {
+            return Err(Error(format!("the step size {h} is not positive")));
+        }
+        let end = self.t + h;
+        if let Some(stop) = self.stop {
+            if end > stop + 1e-12 * scale {
+                return Err(Error(format!("t = {end} is past the stop time {stop}")));
+            }
+        }
+        let model = self.model.as_mut().expect("stepping has a model");
+        if self.inputs_changed {
+            model.set_inputs(&Inputs::held(&self.inputs));
+            let mut fixed = self.x.clone();
+            model.constrained(self.t, &self.x, &mut fixed)?;
+            self.x = fixed;
+            self.inputs_changed = false;
+        }
+        let mut last = (self.t, self.x.clone());
+        let outcome = run(
+            &mut **model,
+            &self.options,
+            self.t,
+            end,
+            &self.x,
+            &[end],
+            |_, t, x| {
+                last = (t, x.to_vec());
+                Ok(())
+            },
+        )?;
+        (self.t, self.x) = last;
+        match outcome.ending {
+            Ending::End => {
+                self.t = end;
+                Ok(Stepped::Done)
+            }
+            Ending::Stopped(at) | Ending::Rest { at, .. } => {
+                self.phase = Phase::Ended;
+                Ok(Stepped::Ended(at))
+            }
+        }
+    }
+
+    pub fn save(&self) -> Saved {
+        Saved {
+            phase: self.phase,
+            t: self.t,
+            x: self.x.clone(),
+            inputs: self.inputs.clone(),
+            inputs_changed: self.inputs_changed,
+            model: self.model.as_ref().map(|m| m.boxed_clone()),
+        }
+    }
+
+    pub fn restore(&mut self, saved: &Saved) {
+        self.phase = saved.phase;
+        self.t = saved.t;
+        self.x.clone_from(&saved.x);
+        self.inputs.clone_from(&saved.inputs);
+        self.inputs_changed = saved.inputs_changed;
+        self.model = saved.model.as_ref().map(|m| m.boxed_clone());
+    }
+}

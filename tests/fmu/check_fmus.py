@@ -1,0 +1,213 @@
+"""FMUs that lagc builds, through FMPy (the reference importer), against
+closed forms. Run by tests/it/fmu.rs in a venv with fmpy 0.3.32 and scipy:
+
+    python check_fmus.py CASE DIR
+
+where DIR holds paper.fmu, driven_oscillator.fmu,
+rocket_burnout_landing.fmu and newton_no_root.fmu. Prints what it
+measured; exits non-zero (an assertion) when a check fails.
+"""
+
+import sys
+import warnings
+
+import fmpy
+import numpy as np
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from scipy.integrate import quad
+
+RTOL = 1e-10
+
+# quad notes rounding at its 1e-14 request; its error is still far below
+# the tolerances checked.
+warnings.filterwarnings("ignore", message=".*roundoff error.*")
+
+
+def paper_exact(t, alpha=0.5, v0=1.0):
+    """SPEC 1.6: q1' = v0 e^(alpha t)/sqrt(1 + t^2), q2' = t q1'."""
+    opts = dict(epsabs=1e-15, epsrel=1e-14, limit=200)
+    q1 = v0 * quad(lambda s: np.exp(alpha * s) / np.sqrt(1 + s * s), 0, t, **opts)[0]
+    q2 = v0 * quad(lambda s: s * np.exp(alpha * s) / np.sqrt(1 + s * s), 0, t, **opts)[0]
+    v = v0 * np.exp(alpha * t) / np.sqrt(1 + t * t)
+    return [q1, q2, v, t * v]
+
+
+def largest_error(result, names, exact):
+    return max(
+        abs(result[n][i] - e) / max(1.0, abs(e))
+        for i in range(len(result))
+        for n, e in zip(names, exact(result["time"][i]))
+    )
+
+
+def oscillator(m, k, pieces, t):
+    """m x'' + k x = F, F = c + r (t - tau) on each piece, from rest at 0."""
+    w = np.sqrt(k / m)
+    x = v = 0.0
+    for i, (tau, c, r) in enumerate(pieces):
+        if tau > t:
+            break
+        end = min(pieces[i + 1][0] if i + 1 < len(pieces) else np.inf, t)
+        a, b, s = x - c / k, (v - r / k) / w, end - tau
+        x = (c + r * s) / k + a * np.cos(w * s) + b * np.sin(w * s)
+        v = r / k - a * w * np.sin(w * s) + b * w * np.cos(w * s)
+    return x, v
+
+
+def paper(d):
+    names = ["q1", "q2", "der(q1)", "der(q2)"]
+    r = fmpy.simulate_fmu(f"{d}/paper.fmu", relative_tolerance=RTOL, output_interval=0.05, output=names)
+    assert r["time"][-1] == 5.0, r["time"][-1]
+    error = largest_error(r, names, paper_exact)
+    print(f"paper: {len(r)} points, largest error {error:.3e}")
+    assert error < 10 * RTOL, error
+    # Params and initial values set as start values change the motion as
+    # --param and --init do; der(q2) is calculated (the constraint fixes it).
+    r = fmpy.simulate_fmu(
+        f"{d}/paper.fmu",
+        relative_tolerance=RTOL,
+        output_interval=0.05,
+        output=names,
+        start_values={"alpha": 0.2, "der(q1)": 2.0},
+    )
+    error = largest_error(r, names, lambda t: paper_exact(t, 0.2, 2.0))
+    print(f"paper, alpha = 0.2, der(q1)(0) = 2: largest error {error:.3e}")
+    assert error < 10 * RTOL, error
+
+
+def driven(d):
+    # A force stepping at t = 1 and t = 3 (communication points of the
+    # 0.25 grid): FMPy sets the input at each point, the FMU restarts its
+    # integration where the value changed.
+    signal = np.array(
+        [(0.0, 1.0), (1.0, 1.0), (1.0, -2.0), (3.0, -2.0), (3.0, 0.5), (5.0, 0.5)],
+        dtype=[("time", np.float64), ("F", np.float64)],
+    )
+    r = fmpy.simulate_fmu(
+        f"{d}/driven_oscillator.fmu",
+        relative_tolerance=RTOL,
+        output_interval=0.25,
+        input=signal,
+        output=["x", "der(x)", "force"],
+    )
+    pieces = [(0.0, 1.0, 0.0), (1.0, -2.0, 0.0), (3.0, 0.5, 0.0)]
+    error = largest_error(r, ["x", "der(x)"], lambda t: oscillator(2.0, 8.0, pieces, t))
+    print(f"driven oscillator, input steps through FMPy: largest error {error:.3e}")
+    assert error < 10 * RTOL, error
+    # The output column reads the input as the FMU holds it.
+    assert r["force"][0] == 1.0 and r["force"][-1] == 0.5, r["force"]
+    # Without an input signal the default (0.5) holds.
+    r = fmpy.simulate_fmu(f"{d}/driven_oscillator.fmu", relative_tolerance=RTOL, output_interval=0.25)
+    error = largest_error(r, ["x", "der(x)"], lambda t: oscillator(2.0, 8.0, [(0.0, 0.5, 0.0)], t))
+    print(f"driven oscillator, default input: largest error {error:.3e}")
+    assert error < 10 * RTOL, error
+
+
+def stop_and_failure(d):
+    # `stop when`: fmi2DoStep returns fmi2Discard with fmi2Terminated, and
+    # FMPy's last row is at the stop time (lagc run: t = 127.27665911452041).
+    r = fmpy.simulate_fmu(f"{d}/rocket_burnout_landing.fmu", relative_tolerance=RTOL, output_interval=0.5)
+    print(f"rocket: the simulation ended at t = {r['time'][-1]!r}, z = {r['z'][-1]:.3e}")
+    assert abs(r["time"][-1] - 127.27665911452041) < 1e-6, r["time"][-1]
+    assert abs(r["z"][-1]) < 1e-6, r["z"][-1]
+    # A numerical failure: fmi2Error (an exception in FMPy, not a crash),
+    # and lagc's message with the time and the quantity through the logger.
+    messages = []
+
+    def logger(env, name, status, category, message):
+        messages.append((status, category.decode(), message.decode()))
+
+    try:
+        fmpy.simulate_fmu(f"{d}/newton_no_root.fmu", logger=logger, output_interval=0.01)
+        raise AssertionError("the failing model did not fail")
+    except FMICallException as e:
+        print(f"newton_no_root: {e}; logged {messages}")
+        assert e.status == 3, e.status
+    assert any(
+        s == 3 and "at t = 1e0" in m and "Newton's method found no highest derivatives" in m
+        for s, _, m in messages
+    ), messages
+
+
+def slave(d, name, instance):
+    md = fmpy.read_model_description(f"{d}/{name}.fmu")
+    unzipped = fmpy.extract(f"{d}/{name}.fmu")
+    fmu = FMU2Slave(
+        guid=md.guid,
+        unzipDirectory=unzipped,
+        modelIdentifier=md.coSimulation.modelIdentifier,
+        instanceName=instance,
+    )
+    refs = {v.name: v.valueReference for v in md.modelVariables}
+    return fmu, refs
+
+
+def two_instances(d):
+    # Two models and two instances of one model in one process, stepped in
+    # turn: each follows its own closed form.
+    a, ra = slave(d, "paper", "paper_a")
+    b, rb = slave(d, "paper", "paper_b")
+    c, rc = slave(d, "driven_oscillator", "oscillator")
+    for fmu in (a, b, c):
+        fmu.instantiate()
+    b.setReal([rb["alpha"]], [0.25])
+    for fmu in (a, b, c):
+        fmu.setupExperiment(tolerance=RTOL, startTime=0.0)
+        fmu.enterInitializationMode()
+        fmu.exitInitializationMode()
+    c.setReal([rc["F"]], [-1.0])
+    t, h, worst = 0.0, 0.125, 0.0
+    for _ in range(24):
+        for fmu in (a, b, c):
+            fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        t += h
+        qa = a.getReal([ra["q1"], ra["der(q1)"]])
+        qb = b.getReal([rb["q1"], rb["der(q1)"]])
+        xc = c.getReal([rc["x"], rc["der(x)"]])
+        ea, eb = paper_exact(t), paper_exact(t, 0.25)
+        ec = oscillator(2.0, 8.0, [(0.0, -1.0, 0.0)], t)
+        for got, want in [(qa, [ea[0], ea[2]]), (qb, [eb[0], eb[2]]), (xc, ec)]:
+            worst = max(worst, max(abs(g - w) / max(1.0, abs(w)) for g, w in zip(got, want)))
+    print(f"three instances, two models, in turn to t = {t}: largest error {worst:.3e}")
+    assert worst < 10 * RTOL, worst
+    # fmi2Reset: the instance starts over with the model's values.
+    b.reset()
+    b.setupExperiment(tolerance=RTOL, startTime=0.0)
+    b.enterInitializationMode()
+    b.exitInitializationMode()
+    b.doStep(currentCommunicationPoint=0.0, communicationStepSize=1.0)
+    got = b.getReal([rb["q1"]])[0]
+    assert abs(got - paper_exact(1.0)[0]) < 10 * RTOL, got
+    # Saved and restored states: a step taken again gives the same state.
+    saved = a.getFMUState()
+    a.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+    first = a.getReal([ra["q1"]])[0]
+    a.setFMUState(saved)
+    a.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+    assert a.getReal([ra["q1"]])[0] == first
+    a.freeFMUState(saved)
+    # Bad calls are errors, not crashes: an unknown value reference, a
+    # step from the wrong time, a param set after initialization.
+    for call in [
+        lambda: a.getReal([999]),
+        lambda: a.doStep(currentCommunicationPoint=t + 7.0, communicationStepSize=h),
+        lambda: c.setReal([rc["k"]], [1.0]),
+    ]:
+        try:
+            call()
+            raise AssertionError("a bad call succeeded")
+        except FMICallException as e:
+            assert e.status == 3, e.status
+    # After fmi2Error an instance may only be reset or freed (FMI 2.0).
+    for fmu in (b, c):
+        fmu.terminate()
+    for fmu in (a, b, c):
+        fmu.freeInstance()
+    print("reset, saved states and bad calls: as specified")
+
+
+if __name__ == "__main__":
+    {"paper": paper, "driven": driven, "stop_and_failure": stop_and_failure, "two_instances": two_instances}[
+        sys.argv[1]
+    ](sys.argv[2])

@@ -1,0 +1,158 @@
+//! FMUs through a real importer (issue 26): `lagc build --fmu` on the
+//! paper's example, a model driven by an input, a `stop when` and a model
+//! made to fail; then FMPy 0.3.32 (from PyPI, in a venv under `target/`)
+//! validates them and simulates them against closed forms
+//! (`tests/fmu/check_fmus.py`): changed params and initial values as start
+//! values, an input stepping through FMPy's input signal, the stop time,
+//! the failure's message through the logger with fmi2Error, three
+//! instances of two models in one process, fmi2Reset, saved states, bad
+//! calls.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+/// The models, by their path under the repository.
+const MODELS: [&str; 4] = [
+    "examples/paper.lag",
+    "tests/data/driven_oscillator.lag",
+    "examples/rocket_burnout_landing.lag",
+    "tests/data/runtime_failures/newton_no_root.lag",
+];
+
+fn target() -> PathBuf {
+    crate::root().join("target/fmu-tests")
+}
+
+fn checked(output: Output, what: &str) -> Output {
+    assert!(
+        output.status.success(),
+        "{what} failed:\n{}\n{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    output
+}
+
+/// A venv with FMPy and SciPy (the closed forms' quadratures), made once.
+fn python() -> &'static Path {
+    static PYTHON: OnceLock<PathBuf> = OnceLock::new();
+    PYTHON.get_or_init(|| {
+        let venv = crate::root().join("target/fmpy-venv");
+        let python = venv.join("bin/python");
+        if !python.exists() {
+            let made = Command::new("python3.11")
+                .args(["-m", "venv"])
+                .arg(&venv)
+                .output()
+                .expect("python3.11 runs");
+            checked(made, "python3.11 -m venv");
+        }
+        let pip = Command::new(&python)
+            .args(["-m", "pip", "install", "--quiet", "fmpy==0.3.32", "scipy"])
+            .output()
+            .unwrap();
+        checked(pip, "pip install fmpy scipy");
+        python
+    })
+}
+
+/// Every model's FMU, built once by `lagc build --fmu`.
+fn fmus() -> &'static Path {
+    static FMUS: OnceLock<PathBuf> = OnceLock::new();
+    FMUS.get_or_init(|| {
+        let dir = target();
+        std::fs::create_dir_all(&dir).unwrap();
+        for model in MODELS {
+            let stem = Path::new(model).file_stem().unwrap().to_str().unwrap();
+            let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+                .args(["build", model, "--fmu", "-o"])
+                .arg(dir.join(format!("{stem}.fmu")))
+                .current_dir(crate::root())
+                .env("LAGC_CACHE_DIR", crate::root().join("target/lagc-cache"))
+                .output()
+                .unwrap();
+            checked(out, &format!("lagc build {model} --fmu"));
+        }
+        dir
+    })
+}
+
+fn check(case: &str) -> String {
+    let python = python();
+    let out = Command::new(python)
+        .arg(crate::root().join("tests/fmu/check_fmus.py"))
+        .arg(case)
+        .arg(fmus())
+        .output()
+        .unwrap();
+    let out = checked(out, &format!("check_fmus.py {case}"));
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    eprintln!("{stdout}");
+    stdout
+}
+
+#[test]
+fn every_fmu_passes_fmpy_validate_and_exports_the_34_functions() {
+    let fmpy = python().with_file_name("fmpy");
+    for model in MODELS {
+        let stem = Path::new(model).file_stem().unwrap().to_str().unwrap();
+        let fmu = fmus().join(format!("{stem}.fmu"));
+        let out = checked(
+            Command::new(&fmpy)
+                .arg("validate")
+                .arg(&fmu)
+                .output()
+                .unwrap(),
+            "fmpy validate",
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("No problems found."), "{stem}: {stdout}");
+        // The archive as Python's zipfile reads it, and the library's
+        // exported symbols (FMPy looks all of them up).
+        let script = "import sys, zipfile, ctypes, tempfile\n\
+            z = zipfile.ZipFile(sys.argv[1]); assert z.testzip() is None\n\
+            names = z.namelist(); so = [n for n in names if n.endswith('.so')][0]\n\
+            assert sorted(names) == ['binaries/linux64/' + so.split('/')[-1], 'modelDescription.xml'], names\n\
+            d = tempfile.mkdtemp(); lib = ctypes.CDLL(z.extract(so, d))\n\
+            fns = '''GetTypesPlatform GetVersion SetDebugLogging Instantiate FreeInstance SetupExperiment\n\
+            EnterInitializationMode ExitInitializationMode Terminate Reset GetReal GetInteger GetBoolean\n\
+            GetString SetReal SetInteger SetBoolean SetString GetFMUstate SetFMUstate FreeFMUstate\n\
+            SerializedFMUstateSize SerializeFMUstate DeSerializeFMUstate GetDirectionalDerivative\n\
+            SetRealInputDerivatives GetRealOutputDerivatives DoStep CancelStep GetStatus GetRealStatus\n\
+            GetIntegerStatus GetBooleanStatus GetStringStatus'''.split()\n\
+            assert len(fns) == 34\n\
+            for f in fns: getattr(lib, 'fmi2' + f)\n\
+            print(len(fns))\n";
+        let out = checked(
+            Command::new(python())
+                .args(["-c", script])
+                .arg(&fmu)
+                .output()
+                .unwrap(),
+            "the archive and its library",
+        );
+        assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "34");
+    }
+}
+
+#[test]
+fn the_papers_fmu_meets_the_exact_solution_with_changed_params_and_initial_values() {
+    let out = check("paper");
+    assert!(out.contains("largest error"), "{out}");
+}
+
+#[test]
+fn an_input_stepped_through_fmpy_drives_the_oscillator_exactly_by_pieces() {
+    check("driven");
+}
+
+#[test]
+fn a_stop_ends_the_simulation_and_a_failure_is_an_error_with_lagcs_message() {
+    check("stop_and_failure");
+}
+
+#[test]
+fn instances_of_two_models_in_one_process_are_independent() {
+    check("two_instances");
+}
