@@ -156,3 +156,20 @@ fn a_stop_ends_the_simulation_and_a_failure_is_an_error_with_lagcs_message() {
 fn instances_of_two_models_in_one_process_are_independent() {
     check("two_instances");
 }
+
+#[test]
+fn lagc_carries_every_file_of_the_fmu_library() {
+    let carried: Vec<&str> = lagc::emit::fmu_library_files().map(|(p, _)| p).collect();
+    let dir = crate::root().join("fmu/src");
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        assert!(
+            carried.contains(&format!("src/{name}").as_str()),
+            "src/emit/fmu.rs does not carry fmu/src/{name}"
+        );
+    }
+    for (path, contents) in lagc::emit::fmu_library_files() {
+        let on_disk = std::fs::read_to_string(crate::root().join("fmu").join(path)).unwrap();
+        assert_eq!(on_disk, contents, "{path}");
+    }
+}
