@@ -17,6 +17,8 @@
 //! | `system`, `stepper` | what integrators integrate, and their interface |
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
+//! | `integration` | a run as an object: `advance_to(t)`, the state, a restart from a given state |
+//! | `driver` | options, outcomes, the run as a loop over an `Integration`; regimes, candidates, diagnosis |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
 //! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
@@ -38,6 +40,7 @@ pub mod failure;
 pub mod field;
 pub mod highest;
 pub mod impacts;
+pub mod integration;
 pub mod keep;
 pub mod linalg;
 pub mod magnus;

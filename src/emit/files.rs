@@ -61,6 +61,10 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/impacts.rs",
         include_str!("../../runtime/src/impacts.rs"),
     ),
+    (
+        "src/integration.rs",
+        include_str!("../../runtime/src/integration.rs"),
+    ),
     ("src/keep.rs", include_str!("../../runtime/src/keep.rs")),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
