@@ -119,7 +119,7 @@ pub enum FailureKind {
     AnchorCancels { digits: f64 },
     /// The field method proper was asked of a model that is not affine.
     NotAffine,
-    /// An [`crate::integration::Integration`] was asked to advance to a
+    /// An `Integration` was asked to advance to a
     /// time before where it stands or past the end of its span.
     OutsideSpan { from: f64, to: f64 },
 }

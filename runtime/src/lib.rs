@@ -16,6 +16,7 @@
 //! | `tolerance`, `controller`, `budget` | tolerances, the PI step controller, the work budget |
 //! | `system`, `stepper` | what integrators integrate, and their interface |
 //! | `dop853`, `rodas4` | the integrators, with dense output |
+//! | `dense` | a step's continuous extension as a value (`DenseStep`) |
 //! | `method` | integrator choice |
 //! | `integration` | a run as an object: `advance_to(t)`, the state, a restart from a given state |
 //! | `driver` | options, outcomes, the run as a loop over an `Integration`; regimes, candidates, diagnosis |
@@ -31,6 +32,7 @@ pub mod budget;
 pub mod cli;
 pub mod closure;
 pub mod controller;
+pub mod dense;
 pub mod direct;
 pub mod dop853;
 pub mod driver;
