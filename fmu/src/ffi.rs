@@ -276,6 +276,19 @@ pub unsafe fn exit_initialization_mode(c: *mut c_void) -> Status {
 pub unsafe fn terminate(c: *mut c_void) -> Status {
     unsafe {
         with(c, |comp| {
+            // The integrator's work, for the log (with debug logging on).
+            if let Some(outcome) = comp.instance.outcome() {
+                let stats = outcome.report.stats;
+                let message = format!(
+                    "{}: {} steps (+{} rejected), {} right-side evaluations, {} events",
+                    outcome.report.method,
+                    stats.accepted_steps,
+                    stats.rejected_steps,
+                    stats.rhs_evaluations,
+                    outcome.events
+                );
+                comp.log(OK, "logEvents", &message);
+            }
             let result = comp.instance.terminate();
             comp.status(result)
         })
@@ -461,9 +474,11 @@ pub unsafe fn set_fmu_state(c: *mut c_void, state: *mut c_void) -> Status {
             let Some((saved, ended_at)) = (state as *const (Saved, Option<f64>)).as_ref() else {
                 return ERROR;
             };
-            comp.instance.restore(saved);
-            comp.ended_at = *ended_at;
-            OK
+            let restored = comp.instance.restore(saved);
+            if restored.is_ok() {
+                comp.ended_at = *ended_at;
+            }
+            comp.status(restored)
         })
     }
 }

@@ -6,8 +6,9 @@
 //! (`Model::PARAMS`), the state (`Model::STATE`: `q1`, `der(q1)`, …), the
 //! outputs (`Model::OUTPUTS`), the inputs (`Model::INPUTS`).
 
-use lagc_runtime::driver::{run, Ending, Options};
+use lagc_runtime::driver::{Ending, Options};
 use lagc_runtime::failure::{Failure, FailureKind};
+use lagc_runtime::integration::{Advance, Integration};
 use lagc_runtime::model::{DynModel, Initial, Inputs};
 
 /// Where an instance stands in FMI's state machine.
@@ -60,7 +61,6 @@ pub struct Saved {
     x: Vec<f64>,
     inputs: Vec<f64>,
     inputs_changed: bool,
-    model: Option<Box<dyn DynModel>>,
 }
 
 /// One instance of a model.
@@ -77,10 +77,13 @@ pub struct Instance {
     pub options: Options,
     start: Option<f64>,
     stop: Option<f64>,
-    /// The model with the params, from initialization on.
-    model: Option<Box<dyn DynModel>>,
-    pub t: f64,
+    /// The model's integration (it owns the model with the params), from
+    /// initialization on: every fmi2DoStep advances it, so the steps are
+    /// the integrator's own, never cut at communication points.
+    integration: Option<Integration<'static>>,
+    /// Provisional initial state (during initialization mode).
     x: Vec<f64>,
+    pub t: f64,
     outputs: Vec<f64>,
 }
 
@@ -100,7 +103,7 @@ impl Instance {
             options: Options::default(),
             start: None,
             stop: None,
-            model: None,
+            integration: None,
             t: prototype.time_span().0,
             x: vec![f64::NAN; dim],
             outputs: vec![f64::NAN; outputs],
@@ -184,8 +187,9 @@ impl Instance {
     }
 
     /// The model with the params set and its initial state under the
-    /// initial values and inputs set, checked as `--param`/`--init` are.
-    fn initialize(&mut self) -> Result<(), Error> {
+    /// initial values and inputs set, checked as `--param`/`--init` are;
+    /// with `start`, its integration from there.
+    fn initialize(&mut self, start: bool) -> Result<(), Error> {
         let params = self.prototype.parameters(&self.overrides);
         let mut model = self.prototype.with_params(&params);
         model.set_inputs(&Inputs::held(&self.inputs));
@@ -205,15 +209,20 @@ impl Instance {
         }
         lagc_runtime::driver::check_initial_candidates(&*model, t0, &x0)?;
         self.t = t0;
-        self.x = x0;
-        self.model = Some(model);
+        self.x.clone_from(&x0);
+        if start {
+            // The steps may reach the stop time the importer gave, else
+            // the model's own span.
+            let end = self.stop.unwrap_or(t1);
+            self.integration = Some(Integration::owned(model, &self.options, t0, end, &x0));
+        }
         self.inputs_changed = false;
         Ok(())
     }
 
     pub fn exit_initialization(&mut self) -> Result<(), Error> {
         self.expect(&[Phase::Initialization], "fmi2ExitInitializationMode")?;
-        self.initialize()?;
+        self.initialize(true)?;
         self.phase = Phase::Stepping;
         Ok(())
     }
@@ -237,25 +246,25 @@ impl Instance {
 
     pub fn get_real(&mut self, vr: u32) -> Result<f64, Error> {
         let variable = self.variable(vr)?;
-        if matches!(variable, Variable::State(_) | Variable::Output(_))
-            && self.phase == Phase::Initialization
-        {
-            // The initial state as it stands (calculated values follow the
-            // params and start values set so far).
-            self.initialize()?;
-        }
-        let before = self.model.is_none();
-        Ok(match variable {
-            Variable::Param(i) => self.prototype.parameters(&self.overrides)[i],
-            Variable::Input(i) => self.inputs[i],
-            Variable::State(i) if before => self.given[i].unwrap_or(f64::NAN),
-            Variable::State(i) => self.x[i],
-            Variable::Output(_) if before => f64::NAN,
-            Variable::Output(i) => {
-                let model = self.model.as_ref().expect("made above");
-                model.outputs(self.t, &self.x, &mut self.outputs);
-                self.outputs[i]
+        let outputs = &mut self.outputs;
+        Ok(match (variable, &self.integration) {
+            (Variable::Param(i), _) => self.prototype.parameters(&self.overrides)[i],
+            (Variable::Input(i), _) => self.inputs[i],
+            (Variable::State(i), Some(integration)) => integration.state()[i],
+            (Variable::Output(i), Some(integration)) => {
+                integration
+                    .model()
+                    .outputs(integration.t(), integration.state(), outputs);
+                outputs[i]
             }
+            (Variable::State(i), None) if self.phase == Phase::Initialization => {
+                // The initial state as it stands (calculated values follow
+                // the params and start values set so far).
+                self.initialize(false)?;
+                self.x[i]
+            }
+            (Variable::State(i), None) => self.given[i].unwrap_or(f64::NAN),
+            (Variable::Output(_), None) => f64::NAN,
         })
     }
 
@@ -328,57 +337,64 @@ impl Instance {
                 return Err(Error(format!("t = {end} is past the stop time {stop}")));
             }
         }
-        let model = self.model.as_mut().expect("stepping has a model");
+        let integration = self
+            .integration
+            .as_mut()
+            .expect("stepping has an integration");
+        // A last step that lands on the stop time up to rounding ends there.
+        let end = end.min(integration.end());
         if self.inputs_changed {
-            model.set_inputs(&Inputs::held(&self.inputs));
-            let mut fixed = self.x.clone();
-            model.constrained(self.t, &self.x, &mut fixed)?;
-            self.x = fixed;
+            integration.set_inputs(&Inputs::held(&self.inputs))?;
             self.inputs_changed = false;
         }
-        let mut last = (self.t, self.x.clone());
-        let outcome = run(
-            &mut **model,
-            &self.options,
-            self.t,
-            end,
-            &self.x,
-            &[end],
-            |_, t, x| {
-                last = (t, x.to_vec());
-                Ok(())
-            },
-        )?;
-        (self.t, self.x) = last;
-        match outcome.ending {
-            Ending::End => {
+        match integration.advance_to(end)? {
+            Advance::Reached(_) => {
                 self.t = end;
                 Ok(Stepped::Done)
             }
-            Ending::Stopped(at) | Ending::Rest { at, .. } => {
+            Advance::Ended(ending) => {
+                let at = match ending {
+                    Ending::Stopped(at) | Ending::Rest { at, .. } => at,
+                    Ending::End => integration.t(),
+                };
+                self.t = integration.t();
                 self.phase = Phase::Ended;
                 Ok(Stepped::Ended(at))
             }
         }
     }
 
+    /// The integration's work so far (for the importer's log).
+    pub fn outcome(&self) -> Option<lagc_runtime::driver::Outcome> {
+        self.integration.as_ref().map(|i| i.outcome())
+    }
+
     pub fn save(&self) -> Saved {
+        let x = match &self.integration {
+            Some(integration) => integration.state().to_vec(),
+            None => self.x.clone(),
+        };
         Saved {
             phase: self.phase,
             t: self.t,
-            x: self.x.clone(),
+            x,
             inputs: self.inputs.clone(),
             inputs_changed: self.inputs_changed,
-            model: self.model.as_ref().map(|m| m.boxed_clone()),
         }
     }
 
-    pub fn restore(&mut self, saved: &Saved) {
+    /// Goes back to a saved instance: the integration restarts from the
+    /// saved state (the importer rolled the time back), under the inputs
+    /// saved with it.
+    pub fn restore(&mut self, saved: &Saved) -> Result<(), Error> {
+        if let Some(integration) = self.integration.as_mut() {
+            integration.restart_with_inputs(saved.t, &saved.x, &Inputs::held(&saved.inputs))?;
+        }
         self.phase = saved.phase;
         self.t = saved.t;
         self.x.clone_from(&saved.x);
         self.inputs.clone_from(&saved.inputs);
         self.inputs_changed = saved.inputs_changed;
-        self.model = saved.model.as_ref().map(|m| m.boxed_clone());
+        Ok(())
     }
 }

@@ -8,10 +8,11 @@
 //! (constant when held), so the right side is smooth there and its time
 //! partial (`∂X/∂u · u'`, emitted by lagc) exact; a change of value or of
 //! slope is a discontinuity, and the integration restarts there, like at
-//! an event ([`run_driven`]).
+//! an event ([`run_driven`], `Integration::set_inputs`).
 
-use crate::driver::{run, Ending, Options, Outcome};
+use crate::driver::{Ending, Options, Outcome};
 use crate::failure::Failure;
+use crate::integration::{Advance, Integration};
 use crate::model::DynModel;
 
 /// Every input's value on the current segment: input `i` is
@@ -215,8 +216,8 @@ impl Schedule {
     }
 }
 
-/// What a driven run did: the segments' outcomes merged, and the number
-/// of restarts at input changes.
+/// What a driven run did: the run's outcome, and the number of restarts
+/// at input changes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Driven {
     pub outcome: Outcome,
@@ -224,13 +225,13 @@ pub struct Driven {
 }
 
 /// Integrates `model` from `(t0, x0)` to `t1` with its inputs following
-/// `schedule`: one run of the driver per segment between input changes,
-/// each restarted from the state where the last ended, with the inputs
-/// of the new segment and the components the constraints fix recomputed
-/// under them (a velocity constraint holding an input moves its dependent
-/// velocity with it). `sample(t, x)` is called at every time of `times`;
-/// a sample at a change time sees the new inputs. The work budget is one
-/// for the whole run.
+/// `schedule`: one [`Integration`] advanced to every change of an input,
+/// where the new values are set and it restarts
+/// ([`Integration::set_inputs`]: the components the constraints fix
+/// recomputed, the others carried over), and to every time of `times`,
+/// where `sample(t, x)` is called (a sample at a change time sees the new
+/// inputs), as [`crate::driver::run`] samples. The work budget is one for
+/// the whole run.
 #[allow(clippy::too_many_arguments)]
 pub fn run_driven(
     model: &mut dyn DynModel,
@@ -244,126 +245,48 @@ pub fn run_driven(
 ) -> Result<Driven, Failure> {
     let defaults = model.input_defaults().to_vec();
     let breaks = schedule.breaks(t0, t1);
+    // The state at t0 under the inputs there (a no-op for one made under
+    // them, `cli::prepare_driven`).
+    model.set_inputs(&schedule.at(&defaults, t0));
     let mut x = x0.to_vec();
-    let mut merged: Option<Outcome> = None;
-    let mut next = 0;
-    let mut start = t0;
-    for &end in breaks.iter().chain(std::iter::once(&t1)) {
-        model.set_inputs(&schedule.at(&defaults, start));
-        // At t0 a no-op for a state made under these inputs
-        // (`cli::prepare_driven`).
-        let mut fixed = x.clone();
-        model.constrained(start, &x, &mut fixed)?;
-        x = fixed;
-        // This segment's samples: [start, end), and t1 itself on the last;
-        // then `end` to carry the state over (not forwarded).
-        let last = end >= t1;
-        let mut segment_times: Vec<f64> = Vec::new();
-        while next < times.len() && (times[next] < end || (last && times[next] <= end)) {
-            segment_times.push(times[next]);
-            next += 1;
-        }
-        let forwarded = segment_times.len();
-        segment_times.push(end);
-        let mut seen = 0;
-        let mut carried = x.clone();
-        let used = merged.as_ref().map_or(0, |o| o.budget_used);
-        let budget = Options {
-            max_steps: options.max_steps.saturating_sub(used).max(1),
-            ..options.clone()
+    model.constrained(t0, x0, &mut x)?;
+    let mut integration = Integration::new(model, options, t0, t1, &x);
+    let mut last: Option<f64> = None;
+    let mut restarts = 0;
+    let mut next_break = 0;
+    // Every change (those past the last sample too), then the samples at
+    // or after it; at one time the change comes first.
+    let mut samples = times.iter().copied().peekable();
+    loop {
+        let change = breaks.get(next_break).copied();
+        let at_sample = samples.peek().copied();
+        let (t, is_change) = match (change, at_sample) {
+            (Some(c), Some(s)) if c <= s => (c, true),
+            (Some(c), None) => (c, true),
+            (_, Some(s)) => (s, false),
+            (None, None) => break,
         };
-        let outcome = run(
-            model,
-            &budget,
-            start,
-            end,
-            &x,
-            &segment_times,
-            |m: &dyn DynModel, t, state| {
-                seen += 1;
-                if seen <= forwarded {
-                    sample(m, t, state)?;
-                }
-                carried.copy_from_slice(state);
-                Ok(())
-            },
-        )?;
-        let ending = outcome.ending;
-        merged = Some(match merged {
-            None => outcome,
-            Some(before) => merge(before, outcome),
-        });
-        if ending != Ending::End {
-            break;
+        match integration.advance_to(t)? {
+            Advance::Reached(_) => {}
+            Advance::Ended(_) => break,
         }
-        x = carried;
-        start = end;
-    }
-    let outcome = merged.expect("at least one segment runs");
-    Ok(Driven {
-        restarts: breaks
-            .iter()
-            .filter(|&&b| b <= end_time(&outcome, t1))
-            .count(),
-        outcome,
-    })
-}
-
-/// Where the run ended.
-fn end_time(outcome: &Outcome, t1: f64) -> f64 {
-    match outcome.ending {
-        Ending::End => t1,
-        Ending::Stopped(t) => t,
-        Ending::Rest { at, .. } => at,
-    }
-}
-
-/// Two consecutive segments' outcomes as one run's.
-fn merge(a: Outcome, b: Outcome) -> Outcome {
-    let mut report = b.report;
-    report.stats = a.report.stats + report.stats;
-    report.largest_condition = match (a.report.largest_condition, report.largest_condition) {
-        (Some(x), Some(y)) => Some(x.max(y)),
-        (x, y) => x.or(y),
-    };
-    report.reanchorings = match (a.report.reanchorings, report.reanchorings) {
-        (Some(x), Some(y)) => Some(x + y),
-        (x, y) => x.or(y),
-    };
-    report.predictor = match (a.report.predictor, report.predictor) {
-        (Some(x), Some(y)) => Some(x + y),
-        (x, y) => x.or(y),
-    };
-    for (x, y) in [
-        (&mut report.windows, a.report.windows),
-        (&mut report.passes, a.report.passes),
-    ] {
-        *x = match (*x, y) {
-            (Some(u), Some(v)) => Some(u + v),
-            (u, v) => u.or(v),
-        };
-    }
-    report.linearizations += a.report.linearizations;
-    let mut notes = a.report.notes;
-    for note in report.notes {
-        if !notes.contains(&note) {
-            notes.push(note);
+        if is_change {
+            next_break += 1;
+            integration.set_inputs(&schedule.at(&defaults, t))?;
+            restarts += 1;
+        } else {
+            samples.next();
+            sample(integration.model(), t, integration.state())?;
+            last = Some(t);
         }
     }
-    report.notes = notes;
-    Outcome {
-        report,
-        ending: b.ending,
-        events: a.events + b.events,
-        budget_used: a.budget_used + b.budget_used,
-        kept: match (a.kept, b.kept) {
-            (Some(x), Some(y)) => Some(crate::keep::Kept {
-                projections: x.projections + y.projections,
-                ..if y.largest >= x.largest { y } else { x }
-            }),
-            (x, y) => x.or(y),
-        },
+    let outcome = integration.finish()?;
+    if let Ending::Stopped(at) | Ending::Rest { at, .. } = outcome.ending {
+        if last != Some(at) {
+            sample(integration.model(), at, integration.state())?;
+        }
     }
+    Ok(Driven { outcome, restarts })
 }
 
 #[cfg(test)]

@@ -173,3 +173,44 @@ fn lagc_carries_every_file_of_the_fmu_library() {
         assert_eq!(on_disk, contents, "{path}");
     }
 }
+
+/// `steps: N (+R rejected); right-side evaluations: E` of a summary, or
+/// `N steps (+R rejected), E right-side evaluations` of the FMU's log.
+fn work(text: &str) -> (u64, u64) {
+    let numbers: Vec<u64> = text
+        .split(|c: char| !c.is_ascii_digit())
+        .filter(|s| !s.is_empty())
+        .filter_map(|s| s.parse().ok())
+        .collect();
+    // The method's name holds no digits before them ("DOP853" aside).
+    let at = numbers.iter().position(|&n| n != 853).unwrap();
+    (numbers[at], numbers[at + 2])
+}
+
+#[test]
+fn co_simulation_at_a_communication_step_of_1e_3_takes_the_steps_of_lagc_run() {
+    // The FMU advances one integration across all 5000 fmi2DoStep calls:
+    // the same steps and right-side evaluations as `lagc run` writing the
+    // same 5001 rows from its dense output.
+    let out = check("steps");
+    let logged = out.lines().find(|l| l.contains(" steps (+")).unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .args([
+            "run",
+            "examples/paper.lag",
+            "--rtol",
+            "1e-10",
+            "--samples",
+            "5001",
+        ])
+        .args(["--quiet"])
+        .current_dir(crate::root())
+        .env("LAGC_CACHE_DIR", crate::root().join("target/lagc-cache"))
+        .output()
+        .unwrap();
+    let run = checked(run, "lagc run");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let summary = stderr.lines().find(|l| l.contains("steps: ")).unwrap();
+    let summary = summary.split("steps: ").nth(1).unwrap();
+    assert_eq!(work(logged), work(summary), "{logged}\n{summary}");
+}
