@@ -211,6 +211,36 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         .enumerate()
         .map(|(i, &law)| (Symbol::Mass(i as u32), law))
         .collect();
+    // A raised constraint (not linear in its candidate `v` of order
+    // k − 1) fixes that candidate through `f = 0` as written: the value
+    // kept is Newton's `v − f/f_v`, equal to `v` exactly on the
+    // constraint, whose partials there are the implicit function's.
+    let mut raised = Vec::new();
+    for c in model.constraints.iter().filter(|c| c.is_raised()) {
+        let f = coupled::written_residual(&mut arena, model, c, &laws).map_err(|d| vec![d])?;
+        let v = Symbol::Jet {
+            coord: c.coord as u32,
+            order: c.order - 1,
+        };
+        let pivot = arena.diff(f, v);
+        let step = arena.div(f, pivot);
+        let v_expr = arena.symbol(v);
+        let kept = arena.sub(v_expr, step);
+        if let Some(i) = state.iter().position(|&s| s == v) {
+            fixed.push((i, kept));
+        }
+        let text = if c.text.is_empty() {
+            format!("{} = 0", arena.display(f))
+        } else {
+            c.text.clone()
+        };
+        raised.push(initial::Raised {
+            candidate: v,
+            residual: f,
+            pivot,
+            text,
+        });
+    }
     let closure = coupled::closure(&mut arena, model, &laws).map_err(|d| vec![d])?;
     let levels = match &closure {
         Some(closure) if symbolic.k >= 2 => {
@@ -230,6 +260,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             &reduction.consistency,
             closure.as_ref(),
             &levels,
+            &raised,
         )?
     } else {
         (Vec::new(), Vec::new())

@@ -249,7 +249,12 @@ fn solve_implicit(
         .with_help(help));
     }
     if arena.is_zero(pivot) {
-        let name = arena.symbol_name(dep);
+        // A raised constraint is written in the derivative below.
+        let written = Symbol::Jet {
+            coord: c.coord as u32,
+            order: c.order - u32::from(c.is_raised()),
+        };
+        let name = arena.symbol_name(written);
         return Err(Diagnostic::error(
             codes::BAD_CANDIDATE,
             format!("the constraint does not depend on `{name}`"),
