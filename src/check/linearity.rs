@@ -152,6 +152,11 @@ impl Checker<'_> {
         };
         let mut refused = false;
         if let Some(explicit) = constraints.iter().find(|c| c.implicit.is_none()) {
+            let name = format!(
+                "{}{}",
+                self.coords[explicit.coord].name,
+                "'".repeat(explicit.order as usize)
+            );
             let diagnostic = crate::diagnostic::Diagnostic::error(
                 crate::diagnostic::codes::BAD_CANDIDATE,
                 "an explicit constraint beside a constraint that is not linear in its candidate",
@@ -162,7 +167,9 @@ impl Checker<'_> {
                 "a non-linear constraint is solved through its derivative, one order higher, \
                  and every constraint of a model shares one order",
             )
-            .with_help("write the explicit constraint implicitly: `constraint y' = … for y';`");
+            .with_help(format!(
+                "write the explicit constraint implicitly: `constraint {name} = … for {name};`"
+            ));
             self.report(diagnostic);
             refused = true;
         }

@@ -216,6 +216,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     // kept is Newton's `v − f/f_v`, equal to `v` exactly on the
     // constraint, whose partials there are the implicit function's.
     let mut raised = Vec::new();
+    let mut directions: Vec<(String, ExprId)> = Vec::new();
     for c in model.constraints.iter().filter(|c| c.is_raised()) {
         let f = coupled::written_residual(&mut arena, model, c, &laws).map_err(|d| vec![d])?;
         let v = Symbol::Jet {
@@ -234,6 +235,41 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         } else {
             c.text.clone()
         };
+        // The cross-check's extra identity: the derivative's reactions are
+        // the written constraint's (Chetaev), `∂φ_d/∂q_i^(k) · f_v +
+        // ∂f/∂q_i^(k−1) = 0` for every independent `i`. `D f` is linear in
+        // the order-k derivatives with the coefficients `∂f/∂q^(k−1)`, so
+        // this holds at every point of the jet space, on `f = 0` or off it:
+        // the random points need not lie on the constraint.
+        if let Some(&(_, phi)) = symbolic
+            .constraints
+            .iter()
+            .find(|&&(d, _)| d == c.coord as u32)
+        {
+            for &i in &symbolic.independent {
+                let d_phi = arena.diff(
+                    phi,
+                    Symbol::Jet {
+                        coord: i,
+                        order: c.order,
+                    },
+                );
+                let d_f = arena.diff(
+                    f,
+                    Symbol::Jet {
+                        coord: i,
+                        order: c.order - 1,
+                    },
+                );
+                let scaled = arena.mul(&[d_phi, pivot]);
+                let identity = arena.add(&[scaled, d_f]);
+                let name = arena.symbol_name(Symbol::Jet {
+                    coord: i,
+                    order: c.order - 1,
+                });
+                directions.push((format!("{} (its reaction on `{name}`)", c.text), identity));
+            }
+        }
         raised.push(initial::Raised {
             candidate: v,
             residual: f,
@@ -314,7 +350,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         reduced,
         param_defaults: symbolic.param_defaults,
         holonomic,
-        written: symbolic.written.clone(),
+        written: symbolic.written.iter().cloned().chain(directions).collect(),
         notes,
         lets: model
             .lets
