@@ -23,13 +23,22 @@ enum Degree {
     Free,
     Affine,
     Other,
+    /// The candidates enter through a selection (`abs`, `sign`, `min`,
+    /// `max`, `atan2`, a condition): no derivative is smooth there, and
+    /// the constraint is left to the mechanics, which refuses it (E0038).
+    Switch,
 }
 
 impl Checker<'_> {
     /// Whether `expr` is affine in the derivatives `(coord, order)` of
     /// `jets` (lets read through their bodies).
-    pub(super) fn is_affine_in(&self, expr: &Expr, jets: &[(usize, u32)]) -> bool {
-        self.degree(expr, jets, 0) != Degree::Other
+    pub(super) fn is_nonlinear_in(&self, expr: &Expr, jets: &[(usize, u32)]) -> bool {
+        self.degree(expr, jets, 0) == Degree::Other
+    }
+
+    /// Whether `expr` switches on the derivatives of `jets`.
+    pub(super) fn switches_on(&self, expr: &Expr, jets: &[(usize, u32)]) -> bool {
+        self.degree(expr, jets, 0) == Degree::Switch
     }
 
     fn degree(&self, expr: &Expr, jets: &[(usize, u32)], depth: usize) -> Degree {
@@ -73,45 +82,52 @@ impl Checker<'_> {
                 match op {
                     BinOp::Add | BinOp::Sub => a.max(b),
                     BinOp::Mul => product(a, b),
-                    BinOp::Div | BinOp::Pow if b != Degree::Free => Degree::Other,
+                    BinOp::Div | BinOp::Pow if b != Degree::Free => a.max(b).max(Degree::Other),
                     BinOp::Div => a,
                     BinOp::Pow if a == Degree::Free => Degree::Free,
-                    BinOp::Pow => Degree::Other,
+                    BinOp::Pow => a.max(Degree::Other),
                 }
             }
             ExprKind::Call { func, args, .. } => {
                 let degrees: Vec<Degree> = args.iter().map(of).collect();
+                let switch = matches!(
+                    func,
+                    Builtin::Abs | Builtin::Sign | Builtin::Min | Builtin::Max | Builtin::Atan2
+                );
                 match (func, &degrees[..]) {
                     (Builtin::Dot | Builtin::Cross, &[a, b]) => product(a, b),
                     _ if degrees.iter().all(|&d| d == Degree::Free) => Degree::Free,
-                    _ => Degree::Other,
+                    _ if switch => Degree::Switch,
+                    _ => degrees
+                        .iter()
+                        .copied()
+                        .max()
+                        .unwrap_or(Degree::Free)
+                        .max(Degree::Other),
                 }
             }
             ExprKind::Compare { lhs, rhs, .. } | ExprKind::Logic { lhs, rhs, .. } => {
                 if of(lhs) == Degree::Free && of(rhs) == Degree::Free {
                     Degree::Free
                 } else {
-                    Degree::Other
+                    Degree::Switch
                 }
             }
             ExprKind::Not(e) => {
                 if of(e) == Degree::Free {
                     Degree::Free
                 } else {
-                    Degree::Other
+                    Degree::Switch
                 }
             }
             ExprKind::If {
                 cond,
                 then,
                 otherwise,
-            } => {
-                if of(cond) == Degree::Free {
-                    of(then).max(of(otherwise))
-                } else {
-                    Degree::Other
-                }
-            }
+            } => match of(cond) {
+                Degree::Free => of(then).max(of(otherwise)),
+                _ => Degree::Switch,
+            },
         }
     }
 }
@@ -119,7 +135,7 @@ impl Checker<'_> {
 fn product(a: Degree, b: Degree) -> Degree {
     match (a, b) {
         (Degree::Free, d) | (d, Degree::Free) => d,
-        _ => Degree::Other,
+        _ => a.max(b).max(Degree::Other),
     }
 }
 
@@ -144,7 +160,12 @@ impl Checker<'_> {
                 };
                 let jets: Vec<(usize, u32)> =
                     implicit.candidates.iter().map(|&j| (j, c.order)).collect();
-                !(self.is_affine_in(&implicit.lhs, &jets) && self.is_affine_in(&c.rhs, &jets))
+                // A switch on a candidate anywhere: left to the mechanics.
+                let switches =
+                    self.switches_on(&implicit.lhs, &jets) || self.switches_on(&c.rhs, &jets);
+                !switches
+                    && (self.is_nonlinear_in(&implicit.lhs, &jets)
+                        || self.is_nonlinear_in(&c.rhs, &jets))
             })
             .collect();
         let Some(&first) = nonlinear.first() else {
