@@ -117,10 +117,7 @@ impl Checker<'_> {
             }
         }
         let groups = self.groups(&mut constraints, &held);
-        let order = match order {
-            Some(k) => Some(self.raise_nonlinear(&mut constraints, &groups, k)),
-            None => None,
-        };
+        let order = order.map(|k| self.raise_nonlinear(&mut constraints, &groups, k));
         if !self.coords.is_empty() && constraints.len() >= self.coords.len() {
             if let Some(last) = constraints.last() {
                 let diagnostic = Diagnostic::error(

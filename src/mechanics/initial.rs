@@ -302,13 +302,15 @@ fn raised_newton(
             ));
         }
         // Halved while the residual does not decrease.
+        // (A NaN residual does not decrease.)
+        let decreases = |next: f64| eval(next, r.residual).abs() < f.abs();
         let mut scale = 1.0;
         let mut next = v - step;
-        while !(eval(next, r.residual).abs() < f.abs()) && scale > 1e-3 {
+        while !decreases(next) && scale > 1e-3 {
             scale *= 0.5;
             next = v - scale * step;
         }
-        if !(eval(next, r.residual).abs() < f.abs()) {
+        if !decreases(next) {
             if step.abs() <= 1e-9 * v.abs().max(1.0) {
                 return Ok(v);
             }
