@@ -179,6 +179,7 @@ const INITIAL_PIVOT_RATIO: f64 = 1e-8;
 /// computed y' = x' tan(π/2) = 1.6e16 and stopped at t = 5e-14 naming the
 /// pivot).
 pub fn check_initial_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
+    crate::keep::check_given_fixed(model, t0, x0)?;
     let constraints = model.constraints();
     if constraints.is_empty() {
         return Ok(());
