@@ -90,6 +90,9 @@ pub struct Derivation {
     /// The holonomic constraints `f = 0` as written (mass symbols kept)
     /// and the form of order k the mechanics solves, `D^k f = 0`.
     pub holonomic: Vec<(ExprId, ExprId)>,
+    /// The non-linear implicit constraints `f = 0` as written and the
+    /// derivative the mechanics solves, `D f = 0` (`Implicit::raised`).
+    pub raised: Vec<(ExprId, ExprId)>,
     /// Notes for the build (an initial position that Newton moved onto
     /// the constraints).
     pub notes: Vec<Diagnostic>,
@@ -217,6 +220,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     // constraint, whose partials there are the implicit function's.
     let mut raised = Vec::new();
     let mut directions: Vec<(String, ExprId)> = Vec::new();
+    let mut shown_raised = Vec::new();
     for c in model.constraints.iter().filter(|c| c.is_raised()) {
         let f = coupled::written_residual(&mut arena, model, c, &laws).map_err(|d| vec![d])?;
         let v = Symbol::Jet {
@@ -270,6 +274,8 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
                 directions.push((format!("{} (its reaction on `{name}`)", c.text), identity));
             }
         }
+        let derivative = arena.total_derivative(f);
+        shown_raised.push((f, derivative));
         raised.push(initial::Raised {
             candidate: v,
             residual: f,
@@ -350,6 +356,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         reduced,
         param_defaults: symbolic.param_defaults,
         holonomic,
+        raised: shown_raised,
         written: symbolic.written.iter().cloned().chain(directions).collect(),
         notes,
         lets: model
