@@ -19,6 +19,7 @@ mod language_v2;
 mod latex;
 mod mass_law_forms;
 mod mechanics;
+mod nonlinear;
 mod parser;
 mod readme_program;
 mod report;
