@@ -244,7 +244,36 @@ def steps(d):
     fmu.freeInstance()
 
 
+def versus_run(fmu, csv):
+    """The FMU through FMPy against `lagc run` at the same tolerance and
+    output times (the CSV): every state column and output, relative to
+    max(1, |value|)."""
+    with open(csv) as f:
+        header = f.readline().strip().split(",")
+    rows = np.loadtxt(csv, delimiter=",", skiprows=1, ndmin=2)
+    t0, t1 = rows[0, 0], rows[-1, 0]
+    h = (t1 - t0) / (len(rows) - 1)
+
+    def fmi_name(column):
+        q = column.rstrip("'")
+        order = len(column) - len(q)
+        return q if order == 0 else f"der({q})" if order == 1 else f"der({q},{order})"
+
+    names = [fmi_name(c) for c in header[1:]]
+    r = fmpy.simulate_fmu(fmu, relative_tolerance=RTOL, output_interval=h, output=names)
+    assert len(r) == len(rows), (len(r), len(rows))
+    worst = 0.0
+    for k, name in enumerate(names):
+        a, b = r[name], rows[:, k + 1]
+        worst = max(worst, float(np.max(np.abs(a - b) / np.maximum(1.0, np.abs(b)))))
+    print(f"{fmu}: {len(names)} columns at {len(rows)} times, largest difference from lagc run {worst:.3e}")
+    assert worst <= 10 * RTOL, worst
+
+
 if __name__ == "__main__":
+    if sys.argv[1] == "versus_run":
+        versus_run(sys.argv[2], sys.argv[3])
+        sys.exit(0)
     {"steps": steps, "paper": paper, "driven": driven, "stop_and_failure": stop_and_failure, "two_instances": two_instances}[
         sys.argv[1]
     ](sys.argv[2])

@@ -92,6 +92,87 @@ fn check(case: &str) -> String {
     stdout
 }
 
+/// Builds the FMU of `model` (a path under the repository) into `dir`.
+fn build_fmu(model: &Path, dir: &Path) -> PathBuf {
+    let stem = model.file_stem().unwrap().to_str().unwrap();
+    let fmu = dir.join(format!("{stem}.fmu"));
+    let out = Command::new(env!("CARGO_BIN_EXE_lagc"))
+        .args(["build"])
+        .arg(model)
+        .args(["--fmu", "-o"])
+        .arg(&fmu)
+        .current_dir(crate::root())
+        .env("LAGC_CACHE_DIR", crate::root().join("target/lagc-cache"))
+        .output()
+        .unwrap();
+    checked(out, &format!("lagc build {} --fmu", model.display()));
+    fmu
+}
+
+#[test]
+fn the_fmu_of_every_example_passes_fmpy_validate() {
+    let fmpy = python().with_file_name("fmpy");
+    let dir = target().join("examples");
+    std::fs::create_dir_all(&dir).unwrap();
+    for model in crate::expect::lag_files("examples") {
+        let fmu = build_fmu(&model, &dir);
+        let out = checked(
+            Command::new(&fmpy)
+                .arg("validate")
+                .arg(&fmu)
+                .output()
+                .unwrap(),
+            "fmpy validate",
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains("No problems found."),
+            "{}: {stdout}",
+            model.display()
+        );
+    }
+}
+
+#[test]
+fn fmpy_simulates_the_examples_as_lagc_run_does() {
+    // Variable mass and non-holonomic (the paper), a k = 2 constraint, an
+    // implicit constraint with candidates that switch, a mass law of the
+    // state, a rolling disk, a non-linear implicit constraint: FMPy's
+    // rows against lagc run's CSV at the same tolerance and times.
+    let dir = target().join("versus-run");
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in [
+        "paper",
+        "second_order_constraint",
+        "knife_edge_turning",
+        "cayley_chain",
+        "rolling_disk",
+        "constant_speed_implicit",
+    ] {
+        let model = crate::root().join(format!("examples/{name}.lag"));
+        let fmu = build_fmu(&model, &dir);
+        let run = Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .arg("run")
+            .arg(&model)
+            .args(["--rtol", "1e-10", "--atol", "1e-12"])
+            .env("LAGC_CACHE_DIR", crate::root().join("target/lagc-cache"))
+            .output()
+            .unwrap();
+        let run = checked(run, &format!("lagc run {name}"));
+        let csv = dir.join(format!("{name}.csv"));
+        std::fs::write(&csv, &run.stdout).unwrap();
+        let out = Command::new(python())
+            .arg(crate::root().join("tests/fmu/check_fmus.py"))
+            .arg("versus_run")
+            .arg(&fmu)
+            .arg(&csv)
+            .output()
+            .unwrap();
+        let out = checked(out, &format!("versus_run {name}"));
+        eprint!("{}", String::from_utf8_lossy(&out.stdout));
+    }
+}
+
 #[test]
 fn every_fmu_passes_fmpy_validate_and_exports_the_34_functions() {
     let fmpy = python().with_file_name("fmpy");
