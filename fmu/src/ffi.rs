@@ -344,7 +344,44 @@ pub unsafe fn set_real(c: *mut c_void, vr: *const u32, n: usize, value: *const f
     }
 }
 
-/// Integer, Boolean and String variables: the model has none, so any
+/// # Safety
+/// `c` as in [`with`]; `vr` and `value` hold `n` elements.
+pub unsafe fn get_integer(c: *mut c_void, vr: *const u32, n: usize, value: *mut i32) -> Status {
+    unsafe {
+        with(c, |comp| {
+            let (Some(vr), Some(value)) = (slice(vr, n), slice_mut(value, n)) else {
+                return comp.status(Err(crate::instance::Error("a null array".into())));
+            };
+            for (r, v) in vr.iter().zip(value.iter_mut()) {
+                match comp.instance.get_integer(*r) {
+                    Ok(x) => *v = x,
+                    Err(e) => return comp.status(Err(e)),
+                }
+            }
+            OK
+        })
+    }
+}
+
+/// # Safety
+/// `c` as in [`with`]; `vr` and `value` hold `n` elements.
+pub unsafe fn set_integer(c: *mut c_void, vr: *const u32, n: usize, value: *const i32) -> Status {
+    unsafe {
+        with(c, |comp| {
+            let (Some(vr), Some(value)) = (slice(vr, n), slice(value, n)) else {
+                return comp.status(Err(crate::instance::Error("a null array".into())));
+            };
+            for (r, v) in vr.iter().zip(value) {
+                if let Err(e) = comp.instance.set_integer(*r, *v) {
+                    return comp.status(Err(e));
+                }
+            }
+            OK
+        })
+    }
+}
+
+/// Boolean and String variables: the model has none, so any
 /// reference is unknown (none at all is fine).
 ///
 /// # Safety

@@ -268,6 +268,60 @@ impl Instance {
         })
     }
 
+    /// The Integer variables, structural parameters of the run: value
+    /// reference 0 the method (0 the field method, 1 direct integration),
+    /// 1 the integrator (0 the model's `integrator` statement, else auto;
+    /// 1 auto, 2 explicit, 3 stiff, 4 Magnus).
+    pub fn get_integer(&self, vr: u32) -> Result<i32, Error> {
+        use lagc_runtime::method::{IntegratorChoice, Method};
+        match vr {
+            0 => Ok(match self.options.method {
+                Method::Field => 0,
+                Method::Direct => 1,
+            }),
+            1 => Ok(match self.options.integrator {
+                None => 0,
+                Some(IntegratorChoice::Auto) => 1,
+                Some(IntegratorChoice::Explicit) => 2,
+                Some(IntegratorChoice::Stiff) => 3,
+                Some(IntegratorChoice::Magnus) => 4,
+            }),
+            _ => Err(Error(format!(
+                "no Integer variable has the value reference {vr}"
+            ))),
+        }
+    }
+
+    pub fn set_integer(&mut self, vr: u32, value: i32) -> Result<(), Error> {
+        use lagc_runtime::method::{IntegratorChoice, Method};
+        if !matches!(self.phase, Phase::Instantiated | Phase::Initialization) {
+            return Err(Error(
+                "the method and the integrator are fixed after initialization".to_string(),
+            ));
+        }
+        match (vr, value) {
+            (0, 0) => self.options.method = Method::Field,
+            (0, 1) => self.options.method = Method::Direct,
+            (1, 0) => self.options.integrator = None,
+            (1, 1) => self.options.integrator = Some(IntegratorChoice::Auto),
+            (1, 2) => self.options.integrator = Some(IntegratorChoice::Explicit),
+            (1, 3) => self.options.integrator = Some(IntegratorChoice::Stiff),
+            (1, 4) => self.options.integrator = Some(IntegratorChoice::Magnus),
+            (0 | 1, _) => {
+                return Err(Error(format!(
+                    "{value} is no {} (see the variable's description)",
+                    if vr == 0 { "method" } else { "integrator" }
+                )))
+            }
+            _ => {
+                return Err(Error(format!(
+                    "no Integer variable has the value reference {vr}"
+                )))
+            }
+        }
+        Ok(())
+    }
+
     pub fn set_real(&mut self, vr: u32, value: f64) -> Result<(), Error> {
         let variable = self.variable(vr)?;
         let before = matches!(self.phase, Phase::Instantiated | Phase::Initialization);

@@ -122,11 +122,11 @@ macro_rules! export_fmu {
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetInteger(
                 c: *mut c_void,
-                _vr: *const u32,
+                vr: *const u32,
                 n: usize,
-                _value: *mut i32,
+                value: *mut i32,
             ) -> i32 {
-                unsafe { ffi::no_such_variables(c, n, "Integer") }
+                unsafe { ffi::get_integer(c, vr, n, value) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetBoolean(
@@ -158,11 +158,11 @@ macro_rules! export_fmu {
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetInteger(
                 c: *mut c_void,
-                _vr: *const u32,
+                vr: *const u32,
                 n: usize,
-                _value: *const i32,
+                value: *const i32,
             ) -> i32 {
-                unsafe { ffi::no_such_variables(c, n, "Integer") }
+                unsafe { ffi::set_integer(c, vr, n, value) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SetBoolean(

@@ -255,6 +255,28 @@ pub fn model_description(kernel: &Kernel, options: &EmitOptions, identifier: &st
             Some(*default),
         );
     }
+    // The run's structural parameters (lagc-fmu's Integer variables).
+    let integers = [
+        (
+            "lagc.method",
+            "the method: 0 the field method, 1 direct integration",
+            0,
+        ),
+        (
+            "lagc.integrator",
+            "the integrator: 0 the model's integrator statement (else auto), 1 auto, \
+             2 explicit (DOP853), 3 stiff (RODAS4), 4 Magnus (the field's linear coefficient systems)",
+            0,
+        ),
+    ];
+    for (k, (name, description, start)) in integers.iter().enumerate() {
+        let _ = writeln!(
+            x,
+            "    <ScalarVariable name=\"{name}\" valueReference=\"{k}\" description=\"{description}\" \
+             causality=\"parameter\" variability=\"fixed\" initial=\"exact\">\
+             <Integer start=\"{start}\"/></ScalarVariable>"
+        );
+    }
     let _ = writeln!(x, "  </ModelVariables>");
     let _ = writeln!(x, "  <ModelStructure>");
     let _ = writeln!(x, "    <Outputs>");

@@ -74,6 +74,24 @@ def paper(d):
     error = largest_error(r, names, lambda t: paper_exact(t, 0.2, 2.0))
     print(f"paper, alpha = 0.2, der(q1)(0) = 2: largest error {error:.3e}")
     assert error < 10 * RTOL, error
+    # The method and the integrator as structural parameters.
+    for method, integrator in [(1, 0), (1, 3), (0, 4)]:
+        messages = []
+        r = fmpy.simulate_fmu(
+            f"{d}/paper.fmu",
+            relative_tolerance=RTOL,
+            output_interval=0.05,
+            output=names,
+            start_values={"lagc.method": method, "lagc.integrator": integrator},
+            debug_logging=True,
+            logger=lambda e, n, s, c, m: messages.append(m.decode()),
+        )
+        error = largest_error(r, names, paper_exact)
+        work = [m for m in messages if " steps (+" in m][-1]
+        print(f"paper, lagc.method {method}, lagc.integrator {integrator}: {work}; largest error {error:.3e}")
+        # The accuracy examples/paper.lag states for each method.
+        assert error < 1e-8, error
+        assert ("direct" in work) == (method == 1), work
 
 
 def driven(d):
