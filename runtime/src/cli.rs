@@ -6,13 +6,14 @@
 //! Exit status: 0 success, 2 bad usage (including overrides that make the
 //! model inconsistent), 3 a numerical failure.
 
-use crate::driver::{run, Ending, Options};
 use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
 use crate::field::Anchor;
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Initial, Model};
 use crate::output::{sample_times, write_header, write_row};
 use crate::plot::{write_plot, PlotRequest};
+use crate::run::options::{Ending, Options};
+use crate::run::run;
 use crate::summary::{json_string, Summary};
 use std::io::Write;
 use std::process::ExitCode;
@@ -395,7 +396,7 @@ pub fn prepare(prototype: &dyn DynModel, inv: &Invocation) -> Result<Prepared, F
             }
         }
     }
-    crate::driver::check_initial_candidates(&*model, t0, &x0)?;
+    crate::run::regime::check_initial_candidates(&*model, t0, &x0)?;
     Ok(Prepared { model, t0, t1, x0 })
 }
 
@@ -645,7 +646,7 @@ fn ensemble(
     times: &[f64],
     count: usize,
 ) -> ExitCode {
-    use crate::driver::run_ensemble;
+    use crate::run::run_ensemble;
     // Moved states are put back on the constraints, as every state of a
     // run is: a member off them would be projected by its direct run and
     // not by the field.

@@ -19,6 +19,7 @@ const RUNTIME: &[(&str, &str)] = &[
     ),
     ("src/dense.rs", include_str!("../../runtime/src/dense.rs")),
     ("src/direct.rs", include_str!("../../runtime/src/direct.rs")),
+    ("src/domain.rs", include_str!("../../runtime/src/domain.rs")),
     ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
     ("src/driver.rs", include_str!("../../runtime/src/driver.rs")),
     (
@@ -62,10 +63,6 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/impacts.rs",
         include_str!("../../runtime/src/impacts.rs"),
     ),
-    (
-        "src/integration.rs",
-        include_str!("../../runtime/src/integration.rs"),
-    ),
     ("src/keep.rs", include_str!("../../runtime/src/keep.rs")),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
@@ -81,8 +78,32 @@ const RUNTIME: &[(&str, &str)] = &[
     ),
     ("src/rodas4.rs", include_str!("../../runtime/src/rodas4.rs")),
     (
-        "src/solution.rs",
-        include_str!("../../runtime/src/solution.rs"),
+        "src/run/diagnosis.rs",
+        include_str!("../../runtime/src/run/diagnosis.rs"),
+    ),
+    (
+        "src/run/integration.rs",
+        include_str!("../../runtime/src/run/integration.rs"),
+    ),
+    (
+        "src/run/mod.rs",
+        include_str!("../../runtime/src/run/mod.rs"),
+    ),
+    (
+        "src/run/options.rs",
+        include_str!("../../runtime/src/run/options.rs"),
+    ),
+    (
+        "src/run/regime.rs",
+        include_str!("../../runtime/src/run/regime.rs"),
+    ),
+    (
+        "src/run/solution.rs",
+        include_str!("../../runtime/src/run/solution.rs"),
+    ),
+    (
+        "src/segment.rs",
+        include_str!("../../runtime/src/segment.rs"),
     ),
     ("src/solver.rs", include_str!("../../runtime/src/solver.rs")),
     (
