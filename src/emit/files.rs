@@ -10,6 +10,22 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/budget.rs", include_str!("../../runtime/src/budget.rs")),
     ("src/cli.rs", include_str!("../../runtime/src/cli.rs")),
     (
+        "src/cli/args.rs",
+        include_str!("../../runtime/src/cli/args.rs"),
+    ),
+    (
+        "src/cli/bench.rs",
+        include_str!("../../runtime/src/cli/bench.rs"),
+    ),
+    (
+        "src/cli/exit.rs",
+        include_str!("../../runtime/src/cli/exit.rs"),
+    ),
+    (
+        "src/cli/run.rs",
+        include_str!("../../runtime/src/cli/run.rs"),
+    ),
+    (
         "src/closure.rs",
         include_str!("../../runtime/src/closure.rs"),
     ),
