@@ -37,6 +37,10 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/direct.rs", include_str!("../../runtime/src/direct.rs")),
     ("src/domain.rs", include_str!("../../runtime/src/domain.rs")),
     ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
+    (
+        "src/dop853/tableau.rs",
+        include_str!("../../runtime/src/dop853/tableau.rs"),
+    ),
     ("src/driver.rs", include_str!("../../runtime/src/driver.rs")),
     (
         "src/ensemble.rs",
@@ -93,6 +97,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/progress.rs"),
     ),
     ("src/rodas4.rs", include_str!("../../runtime/src/rodas4.rs")),
+    (
+        "src/rodas4/tableau.rs",
+        include_str!("../../runtime/src/rodas4/tableau.rs"),
+    ),
     (
         "src/run/diagnosis.rs",
         include_str!("../../runtime/src/run/diagnosis.rs"),
