@@ -101,7 +101,11 @@ pub struct LinearizeArgs {
     pub at: Vec<String>,
     /// Override params: `--param g=9.81,l=2` (repeatable); the params
     /// declared after one are recomputed from it.
-    #[arg(long = "param", value_name = "NAME=VALUE,…", allow_hyphen_values = true)]
+    #[arg(
+        long = "param",
+        value_name = "NAME=VALUE,…",
+        allow_hyphen_values = true
+    )]
     pub params: Vec<String>,
     /// The time, for rheonomic models (default: the start of the model's span).
     #[arg(long, value_name = "T", allow_hyphen_values = true)]

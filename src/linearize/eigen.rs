@@ -52,9 +52,6 @@ pub fn eigenvalues(a: &[Vec<f64>]) -> Vec<Eigenvalue> {
         .iter()
         .map(|c| Eigenvalue { re: c.re, im: c.im })
         .collect();
-    out.sort_by(|x, y| {
-        y.re.total_cmp(&x.re)
-            .then_with(|| y.im.total_cmp(&x.im))
-    });
+    out.sort_by(|x, y| y.re.total_cmp(&x.re).then_with(|| y.im.total_cmp(&x.im)));
     out
 }

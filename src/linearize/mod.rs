@@ -125,28 +125,58 @@ impl std::fmt::Display for LinearizeError {
 }
 
 /// Linearizes the derived model at the requested point. A model whose
-/// implicit constraints have several candidates is linearized in the first
-/// choice whose pivots do not vanish there (its other modes derived here).
+/// implicit constraints have several candidates has a reduced system for
+/// each choice; the point is linearized in the first whose free state
+/// holds every component `--at` gives and whose pivots do not vanish there
+/// (mode 1 if none does).
 pub fn linearize(
     model: &Model,
     derivation: &Derivation,
     request: &Request,
 ) -> Result<Linearization, LinearizeError> {
-    let first = system::linearize_in(model, derivation, request);
-    let singular = matches!(&first, Err(e) if e.kind == ErrorKind::Undefined);
-    if !singular || model.mode_count() < 2 {
-        return first.map(|l| with_mode(l, model, derivation, 0));
+    let first = || {
+        system::linearize_in(model, derivation, request).map(|l| with_mode(l, model, derivation, 0))
+    };
+    if model.mode_count() < 2 {
+        return first();
     }
-    for mode in 1..model.mode_count() {
-        let other = model.in_mode(mode);
-        let Ok(d) = crate::mechanics::derive_mode_checked(&other) else {
-            continue;
+    let given: Vec<String> = point::items(&request.at, "--at")?
+        .into_iter()
+        .map(|(name, _)| name)
+        .collect();
+    for mode in 0..model.mode_count() {
+        let result = if mode == 0 {
+            try_mode(model, derivation, &given, request).map(|r| (r, None))
+        } else {
+            let other = model.in_mode(mode);
+            let Ok(d) = crate::mechanics::derive_mode_checked(&other) else {
+                continue;
+            };
+            try_mode(&other, &d, &given, request).map(|r| (r, Some(d)))
         };
-        if let Ok(l) = system::linearize_in(&other, &d, request) {
-            return Ok(with_mode(l, model, &d, mode));
+        if let Some((Ok(l), d)) = result {
+            return Ok(with_mode(l, model, d.as_ref().unwrap_or(derivation), mode));
         }
     }
-    first
+    first()
+}
+
+/// The linearization in one mode, `None` when the mode fixes a component
+/// the request gives.
+fn try_mode(
+    model: &Model,
+    derivation: &Derivation,
+    given: &[String],
+    request: &Request,
+) -> Option<Result<Linearization, LinearizeError>> {
+    let fixes_given = derivation.reduced.fixed.iter().any(|&(k, _)| {
+        let name = derivation.arena.symbol_name(derivation.reduced.state[k]);
+        given.contains(&name)
+    });
+    if fixes_given {
+        return None;
+    }
+    Some(system::linearize_in(model, derivation, request))
 }
 
 /// Names the dependents of the mode used, when there is a choice.
@@ -155,9 +185,18 @@ fn with_mode(mut l: Linearization, model: &Model, d: &Derivation, mode: usize) -
         let names: Vec<String> = d
             .dependent()
             .iter()
-            .map(|&c| d.arena.symbol_name(crate::ir::Symbol::Jet { coord: c, order: d.k }))
+            .map(|&c| {
+                d.arena.symbol_name(crate::ir::Symbol::Jet {
+                    coord: c,
+                    order: d.k,
+                })
+            })
             .collect();
-        l.mode = Some(format!("mode {} (dependent {})", mode + 1, names.join(", ")));
+        l.mode = Some(format!(
+            "mode {} (dependent {})",
+            mode + 1,
+            names.join(", ")
+        ));
     }
     l
 }

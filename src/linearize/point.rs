@@ -84,7 +84,10 @@ pub(super) fn params(
     let mut values: Vec<f64> = Vec::with_capacity(exprs.len());
     let mut overridden = Vec::with_capacity(exprs.len());
     for (i, p) in model.params.iter().enumerate() {
-        let given = overrides.iter().find(|(n, _)| *n == p.name).map(|&(_, v)| v);
+        let given = overrides
+            .iter()
+            .find(|(n, _)| *n == p.name)
+            .map(|&(_, v)| v);
         overridden.push(given.is_some());
         let v = given.unwrap_or_else(|| {
             arena.eval(exprs[i], &|s| match s {

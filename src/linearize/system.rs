@@ -141,16 +141,21 @@ pub(super) fn linearize_in(
         let given = at.iter().find(|&&(i, _)| i == k).map(|&(_, v)| v);
         let v = match given {
             Some(v) => v,
-            None => point::stated(&mut arena, model, state[k], &params.values).ok_or_else(|| {
-                LinearizeError::usage(
-                    format!("the model states no value of `{}`", names[k]),
-                    format!("give it with `--at \"{}=…\"`", names[k]),
-                )
-            })?,
+            None => {
+                point::stated(&mut arena, model, state[k], &params.values).ok_or_else(|| {
+                    LinearizeError::usage(
+                        format!("the model states no value of `{}`", names[k]),
+                        format!("give it with `--at \"{}=…\"`", names[k]),
+                    )
+                })?
+            }
         };
         if !v.is_finite() {
             return Err(LinearizeError::undefined(
-                format!("the model's initial `{}` is {v} with these params", names[k]),
+                format!(
+                    "the model's initial `{}` is {v} with these params",
+                    names[k]
+                ),
                 format!("give it with `--at \"{}=…\"`", names[k]),
             ));
         }
@@ -214,15 +219,7 @@ pub(super) fn linearize_in(
 
     // Ignorable coordinates: the greatest set of free positions that no
     // other row's rate depends on.
-    let ignorable = ignorable(
-        &arena,
-        &free,
-        &rates,
-        &partials,
-        n,
-        &env,
-        implicit.as_ref(),
-    );
+    let ignorable = ignorable(&arena, &free, &rates, &partials, n, &env, implicit.as_ref());
     let kept: Vec<usize> = (0..free.len()).filter(|c| !ignorable.contains(c)).collect();
 
     // A on the free state, then restricted to the kept components.
@@ -265,7 +262,9 @@ pub(super) fn linearize_in(
         &mut arena,
         &rates,
         implicit.as_ref(),
-        &(0..model.params.len() as u32).map(Symbol::Param).collect::<Vec<_>>(),
+        &(0..model.params.len() as u32)
+            .map(Symbol::Param)
+            .collect::<Vec<_>>(),
     );
     let b_partial = evaluate_rows(
         &arena,
@@ -302,12 +301,15 @@ pub(super) fn linearize_in(
                 (s.value, s.scale)
             }
             Rate::Unknown(j) => {
-                let imp = implicit.as_ref().map(|imp| imp.residual.clone()).unwrap_or_default();
+                let imp = implicit
+                    .as_ref()
+                    .map(|imp| imp.residual.clone())
+                    .unwrap_or_default();
                 let scales = eval_scaled(&arena, &imp, &env);
                 let g_scale = scales.iter().map(|s| s.scale).fold(0.0, f64::max);
-                let pivot = g_z
-                    .as_ref()
-                    .map_or(1.0, |m| m.row(j).iter().map(|v| v.abs()).fold(0.0, f64::max));
+                let pivot = g_z.as_ref().map_or(1.0, |m| {
+                    m.row(j).iter().map(|v| v.abs()).fold(0.0, f64::max)
+                });
                 (z[j], z[j].abs() + g_scale / pivot.max(f64::MIN_POSITIVE))
             }
         };
@@ -452,7 +454,11 @@ fn solve_highest(
         };
         let g = DVector::from_iterator(m, imp.residual.iter().map(|&e| arena.eval(e, &at)));
         let jz = matrix(arena, &imp.jacobian, &at);
-        let step = jz.clone().lu().solve(&(-&g)).filter(|s| s.iter().all(|v| v.is_finite()));
+        let step = jz
+            .clone()
+            .lu()
+            .solve(&(-&g))
+            .filter(|s| s.iter().all(|v| v.is_finite()));
         let Some(step) = step else {
             return Err(singular_mass_matrix(arena, imp));
         };
@@ -646,7 +652,9 @@ fn vanishes(
                 (s, base + spread * (1.0 + base.abs()) * rng.range(-1.0, 1.0))
             })
             .collect();
-        let value = eval_scaled(arena, &[e], &|s| shifts.get(&s).copied().unwrap_or(f64::NAN))[0];
+        let value = eval_scaled(arena, &[e], &|s| {
+            shifts.get(&s).copied().unwrap_or(f64::NAN)
+        })[0];
         if !value.is_finite() {
             continue;
         }

@@ -127,7 +127,11 @@ impl Linearization {
         let _ = write!(
             out,
             ", \"eigenvalues\": {}",
-            list(&self.eigenvalues, |e| format!("[{}, {}]", num(e.re), num(e.im)))
+            list(&self.eigenvalues, |e| format!(
+                "[{}, {}]",
+                num(e.re),
+                num(e.im)
+            ))
         );
         let _ = write!(out, ", \"residual\": {}", list(&self.residual, |&v| num(v)));
         let _ = write!(out, ", \"equilibrium\": {}", self.equilibrium);
@@ -340,10 +344,17 @@ impl fmt::Display for Linearization {
                     writeln!(f)?;
                 }
                 writeln!(f, "\neigenvalues (frequency |Im λ|, natural frequency |λ|, damping ratio −Re λ/|λ|):")?;
+                // Parts below A's rounding (a few ε·‖A‖) are shown as 0:
+                // a zero eigenvalue comes out of the Schur form as ±1e-16.
+                let norm = self.a.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+                let floor = 64.0 * f64::EPSILON * norm * self.a.len().max(1) as f64;
+                let clean = |v: f64| if v.abs() <= floor { 0.0 } else { v };
                 for e in &self.eigenvalues {
-                    let damping = e
-                        .damping_ratio()
-                        .map_or_else(|| "-".to_string(), short);
+                    let e = super::Eigenvalue {
+                        re: clean(e.re),
+                        im: clean(e.im),
+                    };
+                    let damping = e.damping_ratio().map_or_else(|| "-".to_string(), short);
                     writeln!(
                         f,
                         "  {:>13} {:>+14}i   frequency {:<12} natural {:<12} damping {}",
@@ -354,7 +365,7 @@ impl fmt::Display for Linearization {
                         damping
                     )?;
                 }
-                let unstable = self.eigenvalues.iter().any(|e| e.re > 1e-9 * (1.0 + e.im.abs()));
+                let unstable = self.eigenvalues.iter().any(|e| clean(e.re) > 0.0);
                 if unstable {
                     writeln!(f, "  an eigenvalue has a positive real part: unstable")?;
                 }

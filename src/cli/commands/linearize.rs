@@ -21,8 +21,10 @@ pub(crate) fn linearize(args: &LinearizeArgs) -> ExitCode {
         t: args.t.clone(),
         symbolic: args.symbolic,
     };
-    status(compile(&args.file, stage, |(model, derivation)| {
-        match lagc::linearize::linearize(&model, &derivation, &request) {
+    status(compile(
+        &args.file,
+        stage,
+        |(model, derivation)| match lagc::linearize::linearize(&model, &derivation, &request) {
             Ok(l) => {
                 match args.format {
                     LinearizeFormat::Text => print!("{l}"),
@@ -38,6 +40,6 @@ pub(crate) fn linearize(args: &LinearizeArgs) -> ExitCode {
                     ErrorKind::Undefined => EXIT_UNDEFINED,
                 })
             }
-        }
-    }))
+        },
+    ))
 }
