@@ -223,10 +223,9 @@ pub(super) fn linearize_in(
     let kept: Vec<usize> = (0..free.len()).filter(|c| !ignorable.contains(c)).collect();
 
     // A on the free state, then restricted to the kept components.
-    let g_z = match &implicit {
-        Some(imp) => Some(matrix(&arena, &imp.jacobian, &env)),
-        None => None,
-    };
+    let g_z = implicit
+        .as_ref()
+        .map(|imp| matrix(&arena, &imp.jacobian, &env));
     let a_free = evaluate_rows(
         &arena,
         &rates,
@@ -568,9 +567,9 @@ fn param_chain(arena: &mut Arena, params: &Params, env: &dyn Fn(Symbol) -> f64) 
                 continue;
             }
             let slope = arena.eval(d, env);
-            for j in 0..=l {
-                let add = slope * t[l][j];
-                t[k][j] += add;
+            let (done, rest) = t.split_at_mut(k);
+            for (sum, &through) in rest[0].iter_mut().zip(&done[l]).take(l + 1) {
+                *sum += slope * through;
             }
         }
     }

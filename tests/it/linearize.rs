@@ -287,7 +287,16 @@ fn text_of_the_rolling_disk() {
 /// Every way a request can fail, rendered; never a panic.
 #[test]
 fn bad_requests_are_named() {
-    let cases: [(&str, &str, &str, &str, Option<&str>, ErrorKind); 11] = [
+    // (snapshot, file, --at, --param, --t, kind)
+    type Case<'a> = (
+        &'a str,
+        &'a str,
+        &'a str,
+        &'a str,
+        Option<&'a str>,
+        ErrorKind,
+    );
+    let cases: [Case; 11] = [
         (
             "unknown_state",
             "examples/double_pendulum_energy.lag",
