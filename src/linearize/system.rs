@@ -135,20 +135,34 @@ pub(super) fn linearize_in(
     }
 
     // The point: free components from `--at`, else as the model states
-    // them; fixed ones from their constraints.
+    // them, else (k ≥ 3: the independent derivatives of order 2..k−1) as
+    // the consistency of (4) gives them from the rest, as at `t0`; fixed
+    // ones from their constraints.
+    let solved: Vec<(Symbol, ExprId)> = reduced
+        .consistency
+        .iter()
+        .filter_map(|stage| stage.explicit.as_ref().map(|e| (&stage.unknowns, e)))
+        .flat_map(|(unknowns, explicit)| unknowns.iter().copied().zip(explicit.iter().copied()))
+        .collect();
     let mut values: HashMap<Symbol, f64> = HashMap::new();
+    let mut deferred = Vec::new();
     for &k in &free {
         let given = at.iter().find(|&&(i, _)| i == k).map(|&(_, v)| v);
         let v = match given {
             Some(v) => v,
-            None => {
-                point::stated(&mut arena, model, state[k], &params.values).ok_or_else(|| {
-                    LinearizeError::usage(
+            None => match point::stated(&mut arena, model, state[k], &params.values) {
+                Some(v) => v,
+                None if solved.iter().any(|&(s, _)| s == state[k]) => {
+                    deferred.push(k);
+                    continue;
+                }
+                None => {
+                    return Err(LinearizeError::usage(
                         format!("the model states no value of `{}`", names[k]),
                         format!("give it with `--at \"{}=…\"`", names[k]),
-                    )
-                })?
-            }
+                    ))
+                }
+            },
         };
         if !v.is_finite() {
             return Err(LinearizeError::undefined(
@@ -160,6 +174,25 @@ pub(super) fn linearize_in(
             ));
         }
         values.insert(state[k], v);
+    }
+    // In stage order: a stage may use the values of the stages before it.
+    for &(symbol, e) in &solved {
+        let Some(&k) = deferred.iter().find(|&&k| state[k] == symbol) else {
+            continue;
+        };
+        let e = arena.subst(e, &subst);
+        let v = arena.eval(e, &|s| match s {
+            Symbol::Time => t,
+            Symbol::Param(j) => params.values.get(j as usize).copied().unwrap_or(f64::NAN),
+            other => values.get(&other).copied().unwrap_or(f64::NAN),
+        });
+        if !v.is_finite() {
+            return Err(LinearizeError::undefined(
+                format!("`{}` as (4) gives it here is {v}", names[k]),
+                format!("give it with `--at \"{}=…\"`", names[k]),
+            ));
+        }
+        values.insert(symbol, v);
     }
     let pv = params.values.clone();
     let env_of = |values: &HashMap<Symbol, f64>, pv: &[f64], t: f64| {
