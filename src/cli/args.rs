@@ -78,7 +78,11 @@ pub enum Command {
     /// right side contains, such as a rolling disk's heading: left out, so
     /// that a steady motion linearizes to a constant A and residual 0).
     /// Components --at does not give take the model's initial values.
-    /// Each eigenvalue is shown with its frequency |Im λ|, natural
+    /// ∂f/∂p is the total derivative (the params declared after one
+    /// recomputed from it, as --param does). An implicit constraint with
+    /// several candidates: the reduced system whose free state holds every
+    /// component --at gives. Holonomic constraints are not eliminated yet
+    /// (refused). Each eigenvalue is shown with its frequency |Im λ|, natural
     /// frequency |λ| and damping ratio −Re λ/|λ|; the residual says
     /// whether the point is an equilibrium (or a steady motion). Exit
     /// status: 0 on success, 1 when the model has errors, 2 on bad usage
