@@ -3,7 +3,9 @@
 the same physics derived independently, in other coordinates:
 
 - the spherical pendulum: lagc in two rotation angles
-  (examples/spherical_pendulum.lag); SymPy in the bob's horizontal
+  (examples/spherical_pendulum.lag) and in Cartesian coordinates on the
+  sphere, a holonomic constraint (tests/data/v2/spherical_pendulum_cartesian.lag);
+  SymPy in the bob's horizontal
   Cartesian coordinates x, y with z = -sqrt(l^2 - x^2 - y^2), by
   LagrangesMethod, linearized at the bottom;
 - the double pendulum (examples/double_pendulum_energy.lag): SymPy with
@@ -187,6 +189,11 @@ def main():
             f"spherical pendulum at the bottom, l = {l_value}, g = {g_value}",
             lagc_eigenvalues("examples/spherical_pendulum.lag", "a=0,b=0,a'=0,b'=0",
                              f"l={l_value},g={g_value}"),
+            spherical(l_value, g_value))
+        good &= compare(
+            f"spherical pendulum on x^2 + y^2 + z^2 = l^2 (holonomic), l = {l_value}, g = {g_value}",
+            lagc_eigenvalues("tests/data/v2/spherical_pendulum_cartesian.lag",
+                             "x=0,y=0,x'=0,y'=0", f"l={l_value},g={g_value}"),
             spherical(l_value, g_value))
     pi = math.pi
     for params in [(1.0, 1.0, 1.0, 1.0, 9.81), (1.3, 0.7, 2.0, 0.5, 9.81)]:

@@ -81,8 +81,9 @@ pub enum Command {
     /// ∂f/∂p is the total derivative (the params declared after one
     /// recomputed from it, as --param does). An implicit constraint with
     /// several candidates: the reduced system whose free state holds every
-    /// component --at gives. Holonomic constraints are not eliminated yet
-    /// (refused). Each eigenvalue is shown with its frequency |Im λ|, natural
+    /// component --at gives. The dependent positions of holonomic
+    /// constraints are eliminated too (put on the constraints by Newton
+    /// from the values given). Each eigenvalue is shown with its frequency |Im λ|, natural
     /// frequency |λ| and damping ratio −Re λ/|λ|; the residual says
     /// whether the point is an equilibrium (or a steady motion). Exit
     /// status: 0 on success, 1 when the model has errors, 2 on bad usage

@@ -11,6 +11,8 @@
 //!   `φ(t, x)` of the others, substituted before differentiating, so a
 //!   perturbation of the state moves them along the constraint
 //!   (`δx_d = ∂φ/∂x δx`) and `A` has no directions off the constraints;
+//!   likewise the dependent positions of holonomic constraints `f = 0`
+//!   (`∂z/∂q = −f_z⁻¹ f_q`, evaluated);
 //! - the ignorable coordinates: positions that no remaining right side
 //!   contains (found symbolically, the derivative's vanishing confirmed at
 //!   random points where the simplifier leaves `sin²φ + cos²φ` standing),
@@ -19,12 +21,18 @@
 //! | file | what |
 //! |---|---|
 //! | `point.rs` | the request: `--at`, `--param`, `--t` parsed, the point completed |
-//! | `system.rs` | the eliminated system, its symbolic Jacobians, ignorable coordinates, evaluation |
+//! | `system.rs` | the eliminated system, its symbolic Jacobians, their evaluation |
+//! | `closure.rs` | holonomic constraints: dependent positions by Newton, their slopes |
+//! | `ignorable.rs` | the ignorable coordinates |
+//! | `symbolic.rs` | `--symbolic`: A's entries as expressions |
 //! | `eigen.rs` | eigenvalues of a real matrix, frequency and damping |
 //! | `text.rs` | text, JSON and LaTeX |
 
+mod closure;
 mod eigen;
+mod ignorable;
 mod point;
+mod symbolic;
 mod system;
 mod text;
 

@@ -9,29 +9,31 @@
 //! `∂z/∂x = −G_z⁻¹ G_x`, implicit differentiation of exact partials), or a
 //! dependent highest derivative `D(t, x, z)`.
 
+use super::closure::{chain_through, close, closure_slopes, Closure};
 use super::eigen;
+use super::ignorable::{ignorable, vanishes};
 use super::point::{self, Params};
-use super::text::{Entry, Symbolic};
+use super::symbolic::{symbolic, SymbolicInput};
 use super::{Linearization, LinearizeError, Request};
 use crate::check::model::Model;
 use crate::ir::{lower, Arena, ExprId, Symbol};
-use crate::mechanics::{eval_scaled, Derivation, Highest, Rng};
+use crate::mechanics::{eval_scaled, Derivation, Highest};
 use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
 
 /// How a free component's rate is found.
 #[derive(Clone, Copy)]
-enum Rate {
+pub(super) enum Rate {
     Expr(ExprId),
     Unknown(usize),
     Dependent(ExprId),
 }
 
 /// `G(t, x, z) = 0` for the independent highest derivatives `z`.
-struct Implicit {
-    unknowns: Vec<Symbol>,
-    residual: Vec<ExprId>,
-    jacobian: Vec<Vec<ExprId>>,
+pub(super) struct Implicit {
+    pub(super) unknowns: Vec<Symbol>,
+    pub(super) residual: Vec<ExprId>,
+    pub(super) jacobian: Vec<Vec<ExprId>>,
     linear: bool,
 }
 
@@ -44,13 +46,6 @@ pub(super) fn linearize_in(
     request: &Request,
 ) -> Result<Linearization, LinearizeError> {
     let reduced = &derivation.reduced;
-    if reduced.closure.is_some() {
-        return Err(LinearizeError::usage(
-            "`lagc linearize` does not eliminate holonomic constraints yet: their dependent \
-             positions would enter A as free directions off the constraint",
-            "write the model in independent coordinates (the pendulum by its angle) to linearize it",
-        ));
-    }
     let mut arena = derivation.arena.clone();
     let state = reduced.state.clone();
     let names: Vec<String> = state.iter().map(|&s| arena.symbol_name(s)).collect();
@@ -78,7 +73,26 @@ pub(super) fn linearize_in(
     for &(i, phi) in &fixed {
         subst.insert(state[i], phi);
     }
-    let is_fixed = |k: usize| fixed.iter().any(|&(i, _)| i == k);
+    // Holonomic constraints f(t, q) = 0: their dependent positions are
+    // functions of the other positions (∂z/∂q = −f_z⁻¹ f_q), eliminated
+    // like the fixed velocities.
+    let closure = reduced.closure.as_ref().map(|c| Closure {
+        unknowns: c.unknowns.clone(),
+        residual: c.residual.iter().map(|&f| arena.subst(f, &subst)).collect(),
+        jacobian: c
+            .jacobian
+            .iter()
+            .map(|row| row.iter().map(|&e| arena.subst(e, &subst)).collect())
+            .collect(),
+        text: c.text.clone(),
+    });
+    let bound: Vec<usize> = closure.as_ref().map_or_else(Vec::new, |c| {
+        c.unknowns
+            .iter()
+            .filter_map(|u| state.iter().position(|s| s == u))
+            .collect()
+    });
+    let is_fixed = |k: usize| fixed.iter().any(|&(i, _)| i == k) || bound.contains(&k);
     let free: Vec<usize> = (0..state.len()).filter(|&k| !is_fixed(k)).collect();
 
     // The rates of the free components.
@@ -194,6 +208,20 @@ pub(super) fn linearize_in(
         }
         values.insert(symbol, v);
     }
+    if let Some(c) = &closure {
+        close(
+            &mut arena,
+            model,
+            c,
+            &bound,
+            &state,
+            &names,
+            &at,
+            &params.values,
+            t,
+            &mut values,
+        )?;
+    }
     let pv = params.values.clone();
     let env_of = |values: &HashMap<Symbol, f64>, pv: &[f64], t: f64| {
         let values = values.clone();
@@ -247,19 +275,42 @@ pub(super) fn linearize_in(
     let env = env_of(&values, &pv, t);
 
     // Symbolic partials of each rate in each free component.
-    let columns: Vec<Symbol> = free.iter().map(|&k| state[k]).collect();
+    let columns: Vec<Symbol> = free.iter().chain(&bound).map(|&k| state[k]).collect();
     let partials = Partials::new(&mut arena, &rates, implicit.as_ref(), &columns);
+    // Which free columns the holonomic constraints hold (through them a
+    // row that holds a dependent position holds those positions too).
+    let through_closure: Vec<bool> = match &closure {
+        Some(c) => free
+            .iter()
+            .map(|&k| {
+                c.residual.iter().any(|&f| {
+                    let d = arena.diff(f, state[k]);
+                    !vanishes(&arena, d, &env_of(&values, &pv, t), None)
+                })
+            })
+            .collect(),
+        None => vec![false; free.len()],
+    };
 
     // Ignorable coordinates: the greatest set of free positions that no
     // other row's rate depends on.
-    let ignorable = ignorable(&arena, &free, &rates, &partials, n, &env, implicit.as_ref());
+    let ignorable = ignorable(
+        &arena,
+        &free,
+        &rates,
+        &partials,
+        n,
+        &env,
+        implicit.as_ref(),
+        &through_closure,
+    );
     let kept: Vec<usize> = (0..free.len()).filter(|c| !ignorable.contains(c)).collect();
 
     // A on the free state, then restricted to the kept components.
     let g_z = implicit
         .as_ref()
         .map(|imp| matrix(&arena, &imp.jacobian, &env));
-    let a_free = evaluate_rows(
+    let mut a_free = evaluate_rows(
         &arena,
         &rates,
         &partials.state,
@@ -267,8 +318,13 @@ pub(super) fn linearize_in(
         &partials.d_z,
         g_z.as_ref(),
         &env,
-        free.len(),
+        columns.len(),
     )?;
+    let free_symbols: Vec<Symbol> = free.iter().map(|&k| state[k]).collect();
+    if let Some(c) = &closure {
+        let dz = closure_slopes(&mut arena, c, &free_symbols, &env)?;
+        chain_through(&mut a_free, &dz, free.len());
+    }
     let a: Vec<Vec<f64>> = kept
         .iter()
         .map(|&i| kept.iter().map(|&c| a_free[i][c]).collect())
@@ -298,7 +354,7 @@ pub(super) fn linearize_in(
             .map(Symbol::Param)
             .collect::<Vec<_>>(),
     );
-    let b_partial = evaluate_rows(
+    let mut b_partial = evaluate_rows(
         &arena,
         &rates,
         &param_partials.state,
@@ -308,6 +364,25 @@ pub(super) fn linearize_in(
         &env,
         model.params.len(),
     )?;
+    if let Some(c) = &closure {
+        // The dependent positions move with the params too.
+        let through: Vec<Vec<f64>> = a_free
+            .iter()
+            .map(|row| row[free.len()..].to_vec())
+            .collect();
+        let param_symbols: Vec<Symbol> =
+            (0..model.params.len() as u32).map(Symbol::Param).collect();
+        let dz = closure_slopes(&mut arena, c, &param_symbols, &env)?;
+        for (row, bound_row) in b_partial.iter_mut().zip(&through) {
+            for (p, cell) in row.iter_mut().enumerate() {
+                *cell += bound_row
+                    .iter()
+                    .zip(&dz)
+                    .map(|(a, dzd)| a * dzd[p])
+                    .sum::<f64>();
+            }
+        }
+    }
     let chain = param_chain(&mut arena, &params, &env);
     let b_params: Vec<Vec<f64>> = kept
         .iter()
@@ -401,7 +476,7 @@ pub(super) fn linearize_in(
 }
 
 /// The name of the rate of a state component: `th'` for `th`, `th''` for `th'`.
-fn rate_name(arena: &Arena, s: Symbol) -> String {
+pub(super) fn rate_name(arena: &Arena, s: Symbol) -> String {
     match s {
         Symbol::Jet { coord, order } => arena.symbol_name(Symbol::Jet {
             coord,
@@ -412,18 +487,20 @@ fn rate_name(arena: &Arena, s: Symbol) -> String {
 }
 
 /// The symbolic partials of every rate in a list of variables.
-struct Partials {
+pub(super) struct Partials {
     /// Per rate: for `Expr`/`Dependent` rates `∂rate/∂v` per variable
     /// (empty for `Unknown`).
-    state: Vec<Vec<ExprId>>,
+    pub(super) state: Vec<Vec<ExprId>>,
     /// `∂G_r/∂v` per residual row and variable.
-    g_state: Vec<Vec<ExprId>>,
+    pub(super) g_state: Vec<Vec<ExprId>>,
     /// Per rate: `∂D/∂z_k` for `Dependent` rates.
-    d_z: Vec<Vec<ExprId>>,
+    pub(super) d_z: Vec<Vec<ExprId>>,
+    /// The number of variables.
+    pub(super) columns: usize,
 }
 
 impl Partials {
-    fn new(
+    pub(super) fn new(
         arena: &mut Arena,
         rates: &[Rate],
         implicit: Option<&Implicit>,
@@ -459,11 +536,16 @@ impl Partials {
             state,
             g_state,
             d_z,
+            columns: vars.len(),
         }
     }
 }
 
-fn matrix(arena: &Arena, cells: &[Vec<ExprId>], env: &dyn Fn(Symbol) -> f64) -> DMatrix<f64> {
+pub(super) fn matrix(
+    arena: &Arena,
+    cells: &[Vec<ExprId>],
+    env: &dyn Fn(Symbol) -> f64,
+) -> DMatrix<f64> {
     let rows = cells.len();
     let cols = cells.first().map_or(0, Vec::len);
     DMatrix::from_fn(rows, cols, |r, c| arena.eval(cells[r][c], env))
@@ -607,192 +689,4 @@ fn param_chain(arena: &mut Arena, params: &Params, env: &dyn Fn(Symbol) -> f64) 
         }
     }
     t
-}
-
-/// The greatest set of free positions that no remaining rate depends on.
-/// "Depends" is symbolic — the variable in the rate's partial — with the
-/// partial's vanishing checked at random points near this one, so that an
-/// identity the simplifier leaves standing (`sin²φ + cos²φ − 1`) does not
-/// hide an ignorable heading.
-fn ignorable(
-    arena: &Arena,
-    free: &[usize],
-    rates: &[Rate],
-    partials: &Partials,
-    n: usize,
-    env: &dyn Fn(Symbol) -> f64,
-    implicit: Option<&Implicit>,
-) -> Vec<usize> {
-    let positions: Vec<usize> = (0..free.len()).filter(|&i| free[i] < n).collect();
-    let mut zero_cache: HashMap<ExprId, bool> = HashMap::new();
-    let mut is_zero = |e: ExprId| -> bool {
-        *zero_cache
-            .entry(e)
-            .or_insert_with(|| vanishes(arena, e, env, implicit))
-    };
-    let mut depends = |row: usize, col: usize| -> bool {
-        match rates[row] {
-            Rate::Expr(_) => !is_zero(partials.state[row][col]),
-            Rate::Unknown(_) => partials.g_state.iter().any(|g| !is_zero(g[col])),
-            Rate::Dependent(_) => {
-                !is_zero(partials.state[row][col])
-                    || partials.g_state.iter().any(|g| !is_zero(g[col]))
-            }
-        }
-    };
-    let mut set: Vec<usize> = positions;
-    loop {
-        let before = set.len();
-        let current = set.clone();
-        set.retain(|&c| {
-            !(0..free.len())
-                .filter(|r| !current.contains(r))
-                .any(|r| depends(r, c))
-        });
-        if set.len() == before {
-            return set;
-        }
-    }
-}
-
-/// Whether `e` is identically zero: structurally, or (to rounding) at
-/// random points near the linearization point. A point where it cannot be
-/// evaluated is skipped; with too few points left it counts as non-zero.
-fn vanishes(
-    arena: &Arena,
-    e: ExprId,
-    env: &dyn Fn(Symbol) -> f64,
-    implicit: Option<&Implicit>,
-) -> bool {
-    if arena.is_zero(e) {
-        return true;
-    }
-    if arena.as_const(e).is_some() {
-        return false;
-    }
-    let mut rng = Rng::new(0x6c69_6e65_6172_697a ^ e.index() as u64);
-    let symbols = arena.free_symbols(e);
-    let mut finite = 0;
-    for _ in 0..24 {
-        let shifts: HashMap<Symbol, f64> = symbols
-            .iter()
-            .map(|&s| {
-                let base = env(s);
-                let base = if base.is_finite() { base } else { 0.0 };
-                let unknown = implicit.is_some_and(|imp| imp.unknowns.contains(&s));
-                let spread = if unknown { 1.0 } else { 0.5 };
-                (s, base + spread * (1.0 + base.abs()) * rng.range(-1.0, 1.0))
-            })
-            .collect();
-        let value = eval_scaled(arena, &[e], &|s| {
-            shifts.get(&s).copied().unwrap_or(f64::NAN)
-        })[0];
-        if !value.is_finite() {
-            continue;
-        }
-        finite += 1;
-        if value.value.abs() > 1e-9 * value.scale {
-            return false;
-        }
-    }
-    finite >= 8
-}
-
-struct SymbolicInput<'a> {
-    free: &'a [usize],
-    kept: &'a [usize],
-    state: &'a [Symbol],
-    rates: &'a [Rate],
-    partials: &'a Partials,
-    implicit: Option<&'a Implicit>,
-    at: &'a [(usize, f64)],
-    overrides: &'a [(String, f64)],
-    model: &'a Model,
-    t: Option<f64>,
-}
-
-/// `A`'s non-zero entries as expressions, with the values given on the
-/// command line (`--at`, `--param`, `--t`) substituted and the rest left
-/// as symbols; an implicit system's highest rows as the parts of
-/// `G_z ∂z/∂x = −G_x`.
-fn symbolic(arena: &mut Arena, input: &SymbolicInput) -> Symbolic {
-    let mut map: HashMap<Symbol, ExprId> = HashMap::new();
-    for &(k, v) in input.at {
-        let c = arena.constant(v);
-        map.insert(input.state[k], c);
-    }
-    for (name, v) in input.overrides {
-        if let Some(i) = input.model.params.iter().position(|p| &p.name == name) {
-            let c = arena.constant(*v);
-            map.insert(Symbol::Param(i as u32), c);
-        }
-    }
-    if let Some(t) = input.t {
-        let c = arena.constant(t);
-        map.insert(Symbol::Time, c);
-    }
-    let show = |arena: &mut Arena, e: ExprId| -> Option<(String, String)> {
-        let e = arena.subst(e, &map);
-        if arena.is_zero(e) {
-            return None;
-        }
-        let e = crate::mechanics::tidy::tidy(arena, e);
-        if arena.is_zero(e) {
-            return None;
-        }
-        Some((arena.display(e).to_string(), arena.latex(e)))
-    };
-    let name = |arena: &Arena, k: usize| arena.symbol_name(input.state[input.free[k]]);
-    let mut entries = Vec::new();
-    let mut implicit_rows = Vec::new();
-    for &i in input.kept {
-        let row = rate_name(arena, input.state[input.free[i]]);
-        match input.rates[i] {
-            Rate::Expr(_) => {
-                for &c in input.kept {
-                    if let Some((text, latex)) = show(arena, input.partials.state[i][c]) {
-                        entries.push(Entry {
-                            row: row.clone(),
-                            column: name(arena, c),
-                            text,
-                            latex,
-                        });
-                    }
-                }
-            }
-            Rate::Unknown(_) | Rate::Dependent(_) => implicit_rows.push(row),
-        }
-    }
-    let mut parts = Vec::new();
-    if let (Some(imp), false) = (input.implicit, implicit_rows.is_empty()) {
-        for (r, row) in imp.jacobian.iter().enumerate() {
-            for (c, &e) in row.iter().enumerate() {
-                if let Some((text, latex)) = show(arena, e) {
-                    parts.push(Entry {
-                        row: format!("G{}", r + 1),
-                        column: arena.symbol_name(imp.unknowns[c]),
-                        text,
-                        latex,
-                    });
-                }
-            }
-        }
-        for (r, g) in input.partials.g_state.iter().enumerate() {
-            for &c in input.kept {
-                if let Some((text, latex)) = show(arena, g[c]) {
-                    parts.push(Entry {
-                        row: format!("G{}", r + 1),
-                        column: name(arena, c),
-                        text,
-                        latex,
-                    });
-                }
-            }
-        }
-    }
-    Symbolic {
-        entries,
-        implicit_rows,
-        implicit_parts: parts,
-    }
 }

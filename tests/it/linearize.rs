@@ -93,6 +93,41 @@ fn spherical_pendulum_at_the_bottom_has_omega_squared_g_over_l_twice() {
     }
 }
 
+#[test]
+fn holonomic_models_eliminate_their_dependent_positions() {
+    // The spherical pendulum on x² + y² + z² = l² (z dependent).
+    for (params, l, g) in [("", 0.8, 9.81), ("l=2.5,g=1.6", 2.5, 1.6)] {
+        let lin = ok(
+            "tests/data/v2/spherical_pendulum_cartesian.lag",
+            "x=0,y=0,x'=0,y'=0",
+            params,
+        );
+        assert_eq!(lin.state, ["x", "y", "x'", "y'"], "{lin}");
+        assert_eigenvalues(
+            &lin,
+            &pairs(&[g / l, g / l]),
+            "Cartesian spherical pendulum",
+        );
+        assert!(lin.equilibrium, "{lin}");
+    }
+    // The plane pendulum x² + y² = l² (l = 1) off its bottom, against the
+    // angle form θ'' = −g sin θ written in x = sin θ:
+    // x'' = −g x sqrt(1 − x²) − x x'²/(1 − x²).
+    let lin = ok("examples/cartesian_pendulum.lag", "x=0.6,x'=0.3", "");
+    let (x, v, g) = (0.6_f64, 0.3_f64, 9.81);
+    let c2 = 1.0 - x * x;
+    let d_x = -g * c2.sqrt() + g * x * x / c2.sqrt() - v * v * (c2 + 2.0 * x * x) / (c2 * c2);
+    let d_v = -2.0 * x * v / c2;
+    let expected = [[0.0, 1.0], [d_x, d_v]];
+    for (row, want) in lin.a.iter().zip(&expected) {
+        for (got, want) in row.iter().zip(want) {
+            assert!((got - want).abs() < 1e-12, "{lin}");
+        }
+    }
+    let f = -g * x * c2.sqrt() - x * v * v / c2;
+    assert!((lin.residual[1] - f).abs() < 1e-12, "{lin}");
+}
+
 /// `m1 l1 l2 ω⁴ − (m1+m2) g (l1+l2) ω² + (m1+m2) g² = 0` (hanging; the
 /// inverted pendulum has `g → −g`).
 fn double_pendulum_modes(l1: f64, l2: f64, m1: f64, m2: f64, g: f64) -> [f64; 2] {
@@ -378,9 +413,9 @@ fn bad_requests_are_named() {
             ErrorKind::Undefined,
         ),
         (
-            "holonomic",
-            "examples/particle_on_circle.lag",
-            "",
+            "off_holonomic",
+            "examples/cartesian_pendulum.lag",
+            "x=0,y=-2",
             "",
             None,
             ErrorKind::Usage,
