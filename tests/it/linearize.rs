@@ -493,3 +493,55 @@ fn the_binary_prints_json_and_exits_by_kind() {
     let out = lagc(&["linearize", "tests/data/errors/unknown_name.lag"]);
     assert_eq!(out.status.code(), Some(1));
 }
+
+/// Every model that checks, at its initial state and at points with every
+/// component 0, 1e300 or −1: an answer or a named error, never a panic.
+#[test]
+fn every_model_linearizes_or_says_why() {
+    let mut files = Vec::new();
+    for dir in [
+        "examples",
+        "tests/data",
+        "tests/data/v2",
+        "tests/data/runtime_failures",
+    ] {
+        files.extend(crate::expect::lag_files(dir));
+    }
+    let mut answered = 0;
+    for path in files {
+        let source = std::fs::read_to_string(&path).expect("reads");
+        let outcomes = lagc::on_big_stack(move || {
+            let Ok(model) = lagc::frontend(&source) else {
+                return Vec::new();
+            };
+            let Ok((derivation, _)) = lagc::mechanics::derive_checked(&model) else {
+                return Vec::new();
+            };
+            let names: Vec<String> = derivation
+                .reduced
+                .state
+                .iter()
+                .map(|&s| derivation.arena.symbol_name(s))
+                .collect();
+            let mut outcomes = vec![linearize(&model, &derivation, &Request::default()).is_ok()];
+            for value in ["0", "1e300", "-1"] {
+                let at: Vec<String> = names.iter().map(|n| format!("{n}={value}")).collect();
+                let req = Request {
+                    at: vec![at.join(",")],
+                    ..Request::default()
+                };
+                // Fixed components given are checked against the
+                // constraints: an error is an answer too.
+                outcomes.push(linearize(&model, &derivation, &req).is_ok());
+            }
+            outcomes
+        });
+        if outcomes.first() == Some(&true) {
+            answered += 1;
+        }
+    }
+    assert!(
+        answered > 40,
+        "{answered} models linearized at their initial state"
+    );
+}
