@@ -131,10 +131,18 @@ pub(super) fn time(
             }),
         None => {
             let start = lower(arena, &model.time.start, model);
-            Ok(arena.eval(start, &|s| match s {
+            let t0 = arena.eval(start, &|s| match s {
                 Symbol::Param(j) => params.get(j as usize).copied().unwrap_or(f64::NAN),
                 _ => f64::NAN,
-            }))
+            });
+            if t0.is_finite() {
+                Ok(t0)
+            } else {
+                Err(LinearizeError::undefined(
+                    format!("the model's start time is {t0} with these params"),
+                    "give the time with `--t`",
+                ))
+            }
         }
     }
 }

@@ -331,7 +331,15 @@ fn bad_requests_are_named() {
         Option<&'a str>,
         ErrorKind,
     );
-    let cases: [Case; 11] = [
+    let cases: [Case; 12] = [
+        (
+            "singular_mass_matrix",
+            "examples/rolling_disk_3d.lag",
+            "",
+            "m=0",
+            None,
+            ErrorKind::Undefined,
+        ),
         (
             "unknown_state",
             "examples/double_pendulum_energy.lag",
