@@ -1,5 +1,6 @@
 //! The one integration-test binary.
 
+mod bit_identity;
 mod cache;
 mod check_build;
 mod cli;
@@ -17,6 +18,7 @@ mod latex;
 mod linearize;
 mod mass_law_forms;
 mod mechanics;
+mod nonlinear;
 mod parser;
 mod readme_program;
 mod report;
