@@ -13,58 +13,7 @@
 use crate::driver::{Ending, Options, Outcome};
 use crate::failure::Failure;
 use crate::integration::{Advance, Integration};
-use crate::model::DynModel;
-
-/// Every input's value on the current segment: input `i` is
-/// `values[i] + rates[i] · (t − from)`.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Inputs {
-    values: Vec<f64>,
-    rates: Vec<f64>,
-    from: f64,
-}
-
-impl Inputs {
-    /// Inputs held at `values`.
-    pub fn held(values: &[f64]) -> Inputs {
-        Inputs {
-            values: values.to_vec(),
-            rates: vec![0.0; values.len()],
-            from: 0.0,
-        }
-    }
-
-    /// Inputs moving along lines: `values` at `from`, with these `rates`.
-    pub fn lines(values: &[f64], rates: &[f64], from: f64) -> Inputs {
-        Inputs {
-            values: values.to_vec(),
-            rates: rates.to_vec(),
-            from,
-        }
-    }
-
-    /// Input `i` at `t`.
-    #[inline]
-    pub fn at(&self, i: usize, t: f64) -> f64 {
-        self.values[i] + self.rates[i] * (t - self.from)
-    }
-
-    /// Input `i`'s rate on the segment.
-    #[inline]
-    pub fn rate(&self, i: usize) -> f64 {
-        self.rates[i]
-    }
-
-    /// The number of inputs.
-    pub fn len(&self) -> usize {
-        self.values.len()
-    }
-
-    /// No inputs.
-    pub fn is_empty(&self) -> bool {
-        self.values.is_empty()
-    }
-}
+use crate::model::{DynModel, Inputs};
 
 /// How a signal goes between its samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

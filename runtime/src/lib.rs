@@ -18,8 +18,9 @@
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `dense` | a step's continuous extension as a value (`DenseStep`) |
 //! | `method` | integrator choice |
-//! | `integration` | a run as an object: `advance_to(t)`, the state, a restart from a given state |
-//! | `driver` | options, outcomes, the run as a loop over an `Integration`; regimes, candidates, diagnosis |
+//! | `run/` | the run: `integration` (a run as an object: `advance_to(t)`, the state, a restart from a given state), `options`, `regime` (branches, candidates), `diagnosis`, `solution`; the loops over an integration (`run::run`, `run::solve`) |
+//! | `segment` | one step's motion as a value, for a `Solution` |
+//! | `driver` | the run's public names where they have always been (re-exports of `run`) |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
 //! | `inputs` | inputs set from outside: their values in the model, signals, runs restarted at their changes |
 //! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
@@ -35,6 +36,7 @@ pub mod closure;
 pub mod controller;
 pub mod dense;
 pub mod direct;
+pub mod domain;
 pub mod dop853;
 pub mod driver;
 pub mod ensemble;
@@ -44,7 +46,6 @@ pub mod field;
 pub mod highest;
 pub mod impacts;
 pub mod inputs;
-pub mod integration;
 pub mod keep;
 pub mod linalg;
 pub mod magnus;
@@ -55,10 +56,14 @@ pub mod output;
 pub mod plot;
 pub mod progress;
 pub mod rodas4;
-pub mod solution;
+pub mod run;
+pub mod segment;
 pub mod solver;
 pub mod stepper;
 pub mod summary;
 pub mod system;
 pub mod tolerance;
 pub mod watch;
+
+// Where these have always been (generated crates name `solution::Solution`).
+pub use run::{integration, solution};

@@ -9,7 +9,6 @@
 //! coefficient system emits nothing for them.
 
 use crate::failure::Failure;
-pub use crate::inputs::Inputs;
 use crate::linalg::Matrix;
 use crate::method::IntegratorChoice;
 
@@ -35,25 +34,7 @@ pub struct Candidates {
     pub names: &'static [&'static str],
 }
 
-/// How a constraint as written ends at a [`Domain`]'s argument.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum DomainKind {
-    /// The argument of a square root (or of a power below 1): 0 ends the
-    /// branch (the constraint's derivative is infinite there), below it
-    /// the root of a negative number.
-    Root,
-    /// The argument of a fractional power above 1: undefined below 0.
-    Power,
-    /// The argument of a logarithm: 0 ends it.
-    Logarithm,
-    /// `1 − u²` of an arcsine of `u`: 0 ends it.
-    Arcsine,
-    /// `1 − u²` of an arccosine of `u`: 0 ends it.
-    Arccosine,
-    /// What the constraint divides by (the cosine under a tangent): a
-    /// pole, named when a failure happens at it.
-    Pole,
-}
+pub use crate::domain::DomainKind;
 
 /// Where a constraint as written is defined: its `argument` positive (a
 /// pole: non-zero). The run stops naming the constraint where a branch
@@ -79,6 +60,58 @@ pub struct Regime {
     pub mode: usize,
     /// `branches[k]`: switching function `g_k` is positive on this segment.
     pub branches: Vec<bool>,
+}
+
+/// Every input's value on the current segment (issue 26; the signals and
+/// the runs that set them are `crate::inputs`): input `i` is
+/// `values[i] + rates[i] · (t − from)`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Inputs {
+    values: Vec<f64>,
+    rates: Vec<f64>,
+    from: f64,
+}
+
+impl Inputs {
+    /// Inputs held at `values`.
+    pub fn held(values: &[f64]) -> Inputs {
+        Inputs {
+            values: values.to_vec(),
+            rates: vec![0.0; values.len()],
+            from: 0.0,
+        }
+    }
+
+    /// Inputs moving along lines: `values` at `from`, with these `rates`.
+    pub fn lines(values: &[f64], rates: &[f64], from: f64) -> Inputs {
+        Inputs {
+            values: values.to_vec(),
+            rates: rates.to_vec(),
+            from,
+        }
+    }
+
+    /// Input `i` at `t`.
+    #[inline]
+    pub fn at(&self, i: usize, t: f64) -> f64 {
+        self.values[i] + self.rates[i] * (t - self.from)
+    }
+
+    /// Input `i`'s rate on the segment.
+    #[inline]
+    pub fn rate(&self, i: usize) -> f64 {
+        self.rates[i]
+    }
+
+    /// The number of inputs.
+    pub fn len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// No inputs.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
 }
 
 /// A model compiled by lagc.

@@ -17,6 +17,7 @@ mod ir;
 mod kernel;
 mod language_v2;
 mod latex;
+mod linearize;
 mod mass_law_forms;
 mod mechanics;
 mod nonlinear;

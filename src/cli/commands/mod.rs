@@ -7,6 +7,7 @@ mod cache;
 mod check;
 mod derive;
 mod fmu;
+mod linearize;
 mod report;
 mod run;
 
@@ -31,6 +32,7 @@ pub fn main() -> ExitCode {
         Command::Run(args) => run::run(&args),
         Command::Cache(args) => cache::cache(&args),
         Command::Report(args) => report::report(&args),
+        Command::Linearize(args) => linearize::linearize(&args),
     }
 }
 
