@@ -18,6 +18,8 @@
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `method` | integrator choice |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
+//! | `table` | a run's rows as numbers (bit for bit the CLI's), many runs on threads |
+//! | `quantity` | the quantity a failure is about, as a value |
 //! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
 // Numerical kernels index several arrays with one loop variable; and
@@ -47,11 +49,13 @@ pub mod model;
 pub mod output;
 pub mod plot;
 pub mod progress;
+pub mod quantity;
 pub mod rodas4;
 pub mod solution;
 pub mod solver;
 pub mod stepper;
 pub mod summary;
 pub mod system;
+pub mod table;
 pub mod tolerance;
 pub mod watch;
