@@ -112,6 +112,17 @@ pub struct BuildArgs {
     /// them together in one program.
     #[arg(long, value_name = "RUNTIME_DIR")]
     pub runtime: Option<PathBuf>,
+    /// Write a Python project instead: `pip install DIR` builds (with
+    /// maturin) and installs the module named after FILE (`paper.lag` →
+    /// `import paper`). It needs Rust and pip; pyo3 and numpy come from
+    /// crates.io.
+    #[arg(long)]
+    pub python: bool,
+    /// With --python: where to write the `lagc-python` library the project
+    /// depends on (default: DIR/lagc-python). Several models' projects may
+    /// share one, with one --runtime, and one CARGO_TARGET_DIR.
+    #[arg(long, value_name = "PYTHON_LIB_DIR", requires = "python")]
+    pub python_lib: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]

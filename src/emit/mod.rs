@@ -19,6 +19,7 @@
 //! | `motion.rs` | `rhs`, `jacobian`, `time_partial`, `linearize` |
 //! | `coefficients.rs` | the coefficient system |
 //! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
+//! | `python.rs` | the Python project (`--python`): pyproject.toml, Cargo.toml, the `#[pymodule]`, the `lagc-python` crate's sources |
 
 mod bodies;
 mod coefficients;
@@ -32,6 +33,7 @@ mod motion;
 pub mod namer;
 mod names;
 mod params;
+pub mod python;
 
 use crate::diagnostic::Diagnostic;
 use crate::kernel::Kernel;

@@ -17,6 +17,7 @@ mod latex;
 mod mass_law_forms;
 mod mechanics;
 mod parser;
+mod python;
 mod readme_program;
 mod report;
 mod robustness;
