@@ -11,7 +11,8 @@ use pyo3::exceptions::{PyKeyError, PyRuntimeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyModule, PyType};
 
-const DOC: &std::ffi::CStr = c"A run of a lagc model failed: the message `lagc run` prints (`str(e)`, \
+const DOC: &std::ffi::CStr =
+    c"A run of a lagc model failed: the message `lagc run` prints (`str(e)`, \
 `e.message`), the time `e.t`, the quantity `e.quantity` (a mass, a state component, a \
 constraint as written, or the method's quantity such as `mass matrix`), and the rows computed \
 before the failure, `e.solution` (a Solution) and `e.rows` (an array with the CSV's columns, \

@@ -5,7 +5,9 @@ use crate::request::{self, RunOptions};
 use crate::solution::PySolution;
 use crate::{kind, Kind};
 use lagc_runtime::driver::Ending;
-use lagc_runtime::table::{jacobian_at, rhs_at, tabulate, tabulate_many, Request, TableError, Tabulated};
+use lagc_runtime::table::{
+    jacobian_at, rhs_at, tabulate, tabulate_many, Request, TableError, Tabulated,
+};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -23,7 +25,11 @@ pub struct PyModel {
 }
 
 /// A run's result as Python sees it.
-fn solution(py: Python<'_>, kind: &Kind, result: Result<Tabulated, TableError>) -> PyResult<PySolution> {
+fn solution(
+    py: Python<'_>,
+    kind: &Kind,
+    result: Result<Tabulated, TableError>,
+) -> PyResult<PySolution> {
     match result {
         Ok(done) => {
             let stopped_at = match done.summary.outcome.ending {
@@ -31,10 +37,16 @@ fn solution(py: Python<'_>, kind: &Kind, result: Result<Tabulated, TableError>) 
                 Ending::Stopped(t) | Ending::Rest { at: t, .. } => Some(t),
             };
             let stats = done.summary.json();
-            Ok(PySolution::from_table(py, kind, done.table, Some(stats), stopped_at))
+            Ok(PySolution::from_table(
+                py,
+                kind,
+                done.table,
+                Some(stats),
+                stopped_at,
+            ))
         }
         Err(TableError::Usage(message)) => Err(PyValueError::new_err(message)),
-        Err(TableError::Failed { failure, table }) => Err(failed(py, kind, &failure, table)),
+        Err(TableError::Failed(run)) => Err(failed(py, kind, &run.failure, run.table)),
     }
 }
 
@@ -199,9 +211,8 @@ impl PyModel {
                 ))
             })
             .collect::<PyResult<_>>()?;
-        let threads = threads.unwrap_or_else(|| {
-            std::thread::available_parallelism().map_or(1, |n| n.get())
-        });
+        let threads =
+            threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
         if threads == 0 {
             return Err(PyValueError::new_err("threads: give at least 1"));
         }
@@ -230,7 +241,12 @@ impl PyModel {
 
     /// `X(t, x)`, the right side of the reduced system (7) (the state's
     /// rates), in the regime the state is in.
-    fn rhs<'py>(&self, py: Python<'py>, t: f64, x: Vec<f64>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn rhs<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        x: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let x = self.state(x)?;
         match rhs_at(&mut *self.model(), t, &x) {
             Ok(dx) => Ok(dx.into_pyarray(py)),
@@ -240,7 +256,12 @@ impl PyModel {
 
     /// `∂X/∂x (t, x)`, the exact Jacobian of the right side, (N, N):
     /// `J[i, j] = ∂X_i/∂x_j`.
-    fn jacobian<'py>(&self, py: Python<'py>, t: f64, x: Vec<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        x: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let x = self.state(x)?;
         let n = x.len();
         match jacobian_at(&mut *self.model(), t, &x) {
@@ -259,7 +280,9 @@ impl PyModel {
 
     /// Pickling (Dask ships models to its workers): the class and the
     /// overrides as given, so that params computed from them follow again.
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let py = slf.py();
         let kwargs = PyDict::new(py);
         for &(i, v) in &slf.get().overrides {

@@ -23,13 +23,16 @@ pub(crate) struct RunOptions<'a> {
 
 impl RunOptions<'_> {
     pub fn options(&self) -> PyResult<Options> {
-        let mut options = Options::default();
-        options.method = Method::parse(self.method).ok_or_else(|| {
+        let method = Method::parse(self.method).ok_or_else(|| {
             PyValueError::new_err(format!(
                 "method `{}`: give \"field\" or \"direct\"",
                 self.method
             ))
         })?;
+        let mut options = Options {
+            method,
+            ..Options::default()
+        };
         if let Some(text) = self.integrator {
             options.integrator = Some(IntegratorChoice::parse(text).ok_or_else(|| {
                 PyValueError::new_err(format!(
@@ -80,7 +83,10 @@ pub(crate) fn params(kind: &Kind, dict: Option<&Bound<'_, PyDict>>) -> PyResult<
 }
 
 /// Initial values by state component name (`"q1'"`).
-pub(crate) fn initial(kind: &Kind, dict: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(usize, f64)>> {
+pub(crate) fn initial(
+    kind: &Kind,
+    dict: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Vec<(usize, f64)>> {
     by_name("state component", dict, kind.state_names)
 }
 

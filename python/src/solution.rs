@@ -25,7 +25,12 @@ pub struct PySolution {
     stopped_at: Option<f64>,
 }
 
-fn matrix<'py>(py: Python<'py>, data: Vec<f64>, rows: usize, columns: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn matrix<'py>(
+    py: Python<'py>,
+    data: Vec<f64>,
+    rows: usize,
+    columns: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     data.into_pyarray(py).reshape([rows, columns])
 }
 
@@ -222,7 +227,9 @@ impl PySolution {
         )
     }
 
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let py = slf.py();
         let this = slf.get();
         let args = (

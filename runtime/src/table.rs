@@ -72,7 +72,14 @@ pub enum TableError {
     /// time outside the span, times not increasing, a bad tolerance.
     Usage(String),
     /// The run failed; the rows before the failure.
-    Failed { failure: Failure, table: Table },
+    Failed(Box<Failed>),
+}
+
+/// A failed run: the failure and the rows before it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Failed {
+    pub failure: Failure,
+    pub table: Table,
 }
 
 /// Checks what the CLI's argument parser checks of the same request.
@@ -125,9 +132,11 @@ pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated
         spread: 0.1,
         warnings: Vec::new(),
     };
-    let failed = |failure| TableError::Failed {
-        failure,
-        table: Table::default(),
+    let failed = |failure| {
+        TableError::Failed(Box::new(Failed {
+            failure,
+            table: Table::default(),
+        }))
     };
     let Prepared {
         mut model,
@@ -194,7 +203,7 @@ pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated
                 estimated_error: None,
             },
         }),
-        Err(failure) => Err(TableError::Failed { failure, table }),
+        Err(failure) => Err(TableError::Failed(Box::new(Failed { failure, table }))),
     }
 }
 

@@ -72,11 +72,16 @@ fn a_failure_keeps_the_rows_before_it_and_names_its_quantity() {
         ..Request::new()
     };
     match tabulate(&*prototype::<VanishingMass>(), &request) {
-        Err(TableError::Failed { failure, table }) => {
+        Err(TableError::Failed(failed)) => {
+            let (failure, table) = (failed.failure, failed.table);
             assert!((failure.time - 10.0).abs() < 1e-3, "{failure}");
             assert_eq!(failure.quantity(), "M");
             // The rows up to the failure: t = 0, 0.5, …, below 10.
-            assert!(table.t.len() >= 19 && *table.t.last().unwrap() < 10.0, "{:?}", table.t);
+            assert!(
+                table.t.len() >= 19 && *table.t.last().unwrap() < 10.0,
+                "{:?}",
+                table.t
+            );
             assert_eq!(table.states.len(), 2 * table.t.len());
         }
         other => panic!("expected a failure, got {other:?}"),
@@ -134,7 +139,10 @@ fn many_requests_on_threads_equal_one_at_a_time() {
 #[test]
 fn rhs_and_jacobian_at_a_state() {
     let mut model = Oscillator::new(&[2.0, 10.0]);
-    assert_eq!(rhs_at(&mut model, 0.0, &[1.0, 3.0]).unwrap(), vec![3.0, -4.0]);
+    assert_eq!(
+        rhs_at(&mut model, 0.0, &[1.0, 3.0]).unwrap(),
+        vec![3.0, -4.0]
+    );
     let jac = jacobian_at(&mut model, 0.0, &[1.0, 3.0]).unwrap();
     assert_eq!((jac[(0, 1)], jac[(1, 0)], jac[(0, 0)]), (1.0, -4.0, 0.0));
 }

@@ -15,8 +15,14 @@ const PYTHON: &[(&str, &str)] = &[
     ("src/errors.rs", include_str!("../../python/src/errors.rs")),
     ("src/lib.rs", include_str!("../../python/src/lib.rs")),
     ("src/model.rs", include_str!("../../python/src/model.rs")),
-    ("src/request.rs", include_str!("../../python/src/request.rs")),
-    ("src/solution.rs", include_str!("../../python/src/solution.rs")),
+    (
+        "src/request.rs",
+        include_str!("../../python/src/request.rs"),
+    ),
+    (
+        "src/solution.rs",
+        include_str!("../../python/src/solution.rs"),
+    ),
 ];
 
 /// The runtime dependency as `python/Cargo.toml` writes it.
@@ -41,7 +47,10 @@ pub fn python_library_files(runtime_path: &str) -> Vec<(&'static str, String)> {
 fn python_cargo_toml(text: &str, runtime_path: &str) -> String {
     text.replace(
         RUNTIME_IN_REPOSITORY,
-        &format!("lagc-runtime = {{ path = \"{}\" }}", toml_escape(runtime_path)),
+        &format!(
+            "lagc-runtime = {{ path = \"{}\" }}",
+            toml_escape(runtime_path)
+        ),
     )
 }
 
@@ -51,10 +60,10 @@ fn toml_escape(text: &str) -> String {
 
 /// Python's keywords: a module may not be named by one.
 const KEYWORDS: &[&str] = &[
-    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class",
-    "continue", "def", "del", "elif", "else", "except", "finally", "for", "from", "global",
-    "if", "import", "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return",
-    "try", "while", "with", "yield",
+    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class", "continue",
+    "def", "del", "elif", "else", "except", "finally", "for", "from", "global", "if", "import",
+    "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return", "try", "while",
+    "with", "yield",
 ];
 
 /// The Python module's name for a model's file stem: `paper` stays
@@ -180,7 +189,10 @@ mod tests {
     fn the_library_depends_on_the_runtime_where_it_is_written() {
         let files = python_library_files("../rt");
         let cargo = &files.iter().find(|(p, _)| *p == "Cargo.toml").unwrap().1;
-        assert!(cargo.contains("lagc-runtime = { path = \"../rt\" }"), "{cargo}");
+        assert!(
+            cargo.contains("lagc-runtime = { path = \"../rt\" }"),
+            "{cargo}"
+        );
         assert!(!cargo.contains("../runtime\""), "{cargo}");
     }
 }

@@ -16,8 +16,7 @@ use std::time::Instant;
 
 /// What the tests install, pinned to what was checked (the
 /// `docs/BENCHMARKS.md` figures and `/work/shared` notes).
-const REQUIREMENTS: &str =
-    "maturin>=1.9.4,<2\npytest>=8\nnumpy>=1.24\ndask[distributed]>=2024.1\n";
+const REQUIREMENTS: &str = "maturin>=1.9.4,<2\npytest>=8\nnumpy>=1.24\ndask[distributed]>=2024.1\n";
 
 /// The models the suite imports: `(file, module)`.
 const MODELS: &[(&str, &str)] = &[
@@ -81,7 +80,14 @@ fn environment() -> PathBuf {
     std::fs::write(&requirements, REQUIREMENTS).unwrap();
     run(
         Command::new(venv.join("bin/python"))
-            .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", "-r"])
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+                "-r",
+            ])
             .arg(&requirements),
         "pip install of maturin, pytest, numpy, dask",
     );
@@ -119,7 +125,14 @@ fn build_and_install(venv: &Path, file: &str, module: &str) -> f64 {
     let start = Instant::now();
     run(
         Command::new(venv.join("bin/python"))
-            .args(["-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation"])
+            .args([
+                "-m",
+                "pip",
+                "wheel",
+                "--quiet",
+                "--no-deps",
+                "--no-build-isolation",
+            ])
             .arg("--disable-pip-version-check")
             .arg("-w")
             .arg(&wheels)
@@ -138,7 +151,14 @@ fn build_and_install(venv: &Path, file: &str, module: &str) -> f64 {
         .unwrap_or_else(|| panic!("no wheel of {module} in {}", wheels.display()));
     run(
         Command::new(venv.join("bin/python"))
-            .args(["-m", "pip", "install", "--quiet", "--no-deps", "--force-reinstall"])
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--no-deps",
+                "--force-reinstall",
+            ])
             .arg("--disable-pip-version-check")
             .arg(&wheel),
         &format!("pip install of {}", wheel.display()),
@@ -169,4 +189,113 @@ fn python_modules_pass_their_pytest_suite_installed_in_a_venv() {
         "pytest failed on tests/python: {}",
         show(&output)
     );
+}
+
+/// `lagc build --python`'s project: named after the file, the model's code
+/// and a `#[pymodule]` handing it to `lagc_python::register`, the libraries
+/// where asked; a `--python-lib` folder lagc did not write is refused.
+#[test]
+fn build_python_writes_a_project_named_after_the_file() {
+    let dir = crate::root().join("target/python-build-tests");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let lagc = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_lagc"))
+            .current_dir(crate::root())
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = dir.join("paper");
+    let built = lagc(&[
+        "build",
+        "--python",
+        "examples/paper.lag",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(built.status.success(), "{}", show(&built));
+    let read = |path: &str| std::fs::read_to_string(out.join(path)).unwrap();
+    assert!(read("pyproject.toml").contains("module-name = \"paper\""));
+    assert!(read("pyproject.toml").contains("build-backend = \"maturin\""));
+    let cargo = read("Cargo.toml");
+    assert!(cargo.contains("name = \"paper\"") && cargo.contains("crate-type = [\"cdylib\"]"));
+    assert!(
+        cargo.contains("lagc-python = { path = \"lagc-python\" }"),
+        "{cargo}"
+    );
+    let lib = read("src/lib.rs");
+    assert!(lib.contains("impl lagc_runtime::model::Model for Model"));
+    assert!(lib.contains("lagc_python::register::<Model>(module, \"paper\")"));
+    assert!(
+        read("lagc-python/Cargo.toml").contains("lagc-runtime = { path = \"../lagc-runtime\" }")
+    );
+    assert!(out.join("lagc-runtime/src/table.rs").is_file());
+
+    // A module name Python accepts from any file stem.
+    let odd = dir.join("2d arm.lag");
+    std::fs::copy(crate::root().join("examples/paper.lag"), &odd).unwrap();
+    let out = dir.join("odd");
+    let built = lagc(&[
+        "build",
+        "--python",
+        odd.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(built.status.success(), "{}", show(&built));
+    let pyproject = std::fs::read_to_string(out.join("pyproject.toml")).unwrap();
+    assert!(
+        pyproject.contains("module-name = \"_2d_arm\""),
+        "{pyproject}"
+    );
+
+    // A folder lagc did not write is not written over.
+    let mine = dir.join("mine");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("notes.txt"), "mine\n").unwrap();
+    let refused = lagc(&[
+        "build",
+        "--python",
+        "examples/paper.lag",
+        "-o",
+        dir.join("refused").to_str().unwrap(),
+        "--python-lib",
+        mine.to_str().unwrap(),
+    ]);
+    assert_eq!(refused.status.code(), Some(2), "{}", show(&refused));
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("refusing to write the Python library over it"),
+        "{stderr}"
+    );
+    assert!(!dir.join("refused").exists(), "nothing written on refusal");
+    // --python-lib belongs to --python.
+    let alone = lagc(&[
+        "build",
+        "examples/paper.lag",
+        "-o",
+        "x",
+        "--python-lib",
+        "y",
+    ]);
+    assert_eq!(alone.status.code(), Some(2), "{}", show(&alone));
+}
+
+/// lagc carries every source file of `python/` (as it does the runtime's).
+#[test]
+fn the_python_library_lagc_carries_is_every_file_of_python_src() {
+    let python = crate::root().join("python");
+    let mut on_disk = vec!["Cargo.toml".to_string()];
+    for entry in std::fs::read_dir(python.join("src")).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        on_disk.push(format!("src/{name}"));
+    }
+    on_disk.sort();
+    let mut known: Vec<String> = lagc::emit::python::python_library_files("../runtime")
+        .into_iter()
+        .map(|(p, _)| p.to_string())
+        .collect();
+    known.sort();
+    assert_eq!(known, on_disk);
 }

@@ -10,25 +10,29 @@ use std::process::ExitCode;
 const MARKER_TEXT: &str =
     "written by `lagc build`; a later `lagc build` may overwrite this directory\n";
 
-/// A library directory given by an option (`--runtime`, `--python-lib`):
-/// created, unless it holds files lagc did not write.
-fn given_library_dir(dir: &Path, option: &str, force: bool) -> Result<(), ExitCode> {
-    // The library's sources are written over whatever is there: a folder
-    // lagc did not write (the runtime's own source tree, a project) must
-    // not lose its files to them.
-    if !force && !crate::cli::may_write_into(dir) {
-        eprintln!(
-            "error: `{}` is not empty and was not written by `lagc build`: refusing \
-             to write the library over it\n  = help: give {option} an empty or new \
-             directory, or one an earlier `lagc build {option}` wrote, or pass --force",
-            dir.display()
-        );
-        return Err(ExitCode::from(EXIT_USAGE));
+/// Refuses a library directory given by an option (`--runtime`,
+/// `--python-lib`) that holds files lagc did not write: the library's
+/// sources are written over whatever is there, and a folder lagc did not
+/// write (the runtime's own source tree, a project) must not lose its files
+/// to them.
+fn refuse_foreign(
+    dir: &Option<PathBuf>,
+    option: &str,
+    what: &str,
+    force: bool,
+) -> Result<(), ExitCode> {
+    match dir {
+        Some(dir) if !force && !crate::cli::may_write_into(dir) => {
+            eprintln!(
+                "error: `{}` is not empty and was not written by `lagc build`: refusing \
+                 to write the {what} over it\n  = help: give {option} an empty or new \
+                 directory, or one an earlier `lagc build {option}` wrote, or pass --force",
+                dir.display()
+            );
+            Err(ExitCode::from(EXIT_USAGE))
+        }
+        _ => Ok(()),
     }
-    std::fs::create_dir_all(dir).map_err(|error| {
-        eprintln!("error: cannot create `{}`: {error}", dir.display());
-        ExitCode::from(EXIT_USAGE)
-    })
 }
 
 /// The library's directory and its path as the project at `output` sees
@@ -37,17 +41,15 @@ fn library_dir(
     output: &Path,
     given: &Option<PathBuf>,
     default_name: &str,
-    option: &str,
-    force: bool,
 ) -> Result<(PathBuf, String), ExitCode> {
     match given {
         None => Ok((output.join(default_name), default_name.to_string())),
         Some(dir) => {
-            given_library_dir(dir, option, force)?;
-            std::fs::create_dir_all(output).map_err(|error| {
-                eprintln!("error: cannot create `{}`: {error}", output.display());
-                ExitCode::from(EXIT_USAGE)
-            })?;
+            let made = std::fs::create_dir_all(dir).and_then(|()| std::fs::create_dir_all(output));
+            if let Err(error) = made {
+                eprintln!("error: cannot create `{}`: {error}", dir.display());
+                return Err(ExitCode::from(EXIT_USAGE));
+            }
             Ok((dir.clone(), crate::cli::relative_path(output, dir)))
         }
     }
@@ -60,20 +62,20 @@ pub(crate) fn build(args: &BuildArgs) -> ExitCode {
 }
 
 fn build_checked(args: &BuildArgs) -> Result<ExitCode, ExitCode> {
-    let (runtime_dir, runtime_path) = library_dir(
-        &args.output,
-        &args.runtime,
-        crate::cli::RUNTIME_IN_CRATE,
-        "--runtime",
+    refuse_foreign(&args.runtime, "--runtime", "runtime", args.force)?;
+    refuse_foreign(
+        &args.python_lib,
+        "--python-lib",
+        "Python library",
         args.force,
     )?;
+    let (runtime_dir, runtime_path) =
+        library_dir(&args.output, &args.runtime, crate::cli::RUNTIME_IN_CRATE)?;
     let python = if args.python {
         Some(library_dir(
             &args.output,
             &args.python_lib,
             crate::cli::PYTHON_IN_PROJECT,
-            "--python-lib",
-            args.force,
         )?)
     } else {
         None
