@@ -62,6 +62,8 @@ fn python311() -> PathBuf {
 /// The test environment's directory, made (or remade) when its
 /// requirements changed.
 fn environment() -> PathBuf {
+    // Asked first, also when the environment exists: it is made from it.
+    let python = python311();
     let venv = base().join("venv");
     let stamp = venv.join("lagc-requirements.txt");
     if std::fs::read_to_string(&stamp).is_ok_and(|s| s == REQUIREMENTS)
@@ -69,7 +71,6 @@ fn environment() -> PathBuf {
     {
         return venv;
     }
-    let python = python311();
     let _ = std::fs::remove_dir_all(&venv);
     std::fs::create_dir_all(base()).unwrap();
     run(
