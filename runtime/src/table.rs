@@ -108,11 +108,22 @@ fn check_request(request: &Request) -> Result<(), String> {
     Ok(())
 }
 
-/// Runs `request` on `prototype`'s model (its params the file's): the
-/// rows at the requested times and the summary. The run ends at the
-/// model's end time or at the last requested time, whichever is later (a
-/// request within the span is the CLI's run, step for step).
-pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated, TableError> {
+/// A request made ready to run: the model with the request's params (in
+/// the regime of its start), its initial state checked as the CLI checks
+/// it, the output times and the time the run ends.
+pub struct Ready {
+    pub model: Box<dyn DynModel>,
+    pub options: Options,
+    pub t0: f64,
+    pub x0: Vec<f64>,
+    pub times: Vec<f64>,
+    /// The model's end time, or the last requested time if later.
+    pub end: f64,
+}
+
+/// Makes `request` ready on `prototype`'s model (its params the file's),
+/// with the checks of the CLI (`cli::prepare`).
+pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, TableError> {
     check_request(request).map_err(TableError::Usage)?;
     let invocation = Invocation {
         options: Options {
@@ -132,18 +143,12 @@ pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated
         spread: 0.1,
         warnings: Vec::new(),
     };
-    let failed = |failure| {
+    let Prepared { model, t0, t1, x0 } = prepare(prototype, &invocation).map_err(|failure| {
         TableError::Failed(Box::new(Failed {
             failure,
             table: Table::default(),
         }))
-    };
-    let Prepared {
-        mut model,
-        t0,
-        t1,
-        x0,
-    } = prepare(prototype, &invocation).map_err(failed)?;
+    })?;
     let times = match &request.times {
         Some(times) => {
             if let Some(t) = times.iter().find(|&&t| t < t0) {
@@ -155,7 +160,30 @@ pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated
         }
         None => sample_times(t0, t1, 101),
     };
-    let t_end = t1.max(*times.last().unwrap_or(&t1));
+    let end = t1.max(*times.last().unwrap_or(&t1));
+    Ok(Ready {
+        model,
+        options: invocation.options,
+        t0,
+        x0,
+        times,
+        end,
+    })
+}
+
+/// Runs `request` on `prototype`'s model (its params the file's): the
+/// rows at the requested times and the summary. The run ends at the
+/// model's end time or at the last requested time, whichever is later (a
+/// request within the span is the CLI's run, step for step).
+pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated, TableError> {
+    let Ready {
+        mut model,
+        options,
+        t0,
+        x0,
+        times,
+        end: t_end,
+    } = ready(prototype, request)?;
     let (n, m) = (model.dim(), model.output_names().len());
     let mut table = Table {
         t: Vec::with_capacity(times.len()),
@@ -170,7 +198,7 @@ pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated
     let start = Instant::now();
     let ran = run(
         &mut *model,
-        &invocation.options,
+        &options,
         t0,
         t_end,
         &x0,
