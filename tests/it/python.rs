@@ -140,6 +140,8 @@ fn build_and_install(venv: &Path, file: &str, module: &str) -> f64 {
             .arg(&project)
             .env("PATH", path_with(venv))
             .env("CARGO_TARGET_DIR", base().join("target"))
+            // The project's Cargo.lock is complete: cargo may not change it.
+            .env("MATURIN_PEP517_ARGS", "--locked")
             // Generated code and the libraries are warning-free.
             .env("RUSTFLAGS", "-D warnings"),
         &format!("pip wheel of {module}'s project"),
