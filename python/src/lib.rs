@@ -9,6 +9,7 @@
 //! |---|---|
 //! | `model` | `Model(**params)`: `solve`, `solve_batch`, `rhs`, `jacobian`, pickling |
 //! | `solution` | `Solution`: `.t`, `.y`, `sol["q1"]`, `.outputs`, `.stats`, `.stopped_at` |
+//! | `integration` | `Integration` (`Model.integration`): `advance_to(t)`, `.t`, `.state`, `restart` |
 //! | `errors` | `IntegrationError` (shared by every model: `lagc.IntegrationError`), `KeyError`s naming the known names |
 //! | `request` | Python arguments → a `lagc_runtime::table::Request` |
 //!
@@ -24,6 +25,7 @@ use pyo3::types::PyType;
 use std::sync::OnceLock;
 
 mod errors;
+mod integration;
 mod model;
 mod request;
 mod solution;
@@ -64,7 +66,7 @@ fn make<M: Model + 'static>(params: &[f64]) -> Box<dyn DynModel> {
 }
 
 /// Fills the Python module `module` with the classes of model `M`:
-/// `Model`, `Solution`, `IntegrationError`. Called from the generated
+/// `Model`, `Solution`, `Integration`, `IntegrationError`. Called from the generated
 /// `#[pymodule]` function; `name` is the name users import (`paper`: maturin
 /// installs the extension as `paper.paper` inside the package `paper`).
 pub fn register<M: Model + 'static>(module: &Bound<'_, PyModule>, name: &str) -> PyResult<()> {
@@ -88,11 +90,12 @@ pub fn register<M: Model + 'static>(module: &Bound<'_, PyModule>, name: &str) ->
     }
     module.add_class::<model::PyModel>()?;
     module.add_class::<solution::PySolution>()?;
+    module.add_class::<integration::PyIntegration>()?;
     module.add("IntegrationError", error.bind(py))?;
     module.add("__lagc_model__", M::NAME)?;
     // The classes are `paper.Model`, `paper.Solution`: pickle finds them by
     // these names (a Dask worker imports `paper` to rebuild a model).
-    for class in ["Model", "Solution"] {
+    for class in ["Model", "Solution", "Integration"] {
         module.getattr(class)?.setattr("__module__", &name)?;
     }
     Ok(())

@@ -1,12 +1,14 @@
 //! `Model(**params)`: the model with param values, solved by the runtime.
 
 use crate::errors::failed;
+use crate::integration::PyIntegration;
 use crate::request::{self, RunOptions};
 use crate::solution::PySolution;
 use crate::{kind, Kind};
 use lagc_runtime::driver::Ending;
+use lagc_runtime::integration::Integration;
 use lagc_runtime::table::{
-    jacobian_at, rhs_at, tabulate, tabulate_many, Request, TableError, Tabulated,
+    jacobian_at, ready, rhs_at, tabulate, tabulate_many, Request, TableError, Tabulated,
 };
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -236,6 +238,49 @@ impl PyModel {
         match first_error {
             Some(error) if raise => Err(error),
             _ => Ok(list),
+        }
+    }
+
+    /// A run that advances on request (see `Integration`), from the model's
+    /// initial values with those `initial` names replaced; it may advance up
+    /// to the model's end time, or `t_end` if later. The other arguments as
+    /// for `solve`.
+    #[pyo3(signature = (initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, t_end=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn integration(
+        &self,
+        py: Python<'_>,
+        initial: Option<&Bound<'_, PyDict>>,
+        method: &str,
+        integrator: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        max_steps: Option<usize>,
+        t_end: Option<f64>,
+    ) -> PyResult<PyIntegration> {
+        let kind = kind();
+        let options = RunOptions {
+            method,
+            integrator,
+            rtol,
+            atol,
+            max_steps,
+        }
+        .options()?;
+        let inits = request::initial(kind, initial)?;
+        let request = request::request(
+            &self.overrides,
+            Vec::new(),
+            inits,
+            options,
+            t_end.map(|t| vec![t]),
+        );
+        match ready(&*kind.prototype(), &request) {
+            Ok(r) => Ok(PyIntegration::new(Integration::owned(
+                r.model, &r.options, r.t0, r.end, &r.x0,
+            ))),
+            Err(TableError::Usage(message)) => Err(PyValueError::new_err(message)),
+            Err(TableError::Failed(run)) => Err(failed(py, kind, &run.failure, run.table)),
         }
     }
 

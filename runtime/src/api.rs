@@ -13,6 +13,10 @@
 //! - `solve(&Params, &Initial, &Options)`, which hands them over to
 //!   [`solve`] by index.
 //!
+//! [`integration`] (and [`integration_of`] for a model made already) gives
+//! the same run as a steppable [`Integration`]: `advance_to(t)`, the state
+//! there, `restart_from(t, x)`.
+//!
 //! ```ignore
 //! use lag_double_pendulum_energy::{solve, Initial, Method, Options, Params};
 //!
@@ -27,6 +31,7 @@
 use crate::driver::{solve as solve_run, Options};
 use crate::failure::{Failure, FailureKind};
 use crate::field::Anchor;
+use crate::integration::Integration;
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Initial, Model};
 use crate::solution::Solution;
@@ -89,6 +94,44 @@ pub fn solve_model(
     given: &[Option<f64>],
     options: &Options,
 ) -> Result<Solution, Failure> {
+    let (t0, t1, x0) = initial(&*model, given)?;
+    solve_run(model, &quiet(options), t0, t1, &x0)
+}
+
+/// A steppable [`Integration`] of `M` with these param values and initial
+/// values (as [`solve`] takes them) over the model's time span: advance it
+/// to any time, read the state, restart it from a changed state.
+pub fn integration<M: Model + 'static>(
+    params: &[f64],
+    given: &[Option<f64>],
+    options: &Options,
+) -> Result<Integration<'static>, Failure> {
+    integration_of(Box::new(M::new(params)), given, options)
+}
+
+/// [`integration`] for a model made already (for example by
+/// [`DynModel::with_params`]), which the integration owns.
+pub fn integration_of(
+    model: Box<dyn DynModel>,
+    given: &[Option<f64>],
+    options: &Options,
+) -> Result<Integration<'static>, Failure> {
+    let (t0, t1, x0) = initial(&*model, given)?;
+    Ok(Integration::owned(model, &quiet(options), t0, t1, &x0))
+}
+
+/// A library call shows no progress.
+fn quiet(options: &Options) -> Options {
+    Options {
+        progress: false,
+        ..options.clone()
+    }
+}
+
+/// The time span and the initial state, with the checks the command line
+/// applies: `given[i]` replaces a value the model states; one the
+/// constraints fix is checked against them.
+fn initial(model: &dyn DynModel, given: &[Option<f64>]) -> Result<(f64, f64, Vec<f64>), Failure> {
     let (t0, t1) = model.time_span();
     if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
         return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
@@ -114,9 +157,5 @@ pub fn solve_model(
         }
     }
     crate::driver::check_initial_candidates(model, t0, &x0)?;
-    let quiet = Options {
-        progress: false,
-        ..options.clone()
-    };
-    solve_run(model, &quiet, t0, t1, &x0)
+    Ok((t0, t1, x0))
 }

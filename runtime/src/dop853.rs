@@ -9,6 +9,7 @@
 
 use crate::budget::Budget;
 use crate::controller::Controller;
+use crate::dense::{contd8, DenseKind};
 use crate::failure::Failure;
 use crate::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
 use crate::system::System;
@@ -732,16 +733,7 @@ impl Stepper for Dop853 {
     }
 }
 
-/// Hairer's `contd8`: the continuous extension at `θ = (t − t_old)/h`.
-fn contd8(c: &[f64], n: usize, s: f64, out: &mut [f64]) {
-    let s1 = 1.0 - s;
-    for (i, o) in out.iter_mut().enumerate().take(n) {
-        let conf1 = c[4 * n + i] + s * (c[5 * n + i] + s1 * (c[6 * n + i] + s * c[7 * n + i]));
-        *o = c[i] + s * (c[n + i] + s1 * (c[2 * n + i] + s * (c[3 * n + i] + s1 * conf1)));
-    }
-}
-
-pub use crate::stepper::DenseStep;
+pub use crate::dense::DenseStep;
 
 impl DenseStep {
     fn dop853(t_old: f64, t_new: f64, h: f64, cont: Vec<f64>) -> DenseStep {
@@ -749,14 +741,9 @@ impl DenseStep {
             t_old,
             t_new,
             h,
-            kind: crate::stepper::DenseKind::Dop853 { cont },
+            kind: DenseKind::Dop853 { cont },
         }
     }
-}
-
-/// `contd8` for [`DenseStep`].
-pub(crate) fn eval_contd8(cont: &[f64], s: f64, out: &mut [f64]) {
-    contd8(cont, cont.len() / 8, s, out);
 }
 
 /// Stage `j` of Hairer's numbering (`0` the rate at the step's start,

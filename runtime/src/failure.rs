@@ -119,6 +119,9 @@ pub enum FailureKind {
     AnchorCancels { digits: f64 },
     /// The field method proper was asked of a model that is not affine.
     NotAffine,
+    /// An `Integration` was asked to advance to a
+    /// time before where it stands or past the end of its span.
+    OutsideSpan { from: f64, to: f64 },
 }
 
 impl Failure {
@@ -156,6 +159,7 @@ impl Failure {
             | FailureKind::InitialCandidateVanishes { .. }
             | FailureKind::BadTimeSpan { .. }
             | FailureKind::NonFiniteInitialValue { .. }
+            | FailureKind::OutsideSpan { .. }
             | FailureKind::AnchorCancels { .. } => USAGE_EXIT_STATUS,
             _ => FAILURE_EXIT_STATUS,
         }
@@ -351,6 +355,11 @@ impl fmt::Display for Failure {
             FailureKind::NotAffine => write!(
                 f,
                 "at t = {t:e}: the field method proper needs an affine system (internal)"
+            ),
+            FailureKind::OutsideSpan { from, to } => write!(
+                f,
+                "t = {t} is outside what the integration can reach from where it stands: \
+                 {from} .. {to}"
             ),
         }
     }

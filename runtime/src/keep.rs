@@ -364,6 +364,44 @@ impl Keeper {
     }
 }
 
+/// Checks the components that mode 0 fixes but the initial values give
+/// (the candidate of a non-linear constraint, kept as written: its value
+/// chooses the root the motion starts on): each must be the root of its
+/// constraint near it, found by iterating the kept value (Newton's
+/// `v − f/f_v`) from it. A value off the constraint is the user's
+/// (`--init`, `--param`), and a run from it would start off the
+/// constraint: it stops before the run, naming the root near it.
+pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
+    let Some(fixed) = model.fixed_components().first() else {
+        return Ok(());
+    };
+    let given: Vec<usize> = fixed
+        .iter()
+        .copied()
+        .filter(|&j| model.initial_kinds().get(j) == Some(&Initial::Given))
+        .collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    let mut x = x0.to_vec();
+    let mut kept = x0.to_vec();
+    for _ in 0..50 {
+        model.constrained(t0, &x, &mut kept)?;
+        let mut moved = 0.0_f64;
+        for &j in &given {
+            moved = moved.max((kept[j] - x[j]).abs() / x[j].abs().max(1.0));
+            x[j] = kept[j];
+        }
+        if !(moved > 4.0 * f64::EPSILON) {
+            break;
+        }
+    }
+    for &j in &given {
+        crate::model::check_stated(t0, model.state_names()[j], x0[j], x[j])?;
+    }
+    Ok(())
+}
+
 /// The state components the constraints fix in `mode`: the generated
 /// table's (a crate of several modes has one for each), else those the
 /// initial values take as fixed (a single mode).

@@ -16,7 +16,10 @@
 //! | `tolerance`, `controller`, `budget` | tolerances, the PI step controller, the work budget |
 //! | `system`, `stepper` | what integrators integrate, and their interface |
 //! | `dop853`, `rodas4` | the integrators, with dense output |
+//! | `dense` | a step's continuous extension as a value (`DenseStep`) |
 //! | `method` | integrator choice |
+//! | `integration` | a run as an object: `advance_to(t)`, the state, a restart from a given state |
+//! | `driver` | options, outcomes, the run as a loop over an `Integration`; regimes, candidates, diagnosis |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
 //! | `table` | a run's rows as numbers (bit for bit the CLI's), many runs on threads |
 //! | `quantity` | the quantity a failure is about, as a value |
@@ -31,6 +34,7 @@ pub mod budget;
 pub mod cli;
 pub mod closure;
 pub mod controller;
+pub mod dense;
 pub mod direct;
 pub mod dop853;
 pub mod driver;
@@ -40,6 +44,7 @@ pub mod failure;
 pub mod field;
 pub mod highest;
 pub mod impacts;
+pub mod integration;
 pub mod keep;
 pub mod linalg;
 pub mod magnus;

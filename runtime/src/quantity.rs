@@ -33,7 +33,9 @@ impl Failure {
             FailureKind::StepBudgetExhausted { .. } => "step budget".to_string(),
             FailureKind::NewtonNonConvergence { .. } => "highest derivatives".to_string(),
             FailureKind::FieldNotConverging { .. } => "field".to_string(),
-            FailureKind::BadTimeSpan { .. } => "time span".to_string(),
+            FailureKind::BadTimeSpan { .. } | FailureKind::OutsideSpan { .. } => {
+                "time span".to_string()
+            }
             FailureKind::AnchorCancels { .. } => "anchor".to_string(),
             FailureKind::NotAffine => "coefficient system".to_string(),
         }

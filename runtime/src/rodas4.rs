@@ -11,11 +11,10 @@
 
 use crate::budget::Budget;
 use crate::controller::Controller;
+use crate::dense::{rodas4_dense, DenseKind, DenseStep};
 use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
-use crate::stepper::{
-    stalled, Clock, Clocked, DenseKind, DenseStep, ErrorMeasure, StepOutcome, Stepper,
-};
+use crate::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
 use crate::system::System;
 use crate::tolerance::{first_non_finite, rms_norm, Tolerance};
 
@@ -327,21 +326,6 @@ impl Rodas4 {
     }
 }
 
-/// RODAS4's continuous extension at `θ`.
-pub(crate) fn eval_dense(
-    y_old: &[f64],
-    y: &[f64],
-    d2: &[f64],
-    d3: &[f64],
-    s: f64,
-    out: &mut [f64],
-) {
-    let s1 = 1.0 - s;
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = y_old[i] * s1 + s * (y[i] + s1 * (d2[i] + s * d3[i]));
-    }
-}
-
 impl Clocked for Rodas4 {
     fn clock(&self) -> &Clock {
         &self.clock
@@ -380,7 +364,7 @@ impl Stepper for Rodas4 {
             return Ok(());
         }
         let s = (t - self.clock.t_old) / self.clock.h_old;
-        eval_dense(&self.y_old, &self.y, &self.dense_d2, &self.dense_d3, s, out);
+        rodas4_dense(&self.y_old, &self.y, &self.dense_d2, &self.dense_d3, s, out);
         Ok(())
     }
 }

@@ -257,7 +257,7 @@ pub trait ErrorMeasure {
     ) -> Option<f64>;
 
     /// `Some(tol)` when the measure is Hairer's norm of the step itself
-    /// under `tol` ([`crate::dop853::hairer_error`]): the integrator then
+    /// under `tol` (`hairer_error` in `dop853.rs`): the integrator then
     /// computes it in the pass that forms the step instead of calling
     /// [`ErrorMeasure::measure`].
     fn hairer_tolerance(&self) -> Option<crate::tolerance::Tolerance> {
@@ -273,41 +273,4 @@ pub enum StepOutcome {
     Declined,
 }
 
-/// One step's continuous extension, detached from its integrator.
-#[derive(Clone, Debug)]
-pub struct DenseStep {
-    pub t_old: f64,
-    pub t_new: f64,
-    pub(crate) h: f64,
-    pub(crate) kind: DenseKind,
-}
-
-#[derive(Clone, Debug)]
-pub(crate) enum DenseKind {
-    /// DOP853's order-7 extension (Hairer's `contd8` coefficients).
-    Dop853 { cont: Vec<f64> },
-    /// RODAS4's order-3 extension.
-    Rodas4 {
-        y_old: Vec<f64>,
-        y: Vec<f64>,
-        d2: Vec<f64>,
-        d3: Vec<f64>,
-    },
-}
-
-impl DenseStep {
-    /// The state at `t` (clamped to the step).
-    pub fn eval(&self, t: f64, out: &mut [f64]) {
-        let s = if self.h > 0.0 {
-            ((t - self.t_old) / self.h).clamp(0.0, 1.0)
-        } else {
-            1.0
-        };
-        match &self.kind {
-            DenseKind::Dop853 { cont } => crate::dop853::eval_contd8(cont, s, out),
-            DenseKind::Rodas4 { y_old, y, d2, d3 } => {
-                crate::rodas4::eval_dense(y_old, y, d2, d3, s, out)
-            }
-        }
-    }
-}
+pub use crate::dense::DenseStep;

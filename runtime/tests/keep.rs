@@ -211,3 +211,89 @@ fn a_constraint_whose_branch_ends_stops_the_run_naming_its_component() {
         "past the branch's end: {failure}"
     );
 }
+
+/// The kept bead's exact motion: the speed stays √2 (the energy), so the
+/// arc length from x = 0 is √2·t. With w(x) = √(1 + e^(−2x)) the arc length
+/// is F(x) − F(0), F = acoth(w) − w (F' = w), inverted by Newton; since
+/// w − 1 = e^(−2x)/(w + 1), acoth(w) = ln(w + 1) + x without cancellation.
+fn exact_bead(t: f64) -> [f64; 4] {
+    let w = |x: f64| (1.0 + (-2.0 * x).exp()).sqrt();
+    let f = |x: f64| {
+        let w = w(x);
+        (w + 1.0).ln() + x - w
+    };
+    let target = f(0.0) + 2.0_f64.sqrt() * t;
+    let mut x = t;
+    for _ in 0..60 {
+        let dx = (f(x) - target) / w(x);
+        x -= dx;
+        if dx.abs() < 1e-15 * x.abs().max(1.0) {
+            break;
+        }
+    }
+    let v = 2.0_f64.sqrt() / w(x);
+    let y = (-x).exp();
+    [x, y, v, -y * v]
+}
+
+/// The kept bead's largest error against [`exact_bead`] (relative where a
+/// component exceeds 1) over 17 samples, and the steps it took (rejected
+/// and predictor steps included: the work).
+fn kept_bead_error(method: Method, rtol: f64) -> (usize, f64) {
+    let mut model = Bead::<true>;
+    let x0 = model.initial_state(&[]).unwrap();
+    let options = Options {
+        method,
+        tol: Tolerance { rtol, atol: rtol },
+        ..Options::default()
+    };
+    let mut error = 0.0_f64;
+    let times = sample_times(0.0, 16.0, 17);
+    let outcome = run(&mut model, &options, 0.0, 16.0, &x0, &times, |_, t, x| {
+        for (u, v) in x.iter().zip(exact_bead(t)) {
+            error = error.max((u - v).abs() / v.abs().max(1.0));
+        }
+        Ok(())
+    })
+    .unwrap_or_else(|f| panic!("{method:?} rtol {rtol}: {f}"));
+    let r = outcome.report;
+    let predictor = r
+        .predictor
+        .map_or(0, |p| p.accepted_steps + p.rejected_steps);
+    (
+        r.stats.accepted_steps + r.stats.rejected_steps + predictor,
+        error,
+    )
+}
+
+/// The least-squares slope of `log error` against `log steps`, negated.
+fn observed_order(points: &[(usize, f64)]) -> f64 {
+    let xs: Vec<f64> = points.iter().map(|p| (p.0 as f64).ln()).collect();
+    let ys: Vec<f64> = points.iter().map(|p| p.1.ln()).collect();
+    let n = xs.len() as f64;
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let num: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let den: f64 = xs.iter().map(|x| (x - mx).powi(2)).sum();
+    -num / den
+}
+
+/// Projection must not cost the integrators their order: a projection
+/// that lost a step's information (or re-anchored the field wrongly)
+/// would leave the kept run right at one tolerance but of low order.
+#[test]
+fn kept_runs_keep_the_order_of_their_method() {
+    for (method, rtols, least) in [
+        (Method::Direct, [1e-5, 1e-7, 1e-9, 1e-11], 6.5),
+        (Method::Field, [1e-5, 1e-7, 1e-9, 1e-11], 5.5),
+    ] {
+        let points: Vec<(usize, f64)> = rtols.iter().map(|&r| kept_bead_error(method, r)).collect();
+        let p = observed_order(&points);
+        eprintln!("kept bead, {method:?}: order {p:.2} {points:?}");
+        assert!(p > least, "{method:?}: order {p:.2} {points:?}");
+        let tightest = points.last().unwrap().1;
+        assert!(
+            tightest < 1e-9,
+            "{method:?}: error {tightest:e} at rtol 1e-11"
+        );
+    }
+}

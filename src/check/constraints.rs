@@ -57,6 +57,7 @@ impl Checker<'_> {
                     lhs: lhs.clone(),
                     candidates: owned,
                     holonomic: false,
+                    raised: false,
                 };
                 (implicit.candidates[0], order, Some(implicit))
             };
@@ -116,6 +117,7 @@ impl Checker<'_> {
             }
         }
         let groups = self.groups(&mut constraints, &held);
+        let order = order.map(|k| self.raise_nonlinear(&mut constraints, &groups, k));
         if !self.coords.is_empty() && constraints.len() >= self.coords.len() {
             if let Some(last) = constraints.last() {
                 let diagnostic = Diagnostic::error(
@@ -549,6 +551,7 @@ impl Checker<'_> {
                 lhs: lhs.clone(),
                 candidates: named,
                 holonomic: true,
+                raised: false,
             }),
         };
         Some((constraint, held))

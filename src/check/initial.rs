@@ -139,6 +139,21 @@ impl Checker<'_> {
                 (implicit.candidates.iter().skip(1).any(|&q| q == coord) && missing_order)
                     .then_some((first, c.order))
             });
+            // A non-linear constraint's candidate: which root of the
+            // constraint the motion starts on is the user's to say.
+            if let Some(c) = constraints
+                .iter()
+                .find(|c| c.coord == coord && c.is_raised())
+            {
+                let candidate = format!("{}{}", coordinate.name, "'".repeat(c.order as usize - 1));
+                if missing.contains(&format!("`{candidate}`")) {
+                    diagnostic = diagnostic.with_note(format!(
+                        "the constraint is not linear in `{candidate}`: it may hold at several \
+                         values, and the initial value chooses the one the motion starts on \
+                         (lagc checks it against the constraint)"
+                    ));
+                }
+            }
             if let Some((first, order)) = later_candidate {
                 let primes = "'".repeat(order as usize);
                 let (this, other) = (

@@ -11,6 +11,7 @@ mod eval;
 mod expressions;
 mod impacts;
 mod initial;
+mod linearity;
 pub mod model;
 mod points;
 mod statements;

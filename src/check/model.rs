@@ -167,11 +167,23 @@ pub struct Implicit {
     /// coordinates (named `for y or x`, else the left side's coordinate,
     /// else all it holds, the last declared first).
     pub holonomic: bool,
+    /// The constraint as written is not affine in its candidates
+    /// (`x'^2 + y'^2 = c^2 for y' or x'`), or shares the model with one
+    /// that is not: the constraint of order k is its total derivative
+    /// `D (lhs − rhs) = 0` (linear in the order-k derivatives), and the
+    /// run keeps `lhs = rhs` itself on the candidates of order k − 1
+    /// (SPEC §2.3).
+    pub raised: bool,
 }
 
 impl Constraint {
     pub fn is_holonomic(&self) -> bool {
         self.implicit.as_ref().is_some_and(|i| i.holonomic)
+    }
+
+    /// Solved through its derivative ([`Implicit::raised`]).
+    pub fn is_raised(&self) -> bool {
+        self.implicit.as_ref().is_some_and(|i| i.raised)
     }
 }
 

@@ -17,6 +17,7 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/controller.rs",
         include_str!("../../runtime/src/controller.rs"),
     ),
+    ("src/dense.rs", include_str!("../../runtime/src/dense.rs")),
     ("src/direct.rs", include_str!("../../runtime/src/direct.rs")),
     ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
     ("src/driver.rs", include_str!("../../runtime/src/driver.rs")),
@@ -60,6 +61,10 @@ const RUNTIME: &[(&str, &str)] = &[
     (
         "src/impacts.rs",
         include_str!("../../runtime/src/impacts.rs"),
+    ),
+    (
+        "src/integration.rs",
+        include_str!("../../runtime/src/integration.rs"),
     ),
     ("src/keep.rs", include_str!("../../runtime/src/keep.rs")),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),

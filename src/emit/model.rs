@@ -318,7 +318,20 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
     // together (or holonomic ones), a mode's are not found from the first
     // mode's by the candidates' names.
     let modes = std::iter::once(kernel).chain(&kernel.modes);
-    let fixed = if kernel.modes.is_empty() || modes.clone().all(|k| k.kept.is_empty()) {
+    // A single mode states its table only when its fixed components are
+    // not those the initial values take from the constraints (a raised
+    // constraint's candidate is given, and kept).
+    let from_initial: Vec<usize> = kernel
+        .initial
+        .kinds
+        .iter()
+        .enumerate()
+        .filter(|(_, k)| matches!(k, crate::kernel::InitialKind::Constraint))
+        .map(|(i, _)| i)
+        .collect();
+    let single_as_initial = kernel.modes.is_empty()
+        && kernel.kept.iter().map(|&(i, _)| i).collect::<Vec<_>>() == from_initial;
+    let fixed = if single_as_initial || modes.clone().all(|k| k.kept.is_empty()) {
         TokenStream::new()
     } else {
         let tables = modes.map(|k| {

@@ -14,6 +14,10 @@ use super::GeneratedCrate;
 const PYTHON: &[(&str, &str)] = &[
     ("Cargo.toml", include_str!("../../python/Cargo.toml")),
     ("src/errors.rs", include_str!("../../python/src/errors.rs")),
+    (
+        "src/integration.rs",
+        include_str!("../../python/src/integration.rs"),
+    ),
     ("src/lib.rs", include_str!("../../python/src/lib.rs")),
     ("src/model.rs", include_str!("../../python/src/model.rs")),
     (

@@ -55,7 +55,22 @@ pub fn candidates(
             } else {
                 h
             };
-            rows.push((h, if implicit.holonomic { 0 } else { c.order }));
+            // A raised constraint's pivots are those of the constraint as
+            // written, in its candidates of order k − 1 (the derivative's
+            // in the order-k ones are the same expressions).
+            let order = if implicit.holonomic {
+                0
+            } else if implicit.raised {
+                c.order - 1
+            } else {
+                c.order
+            };
+            let h = if implicit.raised {
+                arena.subst(h, &laws)
+            } else {
+                h
+            };
+            rows.push((h, order));
         }
         let mut names = Vec::new();
         let mut pivots = Vec::new();

@@ -37,6 +37,29 @@ pub fn residual(
     let lhs = super::symbols::lower_checked(arena, &implicit.lhs, model)?;
     let rhs = super::symbols::lower_checked(arena, &c.rhs, model)?;
     let h = arena.sub(lhs, rhs);
+    if implicit.raised {
+        // Not linear in its candidates of order k − 1 (or beside one that
+        // is not): its total derivative is linear in those of order k.
+        // A candidate it switches on has no derivative there.
+        for &j in &implicit.candidates {
+            let written = Symbol::Jet {
+                coord: j as u32,
+                order: c.order - 1,
+            };
+            if arena.switches_on(h, written) {
+                let name = arena.symbol_name(written);
+                return Err(Diagnostic::error(
+                    codes::BAD_CANDIDATE,
+                    format!("the constraint switches on `{name}`"),
+                )
+                .with_primary(c.span, format!("`{name}` enters through a selection (`if`, `abs`, `sign`, `min`, `max`)"))
+                .with_note("a constraint is solved through its derivative in its candidate, which a switch on the candidate does not have")
+                .with_help(format!("solve the constraint for `{name}` and write it explicitly: `constraint {name} = …;`")));
+            }
+        }
+        let h = arena.subst(h, laws);
+        return Ok(Some(arena.total_derivative(h)));
+    }
     if !implicit.holonomic {
         return Ok(Some(h));
     }
@@ -45,6 +68,27 @@ pub fn residual(
         h = arena.total_derivative(h);
     }
     Ok(Some(h))
+}
+
+/// A raised constraint's `f = lhs − rhs` as written, of order k − 1 (mass
+/// symbols replaced by their laws): the run keeps `f = 0`.
+pub fn written_residual(
+    arena: &mut Arena,
+    model: &Model,
+    c: &Constraint,
+    laws: &HashMap<Symbol, ExprId>,
+) -> Result<ExprId, Diagnostic> {
+    let implicit = c.implicit.as_ref().filter(|i| i.raised);
+    let Some(implicit) = implicit else {
+        return Err(Diagnostic::error(
+            codes::BAD_CANDIDATE,
+            "internal error: the written residual of a constraint that is not raised",
+        ));
+    };
+    let lhs = super::symbols::lower_checked(arena, &implicit.lhs, model)?;
+    let rhs = super::symbols::lower_checked(arena, &c.rhs, model)?;
+    let f = arena.sub(lhs, rhs);
+    Ok(arena.subst(f, laws))
 }
 
 /// The holonomic constraint's `f = lhs − rhs` (mass symbols replaced by

@@ -35,6 +35,7 @@ pub fn initial_values(
     consistency: &[Consistency],
     closure: Option<&Closure>,
     levels: &HashMap<Symbol, ExprId>,
+    raised: &[Raised],
 ) -> Result<(Vec<InitialValue>, Vec<Diagnostic>), Vec<Diagnostic>> {
     let mut errors = Vec::new();
     let t0 = lower_checked(arena, &model.time.start, model)
@@ -217,11 +218,110 @@ pub fn initial_values(
             values.insert(z, required);
         }
     }
+    // Pass 5: a raised constraint's candidate is given (a non-linear
+    // constraint has several roots: the user's value says which the
+    // motion starts on) and must satisfy it; Newton from the given value
+    // names the root near it, or says there is none.
+    for r in raised {
+        let Some(&(_, user)) = given.get(&r.candidate) else {
+            continue;
+        };
+        let env_values = values.clone();
+        let got = values[&r.candidate];
+        let root = raised_newton(arena, r, got, &|s| {
+            at(symbolic, t0, &laws_at_t0, &env_values, s)
+        });
+        if root.as_ref().is_ok_and(|&root| close(got, root)) {
+            continue;
+        }
+        let name = arena.symbol_name(r.candidate);
+        let diagnostic = Diagnostic::error(
+            codes::INCONSISTENT_INITIAL,
+            format!("the initial value of `{name}` violates a constraint"),
+        )
+        .with_primary(user.span, format!("`{name}` = {got} here"));
+        errors.push(match root {
+            Ok(root) => diagnostic
+                .with_note(format!(
+                    "at t = {t0}, `{}` holds at `{name}` = {root} near it \
+                     (Newton from the given value, params at their defaults)",
+                    r.text
+                ))
+                .with_help(format!("give `{name}` = {root}")),
+            Err(why) => diagnostic
+                .with_note(format!(
+                    "at t = {t0}, Newton on `{}` from the given value finds no root \
+                     (params at their defaults): {why}",
+                    r.text
+                ))
+                .with_help("give initial values on which the constraint can hold"),
+        });
+    }
     if errors.is_empty() {
         Ok((initial, notes))
     } else {
         Err(errors)
     }
+}
+
+/// A constraint solved through its derivative (`check::model::Implicit::
+/// raised`): `residual = f = 0` as written, in its candidate of order
+/// k − 1 (this mode's), with `pivot = ∂f/∂candidate`.
+#[derive(Debug, Clone)]
+pub struct Raised {
+    pub candidate: Symbol,
+    pub residual: ExprId,
+    pub pivot: ExprId,
+    pub text: String,
+}
+
+/// Newton on `f(v) = 0` from `v`, the other values from `env`: the root,
+/// or why there is none near `v`.
+fn raised_newton(
+    arena: &Arena,
+    r: &Raised,
+    start: f64,
+    env: &dyn Fn(Symbol) -> f64,
+) -> Result<f64, String> {
+    let mut v = start;
+    let eval = |v: f64, e: ExprId| arena.eval(e, &|s| if s == r.candidate { v } else { env(s) });
+    for _ in 0..NEWTON_STEPS {
+        let f = eval(v, r.residual);
+        let pivot = eval(v, r.pivot);
+        if !f.is_finite() {
+            return Err(format!("the constraint is not defined there ({f})"));
+        }
+        if f == 0.0 {
+            return Ok(v);
+        }
+        let step = f / pivot;
+        if !step.is_finite() || pivot == 0.0 {
+            return Err(format!(
+                "its derivative in the candidate vanishes (residual {:.3e})",
+                f.abs()
+            ));
+        }
+        // Halved while the residual does not decrease.
+        // (A NaN residual does not decrease.)
+        let decreases = |next: f64| eval(next, r.residual).abs() < f.abs();
+        let mut scale = 1.0;
+        let mut next = v - step;
+        while !decreases(next) && scale > 1e-3 {
+            scale *= 0.5;
+            next = v - scale * step;
+        }
+        if !decreases(next) {
+            if step.abs() <= 1e-9 * v.abs().max(1.0) {
+                return Ok(v);
+            }
+            return Err(format!("it stalls with the residual {:.3e}", f.abs()));
+        }
+        v = next;
+        if step.abs() <= 4.0 * f64::EPSILON * v.abs().max(1.0) {
+            return Ok(v);
+        }
+    }
+    Err(format!("no convergence in {NEWTON_STEPS} steps"))
 }
 
 /// Newton on `f(t0, q) = 0` over the closure's unknowns from `start`,

@@ -90,6 +90,9 @@ pub struct Derivation {
     /// The holonomic constraints `f = 0` as written (mass symbols kept)
     /// and the form of order k the mechanics solves, `D^k f = 0`.
     pub holonomic: Vec<(ExprId, ExprId)>,
+    /// The non-linear implicit constraints `f = 0` as written and the
+    /// derivative the mechanics solves, `D f = 0` (`Implicit::raised`).
+    pub raised: Vec<(ExprId, ExprId)>,
     /// Notes for the build (an initial position that Newton moved onto
     /// the constraints).
     pub notes: Vec<Diagnostic>,
@@ -211,6 +214,75 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         .enumerate()
         .map(|(i, &law)| (Symbol::Mass(i as u32), law))
         .collect();
+    // A raised constraint (not linear in its candidate `v` of order
+    // k − 1) fixes that candidate through `f = 0` as written: the value
+    // kept is Newton's `v − f/f_v`, equal to `v` exactly on the
+    // constraint, whose partials there are the implicit function's.
+    let mut raised = Vec::new();
+    let mut directions: Vec<(String, ExprId)> = Vec::new();
+    let mut shown_raised = Vec::new();
+    for c in model.constraints.iter().filter(|c| c.is_raised()) {
+        let f = coupled::written_residual(&mut arena, model, c, &laws).map_err(|d| vec![d])?;
+        let v = Symbol::Jet {
+            coord: c.coord as u32,
+            order: c.order - 1,
+        };
+        let pivot = arena.diff(f, v);
+        let step = arena.div(f, pivot);
+        let v_expr = arena.symbol(v);
+        let kept = arena.sub(v_expr, step);
+        if let Some(i) = state.iter().position(|&s| s == v) {
+            fixed.push((i, kept));
+        }
+        let text = if c.text.is_empty() {
+            format!("{} = 0", arena.display(f))
+        } else {
+            c.text.clone()
+        };
+        // The cross-check's extra identity: the derivative's reactions are
+        // the written constraint's (Chetaev), `∂φ_d/∂q_i^(k) · f_v +
+        // ∂f/∂q_i^(k−1) = 0` for every independent `i`. `D f` is linear in
+        // the order-k derivatives with the coefficients `∂f/∂q^(k−1)`, so
+        // this holds at every point of the jet space, on `f = 0` or off it:
+        // the random points need not lie on the constraint.
+        if let Some(&(_, phi)) = symbolic
+            .constraints
+            .iter()
+            .find(|&&(d, _)| d == c.coord as u32)
+        {
+            for &i in &symbolic.independent {
+                let d_phi = arena.diff(
+                    phi,
+                    Symbol::Jet {
+                        coord: i,
+                        order: c.order,
+                    },
+                );
+                let d_f = arena.diff(
+                    f,
+                    Symbol::Jet {
+                        coord: i,
+                        order: c.order - 1,
+                    },
+                );
+                let scaled = arena.mul(&[d_phi, pivot]);
+                let identity = arena.add(&[scaled, d_f]);
+                let name = arena.symbol_name(Symbol::Jet {
+                    coord: i,
+                    order: c.order - 1,
+                });
+                directions.push((format!("{} (its reaction on `{name}`)", c.text), identity));
+            }
+        }
+        let derivative = arena.total_derivative(f);
+        shown_raised.push((f, derivative));
+        raised.push(initial::Raised {
+            candidate: v,
+            residual: f,
+            pivot,
+            text,
+        });
+    }
     let closure = coupled::closure(&mut arena, model, &laws).map_err(|d| vec![d])?;
     let levels = match &closure {
         Some(closure) if symbolic.k >= 2 => {
@@ -230,6 +302,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             &reduction.consistency,
             closure.as_ref(),
             &levels,
+            &raised,
         )?
     } else {
         (Vec::new(), Vec::new())
@@ -283,7 +356,8 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
         reduced,
         param_defaults: symbolic.param_defaults,
         holonomic,
-        written: symbolic.written.clone(),
+        raised: shown_raised,
+        written: symbolic.written.iter().cloned().chain(directions).collect(),
         notes,
         lets: model
             .lets

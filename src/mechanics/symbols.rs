@@ -232,10 +232,13 @@ fn solve_implicit(
         let help = if arena.switches_on(h, dep) {
             format!("solve the constraint for `{name}` and write it explicitly: `constraint {name} = …;`")
         } else {
+            // The checker raises every constraint whose text is not
+            // affine in its candidates (`check/linearity.rs`), so this is
+            // one it read as affine: say what lagc would do with it.
             format!(
-                "differentiate it: `constraint {} = 0 for {};` is linear in the next derivatives and \
-                 keeps every branch (the initial velocities must satisfy the constraint as written); \
-                 an explicit root `constraint {name} = …;` holds one branch and stops where it ends",
+                "its derivative `{} = 0` is linear in `{}`: written so that the candidate's \
+                 non-linear use shows in the constraint itself (not through a let's derivative), \
+                 lagc solves it through that derivative and keeps it as written",
                 arena.display(differentiated),
                 arena.symbol_name(next),
             )
@@ -249,7 +252,12 @@ fn solve_implicit(
         .with_help(help));
     }
     if arena.is_zero(pivot) {
-        let name = arena.symbol_name(dep);
+        // A raised constraint is written in the derivative below.
+        let written = Symbol::Jet {
+            coord: c.coord as u32,
+            order: c.order - u32::from(c.is_raised()),
+        };
+        let name = arena.symbol_name(written);
         return Err(Diagnostic::error(
             codes::BAD_CANDIDATE,
             format!("the constraint does not depend on `{name}`"),

@@ -112,6 +112,18 @@ impl Derivation {
                 let _ = writeln!(out, "    D^{}: {h} = 0", self.k);
             }
         }
+        if !self.raised.is_empty() {
+            let _ = writeln!(
+                out,
+                "\nconstraints not linear in their candidates (kept as written), differentiated once:"
+            );
+            for &(f, h) in &self.raised {
+                let f = sum(a, f, Style::Text);
+                let h = sum(a, h, Style::Text);
+                let _ = writeln!(out, "  {f} = 0");
+                let _ = writeln!(out, "    D: {h} = 0");
+            }
+        }
         if !self.constraints.is_empty() {
             out.push_str("\nconstraints:\n");
             for &(d, phi) in &self.constraints {
@@ -228,6 +240,12 @@ impl Derivation {
             };
             let lhs = format!("\\mathit{{{name}}}");
             out.push_str(&crate::latex::equation(&lhs, &shown, "\\text{let}"));
+        }
+        for &(f, h) in &self.raised {
+            let f = sum(a, f, Style::Latex);
+            let h = sum(a, h, Style::Latex);
+            out.push_str(&crate::latex::equation(&f, "0", "\\text{kept as written}"));
+            out.push_str(&crate::latex::equation(&h, "0", "\\text{its derivative}"));
         }
         for &(f, h) in &self.holonomic {
             let f = sum(a, f, Style::Latex);

@@ -1,5 +1,6 @@
 //! The one integration-test binary.
 
+mod bit_identity;
 mod cache;
 mod check_build;
 mod cli;
@@ -16,6 +17,7 @@ mod language_v2;
 mod latex;
 mod mass_law_forms;
 mod mechanics;
+mod nonlinear;
 mod parser;
 mod python;
 mod readme_program;

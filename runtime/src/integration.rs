@@ -1,0 +1,878 @@
+//! A steppable integration: one object that holds a run's state — the
+//! method's solver, the regime (modes and branches), events and impacts,
+//! the constraint keeper and watch, the work budget — and advances it to
+//! any time asked for, hands back the state there, and restarts from a
+//! state the caller gives. Every run is a loop over it: the command line,
+//! `solve`, the report, the ensemble's direct runs ([`crate::driver::run`]).
+//!
+//! Where the caller stops does not change the steps. The steps are limited
+//! only by the end of the span given when the integration is made (and by
+//! the switching functions' pace), never by the times asked for: a time
+//! inside a step is read from that step's continuous extension, as the
+//! command line's output always was. So `advance_to(t1); advance_to(t2)`
+//! takes the steps `advance_to(t2)` takes, to the bit
+//! (`runtime/tests/integration.rs`).
+//!
+//! A step is handled in two halves, and the second waits for the caller.
+//! The first takes the step, looks for events in it, and settles how far
+//! its continuous extension is the solution (to the step's end, to an
+//! event, or to where a constraint's branch ended). The second — the
+//! event's resets and restart, the projection onto the constraints, a
+//! change of candidates — changes the solver's state, after which the
+//! step's continuous extension is gone: it runs only when the caller asks
+//! for a time past the step. Samples within a step are thus read before
+//! its end is acted on, exactly as the run loop this object replaces
+//! read them.
+
+use crate::budget::Budget;
+use crate::driver::{
+    best_mode, check_masses, diagnose, initial_branches, make_solver, near_singular_configuration,
+    observe_to_event, pivot_crossed, pivot_volumes, probe_pace, switch_candidates, Ending,
+    MassScale, Options, Outcome, PivotCrossing,
+};
+use crate::events::{locate, SwitchPace};
+use crate::failure::{Failure, FailureKind};
+use crate::impacts::{AtEvent, Impacts};
+use crate::keep::Keeper;
+use crate::model::{DynModel, Regime};
+use crate::progress::Progress;
+use crate::solution::Piece;
+use crate::solver::{Report, Solver};
+use crate::watch::ConstraintWatch;
+
+/// Why [`Integration::advance_to`] returned.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Advance {
+    /// The integration stands at this time (the one asked for);
+    /// [`Integration::state`] is the state there.
+    Reached(f64),
+    /// The motion ended before the time asked for: `stop when` became
+    /// true, or impacts left it on their boundary. [`Integration::t`] and
+    /// [`Integration::state`] are where it ended (after the impact's
+    /// reset); asking again gives the same answer.
+    Ended(Ending),
+}
+
+/// The model an integration works on: the caller's, or its own.
+enum Held<'m> {
+    Borrowed(&'m mut dyn DynModel),
+    Owned(Box<dyn DynModel>),
+}
+
+impl Held<'_> {
+    fn get(&self) -> &dyn DynModel {
+        match self {
+            Held::Borrowed(m) => &**m,
+            Held::Owned(m) => &**m,
+        }
+    }
+
+    fn get_mut(&mut self) -> &mut dyn DynModel {
+        match self {
+            Held::Borrowed(m) => &mut **m,
+            Held::Owned(m) => &mut **m,
+        }
+    }
+}
+
+/// What a run that can step holds (made at the start and at every
+/// restart).
+struct Stepping {
+    solver: Box<dyn Solver>,
+    watch: ConstraintWatch,
+    /// The mass matrix's scale at the start when computed up front (a
+    /// regime that may change), else computed when a failure asks.
+    early_scale: Option<MassScale>,
+    g_now: Vec<f64>,
+    x_event: Vec<f64>,
+    step_ends: Vec<f64>,
+    pace: SwitchPace,
+    /// After a step across a vanishing pivot: how far the retry may reach.
+    pivot_limit: Option<f64>,
+    /// The functions at the last step's start and quarters, for the pace.
+    g_quarters: Vec<Vec<f64>>,
+    impacts: Impacts,
+}
+
+/// What the second half of a step does.
+enum Then {
+    /// The event located at `t_event` (searched from `t_from`).
+    Event {
+        t_from: f64,
+        t_event: f64,
+        switches: Vec<usize>,
+    },
+    /// An ordinary step: keep the constraints, change candidates.
+    Step,
+    /// A constraint's branch ended within the step: the run stops.
+    Fail(Failure),
+}
+
+/// A step whose first half is done: its continuous extension is the
+/// solution up to `until`.
+struct Pending {
+    until: f64,
+    /// The step's end.
+    tb: f64,
+    /// A failure to read a sample is diagnosed as a failure of the step
+    /// (ordinary steps), or passed on as it is (steps that end in an
+    /// event), as the run loop did.
+    diagnose: bool,
+    then: Then,
+}
+
+/// A run that advances on request. See the module's documentation.
+pub struct Integration<'m> {
+    model: Held<'m>,
+    options: Options,
+    end: f64,
+    /// Where the integration last started or restarted.
+    t_start: f64,
+    x_start: Vec<f64>,
+    budget: Budget,
+    regime: Regime,
+    keeper: Option<Keeper>,
+    volumes: Vec<f64>,
+    stepping: Option<Stepping>,
+    pending: Option<Pending>,
+    /// The run is over: the span's end, `stop when`, or a failure.
+    done: Option<Result<Ending, Failure>>,
+    events: usize,
+    /// Where the caller stands, and the state there.
+    t: f64,
+    x: Vec<f64>,
+    progress: Progress,
+    pieces: Option<Vec<Piece>>,
+    /// The work of the solvers before the last restart.
+    earlier: Option<Report>,
+}
+
+impl<'m> Integration<'m> {
+    /// An integration of `model` (whose regime it sets as it goes) from
+    /// `(t0, x0)` over the span up to `end`. Problems of the start (a mass
+    /// at or below zero, a constraint undefined there, a method that
+    /// cannot start) are reported by the first advance past `t0`, as a
+    /// run reports them after its first row.
+    pub fn new(
+        model: &'m mut dyn DynModel,
+        options: &Options,
+        t0: f64,
+        end: f64,
+        x0: &[f64],
+    ) -> Integration<'m> {
+        Integration::with(Held::Borrowed(model), options, t0, end, x0)
+    }
+
+    fn with(model: Held<'m>, options: &Options, t0: f64, end: f64, x0: &[f64]) -> Integration<'m> {
+        let budget = Budget::new(options.max_steps);
+        budget.accepted_to(t0);
+        let mut integration = Integration {
+            keeper: Keeper::new(model.get(), options.tol),
+            model,
+            options: options.clone(),
+            end,
+            t_start: t0,
+            x_start: x0.to_vec(),
+            budget,
+            regime: Regime::default(),
+            volumes: Vec::new(),
+            stepping: None,
+            pending: None,
+            done: None,
+            events: 0,
+            t: t0,
+            x: x0.to_vec(),
+            progress: Progress::new(false, t0, end),
+            pieces: None,
+            earlier: None,
+        };
+        integration.start(t0, x0);
+        integration
+    }
+
+    /// Sets the regime at `(t0, x0)` and makes the method's solver there.
+    fn start(&mut self, t0: f64, x0: &[f64]) {
+        let model = self.model.get_mut();
+        let span = self.end - t0;
+        let h_max = if span > 0.0 { span } else { 1.0 };
+        self.regime = Regime {
+            mode: best_mode(model, t0, x0).0,
+            branches: initial_branches(model, t0, x0),
+        };
+        model.set_regime(&self.regime);
+        self.volumes = pivot_volumes(model, t0, x0);
+        (self.t_start, self.t) = (t0, t0);
+        self.x_start = x0.to_vec();
+        self.x = x0.to_vec();
+        self.pending = None;
+        self.done = None;
+        self.stepping = None;
+        if model.switches() > 0 && model.stop(&self.regime.branches) {
+            self.done = Some(Ok(Ending::Stopped(t0)));
+            return;
+        }
+        let model = &*model;
+        let started = (|| {
+            check_masses(model, t0, x0)?;
+            let watch = ConstraintWatch::start(model, t0, x0)?;
+            // The mass matrix's scale at the start, which only the
+            // diagnosis of a failure reads: an LU and a norm estimate,
+            // computed up front only when the regime (on which the mass
+            // matrix may depend) can change during the run, else when a
+            // failure asks for it (a tenth of a small model's solve).
+            let regime_may_change = model.switches() > 0 || !model.constraints().is_empty();
+            let early_scale = regime_may_change.then(|| MassScale::at(model, t0, x0));
+            let solver = make_solver(model, &self.options, t0, x0, h_max).map_err(|f| {
+                let scale = early_scale.unwrap_or_else(|| MassScale::at(model, t0, x0));
+                watch.diagnose(model, diagnose(model, f, x0, &scale), t0, x0)
+            })?;
+            let mut pace = SwitchPace::default();
+            probe_pace(model, t0, x0, self.end - t0, &mut pace);
+            let g_now = vec![0.0; model.switches()];
+            Ok(Stepping {
+                solver,
+                watch,
+                early_scale,
+                g_quarters: vec![g_now.clone(); 4],
+                g_now,
+                x_event: vec![0.0; x0.len()],
+                step_ends: Vec::new(),
+                pace,
+                pivot_limit: None,
+                impacts: Impacts::new(model),
+            })
+        })();
+        match started {
+            Ok(stepping) => {
+                self.progress = Progress::new(self.options.progress, t0, self.end);
+                self.stepping = Some(stepping);
+            }
+            Err(failure) => self.done = Some(Err(failure)),
+        }
+    }
+
+    /// Keeps every step's continuous extension (for
+    /// [`crate::solution::Solution`]; memory grows with the steps).
+    pub fn keep_pieces(&mut self) {
+        self.pieces.get_or_insert_with(Vec::new);
+    }
+
+    /// The pieces kept since [`Integration::keep_pieces`].
+    pub fn take_pieces(&mut self) -> Vec<Piece> {
+        self.pieces.take().unwrap_or_default()
+    }
+
+    /// The model in its current regime (for outputs at the state).
+    pub fn model(&self) -> &dyn DynModel {
+        self.model.get()
+    }
+
+    /// The time the integration stands at.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// The state at [`Integration::t`], on the constraints.
+    pub fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// The end of the span the steps are limited to.
+    pub fn end(&self) -> f64 {
+        self.end
+    }
+
+    /// Whether the run is over (the span's end, an ending, a failure).
+    pub fn finished(&self) -> Option<&Result<Ending, Failure>> {
+        self.done.as_ref()
+    }
+
+    /// Advances to `t` (from where the integration stands up to the end
+    /// of its span), stepping only as far as needed: the state at `t` is
+    /// read from the continuous extension of the step that covers it.
+    pub fn advance_to(&mut self, t: f64) -> Result<Advance, Failure> {
+        if t == self.t && !matches!(self.done, Some(Err(_))) {
+            return Ok(Advance::Reached(t));
+        }
+        if !(t > self.t && t <= self.end) {
+            return Err(Failure::new(
+                t,
+                FailureKind::OutsideSpan {
+                    from: self.t,
+                    to: self.end,
+                },
+            ));
+        }
+        loop {
+            match &self.done {
+                Some(Ok(Ending::End)) => return Ok(Advance::Reached(self.t)),
+                Some(Ok(ending)) => return Ok(Advance::Ended(*ending)),
+                Some(Err(failure)) => return Err(failure.clone()),
+                None => {}
+            }
+            let result = match &self.pending {
+                Some(p) if t <= p.until => {
+                    let sampled = self.sample(t);
+                    if sampled.is_ok() {
+                        return Ok(Advance::Reached(t));
+                    }
+                    sampled
+                }
+                Some(_) => self.finish_step(),
+                None if self.solver().time() >= self.end => {
+                    self.reach_end();
+                    Ok(())
+                }
+                None => self.step(),
+            };
+            if let Err(failure) = result {
+                self.progress.finish();
+                self.done = Some(Err(failure));
+            }
+        }
+    }
+
+    /// Runs to the end of the span (or the motion's end), and returns what
+    /// the run did.
+    pub fn finish(&mut self) -> Result<Outcome, Failure> {
+        while self.done.is_none() {
+            let result = if self.pending.is_some() {
+                self.finish_step()
+            } else if self.solver().time() >= self.end {
+                self.reach_end();
+                Ok(())
+            } else {
+                self.step()
+            };
+            if let Err(failure) = result {
+                self.progress.finish();
+                self.done = Some(Err(failure));
+            }
+        }
+        match &self.done {
+            Some(Err(failure)) => Err(failure.clone()),
+            _ => Ok(self.outcome()),
+        }
+    }
+
+    /// The work so far, and how the run ended (`Ending::End` while it
+    /// goes on).
+    pub fn outcome(&self) -> Outcome {
+        let report = match &self.stepping {
+            Some(s) => s.solver.report(),
+            None => Report {
+                // The summary names the method even when it took no step.
+                method: format!(
+                    "{} (no step: stopped at the start)",
+                    self.options.method.name()
+                ),
+                ..Report::default()
+            },
+        };
+        Outcome {
+            report: match &self.earlier {
+                Some(earlier) => merged(earlier, report),
+                None => report,
+            },
+            ending: match self.done {
+                Some(Ok(ending)) => ending,
+                _ => Ending::End,
+            },
+            events: self.events,
+            budget_used: self.budget.used(),
+            kept: self.keeper.as_ref().map(|k| k.kept()),
+        }
+    }
+
+    /// Goes on from `(t, x)`, a state the caller gives (the motion changed
+    /// from outside): the regime is chosen there afresh, the method starts
+    /// there (the field re-anchored at `x`), events and impacts are armed
+    /// again, as a new run from `(t, x)` would; the budget, the counts and
+    /// the constraints' record go on. `x` is checked as `--init` values
+    /// are: finite, on the constraints (the components they fix within
+    /// 1e-9 of the values they require), and every constraint's first
+    /// candidate determined. [`Integration::put_on_constraints`] makes a
+    /// state satisfy them. Panics when `x` is not of the model's dimension.
+    pub fn restart_from(&mut self, t: f64, x: &[f64]) -> Result<(), Failure> {
+        if !(t >= self.t_start.min(self.t) && t <= self.end) {
+            return Err(Failure::new(
+                t,
+                FailureKind::OutsideSpan {
+                    from: self.t_start,
+                    to: self.end,
+                },
+            ));
+        }
+        self.check_state(t, x)?;
+        if let Some(s) = &self.stepping {
+            let report = s.solver.report();
+            self.earlier = Some(match &self.earlier {
+                Some(earlier) => merged(earlier, report),
+                None => report,
+            });
+        }
+        if let Some(pieces) = self.pieces.as_mut() {
+            pieces.retain(|p| p.segment.t_old() < t);
+            if let Some(last) = pieces.last_mut() {
+                last.until = last.until.min(t);
+            }
+        }
+        self.budget.accepted_to(t);
+        self.start(t, x);
+        match &self.done {
+            Some(Err(failure)) => Err(failure.clone()),
+            _ => Ok(()),
+        }
+    }
+
+    /// Moves `x` onto the constraints at `t` (the velocities along the
+    /// constraints' normals, the smallest correction; holonomic positions
+    /// by Gauss–Newton), in the mode whose candidates are best there.
+    pub fn put_on_constraints(&mut self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        let model = self.model.get();
+        let mode = best_mode(model, t, x).0;
+        match self.keeper.as_mut() {
+            Some(keeper) => keeper.put_on(model, mode, t, x),
+            None => Ok(()),
+        }
+    }
+
+    /// The checks of a state given from outside (see
+    /// [`Integration::restart_from`]).
+    fn check_state(&mut self, t: f64, x: &[f64]) -> Result<(), Failure> {
+        let model = self.model.get_mut();
+        assert_eq!(x.len(), model.dim(), "a state has one value per component");
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return Err(Failure::new(
+                t,
+                FailureKind::NonFiniteInitialValue {
+                    component: model.state_names()[i].to_string(),
+                },
+            ));
+        }
+        if model.keeps_constraints() || model.keeps_positions() {
+            let mode = best_mode(model, t, x).0;
+            model.set_regime(&Regime {
+                mode,
+                branches: initial_branches(model, t, x),
+            });
+            let mut required = x.to_vec();
+            if model.keeps_positions() {
+                model.project_closure(t, &mut required)?;
+            }
+            let mut kept = required.clone();
+            model.constrained(t, &required, &mut kept)?;
+            for (i, (&stated, &required)) in x.iter().zip(&kept).enumerate() {
+                if (stated - required).abs() > 1e-9 * required.abs().max(1.0) {
+                    return Err(Failure::new(
+                        t,
+                        FailureKind::InconsistentInitialValue {
+                            component: model.state_names()[i].to_string(),
+                            stated,
+                            required,
+                        },
+                    ));
+                }
+            }
+            model.set_regime(&self.regime);
+        }
+        crate::driver::check_initial_candidates(model, t, x)
+    }
+
+    fn solver(&self) -> &dyn Solver {
+        &*self.stepping.as_ref().expect("a run that steps").solver
+    }
+
+    /// The run has reached the end of its span: the state there, on the
+    /// constraints.
+    fn reach_end(&mut self) {
+        let s = self.stepping.as_ref().expect("a run that steps");
+        self.t = s.solver.time();
+        self.x.copy_from_slice(s.solver.state());
+        self.progress.finish();
+        self.done = Some(Ok(Ending::End));
+    }
+
+    /// The state at `t` within the pending step, on the constraints.
+    fn sample(&mut self, t: f64) -> Result<(), Failure> {
+        let model = self.model.get();
+        let s = self.stepping.as_mut().expect("a run that steps");
+        let pending = self.pending.as_ref().expect("a pending step");
+        let mut read = || -> Result<(), Failure> {
+            s.solver.dense(model, t, &mut self.x)?;
+            // No output is off the constraints.
+            if let Some(keeper) = self.keeper.as_mut() {
+                keeper.project(model, self.regime.mode, t, &mut self.x)?;
+            }
+            Ok(())
+        };
+        match read() {
+            Ok(()) => {
+                self.t = t;
+                Ok(())
+            }
+            Err(failure) if pending.diagnose => {
+                let x = s.solver.state().to_vec();
+                let failure = near_singular_configuration(model, failure, &x, &self.volumes);
+                if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+                    return Err(failure);
+                }
+                Err(s.watch.diagnose(model, failure, pending.tb, &x))
+            }
+            Err(failure) => Err(failure),
+        }
+    }
+
+    /// The first half of a step: take it, look for events in it, and
+    /// settle how far its continuous extension is the solution.
+    fn step(&mut self) -> Result<(), Failure> {
+        let model = self.model.get_mut();
+        let s = self.stepping.as_mut().expect("a run that steps");
+        let Stepping {
+            solver,
+            watch,
+            early_scale,
+            g_now,
+            x_event,
+            step_ends,
+            pace,
+            pivot_limit,
+            g_quarters,
+            impacts,
+        } = s;
+        let budget = &self.budget;
+        let regime = &mut self.regime;
+        let n = self.x.len();
+        // Where the solution stands: after the last step, or where an
+        // event restarted it.
+        budget.accepted_to(solver.time());
+        let mut t_limit = pace.limit(solver.time(), self.end);
+        if let Some(t) = pivot_limit.take() {
+            t_limit = t_limit.min(t);
+        }
+        if let Err(mut failure) = solver.advance(model, t_limit, budget) {
+            if matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) {
+                // Where the solution stands (after the last step and any
+                // event's restart), not where the field's predictor or a
+                // window's steps had run ahead to.
+                failure.time = solver.time();
+            }
+            let x = solver.state().to_vec();
+            self.progress.finish();
+            let scale =
+                early_scale.unwrap_or_else(|| MassScale::at(&*model, self.t_start, &self.x_start));
+            let failure = diagnose(model, failure, &x, &scale);
+            let failure = near_singular_configuration(model, failure, &x, &self.volumes);
+            if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+                return Err(failure);
+            }
+            return Err(watch.diagnose(model, failure, solver.time(), &x));
+        }
+        self.progress.update(solver.time());
+        let (ta, tb) = (solver.previous_time(), solver.time());
+        if let Some(pieces) = self.pieces.as_mut() {
+            for segment in solver.segments(model)? {
+                pieces.push(Piece {
+                    until: segment.t_new(),
+                    segment,
+                });
+            }
+        }
+        // A switch whose function changed sign against its branch.
+        let mut event: Option<(f64, f64, Vec<usize>)> = None;
+        if model.switches() > 0 {
+            // In each of the integrator's steps (one for direct
+            // integration, a window's for the field), the step's end and
+            // three points inside it: a function that crosses zero and back
+            // within one step is seen at one of them unless both crossings
+            // fall between two neighbours. The search for the crossing
+            // starts at the beginning of the first step where one is seen.
+            solver.step_ends(step_ends);
+            let (mut t_check, mut t_from) = (tb, ta);
+            let mut changed: Vec<usize> = Vec::new();
+            let mut start = ta;
+            'scan: for &end in step_ends.iter() {
+                for fraction in [0.25, 0.5, 0.75, 1.0] {
+                    let t = if fraction == 1.0 {
+                        end
+                    } else {
+                        start + fraction * (end - start)
+                    };
+                    if t == tb {
+                        model.switching_functions(tb, solver.state(), g_now);
+                    } else {
+                        solver.dense(model, t, x_event)?;
+                        model.switching_functions(t, x_event, g_now);
+                    }
+                    changed = (0..model.switches())
+                        .filter(|&k| {
+                            let g = impacts.as_seen(k, g_now[k], regime.branches[k]);
+                            (g > 0.0) != regime.branches[k]
+                        })
+                        .collect();
+                    if !changed.is_empty() {
+                        (t_check, t_from) = (t, start);
+                        break 'scan;
+                    }
+                    if fraction < 1.0 {
+                        g_quarters[(4.0 * fraction) as usize].copy_from_slice(g_now);
+                    }
+                }
+                if end == tb {
+                    solver.dense(model, start, x_event)?;
+                    model.switching_functions(start, x_event, &mut g_quarters[0]);
+                    let g = &*g_quarters;
+                    pace.observe(end - start, [&g[0], &g[1], &g[2], &g[3], &g_now[..]]);
+                }
+                start = end;
+            }
+            let (ta, tb) = (t_from, t_check);
+            if !changed.is_empty() {
+                let mut roots = Vec::with_capacity(changed.len());
+                for &k in &changed {
+                    let mut x = vec![0.0; n];
+                    let mut g = vec![0.0; model.switches()];
+                    let positive = regime.branches[k];
+                    let model = &*model;
+                    let mut phi = |t: f64| -> Result<f64, Failure> {
+                        solver.dense(model, t, &mut x)?;
+                        model.switching_functions(t, &x, &mut g);
+                        Ok(impacts.as_seen(k, g[k], positive))
+                    };
+                    let g_a = {
+                        let v = phi(ta)?;
+                        // At the step's start the function is on its
+                        // branch's side (or exactly zero there).
+                        if regime.branches[k] {
+                            v.max(f64::MIN_POSITIVE)
+                        } else {
+                            v.min(-f64::MIN_POSITIVE)
+                        }
+                    };
+                    let root = locate(ta, g_a, tb, g_now[k], &mut phi)?;
+                    roots.push((k, root));
+                }
+                let t_event = roots.iter().map(|&(_, r)| r).fold(f64::INFINITY, f64::min);
+                let width = 8.0 * f64::EPSILON * t_event.abs().max(1.0);
+                let at: Vec<usize> = roots
+                    .iter()
+                    .filter(|&&(_, r)| r <= t_event + width)
+                    .map(|&(k, _)| k)
+                    .collect();
+                event = Some((ta, t_event, at));
+            }
+        }
+        self.pending = Some(match event {
+            Some((t_from, t_event, switches)) => {
+                if let Some(pieces) = self.pieces.as_mut() {
+                    // The event ends this step's pieces early.
+                    pieces.retain(|p| p.segment.t_old() < t_event);
+                    if let Some(last) = pieces.last_mut() {
+                        last.until = last.until.min(t_event);
+                    }
+                }
+                // A constraint's branch that ended within the step stops
+                // the run there, its rows written up to where it ended.
+                let ended = watch.step(model, solver.as_mut(), ta, t_event)?;
+                Pending {
+                    until: ended.as_ref().map_or(t_event, |f| f.time),
+                    tb,
+                    diagnose: false,
+                    then: match ended {
+                        Some(failure) => Then::Fail(failure),
+                        None => Then::Event {
+                            t_from,
+                            t_event,
+                            switches,
+                        },
+                    },
+                }
+            }
+            None => {
+                // A step across a vanishing pivot is not a solution: it is
+                // taken again with another candidate, or the run stops.
+                if !model.constraints().is_empty() {
+                    match pivot_crossed(model, regime, solver.as_mut(), (ta, tb), &self.volumes)? {
+                        PivotCrossing::None => {}
+                        crossing => {
+                            if let Some(pieces) = self.pieces.as_mut() {
+                                // The step is taken again from its start.
+                                pieces.retain(|p| p.segment.t_old() < ta);
+                                if let Some(last) = pieces.last_mut() {
+                                    last.until = last.until.min(ta);
+                                }
+                            }
+                            if let PivotCrossing::Retry(t) = crossing {
+                                *pivot_limit = Some(t);
+                            }
+                            return Ok(());
+                        }
+                    }
+                }
+                // A constraint's branch that ended within the step stops
+                // the run there, its rows written up to where it ended.
+                let ended = watch.step(model, solver.as_mut(), ta, tb)?;
+                Pending {
+                    until: ended.as_ref().map_or(tb, |f| f.time),
+                    tb,
+                    diagnose: true,
+                    then: match ended {
+                        Some(failure) => Then::Fail(failure),
+                        None => Then::Step,
+                    },
+                }
+            }
+        });
+        Ok(())
+    }
+
+    /// The second half of the pending step: the event's resets and
+    /// restart, or the projection onto the constraints and a change of
+    /// candidates.
+    fn finish_step(&mut self) -> Result<(), Failure> {
+        let pending = self.pending.take().expect("a pending step");
+        let model = self.model.get_mut();
+        let s = self.stepping.as_mut().expect("a run that steps");
+        let regime = &mut self.regime;
+        match pending.then {
+            Then::Fail(failure) => Err(failure),
+            Then::Event {
+                t_from,
+                t_event,
+                switches,
+            } => {
+                let x_event = &mut s.x_event;
+                s.solver.dense(model, t_event, x_event)?;
+                if let Some(keeper) = self.keeper.as_mut() {
+                    keeper.project(model, regime.mode, t_event, x_event)?;
+                }
+                observe_to_event(
+                    model,
+                    s.solver.as_mut(),
+                    (t_from, t_event),
+                    x_event,
+                    &switches,
+                    &mut s.pace,
+                )?;
+                let before = regime.branches.clone();
+                for &k in &switches {
+                    regime.branches[k] = !regime.branches[k];
+                }
+                self.events += 1;
+                let mut ending = model
+                    .stop(&regime.branches)
+                    .then_some(Ending::Stopped(t_event));
+                if ending.is_none() && !model.impacts().is_empty() {
+                    // A `when` whose condition became true resets the
+                    // state; after it `stop when` may hold.
+                    let at = s.impacts.at_event(
+                        model,
+                        regime,
+                        &before,
+                        &switches,
+                        t_event,
+                        x_event,
+                        self.options.tol,
+                    )?;
+                    ending = match at {
+                        AtEvent::Stop(end) => Some(end),
+                        AtEvent::Reset if model.stop(&regime.branches) => {
+                            Some(Ending::Stopped(t_event))
+                        }
+                        AtEvent::Reset | AtEvent::None => None,
+                    };
+                }
+                model.set_regime(regime);
+                if let Some(ending) = ending {
+                    self.t = t_event;
+                    self.x.copy_from_slice(x_event);
+                    self.progress.finish();
+                    self.done = Some(Ok(ending));
+                    return Ok(());
+                }
+                s.solver.restart(model, t_event, x_event)
+            }
+            Then::Step => {
+                let tb = pending.tb;
+                let solver = &mut s.solver;
+                let mut kept = Ok(());
+                if let Some(keeper) = self.keeper.as_mut() {
+                    // A state off its constraint near a pole or an end
+                    // of one is named after it.
+                    let x_b = solver.state().to_vec();
+                    kept = match keeper.after_step(model, regime.mode, tb, &x_b) {
+                        Ok(Some(x)) => solver.project(model, tb, x),
+                        Ok(None) => Ok(()),
+                        Err(f) => Err(f),
+                    };
+                }
+                if let Err(failure) = kept {
+                    // A state that cannot be kept on the constraints near
+                    // a singular configuration is named as that, else
+                    // after a pole or an end of a constraint near it.
+                    let x = solver.state().to_vec();
+                    let failure = near_singular_configuration(model, failure, &x, &self.volumes);
+                    if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+                        return Err(failure);
+                    }
+                    return Err(s.watch.diagnose(model, failure, tb, &x));
+                }
+                if !model.constraints().is_empty() {
+                    switch_candidates(model, regime, solver.as_mut(), tb, &self.volumes)?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl Integration<'static> {
+    /// An integration that owns its model (for callers that keep it, such
+    /// as a Python object or a co-simulation slave).
+    pub fn owned(
+        model: Box<dyn DynModel>,
+        options: &Options,
+        t0: f64,
+        end: f64,
+        x0: &[f64],
+    ) -> Integration<'static> {
+        Integration::with(Held::Owned(model), options, t0, end, x0)
+    }
+}
+
+/// The work of two solvers in one run (before and after a restart).
+fn merged(earlier: &Report, later: Report) -> Report {
+    let mut stats = earlier.stats;
+    stats += later.stats;
+    let sum = |a: Option<usize>, b: Option<usize>| match (a, b) {
+        (Some(a), Some(b)) => Some(a + b),
+        (a, b) => a.or(b),
+    };
+    let mut notes = earlier.notes.clone();
+    notes.extend(
+        later
+            .notes
+            .into_iter()
+            .filter(|n| !earlier.notes.contains(n)),
+    );
+    Report {
+        method: later.method,
+        stats,
+        largest_condition: match (earlier.largest_condition, later.largest_condition) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        },
+        reanchorings: sum(earlier.reanchorings, later.reanchorings),
+        windows: sum(earlier.windows, later.windows),
+        passes: sum(earlier.passes, later.passes),
+        predictor: match (earlier.predictor, later.predictor) {
+            (Some(mut a), Some(b)) => {
+                a += b;
+                Some(a)
+            }
+            (a, b) => a.or(b),
+        },
+        linearizations: earlier.linearizations + later.linearizations,
+        notes,
+    }
+}
