@@ -12,3 +12,4 @@ def test_the_readmes_python_block_runs():
     exec(compile(block, "README.md", "exec"), scope)
     sol = scope["sol"]
     assert sol.y.shape == (51, 4) and len(scope["sols"]) == 1000
+    assert scope["it"].t == 2.5
