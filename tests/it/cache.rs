@@ -269,12 +269,19 @@ fn unique_oscillator(omega: f64) -> String {
 }
 
 /// The cached crate directory of the package whose name starts with
-/// `prefix`, in the tests' shared cache.
+/// `prefix`, in the tests' shared cache: the newest one, since every run of
+/// a test writes its model anew (`unique_oscillator`) and a cache kept from
+/// earlier runs holds the crates of those too.
 fn cached_crate(prefix: &str) -> PathBuf {
     std::fs::read_dir(crate::root().join("target/lagc-cache/crates"))
         .unwrap()
         .map(|e| e.unwrap().path())
-        .find(|p| p.file_name().unwrap().to_string_lossy().starts_with(prefix))
+        .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with(prefix))
+        .max_by_key(|p| {
+            std::fs::metadata(p.join("src/lib.rs"))
+                .and_then(|m| m.modified())
+                .ok()
+        })
         .expect("the model's cached crate")
 }
 
