@@ -19,6 +19,7 @@ pub mod frontend;
 pub mod ir;
 pub mod kernel;
 pub mod latex;
+pub mod linearize;
 pub mod mechanics;
 pub mod pipeline;
 pub mod report;

@@ -28,13 +28,14 @@
 //! println!("{:?}", solution.at(2.5));
 //! ```
 
-use crate::driver::{solve as solve_run, Options};
 use crate::failure::{Failure, FailureKind};
 use crate::field::Anchor;
-use crate::integration::Integration;
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Initial, Model};
-use crate::solution::Solution;
+use crate::run::integration::Integration;
+use crate::run::options::Options;
+use crate::run::solution::Solution;
+use crate::run::solve as solve_run;
 
 impl Options {
     /// The field method or direct integration.
@@ -156,6 +157,6 @@ fn initial(model: &dyn DynModel, given: &[Option<f64>]) -> Result<(f64, f64, Vec
             }
         }
     }
-    crate::driver::check_initial_candidates(model, t0, &x0)?;
+    crate::run::regime::check_initial_candidates(model, t0, &x0)?;
     Ok((t0, t1, x0))
 }

@@ -146,9 +146,9 @@ impl Solver for Direct {
         Ok(())
     }
 
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure> {
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure> {
         let dense = self.stepper.dense_step(&ModelSystem(model))?;
-        Ok(vec![crate::solution::Segment::State(dense)])
+        Ok(vec![crate::segment::Segment::State(dense)])
     }
 
     fn report(&self) -> Report {

@@ -82,7 +82,7 @@ pub enum FailureKind {
     /// a pole of it (`argument`, what it divides by, vanishes).
     ConstraintDomainEnds {
         constraint: String,
-        kind: crate::model::DomainKind,
+        kind: crate::domain::DomainKind,
         argument: String,
         value: f64,
     },
@@ -372,11 +372,11 @@ fn domain_end(
     f: &mut fmt::Formatter<'_>,
     t: f64,
     constraint: &str,
-    kind: crate::model::DomainKind,
+    kind: crate::domain::DomainKind,
     argument: &str,
     value: f64,
 ) -> fmt::Result {
-    use crate::model::DomainKind;
+    use crate::domain::DomainKind;
     let function = match kind {
         DomainKind::Root => "square root",
         DomainKind::Power => "fractional power",

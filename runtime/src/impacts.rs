@@ -16,9 +16,9 @@
 //! naming the `when` and t∞. Both endings are the model's own (exit 0),
 //! like `stop when`.
 
-use crate::driver::Ending;
 use crate::failure::Failure;
 use crate::model::{DynModel, Regime};
+use crate::run::options::Ending;
 use crate::tolerance::Tolerance;
 
 /// What the impacts did at an event.

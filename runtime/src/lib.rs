@@ -18,8 +18,9 @@
 //! | `dop853`, `rodas4` | the integrators, with dense output |
 //! | `dense` | a step's continuous extension as a value (`DenseStep`) |
 //! | `method` | integrator choice |
-//! | `integration` | a run as an object: `advance_to(t)`, the state, a restart from a given state |
-//! | `driver` | options, outcomes, the run as a loop over an `Integration`; regimes, candidates, diagnosis |
+//! | `run/` | the run: `integration` (a run as an object: `advance_to(t)`, the state, a restart from a given state), `options`, `regime` (branches, candidates), `diagnosis`, `solution`; the loops over an integration (`run::run`, `run::solve`) |
+//! | `segment` | one step's motion as a value, for a `Solution` |
+//! | `driver` | the run's public names where they have always been (re-exports of `run`) |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
 //! | `table` | a run's rows as numbers (bit for bit the CLI's), many runs on threads |
 //! | `quantity` | the quantity a failure is about, as a value |
@@ -36,6 +37,7 @@ pub mod closure;
 pub mod controller;
 pub mod dense;
 pub mod direct;
+pub mod domain;
 pub mod dop853;
 pub mod driver;
 pub mod ensemble;
@@ -44,7 +46,6 @@ pub mod failure;
 pub mod field;
 pub mod highest;
 pub mod impacts;
-pub mod integration;
 pub mod keep;
 pub mod linalg;
 pub mod magnus;
@@ -56,7 +57,8 @@ pub mod plot;
 pub mod progress;
 pub mod quantity;
 pub mod rodas4;
-pub mod solution;
+pub mod run;
+pub mod segment;
 pub mod solver;
 pub mod stepper;
 pub mod summary;
@@ -64,3 +66,6 @@ pub mod system;
 pub mod table;
 pub mod tolerance;
 pub mod watch;
+
+// Where these have always been (generated crates name `solution::Solution`).
+pub use run::{integration, solution};

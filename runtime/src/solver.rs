@@ -70,8 +70,8 @@ pub trait Solver {
     fn report(&self) -> Report;
 
     /// The continuous extension of the last advance, as values that outlive
-    /// the solver (for [`crate::solution::Solution`]).
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure>;
+    /// the solver (for [`crate::run::solution::Solution`]).
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure>;
 
     /// Follows other initial states through the same field (an ensemble:
     /// exact for affine motions, first order in the spread for others);

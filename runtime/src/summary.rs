@@ -2,7 +2,7 @@
 //! field method can read (see the README for what each figure means), or
 //! as one JSON object line (`--summary json`) for scripts.
 
-use crate::driver::{Ending, Outcome};
+use crate::run::options::{Ending, Outcome};
 use std::fmt::Write as _;
 use std::time::Duration;
 

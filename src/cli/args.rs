@@ -66,6 +66,75 @@ pub enum Command {
     /// failed. Exit status: 0 on success, 1 when the model has errors or
     /// its crate does not build, 2 on bad usage.
     Report(ReportArgs),
+    /// Linearize the reduced system (7) at a state: A = ∂f/∂x, ∂f/∂p, the
+    /// eigenvalues, the residual f.
+    ///
+    /// A is the exact symbolic Jacobian of the reduced system evaluated at
+    /// the point (never differenced). Its state is the one the generated
+    /// crate integrates, without two kinds of components: those the
+    /// constraints fix (the dependent velocities: functions of the rest,
+    /// eliminated, so that a perturbation moves them along the
+    /// constraints) and the ignorable coordinates (positions no remaining
+    /// right side contains, such as a rolling disk's heading: left out, so
+    /// that a steady motion linearizes to a constant A and residual 0).
+    /// Components --at does not give take the model's initial values.
+    /// ∂f/∂p is the total derivative (the params declared after one
+    /// recomputed from it, as --param does). An implicit constraint with
+    /// several candidates: the reduced system whose free state holds every
+    /// component --at gives. The dependent positions of holonomic
+    /// constraints are eliminated too (put on the constraints by Newton
+    /// from the values given). Each eigenvalue is shown with its frequency |Im λ|, natural
+    /// frequency |λ| and damping ratio −Re λ/|λ|; the residual says
+    /// whether the point is an equilibrium (or a steady motion). Exit
+    /// status: 0 on success, 1 when the model has errors, 2 on bad usage
+    /// (an unknown name, a malformed value), 3 where A is not defined (a
+    /// division by zero, a function outside its domain, a singular mass
+    /// matrix).
+    Linearize(LinearizeArgs),
+}
+
+#[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
+pub struct LinearizeArgs {
+    /// The `.lag` model.
+    pub file: PathBuf,
+    /// The state: `--at "th=0.1,th'=0,psi'=-4"` (repeatable); components
+    /// not given take the model's initial values, and those the
+    /// constraints fix are computed from the rest (a value given for one
+    /// must agree with them).
+    #[arg(long, value_name = "NAME=VALUE,…", allow_hyphen_values = true)]
+    pub at: Vec<String>,
+    /// Override params: `--param g=9.81,l=2` (repeatable); the params
+    /// declared after one are recomputed from it.
+    #[arg(
+        long = "param",
+        value_name = "NAME=VALUE,…",
+        allow_hyphen_values = true
+    )]
+    pub params: Vec<String>,
+    /// The time, for rheonomic models (default: the start of the model's span).
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub t: Option<String>,
+    /// The output format (json: `{"state", "ignorable", "A", "eigenvalues",
+    /// "residual", …}` on one line).
+    #[arg(long, value_enum, default_value_t = LinearizeFormat::Text)]
+    pub format: LinearizeFormat,
+    /// A as expressions (printed as `lagc derive` prints): the values given
+    /// with --at, --param and --t substituted, every other param and state
+    /// component a symbol. An implicit system's highest rows as the parts
+    /// of G_z ∂z/∂x = −G_x.
+    #[arg(long)]
+    pub symbolic: bool,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum LinearizeFormat {
+    /// Plain text.
+    Text,
+    /// One JSON object.
+    Json,
+    /// A LaTeX `align*` block.
+    Latex,
 }
 
 /// Negative numbers are values, not flags: `--tolerances -1` gets lagc's

@@ -10,6 +10,22 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/budget.rs", include_str!("../../runtime/src/budget.rs")),
     ("src/cli.rs", include_str!("../../runtime/src/cli.rs")),
     (
+        "src/cli/args.rs",
+        include_str!("../../runtime/src/cli/args.rs"),
+    ),
+    (
+        "src/cli/bench.rs",
+        include_str!("../../runtime/src/cli/bench.rs"),
+    ),
+    (
+        "src/cli/exit.rs",
+        include_str!("../../runtime/src/cli/exit.rs"),
+    ),
+    (
+        "src/cli/run.rs",
+        include_str!("../../runtime/src/cli/run.rs"),
+    ),
+    (
         "src/closure.rs",
         include_str!("../../runtime/src/closure.rs"),
     ),
@@ -19,7 +35,12 @@ const RUNTIME: &[(&str, &str)] = &[
     ),
     ("src/dense.rs", include_str!("../../runtime/src/dense.rs")),
     ("src/direct.rs", include_str!("../../runtime/src/direct.rs")),
+    ("src/domain.rs", include_str!("../../runtime/src/domain.rs")),
     ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
+    (
+        "src/dop853/tableau.rs",
+        include_str!("../../runtime/src/dop853/tableau.rs"),
+    ),
     ("src/driver.rs", include_str!("../../runtime/src/driver.rs")),
     (
         "src/ensemble.rs",
@@ -62,10 +83,6 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/impacts.rs",
         include_str!("../../runtime/src/impacts.rs"),
     ),
-    (
-        "src/integration.rs",
-        include_str!("../../runtime/src/integration.rs"),
-    ),
     ("src/keep.rs", include_str!("../../runtime/src/keep.rs")),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
@@ -85,8 +102,36 @@ const RUNTIME: &[(&str, &str)] = &[
     ),
     ("src/rodas4.rs", include_str!("../../runtime/src/rodas4.rs")),
     (
-        "src/solution.rs",
-        include_str!("../../runtime/src/solution.rs"),
+        "src/rodas4/tableau.rs",
+        include_str!("../../runtime/src/rodas4/tableau.rs"),
+    ),
+    (
+        "src/run/diagnosis.rs",
+        include_str!("../../runtime/src/run/diagnosis.rs"),
+    ),
+    (
+        "src/run/integration.rs",
+        include_str!("../../runtime/src/run/integration.rs"),
+    ),
+    (
+        "src/run/mod.rs",
+        include_str!("../../runtime/src/run/mod.rs"),
+    ),
+    (
+        "src/run/options.rs",
+        include_str!("../../runtime/src/run/options.rs"),
+    ),
+    (
+        "src/run/regime.rs",
+        include_str!("../../runtime/src/run/regime.rs"),
+    ),
+    (
+        "src/run/solution.rs",
+        include_str!("../../runtime/src/run/solution.rs"),
+    ),
+    (
+        "src/segment.rs",
+        include_str!("../../runtime/src/segment.rs"),
     ),
     ("src/solver.rs", include_str!("../../runtime/src/solver.rs")),
     (

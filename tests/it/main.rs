@@ -15,6 +15,7 @@ mod ir;
 mod kernel;
 mod language_v2;
 mod latex;
+mod linearize;
 mod mass_law_forms;
 mod mechanics;
 mod nonlinear;

@@ -261,7 +261,7 @@ impl Solver for AffineField {
         Ok(())
     }
 
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure> {
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure> {
         let window = &mut self.window;
         with_system(model, self.options.magnus, &self.scratch, |system| {
             window.segment(system)

@@ -605,7 +605,7 @@ impl Solver for QuasilinearField {
         Ok(())
     }
 
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::solution::Segment>, Failure> {
+    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure> {
         let Some(window) = self.accepted.as_mut() else {
             return Ok(Vec::new());
         };
@@ -616,7 +616,7 @@ impl Solver for QuasilinearField {
             if window.steps[i].is_explicit() {
                 self.linearizations += window.build_output(model, i)?;
                 if let Some(d) = &window.outputs[i] {
-                    out.push(crate::solution::Segment::State(d.clone()));
+                    out.push(crate::segment::Segment::State(d.clone()));
                 }
                 continue;
             }
@@ -625,7 +625,7 @@ impl Solver for QuasilinearField {
                 window.prepared[i] = Some(window.steps[i].prepare(&source)?);
             }
             if let Some(y) = &window.prepared[i] {
-                out.push(crate::solution::Segment::Projective {
+                out.push(crate::segment::Segment::Projective {
                     y: y.clone(),
                     anchor: window.anchor_x.clone(),
                 });

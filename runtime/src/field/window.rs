@@ -19,7 +19,7 @@ use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::magnus::{LinearGenerator, Magnus};
 use crate::rodas4::Rodas4;
-use crate::solution::Segment;
+use crate::segment::Segment;
 use crate::stepper::{Clocked, DenseStep, ErrorMeasure, StepOutcome, Stepper};
 use crate::tolerance::{Stats, Tolerance};
 

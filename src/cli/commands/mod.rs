@@ -6,6 +6,7 @@ mod build;
 mod cache;
 mod check;
 mod derive;
+mod linearize;
 mod report;
 mod run;
 
@@ -30,6 +31,7 @@ pub fn main() -> ExitCode {
         Command::Run(args) => run::run(&args),
         Command::Cache(args) => cache::cache(&args),
         Command::Report(args) => report::report(&args),
+        Command::Linearize(args) => linearize::linearize(&args),
     }
 }
 

@@ -1,0 +1,285 @@
+//! A run from the command line: the model with the invocation's params and
+//! initial values (checked as the file's own are), the CSV on stdout as
+//! the integration goes, the summary on stderr; `--repeat` and
+//! `--estimate-error` run it again.
+
+use super::args::Invocation;
+use super::bench::ensemble;
+use super::exit::fail;
+use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
+use crate::method::{IntegratorChoice, Method};
+use crate::model::{DynModel, Initial};
+use crate::output::{sample_times, write_header, write_row};
+use crate::plot::write_plot;
+use crate::run::options::{Ending, Options};
+use crate::run::run;
+use crate::summary::Summary;
+use std::io::Write;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+/// A run made ready: the model with the invocation's params, its span and
+/// its initial state.
+pub struct Prepared {
+    pub model: Box<dyn DynModel>,
+    pub t0: f64,
+    pub t1: f64,
+    pub x0: Vec<f64>,
+}
+
+/// The model, its span and initial state for an invocation, with every
+/// check the file's own values get.
+pub fn prepare(prototype: &dyn DynModel, inv: &Invocation) -> Result<Prepared, Failure> {
+    let mut overrides = vec![None; prototype.param_names().len()];
+    for &(i, v) in &inv.params {
+        overrides[i] = Some(v);
+    }
+    let params = prototype.parameters(&overrides);
+    let model = prototype.with_params(&params);
+    let (t0, t1) = model.time_span();
+    if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
+        return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
+    }
+    let mut given = vec![None; model.dim()];
+    for &(i, v) in &inv.inits {
+        if model.initial_kinds().get(i) == Some(&Initial::Given) {
+            given[i] = Some(v);
+        }
+    }
+    let x0 = model.initial_state(&given)?;
+    for (i, v) in x0.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(Failure::new(
+                t0,
+                FailureKind::NonFiniteInitialValue {
+                    component: model.state_names()[i].to_string(),
+                },
+            ));
+        }
+    }
+    // A value the constraints fix may be stated, if it agrees.
+    for &(i, stated) in &inv.inits {
+        if model.initial_kinds().get(i) != Some(&Initial::Given) {
+            let required = x0[i];
+            if (stated - required).abs() > 1e-9 * required.abs().max(1.0) {
+                return Err(Failure::new(
+                    t0,
+                    FailureKind::InconsistentInitialValue {
+                        component: model.state_names()[i].to_string(),
+                        stated,
+                        required,
+                    },
+                ));
+            }
+        }
+    }
+    crate::run::regime::check_initial_candidates(&*model, t0, &x0)?;
+    Ok(Prepared { model, t0, t1, x0 })
+}
+
+/// The line a run prints first: the method and integrator, and why.
+pub fn plan(model: &dyn DynModel, options: &Options) -> String {
+    let (choice, source) = options.choice(model);
+    match options.method {
+        Method::Direct => match choice {
+            IntegratorChoice::Stiff => format!("direct: RODAS4 ({source})"),
+            IntegratorChoice::Explicit => {
+                format!("direct: DOP853 ({source}; stiffness is only reported)")
+            }
+            _ => format!("direct: DOP853, switching to RODAS4 if it detects stiffness ({source})"),
+        },
+        Method::Field => {
+            let integrator = match choice {
+                IntegratorChoice::Stiff => "RODAS4",
+                IntegratorChoice::Explicit => "DOP853",
+                IntegratorChoice::Magnus if model.affine() => "the Magnus integrator",
+                _ => "DOP853, switching to RODAS4 if it detects stiffness",
+            };
+            if model.affine() {
+                format!("field: the coefficient system by {integrator} ({source})")
+            } else {
+                format!(
+                    "field: quasilinear windows (the motion linearised along a predictor, each \
+                     window's field by {integrator}) ({source})"
+                )
+            }
+        }
+    }
+}
+
+pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
+    for warning in &inv.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let Prepared {
+        mut model,
+        t0,
+        t1,
+        x0,
+    } = match prepare(prototype, inv) {
+        Ok(prepared) => prepared,
+        Err(failure) => return fail(inv.json, &failure),
+    };
+    let times = match &inv.times {
+        Some(times) => {
+            if let Some(t) = times.iter().find(|&&t| t < t0 || t > t1) {
+                eprintln!("error: `--times`: {t} is outside the time span {t0} .. {t1}");
+                return ExitCode::from(USAGE_EXIT_STATUS);
+            }
+            times.clone()
+        }
+        None => sample_times(t0, t1, inv.samples),
+    };
+    if let Some(count) = inv.ensemble {
+        return ensemble(&mut *model, inv, t0, t1, &x0, &times, count);
+    }
+    eprintln!("{}", plan(&*model, &inv.options));
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    let columns = model.dim() + model.output_names().len();
+    let mut written: Result<(), std::io::Error> = Ok(());
+    if !inv.quiet {
+        written = write_header(&mut out, model.state_names(), model.output_names());
+    }
+    // The exact lines hold for the model's own initial values: after
+    // `--init` they measured the distance to another motion (12.9 on a
+    // knife edge started at another heading) as an error.
+    let mut exact_error: Option<f64> =
+        (model.states_exact() && inv.inits.is_empty()).then_some(0.0);
+    if model.states_exact() && !inv.inits.is_empty() {
+        eprintln!(
+            "note: the exact solution is not compared: --init changes the initial values it \
+             was written for"
+        );
+    }
+    let mut plotted: Vec<(f64, Vec<f64>)> = Vec::new();
+    let mut outputs = vec![0.0; model.output_names().len()];
+    let mut exact = vec![None; model.dim()];
+    let first_start = Instant::now();
+    // The first solve streams the CSV; `--repeat N` then times N more
+    // solves without output and reports the fastest.
+    let first = run(
+        &mut *model,
+        &inv.options,
+        t0,
+        t1,
+        &x0,
+        &times,
+        |model: &dyn DynModel, t, x| {
+            model.outputs(t, x, &mut outputs);
+            if written.is_ok() && !inv.quiet {
+                written = write_row(&mut out, t, x, &outputs);
+            }
+            if let Some(largest) = exact_error.as_mut() {
+                model.exact(t, &mut exact);
+                for (value, truth) in x.iter().zip(&exact) {
+                    if let Some(truth) = truth {
+                        *largest = largest.max((value - truth).abs() / truth.abs().max(1.0));
+                    }
+                }
+            }
+            if inv.plot.is_some() || inv.estimate_error {
+                let mut row = x.to_vec();
+                row.extend_from_slice(&outputs);
+                plotted.push((t, row));
+            }
+            Ok(())
+        },
+    );
+    let first_time = first_start.elapsed();
+    let flushed = written.and_then(|()| out.flush());
+    drop(out);
+    if let Err(error) = flushed {
+        if error.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("error: cannot write the trajectory: {error}");
+            return ExitCode::FAILURE;
+        }
+    }
+    let outcome = match first {
+        Ok(outcome) => outcome,
+        Err(failure) => return fail(inv.json, &failure),
+    };
+    let mut fastest = first_time;
+    if inv.repeat > 1 {
+        fastest = Duration::MAX;
+        for _ in 0..inv.repeat {
+            let start = Instant::now();
+            let quiet = Options {
+                progress: false,
+                ..inv.options.clone()
+            };
+            if let Err(failure) = run(&mut *model, &quiet, t0, t1, &x0, &times, |_, _, _| Ok(())) {
+                return fail(inv.json, &failure);
+            }
+            fastest = fastest.min(start.elapsed());
+        }
+    }
+    let estimated_error = if inv.estimate_error {
+        match estimate(&mut *model, inv, t0, t1, &x0, &plotted) {
+            Ok(e) => Some(e),
+            Err(failure) => {
+                eprintln!("warning: the error estimate failed: {failure}");
+                None
+            }
+        }
+    } else {
+        None
+    };
+    if let Some(request) = &inv.plot {
+        let mut names: Vec<&str> = vec!["t"];
+        names.extend(model.state_names());
+        names.extend(model.output_names());
+        if let Err(error) = write_plot(request, model.name(), &names, &plotted) {
+            eprintln!("error: cannot write the plot `{}`: {error}", request.file);
+            return ExitCode::FAILURE;
+        }
+    }
+    debug_assert!(plotted.iter().all(|(_, r)| r.len() == columns));
+    let summary = Summary {
+        outcome,
+        wall_time: fastest,
+        runs: inv.repeat,
+        exact_error,
+        estimated_error,
+    };
+    if inv.json {
+        eprintln!("{}", summary.json());
+    } else {
+        eprintln!("{}", summary.text());
+    }
+    if let Ending::Stopped(_) = summary.outcome.ending {
+        // The run ended where the model said: a success.
+    }
+    ExitCode::SUCCESS
+}
+
+/// The largest difference (relative to `max(|x|, 1)`) between the samples
+/// of the run and those of a run at a 100× tighter tolerance.
+fn estimate(
+    model: &mut dyn DynModel,
+    inv: &Invocation,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    samples: &[(f64, Vec<f64>)],
+) -> Result<f64, Failure> {
+    let mut options = inv.options.clone();
+    options.tol = options.tol.scaled(0.01);
+    options.progress = false;
+    let times: Vec<f64> = samples.iter().map(|(t, _)| *t).collect();
+    let n = model.dim();
+    let mut largest = 0.0_f64;
+    let mut i = 0;
+    run(model, &options, t0, t1, x0, &times, |_, t, x| {
+        if let Some((ts, row)) = samples.get(i) {
+            if *ts == t {
+                for (a, b) in row[..n].iter().zip(x) {
+                    largest = largest.max((a - b).abs() / b.abs().max(1.0));
+                }
+            }
+        }
+        i += 1;
+        Ok(())
+    })?;
+    Ok(largest)
+}

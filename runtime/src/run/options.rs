@@ -1,0 +1,91 @@
+//! What a run is asked to do ([`Options`]) and what it did ([`Outcome`],
+//! [`Ending`]).
+
+use crate::field::Anchor;
+use crate::method::{IntegratorChoice, Method};
+use crate::model::DynModel;
+use crate::solver::Report;
+use crate::tolerance::Tolerance;
+
+/// How to integrate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    pub method: Method,
+    /// `None`: the model's `integrator` statement, or `Auto`.
+    pub integrator: Option<IntegratorChoice>,
+    pub tol: Tolerance,
+    pub anchor: Anchor,
+    pub reanchor: bool,
+    /// The work budget: steps of every kind.
+    pub max_steps: usize,
+    /// Show progress on stderr (when it is a terminal) for long runs.
+    pub progress: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            method: Method::Field,
+            integrator: None,
+            tol: Tolerance::default(),
+            anchor: Anchor::Zero,
+            reanchor: true,
+            max_steps: crate::budget::DEFAULT_MAX_STEPS,
+            progress: false,
+        }
+    }
+}
+
+impl Options {
+    /// The integrator choice: the option, else the model's statement,
+    /// else `Auto`; with where it came from, in words.
+    pub fn choice(&self, model: &dyn DynModel) -> (IntegratorChoice, String) {
+        let choice = self.integrator_choice(model);
+        match (self.integrator, model.declared_integrator()) {
+            (Some(c), _) => (choice, format!("--integrator {}", c.name())),
+            (None, Some(c)) => (choice, format!("declared {} in the model", c.name())),
+            (None, None) => (choice, "auto, the default".to_string()),
+        }
+    }
+
+    /// The integrator choice of [`Options::choice`] without the words (no
+    /// allocation: every solve asks).
+    pub fn integrator_choice(&self, model: &dyn DynModel) -> IntegratorChoice {
+        self.integrator
+            .or_else(|| model.declared_integrator())
+            .unwrap_or(IntegratorChoice::Auto)
+    }
+}
+
+/// Why the run ended.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ending {
+    /// At the end of the time span.
+    End,
+    /// `stop when` became true at this time.
+    Stopped(f64),
+    /// The impacts of the `when` whose condition is `impact` left the
+    /// motion on its boundary at `at`: they accumulate at `accumulation`
+    /// (a ball with restitution below 1 comes to rest there), or (`None`)
+    /// the last one stopped the motion instead of turning it back. The
+    /// run ends at `at`, its last row the state after that impact.
+    Rest {
+        impact: &'static str,
+        at: f64,
+        accumulation: Option<f64>,
+    },
+}
+
+/// What a run did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    pub report: Report,
+    pub ending: Ending,
+    /// Events located (switches and candidate changes).
+    pub events: usize,
+    /// Steps drawn from the budget.
+    pub budget_used: usize,
+    /// The constraints' residuals and projections (models whose
+    /// constraints fix state components).
+    pub kept: Option<crate::keep::Kept>,
+}

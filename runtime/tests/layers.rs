@@ -1,0 +1,184 @@
+//! The runtime's layers: no two of its modules import each other (issue
+//! 25). A module is a file of `runtime/src/` (`run/integration.rs` is
+//! `run::integration`, a `mod.rs` its folder); it imports another when its
+//! code (not its comments, not its unit tests) names a path into it,
+//! `crate::…` or `super::…`. Re-exports at the crate's root
+//! (`pub use run::{integration, solution}`) are followed to the module.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// Every module of the runtime by its path (`run::integration`), with its
+/// source.
+fn modules() -> BTreeMap<String, String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut found = BTreeMap::new();
+    let mut folders = vec![root.clone()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+                continue;
+            }
+            if path.extension().is_none_or(|e| e != "rs") {
+                continue;
+            }
+            let relative = path.strip_prefix(&root).unwrap().with_extension("");
+            let mut parts: Vec<String> = relative
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            if parts.last().is_some_and(|p| p == "mod" || p == "lib") {
+                parts.pop();
+            }
+            let source = std::fs::read_to_string(&path).unwrap();
+            found.insert(parts.join("::"), source);
+        }
+    }
+    found
+}
+
+/// The code a module's imports are read from: no comments, no unit tests
+/// (by the house's convention the file's last item, after `#[cfg(test)]`).
+fn code(source: &str) -> String {
+    let source = source.split("#[cfg(test)]").next().unwrap();
+    source
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The paths a module's code names, each a list of segments from the
+/// crate's root (`super::` resolved against `module`).
+fn paths(module: &str, code: &str) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    let parent: Vec<&str> = module.split("::").filter(|s| !s.is_empty()).collect();
+    let parent = &parent[..parent.len().saturating_sub(1)];
+    for (prefix, base) in [("crate::", Vec::new()), ("super::", parent.to_vec())] {
+        let mut rest = code;
+        while let Some(at) = rest.find(prefix) {
+            let before = rest[..at].chars().last();
+            rest = &rest[at + prefix.len()..];
+            if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                continue;
+            }
+            let mut segments: Vec<String> = base.iter().map(|s| s.to_string()).collect();
+            let mut tail = rest;
+            loop {
+                let end = tail
+                    .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+                    .unwrap_or(tail.len());
+                if end == 0 {
+                    break;
+                }
+                segments.push(tail[..end].to_string());
+                if !tail[end..].starts_with("::") {
+                    break;
+                }
+                tail = &tail[end + 2..];
+            }
+            // `crate::x::{a, b}`: each of the group.
+            if tail.starts_with('{')
+                || tail[tail.find(|c: char| c != ':').unwrap_or(0)..].starts_with('{')
+            {
+                let open = tail.find('{').unwrap();
+                let close = tail[open..].find('}').map_or(tail.len(), |c| open + c);
+                for item in tail[open + 1..close].split(',') {
+                    let mut grouped = segments.clone();
+                    grouped.extend(
+                        item.trim()
+                            .split("::")
+                            .map(|s| s.trim().to_string())
+                            .filter(|s| !s.is_empty()),
+                    );
+                    out.push(grouped);
+                }
+            }
+            out.push(segments);
+        }
+    }
+    out
+}
+
+/// The module a path leads into: its longest prefix that is a module,
+/// after the crate root's re-exports of modules.
+fn target(path: &[String], modules: &BTreeMap<String, String>) -> Option<String> {
+    let aliases = [
+        ("solution", "run::solution"),
+        ("integration", "run::integration"),
+    ];
+    let mut path = path.to_vec();
+    if let Some(first) = path.first() {
+        if let Some((_, to)) = aliases.iter().find(|(from, _)| first == from) {
+            let mut resolved: Vec<String> = to.split("::").map(String::from).collect();
+            resolved.extend(path.drain(1..));
+            path = resolved;
+        }
+    }
+    (1..=path.len())
+        .rev()
+        .map(|k| path[..k].join("::"))
+        .find(|candidate| modules.contains_key(candidate))
+}
+
+fn imports() -> BTreeMap<String, BTreeSet<String>> {
+    let modules = modules();
+    let mut graph = BTreeMap::new();
+    for (module, source) in &modules {
+        let code = code(source);
+        let targets: BTreeSet<String> = paths(module, &code)
+            .iter()
+            .filter_map(|p| target(p, &modules))
+            .filter(|t| t != module && !t.is_empty())
+            .collect();
+        graph.insert(module.clone(), targets);
+    }
+    graph
+}
+
+#[test]
+fn no_two_runtime_modules_import_each_other() {
+    let graph = imports();
+    let mut both_ways = Vec::new();
+    for (a, targets) in &graph {
+        for b in targets {
+            if a < b && graph.get(b).is_some_and(|t| t.contains(a)) {
+                both_ways.push(format!("{a} <-> {b}"));
+            }
+        }
+    }
+    assert!(
+        both_ways.is_empty(),
+        "modules that import each other: {both_ways:?}"
+    );
+    // The reader sees what it should: the run imports the integrators'
+    // interface, never the other way.
+    assert!(graph["run::integration"].contains("solver"));
+    assert!(!graph["solver"].iter().any(|t| t.starts_with("run")));
+}
+
+#[test]
+fn the_checker_sees_an_import_both_ways() {
+    // Two made-up modules naming each other, one through a group and
+    // `super::`: the checker must find both edges.
+    let mut modules = BTreeMap::new();
+    modules.insert("a::x".to_string(), String::new());
+    modules.insert("a::y".to_string(), String::new());
+    let from_x = paths("a::x", &code("use super::y::{Thing, other};\n"));
+    let from_y = paths(
+        "a::y",
+        &code("// crate::b is a comment\nfn f() { crate::a::x::g() }\n"),
+    );
+    assert!(from_x
+        .iter()
+        .any(|p| target(p, &modules).as_deref() == Some("a::y")));
+    assert!(from_y
+        .iter()
+        .any(|p| target(p, &modules).as_deref() == Some("a::x")));
+    assert_eq!(
+        paths("a::y", &code("// crate::a::x\n")),
+        Vec::<Vec<String>>::new()
+    );
+}
