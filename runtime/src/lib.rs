@@ -23,6 +23,8 @@
 //! | `driver` | the run's public names where they have always been (re-exports of `run`) |
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
 //! | `inputs` | inputs set from outside: their values in the model, signals, runs restarted at their changes |
+//! | `table` | a run's rows as numbers (bit for bit the CLI's), many runs on threads |
+//! | `quantity` | the quantity a failure is about, as a value |
 //! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
 // Numerical kernels index several arrays with one loop variable; and
@@ -55,6 +57,7 @@ pub mod model;
 pub mod output;
 pub mod plot;
 pub mod progress;
+pub mod quantity;
 pub mod rodas4;
 pub mod run;
 pub mod segment;
@@ -62,6 +65,7 @@ pub mod solver;
 pub mod stepper;
 pub mod summary;
 pub mod system;
+pub mod table;
 pub mod tolerance;
 pub mod watch;
 

@@ -184,8 +184,19 @@ pub struct BuildArgs {
     /// Build an FMI 2.0 co-simulation FMU for Linux x86-64 instead: `-o`
     /// names the `.fmu` file (the model's own integrators run inside
     /// fmi2DoStep; cargo builds it in the cache).
-    #[arg(long, conflicts_with = "runtime")]
+    #[arg(long, conflicts_with_all = ["runtime", "python"])]
     pub fmu: bool,
+    /// Write a Python project instead: `pip install DIR` builds (with
+    /// maturin) and installs the module named after FILE (`paper.lag` →
+    /// `import paper`). It needs Rust and pip; pyo3 and numpy come from
+    /// crates.io.
+    #[arg(long)]
+    pub python: bool,
+    /// With --python: where to write the `lagc-python` library the project
+    /// depends on (default: DIR/lagc-python). Several models' projects may
+    /// share one, with one --runtime, and one CARGO_TARGET_DIR.
+    #[arg(long, value_name = "PYTHON_LIB_DIR", requires = "python")]
+    pub python_lib: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]

@@ -63,6 +63,10 @@ pub fn may_write_into(dir: &Path) -> bool {
 /// Where `lagc build -o DIR` puts the runtime's copy, inside DIR.
 pub const RUNTIME_IN_CRATE: &str = "lagc-runtime";
 
+/// Where `lagc build --python -o DIR` puts the `lagc-python` library's
+/// copy, inside DIR.
+pub const PYTHON_IN_PROJECT: &str = "lagc-python";
+
 /// The cache's directory of the runtime (one per version of its sources).
 pub fn runtime_dir_name() -> String {
     format!("runtime-{}", lagc::emit::runtime_version())

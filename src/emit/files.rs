@@ -97,6 +97,10 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/progress.rs",
         include_str!("../../runtime/src/progress.rs"),
     ),
+    (
+        "src/quantity.rs",
+        include_str!("../../runtime/src/quantity.rs"),
+    ),
     ("src/rodas4.rs", include_str!("../../runtime/src/rodas4.rs")),
     (
         "src/rodas4/tableau.rs",
@@ -140,6 +144,7 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/summary.rs"),
     ),
     ("src/system.rs", include_str!("../../runtime/src/system.rs")),
+    ("src/table.rs", include_str!("../../runtime/src/table.rs")),
     (
         "src/tolerance.rs",
         include_str!("../../runtime/src/tolerance.rs"),

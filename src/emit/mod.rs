@@ -20,6 +20,7 @@
 //! | `coefficients.rs` | the coefficient system |
 //! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
 //! | `fmu.rs` | the FMU's crate (a `cdylib` over lagc-fmu) and modelDescription.xml |
+//! | `python.rs` | the Python project (`--python`): pyproject.toml, Cargo.toml, the `#[pymodule]`, the `lagc-python` crate's sources |
 
 mod bodies;
 mod coefficients;
@@ -34,6 +35,7 @@ mod motion;
 pub mod namer;
 mod names;
 mod params;
+pub mod python;
 
 use crate::diagnostic::Diagnostic;
 use crate::kernel::Kernel;

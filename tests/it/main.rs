@@ -22,6 +22,7 @@ mod mass_law_forms;
 mod mechanics;
 mod nonlinear;
 mod parser;
+mod python;
 mod readme_program;
 mod report;
 mod robustness;

@@ -1,0 +1,359 @@
+//! `Model(**params)`: the model with param values, solved by the runtime.
+
+use crate::errors::failed;
+use crate::integration::PyIntegration;
+use crate::request::{self, RunOptions};
+use crate::solution::PySolution;
+use crate::{kind, Kind};
+use lagc_runtime::driver::Ending;
+use lagc_runtime::integration::Integration;
+use lagc_runtime::table::{
+    jacobian_at, ready, rhs_at, tabulate, tabulate_many, Request, TableError, Tabulated,
+};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+
+/// A lagc model with param values: `Model(alpha=2.0)` overrides the params
+/// named (params computed from them follow, as with `lagc run --param`);
+/// the others keep the file's values.
+#[pyclass(name = "Model", frozen)]
+pub struct PyModel {
+    /// The overrides as given, `(param index, value)`.
+    overrides: Vec<(usize, f64)>,
+    /// Every param's value.
+    values: Vec<f64>,
+}
+
+/// A run's result as Python sees it.
+fn solution(
+    py: Python<'_>,
+    kind: &Kind,
+    result: Result<Tabulated, TableError>,
+) -> PyResult<PySolution> {
+    match result {
+        Ok(done) => {
+            let stopped_at = match done.summary.outcome.ending {
+                Ending::End => None,
+                Ending::Stopped(t) | Ending::Rest { at: t, .. } => Some(t),
+            };
+            let stats = done.summary.json();
+            Ok(PySolution::from_table(
+                py,
+                kind,
+                done.table,
+                Some(stats),
+                stopped_at,
+            ))
+        }
+        Err(TableError::Usage(message)) => Err(PyValueError::new_err(message)),
+        Err(TableError::Failed(run)) => Err(failed(py, kind, &run.failure, run.table)),
+    }
+}
+
+impl PyModel {
+    fn model(&self) -> Box<dyn lagc_runtime::model::DynModel> {
+        (kind().make)(&self.values)
+    }
+
+    fn state(&self, x: Vec<f64>) -> PyResult<Vec<f64>> {
+        let n = kind().state_names.len();
+        if x.len() != n {
+            return Err(PyValueError::new_err(format!(
+                "the state has {n} components ({}), not {}",
+                kind().state_names.join(", "),
+                x.len()
+            )));
+        }
+        Ok(x)
+    }
+}
+
+#[pymethods]
+impl PyModel {
+    #[new]
+    #[pyo3(signature = (**params))]
+    fn new(params: Option<&Bound<'_, PyDict>>) -> PyResult<PyModel> {
+        let kind = kind();
+        let overrides = request::params(kind, params)?;
+        let mut given = vec![None; kind.param_names.len()];
+        for &(i, v) in &overrides {
+            given[i] = Some(v);
+        }
+        let values = kind.prototype().parameters(&given);
+        Ok(PyModel { overrides, values })
+    }
+
+    /// Every param's value by name.
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for (name, value) in kind().param_names.iter().zip(&self.values) {
+            dict.set_item(name, value)?;
+        }
+        Ok(dict)
+    }
+
+    /// The params' names, in declaration order.
+    #[getter]
+    fn param_names(&self) -> Vec<&'static str> {
+        kind().param_names.to_vec()
+    }
+
+    /// The state components' names (the CSV's columns after `t`).
+    #[getter]
+    fn state_names(&self) -> Vec<&'static str> {
+        kind().state_names.to_vec()
+    }
+
+    /// The output columns' names.
+    #[getter]
+    fn output_names(&self) -> Vec<&'static str> {
+        kind().output_names.to_vec()
+    }
+
+    /// The model's time span `(t0, t1)` with these params.
+    #[getter]
+    fn time_span(&self) -> (f64, f64) {
+        self.model().time_span()
+    }
+
+    /// Solves the model: the state (and outputs) at the times `t` (default:
+    /// 101 evenly spaced over the model's span; times past its end extend
+    /// the run), from the model's initial values with those `initial`
+    /// names replaced (`{"q1'": 2.0}`; values the constraints fix are
+    /// checked against them). `method` is "field" or "direct",
+    /// `integrator` "auto", "explicit", "stiff" or "magnus" (default: the
+    /// model's `integrator` statement, or auto), `rtol`/`atol` the per-step
+    /// tolerance (default 1e-10, 1e-12), `max_steps` the work budget. The
+    /// rows are those `lagc run` prints for the same run, bit for bit.
+    /// Raises IntegrationError when the run fails.
+    #[pyo3(signature = (t=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn solve(
+        &self,
+        py: Python<'_>,
+        t: Option<&Bound<'_, PyAny>>,
+        initial: Option<&Bound<'_, PyDict>>,
+        method: &str,
+        integrator: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        max_steps: Option<usize>,
+    ) -> PyResult<PySolution> {
+        let kind = kind();
+        let options = RunOptions {
+            method,
+            integrator,
+            rtol,
+            atol,
+            max_steps,
+        }
+        .options()?;
+        let times = t.map(request::times).transpose()?;
+        let inits = request::initial(kind, initial)?;
+        let request = request::request(&self.overrides, Vec::new(), inits, options, times);
+        let result = py.detach(|| tabulate(&*kind.prototype(), &request));
+        solution(py, kind, result)
+    }
+
+    /// Solves the model once per dict of `params` (each overriding this
+    /// model's params), on `threads` threads (default: every core) with the
+    /// GIL released; the other arguments as for `solve`. Returns the
+    /// Solutions in order. A failure raises the first set's
+    /// IntegrationError (`errors="raise"`, after every set ran), or stands
+    /// in the list in place of its Solution (`errors="return"`).
+    #[pyo3(signature = (t=None, params=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, threads=None, errors="raise"))]
+    #[allow(clippy::too_many_arguments)]
+    fn solve_batch<'py>(
+        &self,
+        py: Python<'py>,
+        t: Option<&Bound<'py, PyAny>>,
+        params: Option<Vec<Bound<'py, PyDict>>>,
+        initial: Option<&Bound<'py, PyDict>>,
+        method: &str,
+        integrator: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        max_steps: Option<usize>,
+        threads: Option<usize>,
+        errors: &str,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let kind = kind();
+        let raise = match errors {
+            "raise" => true,
+            "return" => false,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "errors `{other}`: give \"raise\" or \"return\""
+                )))
+            }
+        };
+        let options = RunOptions {
+            method,
+            integrator,
+            rtol,
+            atol,
+            max_steps,
+        }
+        .options()?;
+        let times = t.map(request::times).transpose()?;
+        let inits = request::initial(kind, initial)?;
+        let requests: Vec<Request> = params
+            .unwrap_or_default()
+            .iter()
+            .map(|set| {
+                Ok(request::request(
+                    &self.overrides,
+                    request::params(kind, Some(set))?,
+                    inits.clone(),
+                    options.clone(),
+                    times.clone(),
+                ))
+            })
+            .collect::<PyResult<_>>()?;
+        let threads =
+            threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+        if threads == 0 {
+            return Err(PyValueError::new_err("threads: give at least 1"));
+        }
+        let make = || kind.prototype();
+        let results = py.detach(|| tabulate_many(&make, &requests, threads));
+        let list = PyList::empty(py);
+        let mut first_error = None;
+        for result in results {
+            match solution(py, kind, result) {
+                Ok(s) => list.append(Py::new(py, s)?)?,
+                Err(error) => {
+                    if error.is_instance(py, kind.error.bind(py)) || !raise {
+                        list.append(error.value(py))?;
+                    }
+                    if first_error.is_none() {
+                        first_error = Some(error);
+                    }
+                }
+            }
+        }
+        match first_error {
+            Some(error) if raise => Err(error),
+            _ => Ok(list),
+        }
+    }
+
+    /// A run that advances on request (see `Integration`), from the model's
+    /// initial values with those `initial` names replaced; it may advance up
+    /// to the model's end time, or `t_end` if later. The other arguments as
+    /// for `solve`.
+    #[pyo3(signature = (initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, t_end=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn integration(
+        &self,
+        py: Python<'_>,
+        initial: Option<&Bound<'_, PyDict>>,
+        method: &str,
+        integrator: Option<&str>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        max_steps: Option<usize>,
+        t_end: Option<f64>,
+    ) -> PyResult<PyIntegration> {
+        let kind = kind();
+        let options = RunOptions {
+            method,
+            integrator,
+            rtol,
+            atol,
+            max_steps,
+        }
+        .options()?;
+        let inits = request::initial(kind, initial)?;
+        let request = request::request(
+            &self.overrides,
+            Vec::new(),
+            inits,
+            options,
+            t_end.map(|t| vec![t]),
+        );
+        match ready(&*kind.prototype(), &request) {
+            Ok(r) => Ok(PyIntegration::new(Integration::owned(
+                r.model, &r.options, r.t0, r.end, &r.x0,
+            ))),
+            Err(TableError::Usage(message)) => Err(PyValueError::new_err(message)),
+            Err(TableError::Failed(run)) => Err(failed(py, kind, &run.failure, run.table)),
+        }
+    }
+
+    /// `X(t, x)`, the right side of the reduced system (7) (the state's
+    /// rates), in the regime the state is in.
+    fn rhs<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        x: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let x = self.state(x)?;
+        match rhs_at(&mut *self.model(), t, &x) {
+            Ok(dx) => Ok(dx.into_pyarray(py)),
+            Err(failure) => Err(failed(py, kind(), &failure, Default::default())),
+        }
+    }
+
+    /// `∂X/∂x (t, x)`, the exact Jacobian of the right side, (N, N):
+    /// `J[i, j] = ∂X_i/∂x_j`.
+    fn jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        t: f64,
+        x: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let x = self.state(x)?;
+        let n = x.len();
+        match jacobian_at(&mut *self.model(), t, &x) {
+            Ok(jac) => {
+                let mut rows = Vec::with_capacity(n * n);
+                for i in 0..n {
+                    for j in 0..n {
+                        rows.push(jac[(i, j)]);
+                    }
+                }
+                rows.into_pyarray(py).reshape([n, n])
+            }
+            Err(failure) => Err(failed(py, kind(), &failure, Default::default())),
+        }
+    }
+
+    /// Pickling (Dask ships models to its workers): the class and the
+    /// overrides as given, so that params computed from them follow again.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let kwargs = PyDict::new(py);
+        for &(i, v) in &slf.get().overrides {
+            kwargs.set_item(kind().param_names[i], v)?;
+        }
+        let partial = py
+            .import("functools")?
+            .getattr("partial")?
+            .call((slf.get_type(),), Some(&kwargs))?;
+        Ok((partial, PyTuple::empty(py)))
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyModel>().is_ok_and(|o| {
+            let o = o.get();
+            o.values == self.values && o.overrides == self.overrides
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        let kind = kind();
+        let given: Vec<String> = self
+            .overrides
+            .iter()
+            .map(|&(i, v)| format!("{}={v:?}", kind.param_names[i]))
+            .collect();
+        format!("{}.Model({})", kind.module, given.join(", "))
+    }
+}

@@ -1,0 +1,310 @@
+//! The Python project of a model (`lagc build FILE --python -o DIR`): a
+//! maturin `pyproject.toml`, a `Cargo.toml` building a `cdylib` named after
+//! the module, its `Cargo.lock` (the workspace's versions), and a
+//! `src/lib.rs` that is the model's generated code and a `#[pymodule]` of a
+//! few lines handing the model to `lagc_python::register`.
+//! Everything model-independent is the `lagc-python` crate (`python/` in
+//! lagc's repository), whose sources lagc carries like the runtime's.
+
+use super::GeneratedCrate;
+
+/// The `lagc-python` crate's files, relative to its root. Its `Cargo.toml`
+/// names the runtime at `../runtime` (lagc's repository); [`python_cargo_toml`]
+/// points it at the runtime's copy.
+const PYTHON: &[(&str, &str)] = &[
+    ("Cargo.toml", include_str!("../../python/Cargo.toml")),
+    ("src/errors.rs", include_str!("../../python/src/errors.rs")),
+    (
+        "src/integration.rs",
+        include_str!("../../python/src/integration.rs"),
+    ),
+    ("src/lib.rs", include_str!("../../python/src/lib.rs")),
+    ("src/model.rs", include_str!("../../python/src/model.rs")),
+    (
+        "src/request.rs",
+        include_str!("../../python/src/request.rs"),
+    ),
+    (
+        "src/solution.rs",
+        include_str!("../../python/src/solution.rs"),
+    ),
+];
+
+/// The runtime dependency as `python/Cargo.toml` writes it.
+const RUNTIME_IN_REPOSITORY: &str = "lagc-runtime = { path = \"../runtime\" }";
+
+/// The `lagc-python` crate's sources `(path relative to its root,
+/// contents)`, its `Cargo.toml` depending on the runtime at `runtime_path`
+/// (relative to the crate's root).
+pub fn python_library_files(runtime_path: &str) -> Vec<(&'static str, String)> {
+    PYTHON
+        .iter()
+        .map(|&(path, text)| {
+            if path == "Cargo.toml" {
+                (path, python_cargo_toml(text, runtime_path))
+            } else {
+                (path, text.to_string())
+            }
+        })
+        .collect()
+}
+
+fn python_cargo_toml(text: &str, runtime_path: &str) -> String {
+    text.replace(
+        RUNTIME_IN_REPOSITORY,
+        &format!(
+            "lagc-runtime = {{ path = \"{}\" }}",
+            toml_escape(runtime_path)
+        ),
+    )
+}
+
+fn toml_escape(text: &str) -> String {
+    text.replace('\\', "\\\\").replace('"', "\\\"")
+}
+
+/// The workspace's lock file: the versions of pyo3, numpy and their
+/// dependencies that lagc's own build and tests use.
+const WORKSPACE_LOCK: &str = include_str!("../../Cargo.lock");
+
+/// One `[[package]]` entry of a lock file: its name, version and the
+/// dependencies it lists (`name` or `name version …`), and its text.
+struct Locked<'a> {
+    name: &'a str,
+    version: &'a str,
+    dependencies: Vec<&'a str>,
+    text: &'a str,
+}
+
+fn locked_packages(lock: &str) -> Vec<Locked<'_>> {
+    lock.split("[[package]]\n")
+        .skip(1)
+        .map(|block| {
+            let text = block.trim_end();
+            let field = |key: &str| {
+                text.lines()
+                    .find_map(|l| l.strip_prefix(key))
+                    .map_or("", |v| v.trim_matches('"'))
+            };
+            let dependencies = text
+                .split_once("dependencies = [")
+                .map(|(_, rest)| rest.split(']').next().unwrap_or(""))
+                .map(|list| {
+                    list.lines()
+                        .map(|l| l.trim().trim_end_matches(',').trim_matches('"'))
+                        .filter(|l| !l.is_empty())
+                        .collect()
+                })
+                .unwrap_or_default();
+            Locked {
+                name: field("name = "),
+                version: field("version = "),
+                dependencies,
+                text,
+            }
+        })
+        .collect()
+}
+
+/// The Python project's `Cargo.lock`: the project's package, and the
+/// workspace's entries of `lagc-python` and everything it depends on, so
+/// that a project builds with the versions lagc was tested with (and
+/// offline, when cargo has them already).
+pub fn python_cargo_lock(package: &str) -> String {
+    let packages = locked_packages(WORKSPACE_LOCK);
+    let mut wanted: Vec<usize> = Vec::new();
+    let mut queue = vec!["lagc-python"];
+    while let Some(dependency) = queue.pop() {
+        let mut words = dependency.split_whitespace();
+        let name = words.next().unwrap_or("");
+        let version = words.next();
+        let found = packages
+            .iter()
+            .position(|p| p.name == name && version.is_none_or(|v| p.version == v));
+        if let Some(i) = found {
+            if !wanted.contains(&i) {
+                wanted.push(i);
+                queue.extend(packages[i].dependencies.iter().copied());
+            }
+        }
+    }
+    wanted.sort_by_key(|&i| (packages[i].name, packages[i].version));
+    let mut lock = format!(
+        "# This file is automatically @generated by Cargo.\n\
+         # It is not intended for manual editing.\n\
+         version = 4\n\
+         \n\
+         [[package]]\n\
+         name = \"{package}\"\n\
+         version = \"0.1.0\"\n\
+         dependencies = [\n \"lagc-python\",\n \"lagc-runtime\",\n]\n"
+    );
+    for i in wanted {
+        lock.push_str("\n[[package]]\n");
+        lock.push_str(packages[i].text);
+        lock.push('\n');
+    }
+    lock
+}
+
+/// Python's keywords: a module may not be named by one.
+const KEYWORDS: &[&str] = &[
+    "False", "None", "True", "and", "as", "assert", "async", "await", "break", "class", "continue",
+    "def", "del", "elif", "else", "except", "finally", "for", "from", "global", "if", "import",
+    "in", "is", "lambda", "nonlocal", "not", "or", "pass", "raise", "return", "try", "while",
+    "with", "yield",
+];
+
+/// The Python module's name for a model's file stem: `paper` stays
+/// `paper`; other characters than ASCII letters, digits and `_` become
+/// `_`; a leading digit or a keyword gets a `_` (`2d-arm` → `_2d_arm`).
+pub fn python_module_name(model_name: &str) -> String {
+    let mut name: String = model_name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    if name.is_empty() {
+        name = "model".to_string();
+    }
+    if name.starts_with(|c: char| c.is_ascii_digit()) {
+        name.insert(0, '_');
+    }
+    if KEYWORDS.contains(&name.as_str()) {
+        name.push('_');
+    }
+    name
+}
+
+/// Where the libraries are, relative to the project's root.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PythonPaths {
+    pub runtime: String,
+    pub python: String,
+}
+
+/// The Python project of the model whose crate is `generated`: its files
+/// `(path relative to the project's root, contents)`, the module named
+/// `module`.
+pub fn python_project(
+    generated: &GeneratedCrate,
+    module: &str,
+    paths: &PythonPaths,
+) -> Vec<(String, String)> {
+    let package = format!("{}-py", generated.package);
+    let model = generated.file("src/lib.rs").unwrap_or_default();
+    let lib = format!(
+        "{model}\n\
+         /// The Python module `{module}`: `Model`, `Solution` and `IntegrationError`\n\
+         /// (the `lagc-python` crate).\n\
+         #[lagc_python::pyo3::pymodule]\n\
+         #[pyo3(crate = \"lagc_python::pyo3\", name = \"{module}\")]\n\
+         fn python_module(\n    \
+         module: &lagc_python::pyo3::Bound<'_, lagc_python::pyo3::types::PyModule>,\n\
+         ) -> lagc_python::pyo3::PyResult<()> {{\n    \
+         lagc_python::register::<Model>(module, \"{module}\")\n\
+         }}\n"
+    );
+    let cargo = format!(
+        "# Generated by lagc. Do not edit: regenerate with `lagc build --python`.\n\
+         [package]\n\
+         name = \"{package}\"\n\
+         version = \"0.1.0\"\n\
+         edition = \"2021\"\n\
+         publish = false\n\
+         \n\
+         [lib]\n\
+         name = \"{module}\"\n\
+         path = \"src/lib.rs\"\n\
+         crate-type = [\"cdylib\"]\n\
+         \n\
+         [dependencies]\n\
+         lagc-runtime = {{ path = \"{runtime}\" }}\n\
+         lagc-python = {{ path = \"{python}\" }}\n\
+         \n\
+         # A crate of its own: never part of an enclosing workspace.\n\
+         [workspace]\n",
+        runtime = toml_escape(&paths.runtime),
+        python = toml_escape(&paths.python),
+    );
+    let pyproject = format!(
+        "# Generated by lagc. Do not edit: regenerate with `lagc build --python`.\n\
+         # `pip install .` builds and installs the module `{module}` (maturin).\n\
+         [build-system]\n\
+         requires = [\"maturin>=1.9.4,<2\"]\n\
+         build-backend = \"maturin\"\n\
+         \n\
+         [project]\n\
+         name = \"{module}\"\n\
+         version = \"0.1.0\"\n\
+         description = \"The lagc model `{name}` as a Python module\"\n\
+         requires-python = \">=3.9\"\n\
+         dependencies = [\"numpy\"]\n\
+         \n\
+         [tool.maturin]\n\
+         module-name = \"{module}\"\n\
+         # The stable ABI (abi3, Python >= 3.9): one wheel for every Python.\n\
+         bindings = \"pyo3\"\n",
+        name = generated_model_name(generated),
+    );
+    vec![
+        ("pyproject.toml".to_string(), pyproject),
+        ("Cargo.toml".to_string(), cargo),
+        ("Cargo.lock".to_string(), python_cargo_lock(&package)),
+        ("src/lib.rs".to_string(), lib),
+    ]
+}
+
+/// The model's name as the generated crate's package carries it.
+fn generated_model_name(generated: &GeneratedCrate) -> &str {
+    generated
+        .package
+        .strip_prefix("lag-")
+        .unwrap_or(&generated.package)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn module_names_are_python_identifiers() {
+        assert_eq!(python_module_name("paper"), "paper");
+        assert_eq!(python_module_name("2d-arm"), "_2d_arm");
+        assert_eq!(python_module_name("import"), "import_");
+        assert_eq!(python_module_name("ball on table"), "ball_on_table");
+        assert_eq!(python_module_name(""), "model");
+    }
+
+    #[test]
+    fn the_lock_holds_the_libraries_and_their_dependencies_once() {
+        let lock = python_cargo_lock("lag-paper-py");
+        for name in [
+            "lag-paper-py",
+            "lagc-python",
+            "lagc-runtime",
+            "pyo3",
+            "pyo3-ffi",
+            "numpy",
+        ] {
+            assert_eq!(
+                lock.matches(&format!("\nname = \"{name}\"\n")).count(),
+                1,
+                "{name}:\n{lock}"
+            );
+        }
+        // Nothing of lagc's own dependencies that the library does not use.
+        assert!(!lock.contains("name = \"pest\""), "{lock}");
+        assert!(!lock.contains("name = \"lagc\""), "{lock}");
+    }
+
+    #[test]
+    fn the_library_depends_on_the_runtime_where_it_is_written() {
+        let files = python_library_files("../rt");
+        let cargo = &files.iter().find(|(p, _)| *p == "Cargo.toml").unwrap().1;
+        assert!(
+            cargo.contains("lagc-runtime = { path = \"../rt\" }"),
+            "{cargo}"
+        );
+        assert!(!cargo.contains("../runtime\""), "{cargo}");
+    }
+}
