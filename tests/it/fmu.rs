@@ -13,9 +13,10 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 /// The models, by their path under the repository.
-const MODELS: [&str; 4] = [
+const MODELS: [&str; 5] = [
     "examples/paper.lag",
     "tests/data/driven_oscillator.lag",
+    "tests/data/stepped_oscillator.lag",
     "examples/rocket_burnout_landing.lag",
     "tests/data/runtime_failures/newton_no_root.lag",
 ];
