@@ -1,6 +1,7 @@
 //! The linearization as text (`Display`), JSON and LaTeX.
 
 use super::Linearization;
+use lagc_runtime::summary::json_string;
 use std::fmt::{self, Write};
 
 /// `A`'s entries as expressions (`--symbolic`).
@@ -35,22 +36,6 @@ fn num(v: f64) -> String {
     }
 }
 
-fn json_str(s: &str) -> String {
-    let mut out = String::from("\"");
-    for ch in s.chars() {
-        match ch {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", c as u32);
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
 fn list<T>(items: &[T], f: impl Fn(&T) -> String) -> String {
     let parts: Vec<String> = items.iter().map(f).collect();
     format!("[{}]", parts.join(", "))
@@ -80,11 +65,11 @@ impl Linearization {
     /// named.
     pub fn json(&self) -> String {
         let mut out = String::from("{");
-        let _ = write!(out, "\"state\": {}", list(&self.state, |s| json_str(s)));
+        let _ = write!(out, "\"state\": {}", list(&self.state, |s| json_string(s)));
         let _ = write!(
             out,
             ", \"ignorable\": {}",
-            list(&self.ignorable, |(s, _)| json_str(s))
+            list(&self.ignorable, |(s, _)| json_string(s))
         );
         match &self.symbolic {
             None => {
@@ -102,12 +87,12 @@ impl Linearization {
                         let rate = rate_of(r);
                         list(&self.state, |c| {
                             if sym.implicit_rows.contains(&rate) {
-                                return json_str("implicit");
+                                return json_string("implicit");
                             }
                             sym.entries
                                 .iter()
                                 .find(|e| e.row == rate && &e.column == c)
-                                .map_or_else(|| json_str("0"), |e| json_str(&e.text))
+                                .map_or_else(|| json_string("0"), |e| json_string(&e.text))
                         })
                     })
                     .collect();
@@ -117,9 +102,9 @@ impl Linearization {
                     ", \"implicit\": {}",
                     list(&sym.implicit_parts, |e| format!(
                         "[{}, {}, {}]",
-                        json_str(&e.row),
-                        json_str(&e.column),
-                        json_str(&e.text)
+                        json_string(&e.row),
+                        json_string(&e.column),
+                        json_string(&e.text)
                     ))
                 );
             }
@@ -147,11 +132,15 @@ impl Linearization {
             ", \"fixed\": {{{}}}",
             self.fixed
                 .iter()
-                .map(|(n, v)| format!("{}: {}", json_str(n), num(*v)))
+                .map(|(n, v)| format!("{}: {}", json_string(n), num(*v)))
                 .collect::<Vec<_>>()
                 .join(", ")
         );
-        let _ = write!(out, ", \"params\": {}", list(&self.params, |s| json_str(s)));
+        let _ = write!(
+            out,
+            ", \"params\": {}",
+            list(&self.params, |s| json_string(s))
+        );
         let _ = write!(
             out,
             ", \"B_params\": {}",
