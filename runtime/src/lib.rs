@@ -24,6 +24,7 @@
 //! | `events`, `impacts` | locating events; the resets of `when` at them |
 //! | `inputs` | inputs set from outside: their values in the model, signals, runs restarted at their changes |
 //! | `table` | a run's rows as numbers (bit for bit the CLI's), many runs on threads |
+//! | `sensitivity` | forward sensitivities: the variational equations as an augmented system |
 //! | `quantity` | the quantity a failure is about, as a value |
 //! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
 
@@ -61,6 +62,7 @@ pub mod quantity;
 pub mod rodas4;
 pub mod run;
 pub mod segment;
+pub mod sensitivity;
 pub mod solver;
 pub mod stepper;
 pub mod summary;

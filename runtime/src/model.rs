@@ -178,6 +178,8 @@ pub trait Model: Clone {
     /// indices [`Model::constrained`] writes); empty for a model of one
     /// mode: those [`Model::INITIAL`] marks `Constraint`.
     const FIXED: &'static [&'static [usize]] = &[];
+    /// [`Model::param_jacobian`] is given (forward sensitivities).
+    const PARAM_JACOBIAN: bool = false;
 
     /// Every param's value: param `i` is `overrides[i]` when given, else
     /// its expression evaluated with the values before it (so an override
@@ -227,6 +229,13 @@ pub trait Model: Clone {
     ) -> Result<(), Failure> {
         self.rhs(t, x, dx)?;
         self.jacobian(t, x, jac)
+    }
+
+    /// `jac = ∂X/∂p (t, x)`, exact, one column per param (zeroed by the
+    /// caller; the partial in each param symbol, the params computed from
+    /// it held). Given when [`Model::PARAM_JACOBIAN`].
+    fn param_jacobian(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
     }
 
     /// The coefficient system `df = F(t, f)` of the field ansatz (10)
@@ -396,6 +405,10 @@ pub trait DynModel {
     fn keeps_positions(&self) -> bool;
     /// [`Model::FIXED`].
     fn fixed_components(&self) -> &'static [&'static [usize]];
+    /// [`Model::PARAM_JACOBIAN`].
+    fn has_param_jacobian(&self) -> bool;
+    /// [`Model::param_jacobian`].
+    fn param_jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
 
     /// [`Model::parameters`].
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64>;
@@ -519,6 +532,12 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn fixed_components(&self) -> &'static [&'static [usize]] {
         M::FIXED
+    }
+    fn has_param_jacobian(&self) -> bool {
+        M::PARAM_JACOBIAN
+    }
+    fn param_jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        Model::param_jacobian(self, t, x, jac)
     }
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
         M::parameters(overrides)

@@ -209,7 +209,8 @@ pub struct RunArgs {
     /// `--integrator auto|explicit|stiff|magnus`, `--param NAME=VALUE`,
     /// `--init NAME=VALUE`, `--rtol R`, `--atol A`, `--samples N`,
     /// `--times T1,T2,…`, `--estimate-error`, `--plot FILE.svg [--phase X,Y]`,
-    /// `--ensemble K`, `--repeat N`, `--quiet`, `--summary text|json`, …;
+    /// `--ensemble K`, `--sensitivity`, `--repeat N`, `--quiet`,
+    /// `--summary text|json`, …;
     /// and lagc's own `--verbose`: the model's notes (N0001) on every run,
     /// not only when lagc builds its crate.
     #[arg(

@@ -101,6 +101,10 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/quantity.rs",
         include_str!("../../runtime/src/quantity.rs"),
     ),
+    (
+        "src/sensitivity.rs",
+        include_str!("../../runtime/src/sensitivity.rs"),
+    ),
     ("src/rodas4.rs", include_str!("../../runtime/src/rodas4.rs")),
     (
         "src/rodas4/tableau.rs",

@@ -17,6 +17,7 @@
 //! | `initial.rs` | the `Initial` struct (initial values by name) |
 //! | `model.rs` | consts, time span, initial state, exact solution, masses |
 //! | `motion.rs` | `rhs`, `jacobian`, `time_partial`, `linearize` |
+//! | `sensitivity.rs` | `param_jacobian` (`∂X/∂p`, forward sensitivities) |
 //! | `coefficients.rs` | the coefficient system |
 //! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
 //! | `fmu.rs` | the FMU's crate (a `cdylib` over lagc-fmu) and modelDescription.xml |
@@ -36,6 +37,7 @@ pub mod namer;
 mod names;
 mod params;
 pub mod python;
+mod sensitivity;
 
 use crate::diagnostic::Diagnostic;
 use crate::kernel::Kernel;

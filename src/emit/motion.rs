@@ -37,7 +37,8 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
     let closure = closure_kept(kernel, names);
     let events = quote! { #events #closure };
     if kernel.modes.is_empty() {
-        return (quote! { #trait_items #condition #events }, inherent);
+        let params = super::sensitivity::param_jacobian_code(kernel, names, &from_x);
+        return (quote! { #trait_items #condition #events #params }, inherent);
     }
     // Several modes: each mode's motion as inherent methods `…_modeM`,
     // the trait's methods dispatching on the current mode.

@@ -16,6 +16,7 @@ mod impacts;
 mod items;
 mod motion;
 mod outputs;
+mod sensitivity;
 pub mod switches;
 mod text;
 pub mod time;
@@ -26,6 +27,7 @@ pub use items::{
     Coefficients, InitialKind, InitialSource, KernelClosure, KernelInitial, KernelParam,
 };
 pub use motion::{Explicit, Implicit, Motion};
+pub use sensitivity::ParamPartials;
 pub use switches::{BranchCond, Switches};
 
 use crate::check::model::{IntegratorChoice, Model};
@@ -99,6 +101,9 @@ pub struct Kernel {
     /// Where the constraints as written end (square roots, logarithms,
     /// arcsines, poles): the runtime names the constraint there.
     pub domains: Vec<domains::KernelDomain>,
+    /// `∂X/∂p` for the forward sensitivities (`None` where a mass law
+    /// switches).
+    pub param_partials: Option<ParamPartials>,
     /// The kernels of modes 1, 2, …: the same model with other candidates
     /// (their motion only).
     pub modes: Vec<Kernel>,
@@ -221,6 +226,18 @@ fn build_with(
         coefficients.as_mut(),
         &mut mass_matrix,
     );
+    let param_partials = sensitivity::param_partials(
+        &mut arena,
+        &motion,
+        reduced.state.len(),
+        params.len(),
+        &masses,
+        &reduced
+            .mass_laws
+            .iter()
+            .map(|&(i, _)| i)
+            .collect::<Vec<_>>(),
+    );
     let stop = stop.map(|c| switches.condition(&mut arena, &c));
     let kept = kept(&mut arena, &mut switches, reduced);
     let kept_gradient = kept_gradient(&mut arena, &kept, &reduced.state);
@@ -257,6 +274,7 @@ fn build_with(
         kept,
         kept_gradient,
         domains,
+        param_partials,
         modes: Vec::new(),
     })
 }

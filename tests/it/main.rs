@@ -28,6 +28,7 @@ mod report;
 mod robustness;
 mod rolling_bodies;
 mod runtime_failures;
+mod sensitivity;
 mod source_text;
 mod stages;
 mod stiff_extreme;

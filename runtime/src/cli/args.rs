@@ -55,6 +55,12 @@ usage: MODEL [OPTIONS]
                          the largest difference (exact for affine motions,
                          first order in the spread otherwise)
   --spread S             the ensemble's relative spread
+  --sensitivity          also write dX(t)/dY0 for every initial value the
+                         model states and dX(t)/dP for every param, as the
+                         columns `d(X)/d(Y0)`, `d(X)/d(P)` (the variational
+                         equations integrated with the motion by the direct
+                         method, inside its error control; refused for
+                         models with events)
   --repeat N             solve N times (after a warm-up) and report the
                          smallest wall time
   --quiet                no CSV on stdout
@@ -88,6 +94,8 @@ pub struct Invocation {
     pub json: bool,
     pub ensemble: Option<usize>,
     pub spread: f64,
+    /// `--sensitivity`: the forward sensitivities as extra columns.
+    pub sensitivity: bool,
     /// Warnings to print before running (e.g. a tolerance below rounding).
     pub warnings: Vec<String>,
     /// `--input NAME=FILE`: `(name, file)`, checked against the model's
@@ -156,6 +164,7 @@ pub fn parse(
         quiet: false,
         json: false,
         ensemble: None,
+        sensitivity: false,
         spread: 0.1,
         warnings: Vec::new(),
         inputs: Vec::new(),
@@ -234,6 +243,7 @@ pub fn parse(
                 inv.times = Some(times);
             }
             "--estimate-error" => inv.estimate_error = true,
+            "--sensitivity" => inv.sensitivity = true,
             "--ensemble" => inv.ensemble = Some(count(flag, value(flag, &mut args)?, 10_000_000)?),
             "--spread" => {
                 let s = number(flag, value(flag, &mut args)?)?;

@@ -152,17 +152,47 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
         }
         None => sample_times(t0, t1, inv.samples),
     };
+    if inv.sensitivity {
+        let refused = if inv.ensemble.is_some() {
+            Some("`--sensitivity` does not combine with `--ensemble`".to_string())
+        } else if schedule.is_some() {
+            Some("`--sensitivity` does not combine with `--input` yet".to_string())
+        } else {
+            crate::sensitivity::unsupported(&*model)
+        };
+        if let Some(message) = refused {
+            eprintln!("error: {message}");
+            return ExitCode::from(USAGE_EXIT_STATUS);
+        }
+    }
     if let Some(count) = inv.ensemble {
         return ensemble(&mut *model, inv, t0, t1, &x0, &times, count);
     }
     eprintln!("{}", plan(&*model, &inv.options));
+    // The sensitivities first, kept per sample: the CSV then streams the
+    // state from the run as it is without them, with them beside it.
+    let sensitivities = if inv.sensitivity {
+        match sensitivities(prototype, inv, &*model, t0, t1, &x0, &times) {
+            Ok(found) => Some(found),
+            Err(failure) => return fail(inv.json, &failure),
+        }
+    } else {
+        None
+    };
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     let columns = model.dim() + model.output_names().len();
     let mut written: Result<(), std::io::Error> = Ok(());
     if !inv.quiet {
-        written = write_header(&mut out, model.state_names(), model.output_names());
+        let mut extra: Vec<String> = model.output_names().iter().map(|s| s.to_string()).collect();
+        if sensitivities.is_some() {
+            extra.extend(crate::sensitivity::headers(&*model));
+        }
+        let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+        written = write_header(&mut out, model.state_names(), &extra);
     }
+    let mut sample_index = 0;
+    let mut extra = Vec::new();
     // The exact lines hold for the model's own initial values: after
     // `--init` they measured the distance to another motion (12.9 on a
     // knife edge started at another heading) as an error.
@@ -191,8 +221,14 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
         |model: &dyn DynModel, t, x| {
             model.outputs(t, x, &mut outputs);
             if written.is_ok() && !inv.quiet {
-                written = write_row(&mut out, t, x, &outputs);
+                extra.clear();
+                extra.extend_from_slice(&outputs);
+                if let Some((rows, _)) = &sensitivities {
+                    extra.extend_from_slice(rows.get(sample_index).map_or(&[][..], |r| &r[..]));
+                }
+                written = write_row(&mut out, t, x, &extra);
             }
+            sample_index += 1;
             if let Some(largest) = exact_error.as_mut() {
                 model.exact(t, &mut exact);
                 for (value, truth) in x.iter().zip(&exact) {
@@ -218,10 +254,13 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
             return ExitCode::FAILURE;
         }
     }
-    let outcome = match first {
+    let mut outcome = match first {
         Ok(outcome) => outcome,
         Err(failure) => return fail(inv.json, &failure),
     };
+    if let Some((_, note)) = &sensitivities {
+        outcome.report.notes.push(note.clone());
+    }
     let mut fastest = first_time;
     if inv.repeat > 1 {
         fastest = Duration::MAX;
@@ -276,6 +315,62 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
         // The run ended where the model said: a success.
     }
     ExitCode::SUCCESS
+}
+
+/// The sensitivities at every sample time (each row `S` column by column)
+/// and a note for the summary: the augmented system by the direct method
+/// (whatever `--method` integrates the state; the integrator is the run's).
+#[allow(clippy::too_many_arguments)]
+fn sensitivities(
+    prototype: &dyn DynModel,
+    inv: &Invocation,
+    model: &dyn DynModel,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+) -> Result<(Vec<Vec<f64>>, String), Failure> {
+    use crate::sensitivity::{initial, Augmented, Start};
+    let mut overrides = vec![None; prototype.param_names().len()];
+    for &(i, v) in &inv.params {
+        overrides[i] = Some(v);
+    }
+    let mut given = vec![None; model.dim()];
+    for &(i, v) in &inv.inits {
+        if model.initial_kinds().get(i) == Some(&Initial::Given) {
+            given[i] = Some(v);
+        }
+    }
+    let start = Start {
+        prototype,
+        overrides: &overrides,
+        given: &given,
+    };
+    let (chain, s0) = initial(model, &start, t0, x0)?;
+    let mut augmented = Augmented::new(model.boxed_clone(), chain);
+    let mut z0 = x0.to_vec();
+    z0.extend(s0);
+    let options = Options {
+        method: Method::Direct,
+        progress: false,
+        ..inv.options.clone()
+    };
+    let n = model.dim();
+    let mut rows = Vec::with_capacity(times.len());
+    let outcome = run(&mut augmented, &options, t0, t1, &z0, times, |_, _, z| {
+        rows.push(z[n..].to_vec());
+        Ok(())
+    })?;
+    let note = format!(
+        "sensitivities: {} columns, the augmented system ({} components) by direct \
+         integration ({}): {} steps, {} rejected",
+        augmented.columns(),
+        z0.len(),
+        outcome.report.method,
+        outcome.report.stats.accepted_steps,
+        outcome.report.stats.rejected_steps
+    );
+    Ok((rows, note))
 }
 
 /// The largest difference (relative to `max(|x|, 1)`) between the samples

@@ -1,0 +1,480 @@
+//! Forward sensitivities (issue 27): `S = ∂x(t)/∂(y0, p)`, one column per
+//! initial value the model states and per param, by the variational
+//! equations `S' = J S + ∂X/∂p` integrated with the motion as one
+//! augmented system (the direct method on `N + N·m` components). The
+//! sensitivities are ordinary components of that system, so they are
+//! inside the error control (CVODES' `errconS`), and the dense output,
+//! the step control and the failures are the run's own.
+//!
+//! [`Augmented`] is that system as a [`DynModel`] over the model: `J` and
+//! `∂X/∂p` are the model's exact symbolic partials (`jacobian`,
+//! `param_jacobian`); only what RODAS4 needs beyond them — the partials of
+//! `J S + ∂X/∂p` in `x` and `t`, second derivatives of the motion — are
+//! central differences of those exact partials.
+//!
+//! What is not covered is refused ([`unsupported`]): events (switches,
+//! `stop when`, impacts: the sensitivities jump there), run-time
+//! candidates, inputs following a schedule, and models without
+//! `param_jacobian`. The constraints a run keeps by projection are not
+//! kept on the augmented system: its motion is the reduced system's own
+//! (on which they are invariant), and the command line prints the state
+//! from the ordinary run beside it.
+
+use crate::failure::Failure;
+use crate::linalg::Matrix;
+use crate::method::IntegratorChoice;
+use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
+
+/// Why `--sensitivity` is refused for this model, or `None`.
+pub fn unsupported(model: &dyn DynModel) -> Option<String> {
+    if model.switches() > 0 || !model.impacts().is_empty() {
+        return Some(format!(
+            "`--sensitivity`: the model `{}` has events (switches, `stop when` or `when`), \
+             where the sensitivities jump; their jumps are not computed yet",
+            model.name()
+        ));
+    }
+    if !model.constraints().is_empty() {
+        return Some(format!(
+            "`--sensitivity`: the model `{}` chooses its constraints' dependents at run time \
+             (`for y' or x'`); sensitivities across a change of candidates are not computed",
+            model.name()
+        ));
+    }
+    if !model.param_names().is_empty() && !model.has_param_jacobian() {
+        return Some(format!(
+            "`--sensitivity`: the model `{}` was built without `∂X/∂p` (a mass law that \
+             switches)",
+            model.name()
+        ));
+    }
+    None
+}
+
+/// The columns of `S`: the state components the model states (`Y0`, or
+/// `Y(t0)` where a param is called `Y0`), then the params.
+pub fn column_names(model: &dyn DynModel) -> Vec<String> {
+    let params = model.param_names();
+    let mut names: Vec<String> = given_components(model)
+        .into_iter()
+        .map(|i| {
+            let y = model.state_names()[i];
+            let short = format!("{y}0");
+            if params.contains(&short.as_str()) {
+                format!("{y}(t0)")
+            } else {
+                short
+            }
+        })
+        .collect();
+    names.extend(model.param_names().iter().map(|p| p.to_string()));
+    names
+}
+
+/// The CSV headers `d(X)/d(Y0)`, `d(X)/d(P)`, column by column of `S`
+/// (each column's state components in order).
+pub fn headers(model: &dyn DynModel) -> Vec<String> {
+    let mut out = Vec::new();
+    for y in column_names(model) {
+        for x in model.state_names() {
+            out.push(format!("d({x})/d({y})"));
+        }
+    }
+    out
+}
+
+/// The components whose initial values the model states.
+pub fn given_components(model: &dyn DynModel) -> Vec<usize> {
+    (0..model.dim())
+        .filter(|&i| model.initial_kinds().get(i) == Some(&Initial::Given))
+        .collect()
+}
+
+/// A central difference refined by one Richardson step (error `O(h⁴)`):
+/// for the algebraic maps at the start (the initial state, the params
+/// computed from others, the time span), where the values are cheap and
+/// smooth. At `h = 1e-3·|v|` (`1e-3` at 0) the truncation is `~1e-12`
+/// relative for maps of the size of their arguments, and rounding
+/// `~1e-13`; relative to `v`, so a param of 1e-6 is not moved through 0.
+fn derivative(
+    v: f64,
+    f: &mut dyn FnMut(f64) -> Result<Vec<f64>, Failure>,
+) -> Result<Vec<f64>, Failure> {
+    let h = if v == 0.0 { 1e-3 } else { 1e-3 * v.abs() };
+    let central = |f: &mut dyn FnMut(f64) -> Result<Vec<f64>, Failure>,
+                   h: f64|
+     -> Result<Vec<f64>, Failure> {
+        let (a, b) = (f(v + h)?, f(v - h)?);
+        Ok(a.iter().zip(&b).map(|(a, b)| (a - b) / (2.0 * h)).collect())
+    };
+    let coarse = central(f, h)?;
+    let fine = central(f, h / 2.0)?;
+    Ok(fine
+        .iter()
+        .zip(&coarse)
+        .map(|(f, c)| (4.0 * f - c) / 3.0)
+        .collect())
+}
+
+/// What the sensitivities need of an invocation: the params it overrides
+/// and the initial values it states (as `prepare` takes them).
+pub struct Start<'a> {
+    pub prototype: &'a dyn DynModel,
+    pub overrides: &'a [Option<f64>],
+    pub given: &'a [Option<f64>],
+}
+
+/// The augmented system's start: `chain` (`dp_k/dp_j`, row-major) and the
+/// initial sensitivities `S(t0)` (column-major, `N × m`), for the model
+/// `model` made from `start` with initial state `x0` at `t0`.
+pub fn initial(
+    model: &dyn DynModel,
+    start: &Start,
+    t0: f64,
+    x0: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>), Failure> {
+    let n = model.dim();
+    let given = given_components(model);
+    let np = model.param_names().len();
+    let mut s0 = Vec::with_capacity(n * (given.len() + np));
+    // The values the components stated take at the start, held while one
+    // of them moves: the others, fixed by the constraints, follow.
+    let held: Vec<Option<f64>> = (0..n)
+        .map(|i| given.contains(&i).then_some(x0[i]))
+        .collect();
+    let all_given = given.len() == n;
+    for &j in &given {
+        if all_given {
+            let mut unit = vec![0.0; n];
+            unit[j] = 1.0;
+            s0.extend(unit);
+            continue;
+        }
+        let mut moved = held.clone();
+        let column = derivative(x0[j], &mut |v| {
+            moved[j] = Some(v);
+            model.initial_state(&moved)
+        })?;
+        s0.extend(column);
+    }
+    // A param moves the params computed from it, the initial values that
+    // are its expressions, and `t0` (then `x(t)` moves by `−X(t0, x0)·dt0`).
+    let params = start.prototype.parameters(start.overrides);
+    let mut f0 = vec![0.0; n];
+    model.rhs(t0, x0, &mut f0)?;
+    let mut chain = vec![0.0; np * np];
+    for k in 0..np {
+        let mut overrides = start.overrides.to_vec();
+        // [params…, t0, x0…] with param k at `v`.
+        let column = derivative(params[k], &mut |v| {
+            overrides[k] = Some(v);
+            let p = start.prototype.parameters(&overrides);
+            let moved = start.prototype.with_params(&p);
+            let (t0, _) = moved.time_span();
+            let mut out = p;
+            out.push(t0);
+            out.extend(moved.initial_state(start.given)?);
+            Ok(out)
+        })?;
+        for (l, &d) in column[..np].iter().enumerate() {
+            chain[l * np + k] = d;
+        }
+        let dt0 = column[np];
+        s0.extend(column[np + 1..].iter().zip(&f0).map(|(dx, f)| dx - f * dt0));
+    }
+    Ok((chain, s0))
+}
+
+/// The motion with its sensitivities: state `[x; S e_1; …; S e_m]`.
+pub struct Augmented {
+    inner: Box<dyn DynModel>,
+    n: usize,
+    /// The number of columns: the given initial values, then the params.
+    columns: usize,
+    given: usize,
+    /// `dp_k/dp_j`, row-major `np × np`.
+    chain: Vec<f64>,
+    names: &'static [&'static str],
+}
+
+impl Augmented {
+    /// The augmented system of `inner` with this chain of params.
+    pub fn new(inner: Box<dyn DynModel>, chain: Vec<f64>) -> Augmented {
+        let n = inner.dim();
+        let given = given_components(&*inner).len();
+        let columns = given + inner.param_names().len();
+        // The names live as long as the run's process (one small leak per
+        // sensitivity run; `DynModel` hands out `'static` names).
+        let mut names: Vec<&'static str> = inner.state_names().to_vec();
+        for h in headers(&*inner) {
+            names.push(Box::leak(h.into_boxed_str()));
+        }
+        Augmented {
+            inner,
+            n,
+            columns,
+            given,
+            chain,
+            names: Box::leak(names.into_boxed_slice()),
+        }
+    }
+
+    /// The number of sensitivity columns.
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    fn copy(&self) -> Augmented {
+        Augmented {
+            inner: self.inner.boxed_clone(),
+            n: self.n,
+            columns: self.columns,
+            given: self.given,
+            chain: self.chain.clone(),
+            names: self.names,
+        }
+    }
+
+    /// `∂X/∂p · dp/dp` (`N × np`, the chain applied).
+    fn param_partials(&self, t: f64, x: &[f64]) -> Result<Matrix, Failure> {
+        let np = self.columns - self.given;
+        let mut partial = Matrix::zeros(self.n, np);
+        if np == 0 {
+            return Ok(partial);
+        }
+        self.inner.param_jacobian(t, x, &mut partial)?;
+        let mut total = Matrix::zeros(self.n, np);
+        for j in 0..np {
+            for k in 0..np {
+                let c = self.chain[k * np + j];
+                if c == 0.0 {
+                    continue;
+                }
+                for i in 0..self.n {
+                    total[(i, j)] += partial[(i, k)] * c;
+                }
+            }
+        }
+        Ok(total)
+    }
+
+    /// `J S + ∂X/∂p` at `(t, x)` for the sensitivities `s`, into `out`.
+    fn variational(&self, t: f64, x: &[f64], s: &[f64], out: &mut [f64]) -> Result<(), Failure> {
+        let n = self.n;
+        let mut jac = Matrix::zeros(n, n);
+        self.inner.jacobian(t, x, &mut jac)?;
+        let fp = self.param_partials(t, x)?;
+        for c in 0..self.columns {
+            let column = &s[c * n..(c + 1) * n];
+            let target = &mut out[c * n..(c + 1) * n];
+            jac.mul_vec(column, target);
+            if c >= self.given {
+                for (v, p) in target.iter_mut().zip(fp.column(c - self.given)) {
+                    *v += p;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl DynModel for Augmented {
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+    fn source_hash(&self) -> &'static str {
+        self.inner.source_hash()
+    }
+    fn param_names(&self) -> &'static [&'static str] {
+        self.inner.param_names()
+    }
+    fn state_names(&self) -> &'static [&'static str] {
+        self.names
+    }
+    fn coordinates(&self) -> usize {
+        // No `x_i' = x_{i+n}` structure is promised for the whole system.
+        self.names.len()
+    }
+    fn initial_kinds(&self) -> &'static [Initial] {
+        self.inner.initial_kinds()
+    }
+    fn output_names(&self) -> &'static [&'static str] {
+        &[]
+    }
+    fn mass_names(&self) -> &'static [&'static str] {
+        self.inner.mass_names()
+    }
+    fn input_names(&self) -> &'static [&'static str] {
+        self.inner.input_names()
+    }
+    fn input_defaults(&self) -> &'static [f64] {
+        self.inner.input_defaults()
+    }
+    fn declared_integrator(&self) -> Option<IntegratorChoice> {
+        self.inner.declared_integrator()
+    }
+    fn switches(&self) -> usize {
+        0
+    }
+    fn constraints(&self) -> &'static [Candidates] {
+        &[]
+    }
+    fn impacts(&self) -> &'static [&'static str] {
+        &[]
+    }
+    fn affine(&self) -> bool {
+        false
+    }
+    fn coefficients_linear(&self) -> bool {
+        false
+    }
+    fn states_exact(&self) -> bool {
+        false
+    }
+    fn keeps_constraints(&self) -> bool {
+        false
+    }
+    fn keeps_positions(&self) -> bool {
+        false
+    }
+    fn fixed_components(&self) -> &'static [&'static [usize]] {
+        &[]
+    }
+    fn has_param_jacobian(&self) -> bool {
+        false
+    }
+    fn param_jacobian(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
+        self.inner.parameters(overrides)
+    }
+    fn with_params(&self, params: &[f64]) -> Box<dyn DynModel> {
+        let mut copy = self.copy();
+        copy.inner = self.inner.with_params(params);
+        Box::new(copy)
+    }
+    fn boxed_clone(&self) -> Box<dyn DynModel> {
+        Box::new(self.copy())
+    }
+    fn param_values(&self) -> &[f64] {
+        self.inner.param_values()
+    }
+    fn time_span(&self) -> (f64, f64) {
+        self.inner.time_span()
+    }
+    fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure> {
+        self.inner.initial_state(&given[..self.n.min(given.len())])
+    }
+    fn set_regime(&mut self, regime: &Regime) {
+        self.inner.set_regime(regime);
+    }
+    fn set_inputs(&mut self, inputs: &Inputs) {
+        self.inner.set_inputs(inputs);
+    }
+    fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
+        let n = self.n;
+        let (x, s) = x.split_at(n);
+        let (dx, ds) = dx.split_at_mut(n);
+        self.inner.rhs(t, x, dx)?;
+        self.variational(t, x, s, ds)
+    }
+    fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+        let n = self.n;
+        let total = x.len();
+        let mut inner = Matrix::zeros(n, n);
+        self.inner.jacobian(t, &x[..n], &mut inner)?;
+        // The diagonal blocks: `J` for `x` and for every column of `S`.
+        for b in 0..=self.columns {
+            for c in 0..n {
+                for r in 0..n {
+                    jac[(b * n + r, b * n + c)] = inner[(r, c)];
+                }
+            }
+        }
+        // `∂(J S + ∂X/∂p)/∂x`: central differences of the exact partials.
+        let (mut ahead, mut behind) = (vec![0.0; total - n], vec![0.0; total - n]);
+        let mut shifted = x[..n].to_vec();
+        for c in 0..n {
+            let h = f64::EPSILON.cbrt() * x[c].abs().max(1.0);
+            shifted[c] = x[c] + h;
+            self.variational(t, &shifted, &x[n..], &mut ahead)?;
+            shifted[c] = x[c] - h;
+            self.variational(t, &shifted, &x[n..], &mut behind)?;
+            shifted[c] = x[c];
+            for (r, (a, b)) in ahead.iter().zip(&behind).enumerate() {
+                jac[(n + r, c)] = (a - b) / (2.0 * h);
+            }
+        }
+        Ok(())
+    }
+    fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
+        let n = self.n;
+        let (dx, ds) = dxdt.split_at_mut(n);
+        self.inner.time_partial(t, &x[..n], dx)?;
+        let (mut ahead, mut behind) = (vec![0.0; ds.len()], vec![0.0; ds.len()]);
+        let h = f64::EPSILON.cbrt() * t.abs().max(1.0);
+        self.variational(t + h, &x[..n], &x[n..], &mut ahead)?;
+        self.variational(t - h, &x[..n], &x[n..], &mut behind)?;
+        for (d, (a, b)) in ds.iter_mut().zip(ahead.iter().zip(&behind)) {
+            *d = (a - b) / (2.0 * h);
+        }
+        Ok(())
+    }
+    fn linearize(
+        &self,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut Matrix,
+    ) -> Result<(), Failure> {
+        self.rhs(t, x, dx)?;
+        self.jacobian(t, x, jac)
+    }
+    fn coefficients(&self, t: f64, _f: &[f64], _df: &mut [f64]) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
+    fn coefficient_jacobian(&self, t: f64, _f: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
+    fn coefficient_time_partial(
+        &self,
+        t: f64,
+        _f: &[f64],
+        _dfdt: &mut [f64],
+    ) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
+    fn exact(&self, _t: f64, _out: &mut [Option<f64>]) {}
+    fn constrained(&self, _t: f64, _x: &[f64], _kept: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn kept_gradient(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn project_closure(&self, _t: f64, _x: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
+    fn outputs(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    fn switching_functions(&self, _t: f64, _x: &[f64], _g: &mut [f64]) {}
+    fn stop(&self, _branches: &[bool]) -> bool {
+        false
+    }
+    fn impact_holds(&self, _w: usize, _branches: &[bool]) -> bool {
+        false
+    }
+    fn impact_reset(&self, _w: usize, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    fn domains(&self) -> &'static [Domain] {
+        self.inner.domains()
+    }
+    fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        self.inner.domain_values(t, &x[..self.n], out);
+    }
+    fn masses(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        self.inner.masses(t, &x[..self.n], out);
+    }
+    fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix> {
+        self.inner.mass_matrix(t, &x[..self.n])
+    }
+}
