@@ -99,6 +99,75 @@ pub fn solve_model(
     solve_run(model, &quiet(options), t0, t1, &x0)
 }
 
+/// A solution with its forward sensitivities ([`solve_sensitivity`]):
+/// `at(t)` gives the state and `S = ∂x(t)/∂(y0, p)`.
+#[derive(Clone, Debug)]
+pub struct Sensitivities {
+    /// The augmented system's solution: the state, then `S` column by
+    /// column.
+    pub solution: Solution,
+    /// The state's dimension `N`.
+    pub dim: usize,
+    /// The columns of `S`: the initial values the model states (`Y0`),
+    /// then every param.
+    pub columns: Vec<String>,
+}
+
+impl Sensitivities {
+    /// The state at `t` and `S` (`N × columns`, column-major: `S[c·N + i]`
+    /// is `∂x_i/∂columns[c]`).
+    pub fn at(&self, t: f64) -> (Vec<f64>, Vec<f64>) {
+        let mut z = self.solution.at(t);
+        let s = z.split_off(self.dim);
+        (z, s)
+    }
+}
+
+/// [`solve_model`] with the forward sensitivities (the same as
+/// `--sensitivity` on the command line, by direct integration of the
+/// augmented system whatever `options.method` says): every param is
+/// independent here (the values passed are all given), so `∂x/∂p` holds
+/// the params computed from the others fixed.
+pub fn solve_sensitivity(
+    model: &mut dyn DynModel,
+    given: &[Option<f64>],
+    options: &Options,
+) -> Result<Sensitivities, Failure> {
+    use crate::sensitivity::{column_names, initial as start_of, unsupported, Augmented, Start};
+    if let Some(message) = unsupported(&*model) {
+        return Err(Failure::new(
+            model.time_span().0,
+            FailureKind::Unsupported { message },
+        ));
+    }
+    let (t0, t1, x0) = initial(&*model, given)?;
+    let overrides: Vec<Option<f64>> = model.param_values().iter().map(|&v| Some(v)).collect();
+    let stated: Vec<Option<f64>> = given
+        .iter()
+        .zip(model.initial_kinds())
+        .map(|(g, kind)| if *kind == Initial::Given { *g } else { None })
+        .collect();
+    let start = Start {
+        prototype: &*model,
+        overrides: &overrides,
+        given: &stated,
+    };
+    let (chain, s0) = start_of(&*model, &start, t0, &x0)?;
+    let mut augmented = Augmented::new(model.boxed_clone(), chain);
+    let mut z0 = x0.clone();
+    z0.extend(s0);
+    let options = Options {
+        method: Method::Direct,
+        ..quiet(options)
+    };
+    let solution = solve_run(&mut augmented, &options, t0, t1, &z0)?;
+    Ok(Sensitivities {
+        solution,
+        dim: x0.len(),
+        columns: column_names(&*model),
+    })
+}
+
 /// A steppable [`Integration`] of `M` with these param values and initial
 /// values (as [`solve`] takes them) over the model's time span: advance it
 /// to any time, read the state, restart it from a changed state.

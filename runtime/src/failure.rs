@@ -122,6 +122,9 @@ pub enum FailureKind {
     /// An `Integration` was asked to advance to a
     /// time before where it stands or past the end of its span.
     OutsideSpan { from: f64, to: f64 },
+    /// A request the runtime does not compute for this model (e.g.
+    /// sensitivities through events), in words.
+    Unsupported { message: String },
 }
 
 impl Failure {
@@ -361,6 +364,7 @@ impl fmt::Display for Failure {
                 "t = {t} is outside what the integration can reach from where it stands: \
                  {from} .. {to}"
             ),
+            FailureKind::Unsupported { message } => write!(f, "{message}"),
         }
     }
 }

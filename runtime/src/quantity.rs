@@ -38,6 +38,7 @@ impl Failure {
             }
             FailureKind::AnchorCancels { .. } => "anchor".to_string(),
             FailureKind::NotAffine => "coefficient system".to_string(),
+            FailureKind::Unsupported { .. } => "request".to_string(),
         }
     }
 }
