@@ -470,6 +470,22 @@ pub trait DynModel {
     fn masses(&self, t: f64, x: &[f64], out: &mut [f64]);
     /// [`Model::mass_matrix`].
     fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix>;
+
+    /// At an event at `t` (the switches `switched` changed sign, the
+    /// regime was `before` and is now the model's own, the state was
+    /// `x_before` and is `x` after any resets): a system that carries more
+    /// than the motion (the sensitivities, `crate::sensitivity`) updates
+    /// it in `x`. Nothing for a model.
+    fn event_jump(
+        &self,
+        _before: &Regime,
+        _switched: &[usize],
+        _t: f64,
+        _x_before: &[f64],
+        _x: &mut [f64],
+    ) -> Result<(), Failure> {
+        Ok(())
+    }
 }
 
 impl<M: Model + 'static> DynModel for M {

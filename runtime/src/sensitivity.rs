@@ -12,9 +12,14 @@
 //! `J S + ∂X/∂p` in `x` and `t`, second derivatives of the motion — are
 //! central differences of those exact partials.
 //!
-//! What is not covered is refused ([`unsupported`]): events (switches,
-//! `stop when`, impacts: the sensitivities jump there), run-time
-//! candidates, inputs following a schedule, and models without
+//! Events: at a switch or an impact at `τ` the sensitivities jump,
+//! `S⁺ = R_x S⁻ + R_p + (R_x f⁻ − f⁺) dτ` (the identity `R` at a switch;
+//! [`Augmented::jump`], called by the run through `DynModel::event_jump`).
+//! Where impacts accumulate (a ball at rest) the motion has no derivative
+//! in its start and the command line writes `NaN` there.
+//!
+//! What is not covered is refused ([`unsupported`]): run-time candidates
+//! (the mode may change), inputs following a schedule, and models without
 //! `param_jacobian`. The constraints a run keeps by projection are not
 //! kept on the augmented system: its motion is the reduced system's own
 //! (on which they are invariant), and the command line prints the state
@@ -27,13 +32,6 @@ use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
 
 /// Why `--sensitivity` is refused for this model, or `None`.
 pub fn unsupported(model: &dyn DynModel) -> Option<String> {
-    if model.switches() > 0 || !model.impacts().is_empty() {
-        return Some(format!(
-            "`--sensitivity`: the model `{}` has events (switches, `stop when` or `when`), \
-             where the sensitivities jump; their jumps are not computed yet",
-            model.name()
-        ));
-    }
     if !model.constraints().is_empty() {
         return Some(format!(
             "`--sensitivity`: the model `{}` chooses its constraints' dependents at run time \
@@ -93,14 +91,18 @@ pub fn given_components(model: &dyn DynModel) -> Vec<usize> {
 /// A central difference refined by one Richardson step (error `O(h⁴)`):
 /// for the algebraic maps at the start (the initial state, the params
 /// computed from others, the time span), where the values are cheap and
-/// smooth. At `h = 1e-3·|v|` (`1e-3` at 0) the truncation is `~1e-12`
-/// relative for maps of the size of their arguments, and rounding
-/// `~1e-13`; relative to `v`, so a param of 1e-6 is not moved through 0.
+/// smooth. At `h = 1e-3·max(|v|, floor)` (`1e-3` at 0) the truncation is
+/// `~1e-12` relative for maps of the size of their arguments, and rounding
+/// `~1e-13`. Params move relative to their value (floor 0: a param of
+/// 1e-6 is not moved through 0), state components and `t` by at least
+/// 1e-3 (floor 1: a height of 1e-17 at a bounce is not a scale).
 fn derivative(
     v: f64,
+    floor: f64,
     f: &mut dyn FnMut(f64) -> Result<Vec<f64>, Failure>,
 ) -> Result<Vec<f64>, Failure> {
-    let h = if v == 0.0 { 1e-3 } else { 1e-3 * v.abs() };
+    let h = 1e-3 * v.abs().max(floor);
+    let h = if h > 0.0 { h } else { 1e-3 };
     let central = |f: &mut dyn FnMut(f64) -> Result<Vec<f64>, Failure>,
                    h: f64|
      -> Result<Vec<f64>, Failure> {
@@ -151,7 +153,7 @@ pub fn initial(
             continue;
         }
         let mut moved = held.clone();
-        let column = derivative(x0[j], &mut |v| {
+        let column = derivative(x0[j], 0.0, &mut |v| {
             moved[j] = Some(v);
             model.initial_state(&moved)
         })?;
@@ -166,7 +168,7 @@ pub fn initial(
     for k in 0..np {
         let mut overrides = start.overrides.to_vec();
         // [params…, t0, x0…] with param k at `v`.
-        let column = derivative(params[k], &mut |v| {
+        let column = derivative(params[k], 0.0, &mut |v| {
             overrides[k] = Some(v);
             let p = start.prototype.parameters(&overrides);
             let moved = start.prototype.with_params(&p);
@@ -183,6 +185,13 @@ pub fn initial(
         s0.extend(column[np + 1..].iter().zip(&f0).map(|(dx, f)| dx - f * dt0));
     }
     Ok((chain, s0))
+}
+
+/// Values computed from a model (a switching function, a reset).
+type Values<'a> = dyn Fn(&dyn DynModel) -> Result<Vec<f64>, Failure> + 'a;
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| a * b).sum()
 }
 
 /// The motion with its sensitivities: state `[x; S e_1; …; S e_m]`.
@@ -258,6 +267,157 @@ impl Augmented {
         Ok(total)
     }
 
+    /// The params' columns of `dp`-chained partials of `f(model) ∈ R^k`:
+    /// `out[c][i] = Σ_k ∂f_i/∂p_k · dp_k/dp_c`, each partial a refined
+    /// central difference over the model made with param `k` moved.
+    fn param_slopes(
+        &self,
+        f: &Values<'_>,
+    ) -> Result<Vec<Vec<f64>>, Failure> {
+        let np = self.columns - self.given;
+        let values = self.inner.param_values().to_vec();
+        let mut partial = Vec::with_capacity(np);
+        for k in 0..np {
+            let mut moved = values.clone();
+            partial.push(derivative(values[k], 0.0, &mut |v| {
+                moved[k] = v;
+                f(&*self.inner.with_params(&moved))
+            })?);
+        }
+        let len = partial.first().map_or(0, Vec::len);
+        Ok((0..np)
+            .map(|c| {
+                (0..len)
+                    .map(|i| {
+                        (0..np)
+                            .map(|k| partial[k][i] * self.chain[k * np + c])
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect())
+    }
+
+    /// The sensitivities' jump at an event where `g = switching function
+    /// switched[0]` reaches zero at `τ` (a transversal crossing): with
+    /// `dτ = −(∂g/∂x S⁻ + ∂g/∂p)/(∂g/∂x f⁻ + ∂g/∂t)` and the resets `R` of
+    /// the impacts that fired (the identity at a switch),
+    /// `S⁺ = R_x S⁻ + R_p + (R_x f⁻ − f⁺) dτ`. The partials of `g` and `R`
+    /// are refined central differences (both are cheap algebraic maps).
+    fn jump(
+        &self,
+        before: &Regime,
+        switched: &[usize],
+        t: f64,
+        x_before: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), Failure> {
+        let n = self.n;
+        let m = self.columns;
+        let Some(&k) = switched.first() else {
+            return Ok(());
+        };
+        let (xm, sm) = x_before.split_at(n);
+        let mut old = self.inner.boxed_clone();
+        old.set_regime(before);
+        let old = &*old;
+        let mut f_minus = vec![0.0; n];
+        old.rhs(t, xm, &mut f_minus)?;
+        let mut f_plus = vec![0.0; n];
+        self.inner.rhs(t, &x[..n], &mut f_plus)?;
+        let count = self.inner.switches();
+        let g_of = |model: &dyn DynModel, t: f64, x: &[f64]| -> f64 {
+            let mut g = vec![0.0; count];
+            model.switching_functions(t, x, &mut g);
+            g[k]
+        };
+        // ∂g/∂x, ∂g/∂t and ∂g/∂p, before the event.
+        let mut g_x = vec![0.0; n];
+        let mut moved = xm.to_vec();
+        for j in 0..n {
+            g_x[j] = derivative(xm[j], 1.0, &mut |v| {
+                moved[j] = v;
+                let g = g_of(old, t, &moved);
+                moved[j] = xm[j];
+                Ok(vec![g])
+            })?[0];
+        }
+        let g_t = derivative(t, 1.0, &mut |v| Ok(vec![g_of(old, v, xm)]))?[0];
+        let g_p = self.param_slopes(&|model| {
+            let mut model = model.boxed_clone();
+            model.set_regime(before);
+            Ok(vec![g_of(&*model, t, xm)])
+        })?;
+        let rate = dot(&g_x, &f_minus) + g_t;
+        if !(rate.abs() > 0.0) || !rate.is_finite() {
+            return Err(Failure::new(
+                t,
+                crate::failure::FailureKind::Unsupported {
+                    message: format!(
+                        "`--sensitivity`: at t = {t} the switching function {} touches zero \
+                         without crossing it (a grazing event): the sensitivities are not \
+                         defined there",
+                        k + 1
+                    ),
+                },
+            ));
+        }
+        // The impacts that fired: the resets `R`, applied in order.
+        let mut mid = before.branches.clone();
+        for &s in switched {
+            mid[s] = !mid[s];
+        }
+        let fired: Vec<usize> = (0..self.inner.impacts().len())
+            .filter(|&w| !old.impact_holds(w, &before.branches) && old.impact_holds(w, &mid))
+            .collect();
+        let reset = |model: &dyn DynModel, state: &[f64]| -> Vec<f64> {
+            let mut y = state.to_vec();
+            let mut out = y.clone();
+            for &w in &fired {
+                out.copy_from_slice(&y);
+                model.impact_reset(w, t, &y, &mut out);
+                y.copy_from_slice(&out);
+            }
+            y
+        };
+        // R_x, column by column (the identity where nothing fired).
+        let mut r_x = Matrix::identity(n);
+        let mut r_p = vec![vec![0.0; n]; m - self.given];
+        if !fired.is_empty() {
+            let mut moved = xm.to_vec();
+            for j in 0..n {
+                let column = derivative(xm[j], 1.0, &mut |v| {
+                    moved[j] = v;
+                    let y = reset(old, &moved);
+                    moved[j] = xm[j];
+                    Ok(y)
+                })?;
+                r_x.column_mut(j).copy_from_slice(&column);
+            }
+            r_p = self.param_slopes(&|model| Ok(reset(model, xm)))?;
+        }
+        let mut r_f = vec![0.0; n];
+        r_x.mul_vec(&f_minus, &mut r_f);
+        let mut column = vec![0.0; n];
+        for c in 0..m {
+            let s_minus = &sm[c * n..(c + 1) * n];
+            let mut slope = dot(&g_x, s_minus);
+            if c >= self.given {
+                slope += g_p[c - self.given][0];
+            }
+            let d_tau = -slope / rate;
+            r_x.mul_vec(s_minus, &mut column);
+            for i in 0..n {
+                let mut v = column[i] + (r_f[i] - f_plus[i]) * d_tau;
+                if c >= self.given {
+                    v += r_p[c - self.given][i];
+                }
+                x[n + c * n + i] = v;
+            }
+        }
+        Ok(())
+    }
+
     /// `J S + ∂X/∂p` at `(t, x)` for the sensitivities `s`, into `out`.
     fn variational(&self, t: f64, x: &[f64], s: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         let n = self.n;
@@ -314,13 +474,13 @@ impl DynModel for Augmented {
         self.inner.declared_integrator()
     }
     fn switches(&self) -> usize {
-        0
+        self.inner.switches()
     }
     fn constraints(&self) -> &'static [Candidates] {
         &[]
     }
     fn impacts(&self) -> &'static [&'static str] {
-        &[]
+        self.inner.impacts()
     }
     fn affine(&self) -> bool {
         false
@@ -456,14 +616,31 @@ impl DynModel for Augmented {
         Ok(())
     }
     fn outputs(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
-    fn switching_functions(&self, _t: f64, _x: &[f64], _g: &mut [f64]) {}
-    fn stop(&self, _branches: &[bool]) -> bool {
-        false
+    fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]) {
+        self.inner.switching_functions(t, &x[..self.n], g);
     }
-    fn impact_holds(&self, _w: usize, _branches: &[bool]) -> bool {
-        false
+    fn stop(&self, branches: &[bool]) -> bool {
+        self.inner.stop(branches)
     }
-    fn impact_reset(&self, _w: usize, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    fn impact_holds(&self, w: usize, branches: &[bool]) -> bool {
+        self.inner.impact_holds(w, branches)
+    }
+    fn impact_reset(&self, w: usize, t: f64, x: &[f64], out: &mut [f64]) {
+        // The motion's components; the sensitivities jump in `event_jump`,
+        // which sees the state before and after.
+        let n = self.n;
+        self.inner.impact_reset(w, t, &x[..n], &mut out[..n]);
+    }
+    fn event_jump(
+        &self,
+        before: &Regime,
+        switched: &[usize],
+        t: f64,
+        x_before: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), Failure> {
+        self.jump(before, switched, t, x_before, x)
+    }
     fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     fn domains(&self) -> &'static [Domain] {
         self.inner.domains()

@@ -59,8 +59,8 @@ usage: MODEL [OPTIONS]
                          model states and dX(t)/dP for every param, as the
                          columns `d(X)/d(Y0)`, `d(X)/d(P)` (the variational
                          equations integrated with the motion by the direct
-                         method, inside its error control; refused for
-                         models with events)
+                         method, inside its error control, with their jumps
+                         at events; refused for run-time candidates)
   --repeat N             solve N times (after a warm-up) and report the
                          smallest wall time
   --quiet                no CSV on stdout

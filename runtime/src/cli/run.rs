@@ -357,10 +357,21 @@ fn sensitivities(
     };
     let n = model.dim();
     let mut rows = Vec::with_capacity(times.len());
-    let outcome = run(&mut augmented, &options, t0, t1, &z0, times, |_, _, z| {
+    let mut last = t0;
+    let outcome = run(&mut augmented, &options, t0, t1, &z0, times, |_, t, z| {
         rows.push(z[n..].to_vec());
+        last = t;
         Ok(())
     })?;
+    if let Ending::Rest { at, .. } = outcome.ending {
+        // Where impacts accumulate the motion has no derivative in its
+        // start: the row there is not a number, not the blown-up value.
+        if last == at {
+            if let Some(row) = rows.last_mut() {
+                row.fill(f64::NAN);
+            }
+        }
+    }
     let note = format!(
         "sensitivities: {} columns, the augmented system ({} components) by direct \
          integration ({}): {} steps, {} rejected",

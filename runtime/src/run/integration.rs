@@ -785,6 +785,9 @@ impl<'m> Integration<'m> {
                     &mut s.pace,
                 )?;
                 let before = regime.branches.clone();
+                // What a system carrying more than the motion needs at the
+                // event (`DynModel::event_jump`).
+                let x_before = x_event.clone();
                 for &k in &switches {
                     regime.branches[k] = !regime.branches[k];
                 }
@@ -813,6 +816,13 @@ impl<'m> Integration<'m> {
                     };
                 }
                 model.set_regime(regime);
+                if ending.is_none() {
+                    let before = Regime {
+                        mode: regime.mode,
+                        branches: before,
+                    };
+                    model.event_jump(&before, &switches, t_event, &x_before, x_event)?;
+                }
                 if let Some(ending) = ending {
                     self.t = t_event;
                     self.x.copy_from_slice(x_event);
