@@ -270,10 +270,7 @@ impl Augmented {
     /// The params' columns of `dp`-chained partials of `f(model) ∈ R^k`:
     /// `out[c][i] = Σ_k ∂f_i/∂p_k · dp_k/dp_c`, each partial a refined
     /// central difference over the model made with param `k` moved.
-    fn param_slopes(
-        &self,
-        f: &Values<'_>,
-    ) -> Result<Vec<Vec<f64>>, Failure> {
+    fn param_slopes(&self, f: &Values<'_>) -> Result<Vec<Vec<f64>>, Failure> {
         let np = self.columns - self.given;
         let values = self.inner.param_values().to_vec();
         let mut partial = Vec::with_capacity(np);
