@@ -14,7 +14,7 @@
 //!
 //! Events: at a switch or an impact at `τ` the sensitivities jump,
 //! `S⁺ = R_x S⁻ + R_p + (R_x f⁻ − f⁺) dτ` (the identity `R` at a switch;
-//! [`Augmented::jump`], called by the run through `DynModel::event_jump`).
+//! `Augmented::jump`, called by the run through `DynModel::event_jump`).
 //! Where impacts accumulate (a ball at rest) the motion has no derivative
 //! in its start and the command line writes `NaN` there.
 //!
