@@ -8,7 +8,8 @@ use crate::{kind, Kind};
 use lagc_runtime::driver::Ending;
 use lagc_runtime::integration::Integration;
 use lagc_runtime::table::{
-    jacobian_at, ready, rhs_at, tabulate, tabulate_many, Request, TableError, Tabulated,
+    jacobian_at, ready, rhs_at, sensitivities, tabulate, tabulate_many, Request, TableError,
+    Tabulated,
 };
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -128,8 +129,12 @@ impl PyModel {
     /// model's `integrator` statement, or auto), `rtol`/`atol` the per-step
     /// tolerance (default 1e-10, 1e-12), `max_steps` the work budget. The
     /// rows are those `lagc run` prints for the same run, bit for bit.
-    /// Raises IntegrationError when the run fails.
-    #[pyo3(signature = (t=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None))]
+    /// `sensitivity=True` adds `sol.sensitivity`, (k, number of state
+    /// components, number of stated initial values + number of params):
+    /// ∂x(t)/∂(y0, p) as `lagc run --sensitivity` writes it (columns named
+    /// by `sol.sensitivity_names`). Raises IntegrationError when the run
+    /// fails, ValueError where sensitivities are not computed.
+    #[pyo3(signature = (t=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, sensitivity=false))]
     #[allow(clippy::too_many_arguments)]
     fn solve(
         &self,
@@ -141,6 +146,7 @@ impl PyModel {
         rtol: Option<f64>,
         atol: Option<f64>,
         max_steps: Option<usize>,
+        sensitivity: bool,
     ) -> PyResult<PySolution> {
         let kind = kind();
         let options = RunOptions {
@@ -155,7 +161,17 @@ impl PyModel {
         let inits = request::initial(kind, initial)?;
         let request = request::request(&self.overrides, Vec::new(), inits, options, times);
         let result = py.detach(|| tabulate(&*kind.prototype(), &request));
-        solution(py, kind, result)
+        let solved = solution(py, kind, result)?;
+        if !sensitivity {
+            return Ok(solved);
+        }
+        let rows = match py.detach(|| sensitivities(&*kind.prototype(), &request)) {
+            Ok(rows) => rows,
+            Err(TableError::Usage(message)) => return Err(PyValueError::new_err(message)),
+            Err(TableError::Failed(run)) => return Err(failed(py, kind, &run.failure, run.table)),
+        };
+        let names = lagc_runtime::sensitivity::column_names(&*kind.prototype());
+        solved.with_sensitivity(py, rows, names)
     }
 
     /// Solves the model once per dict of `params` (each overriding this

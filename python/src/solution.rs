@@ -3,7 +3,7 @@
 use crate::errors::unknown;
 use crate::Kind;
 use lagc_runtime::table::Table;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -23,6 +23,10 @@ pub struct PySolution {
     /// The summary as `--summary json` prints it (parsed when asked).
     stats: Option<String>,
     stopped_at: Option<f64>,
+    /// `solve(..., sensitivity=True)`: (k, N, columns) and the columns'
+    /// names.
+    sensitivity: Option<Py<PyArray3<f64>>>,
+    sensitivity_names: Vec<String>,
 }
 
 fn matrix<'py>(
@@ -55,7 +59,35 @@ impl PySolution {
             output_names: kind.output_names.iter().map(|s| s.to_string()).collect(),
             stats,
             stopped_at,
+            sensitivity: None,
+            sensitivity_names: Vec::new(),
         }
+    }
+
+    /// The solution with its sensitivities: `rows[r][c·N + i]` is
+    /// `∂x_i/∂names[c]` at the `r`-th time.
+    pub(crate) fn with_sensitivity(
+        mut self,
+        py: Python<'_>,
+        rows: Vec<Vec<f64>>,
+        names: Vec<String>,
+    ) -> PyResult<PySolution> {
+        let (k, n, m) = (self.t.bind(py).len(), self.state_names.len(), names.len());
+        if rows.len() != k || rows.iter().any(|r| r.len() != n * m) {
+            return Err(pyo3::exceptions::PyRuntimeError::new_err(format!(
+                "the sensitivities have {} rows for {k} times (internal)",
+                rows.len()
+            )));
+        }
+        let mut data = Vec::with_capacity(k * n * m);
+        for row in &rows {
+            for i in 0..n {
+                data.extend((0..m).map(|c| row[c * n + i]));
+            }
+        }
+        self.sensitivity = Some(data.into_pyarray(py).reshape([k, n, m])?.unbind());
+        self.sensitivity_names = names;
+        Ok(self)
     }
 
     /// The CSV's column names: `t`, the state, the outputs.
@@ -87,7 +119,8 @@ impl PySolution {
 impl PySolution {
     /// Rebuilds a solution from its parts (what pickling stores).
     #[new]
-    #[pyo3(signature = (t, y, outputs, state_names, output_names, stats=None, stopped_at=None))]
+    #[pyo3(signature = (t, y, outputs, state_names, output_names, stats=None, stopped_at=None, sensitivity=None, sensitivity_names=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         t: Bound<'_, PyArray1<f64>>,
         y: Bound<'_, PyArray2<f64>>,
@@ -96,6 +129,8 @@ impl PySolution {
         output_names: Vec<String>,
         stats: Option<String>,
         stopped_at: Option<f64>,
+        sensitivity: Option<Bound<'_, PyArray3<f64>>>,
+        sensitivity_names: Option<Vec<String>>,
     ) -> PyResult<PySolution> {
         let rows = t.len();
         let (y_shape, out_shape) = (y.shape().to_vec(), outputs.shape().to_vec());
@@ -115,7 +150,23 @@ impl PySolution {
             output_names,
             stats,
             stopped_at,
+            sensitivity: sensitivity.map(Bound::unbind),
+            sensitivity_names: sensitivity_names.unwrap_or_default(),
         })
+    }
+
+    /// `solve(..., sensitivity=True)`: ∂x(t)/∂(y0, p), (k, number of state
+    /// components, len(sensitivity_names)); None otherwise.
+    #[getter]
+    fn sensitivity(&self, py: Python<'_>) -> Option<Py<PyArray3<f64>>> {
+        self.sensitivity.as_ref().map(|s| s.clone_ref(py))
+    }
+
+    /// The sensitivity's last axis: the stated initial values (`Y0`), then
+    /// the params.
+    #[getter]
+    fn sensitivity_names(&self) -> Vec<String> {
+        self.sensitivity_names.clone()
     }
 
     /// The output times, (k,).
@@ -240,6 +291,8 @@ impl PySolution {
             this.output_names.clone(),
             this.stats.clone(),
             this.stopped_at,
+            this.sensitivity.as_ref().map(|s| s.clone_ref(py)),
+            this.sensitivity_names.clone(),
         )
             .into_pyobject(py)?;
         Ok((slf.get_type().into_any(), args))

@@ -27,8 +27,10 @@
 
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::method::IntegratorChoice;
+use crate::method::{IntegratorChoice, Method};
 use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
+use crate::run::options::{Ending, Options};
+use crate::run::run;
 
 /// Why `--sensitivity` is refused for this model, or `None`.
 pub fn unsupported(model: &dyn DynModel) -> Option<String> {
@@ -192,6 +194,59 @@ type Values<'a> = dyn Fn(&dyn DynModel) -> Result<Vec<f64>, Failure> + 'a;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(a, b)| a * b).sum()
+}
+
+/// The sensitivities at every time of `times` (each row `S` column by
+/// column, `S[c·N + i] = ∂x_i/∂column c`) and a note for the summary: the
+/// augmented system by the direct method whatever `options.method` says
+/// (the integrator is the options'), from `model`'s start `(t0, x0)` made
+/// as `start` says.
+#[allow(clippy::too_many_arguments)]
+pub fn sample(
+    start: &Start,
+    model: &dyn DynModel,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+) -> Result<(Vec<Vec<f64>>, String), Failure> {
+    let (chain, s0) = initial(model, start, t0, x0)?;
+    let mut augmented = Augmented::new(model.boxed_clone(), chain);
+    let mut z0 = x0.to_vec();
+    z0.extend(s0);
+    let options = Options {
+        method: Method::Direct,
+        progress: false,
+        ..options.clone()
+    };
+    let n = model.dim();
+    let mut rows = Vec::with_capacity(times.len());
+    let mut last = t0;
+    let outcome = run(&mut augmented, &options, t0, t1, &z0, times, |_, t, z| {
+        rows.push(z[n..].to_vec());
+        last = t;
+        Ok(())
+    })?;
+    if let Ending::Rest { at, .. } = outcome.ending {
+        // Where impacts accumulate the motion has no derivative in its
+        // start: the row there is not a number, not the blown-up value.
+        if last == at {
+            if let Some(row) = rows.last_mut() {
+                row.fill(f64::NAN);
+            }
+        }
+    }
+    let note = format!(
+        "sensitivities: {} columns, the augmented system ({} components) by direct \
+         integration ({}): {} steps, {} rejected",
+        augmented.columns(),
+        z0.len(),
+        outcome.report.method,
+        outcome.report.stats.accepted_steps,
+        outcome.report.stats.rejected_steps
+    );
+    Ok((rows, note))
 }
 
 /// The motion with its sensitivities: state `[x; S e_1; …; S e_m]`.

@@ -174,6 +174,50 @@ pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, Table
     })
 }
 
+/// The forward sensitivities of `request`'s run at its times (each row
+/// `S` column by column, [`crate::sensitivity::sample`]); a usage error
+/// where they are not computed.
+pub fn sensitivities(
+    prototype: &dyn DynModel,
+    request: &Request,
+) -> Result<Vec<Vec<f64>>, TableError> {
+    use crate::sensitivity::{sample, unsupported, Start};
+    let Ready {
+        model,
+        options,
+        t0,
+        x0,
+        times,
+        end,
+    } = ready(prototype, request)?;
+    if let Some(message) = unsupported(&*model) {
+        return Err(TableError::Usage(message));
+    }
+    let mut overrides = vec![None; prototype.param_names().len()];
+    for &(i, v) in &request.params {
+        overrides[i] = Some(v);
+    }
+    let mut given = vec![None; model.dim()];
+    for &(i, v) in &request.inits {
+        if model.initial_kinds().get(i) == Some(&crate::model::Initial::Given) {
+            given[i] = Some(v);
+        }
+    }
+    let start = Start {
+        prototype,
+        overrides: &overrides,
+        given: &given,
+    };
+    sample(&start, &*model, &options, t0, end, &x0, &times)
+        .map(|(rows, _)| rows)
+        .map_err(|failure| {
+            TableError::Failed(Box::new(Failed {
+                failure,
+                table: Table::default(),
+            }))
+        })
+}
+
 /// Runs `request` on `prototype`'s model (its params the file's): the
 /// rows at the requested times and the summary. The run ends at the
 /// model's end time or at the last requested time, whichever is later (a

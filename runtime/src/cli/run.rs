@@ -324,9 +324,8 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// The sensitivities at every sample time (each row `S` column by column)
-/// and a note for the summary: the augmented system by the direct method
-/// (whatever `--method` integrates the state; the integrator is the run's).
+/// The sensitivities at every sample time and a note for the summary
+/// ([`crate::sensitivity::sample`]).
 #[allow(clippy::too_many_arguments)]
 fn sensitivities(
     prototype: &dyn DynModel,
@@ -337,7 +336,7 @@ fn sensitivities(
     x0: &[f64],
     times: &[f64],
 ) -> Result<(Vec<Vec<f64>>, String), Failure> {
-    use crate::sensitivity::{initial, Augmented, Start};
+    use crate::sensitivity::{sample, Start};
     let mut overrides = vec![None; prototype.param_names().len()];
     for &(i, v) in &inv.params {
         overrides[i] = Some(v);
@@ -353,42 +352,7 @@ fn sensitivities(
         overrides: &overrides,
         given: &given,
     };
-    let (chain, s0) = initial(model, &start, t0, x0)?;
-    let mut augmented = Augmented::new(model.boxed_clone(), chain);
-    let mut z0 = x0.to_vec();
-    z0.extend(s0);
-    let options = Options {
-        method: Method::Direct,
-        progress: false,
-        ..inv.options.clone()
-    };
-    let n = model.dim();
-    let mut rows = Vec::with_capacity(times.len());
-    let mut last = t0;
-    let outcome = run(&mut augmented, &options, t0, t1, &z0, times, |_, t, z| {
-        rows.push(z[n..].to_vec());
-        last = t;
-        Ok(())
-    })?;
-    if let Ending::Rest { at, .. } = outcome.ending {
-        // Where impacts accumulate the motion has no derivative in its
-        // start: the row there is not a number, not the blown-up value.
-        if last == at {
-            if let Some(row) = rows.last_mut() {
-                row.fill(f64::NAN);
-            }
-        }
-    }
-    let note = format!(
-        "sensitivities: {} columns, the augmented system ({} components) by direct \
-         integration ({}): {} steps, {} rejected",
-        augmented.columns(),
-        z0.len(),
-        outcome.report.method,
-        outcome.report.stats.accepted_steps,
-        outcome.report.stats.rejected_steps
-    );
-    Ok((rows, note))
+    sample(&start, model, &inv.options, t0, t1, x0, times)
 }
 
 /// The largest difference (relative to `max(|x|, 1)`) between the samples
