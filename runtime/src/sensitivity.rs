@@ -30,6 +30,7 @@ use crate::linalg::Matrix;
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
 use crate::run::options::{Ending, Options};
+use crate::run::regime::{best_mode, initial_branches};
 use crate::run::run;
 
 /// Why `--sensitivity` is refused for this model, or `None`.
@@ -164,8 +165,15 @@ pub fn initial(
     // A param moves the params computed from it, the initial values that
     // are its expressions, and `t0` (then `x(t)` moves by `−X(t0, x0)·dt0`).
     let params = start.prototype.parameters(start.overrides);
+    // `X(t0, x0)` in the regime the run starts in (the model's default
+    // branches may be the others).
+    let mut at_start = model.boxed_clone();
+    at_start.set_regime(&Regime {
+        mode: best_mode(model, t0, x0).0,
+        branches: initial_branches(model, t0, x0),
+    });
     let mut f0 = vec![0.0; n];
-    model.rhs(t0, x0, &mut f0)?;
+    at_start.rhs(t0, x0, &mut f0)?;
     let mut chain = vec![0.0; np * np];
     for k in 0..np {
         let mut overrides = start.overrides.to_vec();

@@ -74,10 +74,21 @@ fn largest_disagreement_with(
     unchecked: &[&str],
     moved: &[Moved],
 ) -> f64 {
-    let binary = build(model);
+    disagreement_of(&build(model), model, times, outputs, unchecked, moved)
+}
+
+/// [`largest_disagreement_with`] for a model's binary built already.
+fn disagreement_of(
+    binary: &Path,
+    model: &str,
+    times: &str,
+    outputs: usize,
+    unchecked: &[&str],
+    moved: &[Moved],
+) -> f64 {
     let mut args: Vec<&str> = TIGHT.to_vec();
     args.extend(["--times", times, "--sensitivity"]);
-    let mut out = run(&binary, &args);
+    let mut out = run(binary, &args);
     assert_eq!(out.code, 0, "{model}: {}", out.stderr);
     out.rows.truncate(times.split(',').count());
     let n = out.header[1..]
@@ -105,7 +116,7 @@ fn largest_disagreement_with(
     for &(flag, name, base, column) in moved {
         let at = |v: f64| {
             states(
-                &binary,
+                binary,
                 times,
                 n,
                 &[flag.to_string(), format!("{name}={v:?}")],
@@ -261,6 +272,28 @@ fn coulomb_friction_agrees_with_differences_through_its_switches() {
             ("--param", "k", 1.0, "k"),
             ("--param", "mu", 0.05, "mu"),
             ("--param", "g", 2.0, "g"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+}
+
+#[test]
+fn a_start_on_a_switch_branch_and_a_param_start_time_agree_with_differences() {
+    // The run starts on the negative branch of `sign(x)`; t0 a param moves
+    // x(t) by −X(t0, x0)·dt0 with X in that branch (the model's default
+    // branch gave the opposite sign).
+    let binary = crate::generated::build_file(&crate::root().join("tests/data/start_switch.lag"));
+    let worst = disagreement_of(
+        &binary,
+        "start_switch",
+        "1,2.5,3,3.8",
+        0,
+        &[],
+        &[
+            ("--init", "x", -1.0, "x0"),
+            ("--init", "x'", 0.0, "x'0"),
+            ("--param", "t0", 0.5, "t0"),
+            ("--param", "k", 1.0, "k"),
         ],
     );
     assert!(worst < 1e-6, "{worst:e}");
