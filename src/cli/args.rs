@@ -208,7 +208,8 @@ pub struct RunArgs {
     /// (`lagc run FILE --help` lists them): `--method field|direct`,
     /// `--integrator auto|explicit|stiff|magnus`, `--param NAME=VALUE`,
     /// `--init NAME=VALUE`, `--rtol R`, `--atol A`, `--samples N`,
-    /// `--times T1,T2,…`, `--estimate-error`, `--plot FILE.svg [--phase X,Y]`,
+    /// `--times T1,T2,…`, `--step-to-times`, `--estimate-error`,
+    /// `--plot FILE.svg [--phase X,Y]`,
     /// `--ensemble K`, `--repeat N`, `--quiet`, `--summary text|json`, …;
     /// and lagc's own `--verbose`: the model's notes (N0001) on every run,
     /// not only when lagc builds its crate.

@@ -39,6 +39,10 @@ usage: MODEL [OPTIONS]
                          (default 101; 1 prints the final state only);
                          output times never change the steps
   --times T1,T2,...      output at these times instead
+  --step-to-times        cut the steps to land on every output time (a stop
+                         time, as SUNDIALS and GSL's driver do): the samples
+                         carry the step's error instead of the continuous
+                         extension's, and the steps depend on the output
   --estimate-error       also run at a 100× tighter tolerance and report the
                          largest difference (an estimate of the global error;
                          like the error against `exact` lines, relative:
@@ -234,6 +238,7 @@ pub fn parse(
                 inv.times = Some(times);
             }
             "--estimate-error" => inv.estimate_error = true,
+            "--step-to-times" => inv.options.step_to_times = true,
             "--ensemble" => inv.ensemble = Some(count(flag, value(flag, &mut args)?, 10_000_000)?),
             "--spread" => {
                 let s = number(flag, value(flag, &mut args)?)?;

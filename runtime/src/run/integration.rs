@@ -148,6 +148,9 @@ pub struct Integration<'m> {
     t: f64,
     x: Vec<f64>,
     progress: Progress,
+    /// The time the caller last asked for: with `step_to_times`, no step
+    /// passes it.
+    target: f64,
     pieces: Option<Vec<Piece>>,
     /// The work of the solvers before the last restart.
     earlier: Option<Report>,
@@ -189,6 +192,7 @@ impl<'m> Integration<'m> {
             t: t0,
             x: x0.to_vec(),
             progress: Progress::new(false, t0, end),
+            target: end,
             pieces: None,
             earlier: None,
         };
@@ -309,6 +313,7 @@ impl<'m> Integration<'m> {
                 },
             ));
         }
+        self.target = t;
         loop {
             match &self.done {
                 Some(Ok(Ending::End)) => return Ok(Advance::Reached(self.t)),
@@ -528,8 +533,15 @@ impl<'m> Integration<'m> {
         let model = self.model.get();
         let s = self.stepping.as_mut().expect("a run that steps");
         let pending = self.pending.as_ref().expect("a pending step");
+        // A step cut to land on `t` holds its own state there, not the
+        // continuous extension's reading of it.
+        let on_step_end = self.options.step_to_times && t == s.solver.time();
         let mut read = || -> Result<(), Failure> {
-            s.solver.dense(model, t, &mut self.x)?;
+            if on_step_end {
+                self.x.copy_from_slice(s.solver.state());
+            } else {
+                s.solver.dense(model, t, &mut self.x)?;
+            }
             // No output is off the constraints.
             if let Some(keeper) = self.keeper.as_mut() {
                 keeper.project(model, self.regime.mode, t, &mut self.x)?;
@@ -579,6 +591,9 @@ impl<'m> Integration<'m> {
         let mut t_limit = pace.limit(solver.time(), self.end);
         if let Some(t) = pivot_limit.take() {
             t_limit = t_limit.min(t);
+        }
+        if self.options.step_to_times && self.target > solver.time() {
+            t_limit = t_limit.min(self.target);
         }
         if let Err(mut failure) = solver.advance(model, t_limit, budget) {
             if matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) {
