@@ -112,6 +112,15 @@ pub struct LinearizeArgs {
         allow_hyphen_values = true
     )]
     pub params: Vec<String>,
+    /// The inputs' values at the point: `--input F=0.5` (repeatable; default:
+    /// each input's default). Inputs are held there (their rates zero), and
+    /// ∂f/∂u is printed beside ∂f/∂p.
+    #[arg(
+        long = "input",
+        value_name = "NAME=VALUE,…",
+        allow_hyphen_values = true
+    )]
+    pub inputs: Vec<String>,
     /// The time, for rheonomic models (default: the start of the model's span).
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t: Option<String>,
