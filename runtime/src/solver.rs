@@ -80,6 +80,14 @@ pub trait Solver {
         false
     }
 
+    /// Each tracked member's largest local error in units of the
+    /// tolerance (infinite: the method could not follow it, and it must be
+    /// integrated on its own); `None` where the members are exact (an
+    /// affine motion's field).
+    fn member_estimates(&self) -> Option<Vec<f64>> {
+        None
+    }
+
     /// The tracked members' states at `t` in `[previous_time, time]`, into
     /// `out` (reused from sample to sample: ten thousand members are a
     /// buffer that should not be allocated anew at every output time).

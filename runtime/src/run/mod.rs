@@ -86,13 +86,31 @@ pub fn solve(
     })
 }
 
+/// What an ensemble run did, beyond the reference's [`Outcome`].
+#[derive(Clone, Debug)]
+pub struct EnsembleOutcome {
+    pub outcome: Outcome,
+    /// Members followed through the field: exactly (an affine motion), or
+    /// corrected within the tolerance by their estimates.
+    pub along_field: usize,
+    /// Members the field could not follow within the tolerance, each
+    /// integrated on its own (direct, the same tolerance).
+    pub on_their_own: usize,
+    /// The largest local error estimate among the members kept on the
+    /// field, in units of the tolerance (`None`: exact, an affine motion).
+    pub largest_estimate: Option<f64>,
+}
+
 /// Integrates `members` (at least one; the first is the reference)
 /// through one field: `sample(t, states)` at every time of `times`. Exact
-/// for affine models; for the others the members follow the field of the
-/// motion linearised along the reference, to first order in their distance
-/// from it. The members are taken, not copied, and every sample's states
-/// are written into one buffer: with ten thousand members, copies and
-/// fresh allocations would cost more than the field.
+/// for affine models. For the others each member is corrected in each
+/// window's frame to the tolerance ([`crate::field::members`]), and a
+/// member the field cannot follow within it is integrated on its own:
+/// never first order in the spread. The members are taken, not copied,
+/// and an affine motion's samples are written into one buffer as they
+/// come: with ten thousand members, copies and fresh allocations would
+/// cost more than the field. A non-affine motion's samples are kept until
+/// the end, when it is known which members need their own integration.
 pub fn run_ensemble(
     model: &mut dyn DynModel,
     options: &Options,
@@ -101,7 +119,8 @@ pub fn run_ensemble(
     members: crate::ensemble::States,
     times: &[f64],
     mut sample: impl FnMut(f64, &crate::ensemble::States),
-) -> Result<Outcome, Failure> {
+) -> Result<EnsembleOutcome, Failure> {
+    use crate::ensemble::States;
     if model.switches() > 0 || !model.constraints().is_empty() {
         return Err(Failure::new(t0, FailureKind::NotAffine));
     }
@@ -113,13 +132,25 @@ pub fn run_ensemble(
         ..options.clone()
     };
     assert!(!members.is_empty(), "an ensemble has a reference member");
+    let count = members.len();
     let mut solver = make_solver(model, &field, t0, members.row(0), h_max)?;
+    // A non-affine motion's members are corrected, and some may need
+    // their own integration: its samples are kept until that is known,
+    // and its initial states for those integrations.
+    let buffered = !model.affine();
+    let initial = buffered.then(|| members.clone());
+    let n = members.n;
+    let mut samples: Vec<(f64, States)> = Vec::new();
     let mut next = 0;
     while next < times.len() && times[next] <= t0 {
-        sample(times[next], &members);
+        if buffered {
+            samples.push((times[next], members.clone()));
+        } else {
+            sample(times[next], &members);
+        }
         next += 1;
     }
-    let mut states = crate::ensemble::States::default();
+    let mut states = States::default();
     if !solver.track_members(members) {
         return Err(Failure::new(t0, FailureKind::NotAffine));
     }
@@ -128,15 +159,78 @@ pub fn run_ensemble(
         budget.accepted_to(solver.time());
         while next < times.len() && times[next] <= solver.time() {
             solver.members_at(model, times[next], &mut states)?;
-            sample(times[next], &states);
+            if buffered {
+                samples.push((times[next], states.clone()));
+            } else {
+                sample(times[next], &states);
+            }
             next += 1;
         }
     }
-    Ok(Outcome {
-        report: solver.report(),
+    let report = solver.report();
+    let estimates = solver.member_estimates();
+    drop(solver);
+    let outcome = Outcome {
+        report,
         ending: Ending::End,
         events: 0,
         budget_used: budget.used(),
         kept: None,
+    };
+    let (estimates, initial) = match (estimates, initial) {
+        (None, None) => {
+            return Ok(EnsembleOutcome {
+                outcome,
+                along_field: count,
+                on_their_own: 0,
+                largest_estimate: None,
+            })
+        }
+        (Some(estimates), Some(initial)) => (estimates, initial),
+        // A method that cannot say how far its members are from their
+        // motions on a non-affine model would answer to first order.
+        _ => return Err(Failure::new(t0, FailureKind::NotAffine)),
+    };
+    // A member beyond the tolerance by its estimate (or dropped: infinite,
+    // or NaN) is integrated on its own, over the same samples.
+    let direct = Options {
+        method: Method::Direct,
+        progress: false,
+        ..options.clone()
+    };
+    let sampled: Vec<f64> = samples.iter().map(|(t, _)| *t).collect();
+    let mut on_their_own = 0;
+    let mut largest: f64 = 0.0;
+    for (m, &estimate) in estimates.iter().enumerate() {
+        if estimate <= 1.0 {
+            largest = largest.max(estimate);
+            continue;
+        }
+        on_their_own += 1;
+        let mut i = 0;
+        run(
+            model,
+            &direct,
+            t0,
+            t1,
+            initial.row(m),
+            &sampled,
+            |_, _, x| {
+                if let Some((_, states)) = samples.get_mut(i) {
+                    states.data[m * n..(m + 1) * n].copy_from_slice(x);
+                }
+                i += 1;
+                Ok(())
+            },
+        )?;
+    }
+    for (t, states) in &samples {
+        sample(*t, states);
+    }
+    Ok(EnsembleOutcome {
+        outcome,
+        along_field: count - on_their_own,
+        on_their_own,
+        largest_estimate: Some(largest),
     })
 }
