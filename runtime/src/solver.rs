@@ -74,9 +74,14 @@ pub trait Solver {
     fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure>;
 
     /// Follows other initial states through the same field (an ensemble:
-    /// exact for affine motions, first order in the spread for others);
-    /// `false` when the method cannot.
-    fn track_members(&mut self, _members: crate::ensemble::States) -> bool {
+    /// exact for affine motions; for others each member corrected to
+    /// `tol`, see [`Solver::member_estimates`]); `false` when the method
+    /// cannot.
+    fn track_members(
+        &mut self,
+        _members: crate::ensemble::States,
+        _tol: crate::tolerance::Tolerance,
+    ) -> bool {
         false
     }
 

@@ -13,8 +13,9 @@
 //! (the linear part cancels: `x_lin' = A x_lin + b`, `Φ' = A Φ`). The
 //! right side is the linearisation's remainder, `½ X_xx (x − p)²`: small
 //! (the square of the spread) and free of the motion's fast linear part,
-//! and it vanishes for an affine model. It is integrated by the
-//! Dormand–Prince pair 5(4) on one sequence of steps shared by all
+//! and it vanishes for an affine model. It is integrated by DOP853's
+//! tableau (8th order, its 5th- and 3rd-order error estimates) on one
+//! sequence of steps shared by all
 //! members (the frames `x_lin, Φ, Φ⁻¹, p, X(p), A` at each stage time are
 //! computed once for all of them), each member's local error — mapped to
 //! the state through `Φ` — kept within the tolerance as direct integration
@@ -22,6 +23,8 @@
 //! the field's own (too far from the reference), or whose equations fail,
 //! is dropped: the run integrates it on its own.
 
+use crate::dop853::hairer_error;
+use crate::dop853::tableau::{A, B, BHH, C, ER, STAGES};
 use crate::ensemble::States;
 use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
@@ -141,7 +144,13 @@ fn rate(
     for j in 0..n {
         s.d[j] = s.x[j] - frame.p[j];
     }
-    frame.a.mul_vec(&s.d, &mut s.ad);
+    // A (x − p), A column-major.
+    s.ad.fill(0.0);
+    for (column, d) in frame.a.as_slice().chunks_exact(n).zip(&s.d) {
+        for (v, a) in s.ad.iter_mut().zip(column) {
+            *v += a * d;
+        }
+    }
     for j in 0..n {
         s.r[j] = if j < shift_rows {
             0.0
@@ -163,52 +172,10 @@ fn rate(
     }
 }
 
-// The Dormand–Prince pair 5(4) (Hairer, Nørsett & Wanner, Table II.5.2).
-const C: [f64; 7] = [0.0, 0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
-const A: [[f64; 6]; 7] = [
-    [0.0; 6],
-    [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
-    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
-    [
-        19372.0 / 6561.0,
-        -25360.0 / 2187.0,
-        64448.0 / 6561.0,
-        -212.0 / 729.0,
-        0.0,
-        0.0,
-    ],
-    [
-        9017.0 / 3168.0,
-        -355.0 / 33.0,
-        46732.0 / 5247.0,
-        49.0 / 176.0,
-        -5103.0 / 18656.0,
-        0.0,
-    ],
-    [
-        35.0 / 384.0,
-        0.0,
-        500.0 / 1113.0,
-        125.0 / 192.0,
-        -2187.0 / 6784.0,
-        11.0 / 84.0,
-    ],
-];
-/// The 5th-order weights minus the 4th-order ones.
-const E: [f64; 7] = [
-    71.0 / 57600.0,
-    0.0,
-    -71.0 / 16695.0,
-    71.0 / 1920.0,
-    -17253.0 / 339200.0,
-    22.0 / 525.0,
-    -1.0 / 40.0,
-];
-
-/// One member's DOPRI5 step from `(w0, k1)` over `h` with the frames of
-/// the stage times (`frames[s]` at `t + C[s] h`; the last two coincide).
-/// Writes `w1`, its rate `k7` and the 4th-order solution's error `e`.
+/// One member's DOP853 step from `(w0, k[0])` over `h` with the frames of
+/// the stage times (`frames[s]` at `t + C[s] h`, `frames[11]` at `t + h`).
+/// Writes `w1`, its rate `k[12]` and the 3rd- and 5th-order error
+/// estimates `e3`, `e5` (of `w`, without the factor `h`, as DOP853's).
 #[allow(clippy::too_many_arguments)]
 fn step(
     model: &dyn DynModel,
@@ -216,37 +183,56 @@ fn step(
     shift_rows: usize,
     h: f64,
     w0: &[f64],
-    k1: &[f64],
-    k: &mut [Vec<f64>; 7],
+    k: &mut [Vec<f64>; STAGES + 1],
     w1: &mut [f64],
-    e: &mut [f64],
+    (e3, e5): (&mut [f64], &mut [f64]),
     s: &mut Scratch,
 ) -> Result<(), Failure> {
     let n = w0.len();
-    k[0].copy_from_slice(k1);
     let mut stage = std::mem::take(&mut s.stage);
-    for st in 1..7 {
-        for j in 0..n {
-            let mut v = w0[j];
-            for (l, kl) in k.iter().enumerate().take(st) {
-                v += h * A[st][l] * kl[j];
+    let mut stepped = Ok(());
+    for st in 1..STAGES {
+        // Whole-vector updates, one per stage used (they vectorise).
+        stage.copy_from_slice(w0);
+        for &(l, a) in A[st] {
+            let c = h * a;
+            for (v, kl) in stage.iter_mut().zip(&k[l]) {
+                *v += c * kl;
             }
-            stage[j] = v;
         }
-        if st == 6 {
-            w1.copy_from_slice(&stage);
-        }
-        let rated = rate(model, &frames[st.min(5)], shift_rows, &stage, &mut k[st], s);
-        if let Err(failure) = rated {
-            s.stage = stage;
-            return Err(failure);
+        stepped = rate(model, &frames[st], shift_rows, &stage, &mut k[st], s);
+        if stepped.is_err() {
+            break;
         }
     }
     s.stage = stage;
-    for j in 0..n {
-        e[j] = h * (0..7).map(|l| E[l] * k[l][j]).sum::<f64>();
+    stepped?;
+    let mut b = std::mem::take(&mut s.d);
+    b.fill(0.0);
+    e5.fill(0.0);
+    for &(l, c) in &B {
+        for (v, kl) in b.iter_mut().zip(&k[l]) {
+            *v += c * kl;
+        }
     }
-    Ok(())
+    for &(l, c) in &ER {
+        for (v, kl) in e5.iter_mut().zip(&k[l]) {
+            *v += c * kl;
+        }
+    }
+    e3.copy_from_slice(&b);
+    for &(l, c) in &BHH {
+        for (v, kl) in e3.iter_mut().zip(&k[l]) {
+            *v -= c * kl;
+        }
+    }
+    for j in 0..n {
+        w1[j] = w0[j] + h * b[j];
+    }
+    s.d = b;
+    let (done, new) = k.split_at_mut(STAGES);
+    let _ = done;
+    rate(model, &frames[STAGES - 1], shift_rows, w1, &mut new[0], s)
 }
 
 /// One accepted point of the shared steps: every member's `w` and rate.
@@ -265,6 +251,9 @@ pub struct Members {
     /// The largest local error met by each member, in units of the
     /// tolerance (infinite: dropped, to be integrated on its own).
     pub estimates: Vec<f64>,
+    /// The members' tolerance (the field's own is tighter: see
+    /// [`crate::run::run_ensemble`]).
+    tol: Tolerance,
     /// The shared steps' size to try next.
     h: Option<f64>,
     /// The accepted window's nodes (for output within it).
@@ -272,24 +261,29 @@ pub struct Members {
     /// The shortest shared step before members are dropped (in the
     /// current window).
     floor: f64,
-    /// Shared steps taken.
+    /// Shared steps taken, and rejected.
     pub steps: usize,
+    pub rejected: usize,
 }
 
 /// How much shorter than the field's own steps the members' steps may get
 /// before the members that force them are dropped.
 const FLOOR: f64 = 0.125;
+/// The most a shared step grows from one to the next.
+const GROWTH: f64 = 2.0;
 
 impl Members {
-    pub fn new(states: States) -> Members {
+    pub fn new(states: States, tol: Tolerance) -> Members {
         let count = states.len();
         Members {
             states,
             estimates: vec![0.0; count],
+            tol,
             h: None,
             nodes: Vec::new(),
             floor: 0.0,
             steps: 0,
+            rejected: 0,
         }
     }
 
@@ -304,7 +298,6 @@ impl Members {
         &mut self,
         frames: &mut dyn Frames,
         model: &dyn DynModel,
-        tol: Tolerance,
         (t_r, t_e): (f64, f64),
         field_steps: usize,
     ) -> Result<(), Failure> {
@@ -345,7 +338,6 @@ impl Members {
         let integrated = self.integrate(
             frames,
             model,
-            tol,
             (&mut w, &mut kk),
             (t_r, t_e),
             f0,
@@ -372,7 +364,6 @@ impl Members {
         &mut self,
         frames: &mut dyn Frames,
         model: &dyn DynModel,
-        tol: Tolerance,
         (w, kk): (&mut Vec<f64>, &mut Vec<f64>),
         (mut t, t_end): (f64, f64),
         f0: Frame,
@@ -381,22 +372,26 @@ impl Members {
     ) -> Result<(Frame, f64), Failure> {
         let n = self.states.n;
         let count = self.states.len();
+        let tol = self.tol;
         let shift_rows = n.saturating_sub(model.coordinates());
         let mut s = Scratch::new(n);
-        let mut frames_buf: Vec<Frame> = (0..6).map(|_| Frame::new(n)).collect();
+        let mut frames_buf: Vec<Frame> = (0..STAGES).map(|_| Frame::new(n)).collect();
         frames_buf[0] = f0;
-        let mut k: [Vec<f64>; 7] = std::array::from_fn(|_| vec![0.0; n]);
-        let (mut w1, mut e) = (vec![0.0; count * n], vec![0.0; count * n]);
+        let mut k: [Vec<f64>; STAGES + 1] = std::array::from_fn(|_| vec![0.0; n]);
+        let mut w1 = vec![0.0; count * n];
+        let (mut e3, mut e5) = (vec![0.0; n], vec![0.0; n]);
         let mut k_new = kk.clone();
         let mut errs = vec![0.0; count];
-        let (mut x0, mut x1, mut ex) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let (mut x0, mut x1) = (vec![0.0; n], vec![0.0; n]);
+        let (mut e3x, mut e5x) = (vec![0.0; n], vec![0.0; n]);
+        let last_stage = STAGES - 1;
         while t < t_end {
             let last = t + 1.0000001 * h >= t_end;
             let h_try = if last { t_end - t } else { h };
             for (st, frame) in frames_buf.iter_mut().enumerate().skip(1) {
                 let ts = match st {
-                    5 if last => t_end,
-                    5 => t + h_try,
+                    _ if st == last_stage && last => t_end,
+                    _ if st == last_stage => t + h_try,
                     _ => t + C[st] * h_try,
                 };
                 frames.frame(ts, frame)?;
@@ -407,53 +402,54 @@ impl Members {
                     continue;
                 }
                 let r = m * n..(m + 1) * n;
+                k[0].copy_from_slice(&kk[r.clone()]);
                 let stepped = step(
                     model,
                     &frames_buf,
                     shift_rows,
                     h_try,
                     &w[r.clone()],
-                    &kk[r.clone()],
                     &mut k,
                     &mut w1[r.clone()],
-                    &mut e[r.clone()],
+                    (&mut e3, &mut e5),
                     &mut s,
                 );
                 if stepped.is_err() {
                     self.estimates[m] = f64::INFINITY;
                     continue;
                 }
-                // The error as the state's, scaled as direct integration's.
+                // The error as the state's, measured as direct DOP853
+                // measures its own.
+                let end = &frames_buf[last_stage];
                 frames_buf[0].state(&w[r.clone()], &mut x0);
-                frames_buf[5].state(&w1[r.clone()], &mut x1);
-                frames_buf[5].map(&e[r.clone()], &mut ex);
-                let sum: f64 = (0..n)
-                    .map(|j| {
-                        let sc = tol.atol + tol.rtol * x0[j].abs().max(x1[j].abs());
-                        (ex[j] / sc).powi(2)
-                    })
-                    .sum();
-                errs[m] = (sum / n as f64).sqrt();
+                end.state(&w1[r.clone()], &mut x1);
+                end.map(&e3, &mut e3x);
+                end.map(&e5, &mut e5x);
+                errs[m] = hairer_error(tol, h_try, &x0, &x1, &e3x, &e5x);
                 if !errs[m].is_finite() {
                     self.estimates[m] = f64::INFINITY;
                     errs[m] = 0.0;
                 }
-                // The new rate is the last stage's (FSAL).
-                k_new[r].copy_from_slice(&k[6]);
+                // The new point's rate, the next step's first stage.
+                k_new[r].copy_from_slice(&k[STAGES]);
             }
             let worst = (0..count)
                 .filter(|&m| self.live(m))
                 .map(|m| errs[m])
                 .fold(0.0_f64, f64::max);
+            // The largest error of many members jumps from step to step
+            // more than one motion's: growth is capped lower than DOP853's
+            // (6), or a third of the steps were rejected.
             let factor = if worst > 0.0 {
-                (0.9 * worst.powf(-0.2)).clamp(0.2, 5.0)
+                (0.85 * worst.powf(-0.125)).clamp(1.0 / 6.0, GROWTH)
             } else {
-                5.0
+                GROWTH
             };
             if worst > 1.0 {
                 let shorter = h_try * factor;
                 if shorter >= self.floor {
                     h = shorter;
+                    self.rejected += 1;
                     continue;
                 }
                 // The members that need steps this short are too far from
@@ -480,9 +476,9 @@ impl Members {
                     k: kk.clone(),
                 });
             }
-            frames_buf.swap(0, 5);
+            frames_buf.swap(0, last_stage);
             if !last {
-                h = h_try * factor.min(if worst > 1.0 { 1.0 } else { 5.0 });
+                h = h_try * factor.min(if worst > 1.0 { 1.0 } else { GROWTH });
             }
         }
         let end = frames_buf.swap_remove(0);
@@ -496,7 +492,6 @@ impl Members {
         &mut self,
         frames: &mut dyn Frames,
         model: &dyn DynModel,
-        tol: Tolerance,
         t: f64,
         out: &mut States,
     ) -> Result<(), Failure> {
@@ -516,17 +511,8 @@ impl Members {
         frames.frame(t_node, &mut f0)?;
         let end = if t > t_node {
             let h = t - t_node;
-            self.integrate(
-                frames,
-                model,
-                tol,
-                (&mut w, &mut kk),
-                (t_node, t),
-                f0,
-                h,
-                None,
-            )?
-            .0
+            self.integrate(frames, model, (&mut w, &mut kk), (t_node, t), f0, h, None)?
+                .0
         } else {
             f0
         };

@@ -501,8 +501,7 @@ impl Solver for QuasilinearField {
                         model,
                         options: &self.options,
                     };
-                    let tol = self.options.tol;
-                    members.through(&mut frames, model, tol, (self.t, end_time), steps)?;
+                    members.through(&mut frames, model, (self.t, end_time), steps)?;
                 }
             }
             self.t_prev = self.t;
@@ -638,8 +637,8 @@ impl Solver for QuasilinearField {
         Ok(out)
     }
 
-    fn track_members(&mut self, members: States) -> bool {
-        self.members = Some(Members::new(members));
+    fn track_members(&mut self, members: States, tol: Tolerance) -> bool {
+        self.members = Some(Members::new(members, tol));
         true
     }
 
@@ -662,7 +661,7 @@ impl Solver for QuasilinearField {
             model,
             options: &self.options,
         };
-        members.at(&mut frames, model, self.options.tol, t, out)
+        members.at(&mut frames, model, t, out)
     }
 
     fn member_estimates(&self) -> Option<Vec<f64>> {
@@ -683,7 +682,16 @@ impl Solver for QuasilinearField {
             passes: Some(self.passes),
             predictor: Some(self.predictor_stats),
             linearizations: self.linearizations,
-            notes: Vec::new(),
+            notes: self
+                .members
+                .iter()
+                .map(|m| {
+                    format!(
+                        "ensemble members: {} shared steps, {} rejected",
+                        m.steps, m.rejected
+                    )
+                })
+                .collect(),
         }
     }
 }
