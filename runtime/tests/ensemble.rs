@@ -130,7 +130,7 @@ fn a_non_affine_ensemble_is_corrected_to_the_tolerance() {
 fn a_far_spread_ensemble_is_right_member_by_member() {
     let rtol = 1e-8;
     let (error, outcome) = ensemble_against_direct::<DoublePendulum>(0.1, 12, rtol);
-    let mut model = DoublePendulum::new(&DoublePendulum::parameters(&[]));
+    let model = DoublePendulum::new(&DoublePendulum::parameters(&[]));
     let (t0, t1) = model.time_span();
     let x0 = model.initial_state(&[None; 4]).unwrap();
     let times = sample_times(t0, t1, 11);

@@ -103,6 +103,9 @@ impl Frame {
 /// The window's frames at any time within it.
 pub trait Frames {
     fn frame(&mut self, t: f64, out: &mut Frame) -> Result<(), Failure>;
+    /// The ends of the field's steps: the frames are smooth between them
+    /// (each step's own continuous extension), not across.
+    fn breaks(&self) -> Vec<f64>;
 }
 
 /// Scratch of one member's right side.
@@ -230,9 +233,14 @@ fn step(
         w1[j] = w0[j] + h * b[j];
     }
     s.d = b;
-    let (done, new) = k.split_at_mut(STAGES);
-    let _ = done;
-    rate(model, &frames[STAGES - 1], shift_rows, w1, &mut new[0], s)
+    rate(
+        model,
+        &frames[STAGES - 1],
+        shift_rows,
+        w1,
+        &mut k[STAGES],
+        s,
+    )
 }
 
 /// One accepted point of the shared steps: every member's `w` and rate.
@@ -385,12 +393,20 @@ impl Members {
         let (mut x0, mut x1) = (vec![0.0; n], vec![0.0; n]);
         let (mut e3x, mut e5x) = (vec![0.0; n], vec![0.0; n]);
         let last_stage = STAGES - 1;
+        let breaks = frames.breaks();
         while t < t_end {
-            let last = t + 1.0000001 * h >= t_end;
-            let h_try = if last { t_end - t } else { h };
+            // A step ends on the next break of the frames if it would
+            // cross it: DOP853's order needs a smooth right side.
+            let stop = breaks
+                .iter()
+                .copied()
+                .find(|&b| b > t * (1.0 + 1e-15) + 1e-300 && b < t_end)
+                .unwrap_or(t_end);
+            let last = t + 1.0000001 * h >= stop;
+            let h_try = if last { stop - t } else { h };
             for (st, frame) in frames_buf.iter_mut().enumerate().skip(1) {
                 let ts = match st {
-                    _ if st == last_stage && last => t_end,
+                    _ if st == last_stage && last => stop,
                     _ if st == last_stage => t + h_try,
                     _ => t + C[st] * h_try,
                 };
@@ -465,7 +481,7 @@ impl Members {
                     self.estimates[m] = self.estimates[m].max(errs[m]);
                 }
             }
-            t = if last { t_end } else { t + h_try };
+            t = if last { stop } else { t + h_try };
             std::mem::swap(w, &mut w1);
             std::mem::swap(kk, &mut k_new);
             self.steps += 1;

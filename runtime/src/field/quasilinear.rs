@@ -809,6 +809,10 @@ struct WindowFrames<'a> {
 }
 
 impl Frames for WindowFrames<'_> {
+    fn breaks(&self) -> Vec<f64> {
+        self.window.steps.iter().map(StoredStep::t_new).collect()
+    }
+
     fn frame(&mut self, t: f64, out: &mut Frame) -> Result<(), Failure> {
         let window = &mut *self.window;
         let n = window.anchor_x.len();
