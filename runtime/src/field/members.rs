@@ -12,19 +12,20 @@
 //!
 //! (the linear part cancels: `x_lin' = A x_lin + b`, `Φ' = A Φ`). The
 //! right side is the linearisation's remainder, `½ X_xx (x − p)²`: small
-//! (the square of the spread) and free of the motion's fast linear part,
-//! and it vanishes for an affine model. It is integrated by DOP853's
-//! tableau (8th order, its 5th- and 3rd-order error estimates) on one
-//! sequence of steps shared by all
-//! members (the frames `x_lin, Φ, Φ⁻¹, p, X(p), A` at each stage time are
-//! computed once for all of them), each member's local error — mapped to
-//! the state through `Φ` — kept within the tolerance as direct integration
-//! keeps its own. A member whose error would need steps much shorter than
-//! the field's own (too far from the reference), or whose equations fail,
-//! is dropped: the run integrates it on its own.
+//! (the square of the spread), and it vanishes for an affine model. It is
+//! integrated by DOP853's tableau (8th order, its 5th- and 3rd-order error
+//! estimates) on one sequence of steps shared by all members (the frames
+//! `x_lin, Φ, Φ⁻¹, p, X(p), A` at each stage time are computed once for
+//! all of them), each member's local error — mapped to the state through
+//! `Φ` — kept within the tolerance as direct integration keeps its own.
+//! The steps end on the field's step ends: the frames come from each field
+//! step's own continuous extension, smooth within a step and not across
+//! (steps across them lost DOP853's order where its estimate did not see
+//! it: a double pendulum 0.5 away, 1.6e-5 off against direct's 2.9e-6).
+//! A member whose error would need steps much shorter than the field's
+//! own (too far from the reference), or whose equations fail, is dropped:
+//! the run integrates it on its own ([`crate::run::run_ensemble`]).
 
-use crate::dop853::hairer_error;
-use crate::dop853::tableau::{A, B, BHH, C, ER, STAGES};
 use crate::ensemble::States;
 use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
