@@ -26,6 +26,8 @@
 //! own (too far from the reference), or whose equations fail, is dropped:
 //! the run integrates it on its own ([`crate::run::run_ensemble`]).
 
+use crate::dop853::hairer_error;
+use crate::dop853::tableau::{A, B, BHH, C, ER, STAGES};
 use crate::ensemble::States;
 use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
