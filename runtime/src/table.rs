@@ -141,6 +141,7 @@ pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, Table
         json: true,
         ensemble: None,
         spread: 0.1,
+        output: None,
         warnings: Vec::new(),
         inputs: Vec::new(),
         interpolation: crate::inputs::Interpolation::Hold,

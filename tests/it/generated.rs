@@ -394,8 +394,9 @@ pub(crate) fn clippy_file(path: &Path) {
 
 /// `--ensemble K`: one field for K initial states agrees with K direct
 /// integrations (a linear and a Riccati coefficient system) to the
-/// tolerance; a non-affine system's tangent ensemble is first order in the
-/// spread.
+/// tolerance; a non-affine system's members, corrected along the field,
+/// agree with theirs to 10·rtol whatever the spread (they were first order
+/// in it: more tests in `ensemble.rs`).
 #[test]
 fn ensemble_mode_agrees_with_direct_integrations() {
     for name in ["paper", "damped_oscillator"] {
@@ -436,7 +437,7 @@ fn ensemble_mode_agrees_with_direct_integrations() {
     };
     let (coarse, fine) = (difference("1e-2"), difference("1e-3"));
     assert!(
-        fine < coarse / 20.0,
+        coarse <= 1e-9 && fine <= 1e-9,
         "spread 1e-2: {coarse:e}, 1e-3: {fine:e}"
     );
 }

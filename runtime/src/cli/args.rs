@@ -56,9 +56,13 @@ usage: MODEL [OPTIONS]
   --ensemble K           K initial states around the model's (spread by
                          --spread, default 0.1 of each value) through one
                          field, against K direct integrations: times and
-                         the largest difference (exact for affine motions,
-                         first order in the spread otherwise)
+                         the largest difference (exact for affine motions;
+                         otherwise each member corrected to the tolerance,
+                         or integrated on its own where the field cannot)
   --spread S             the ensemble's relative spread
+  -o FILE                with --ensemble: write the members' states to FILE
+                         as CSV (member,t,<state...>, member by member)
+                         instead of timing them against direct integrations
   --repeat N             solve N times (after a warm-up) and report the
                          smallest wall time
   --quiet                no CSV on stdout
@@ -92,6 +96,8 @@ pub struct Invocation {
     pub json: bool,
     pub ensemble: Option<usize>,
     pub spread: f64,
+    /// `-o FILE`: the ensemble's states are written there.
+    pub output: Option<String>,
     /// Warnings to print before running (e.g. a tolerance below rounding).
     pub warnings: Vec<String>,
     /// `--input NAME=FILE`: `(name, file)`, checked against the model's
@@ -161,6 +167,7 @@ pub fn parse(
         json: false,
         ensemble: None,
         spread: 0.1,
+        output: None,
         warnings: Vec::new(),
         inputs: Vec::new(),
         interpolation: Interpolation::Hold,
@@ -247,6 +254,7 @@ pub fn parse(
                 }
                 inv.spread = s;
             }
+            "-o" | "--output" => inv.output = Some(value(flag, &mut args)?.to_string()),
             "--repeat" => inv.repeat = count(flag, value(flag, &mut args)?, 1_000_000)?,
             "--quiet" => inv.quiet = true,
             "--summary" => match value(flag, &mut args)? {
@@ -302,6 +310,13 @@ pub fn parse(
             }
             other => return Err(format!("unknown argument `{other}`")),
         }
+    }
+    if inv.output.is_some() && inv.ensemble.is_none() {
+        return Err(
+            "`-o FILE` writes an ensemble's states: it needs `--ensemble K` (a single run's \
+             CSV goes to stdout)"
+                .to_string(),
+        );
     }
     if let Some(phase) = phase {
         let plot = inv
