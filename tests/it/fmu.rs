@@ -6,7 +6,8 @@
 //! values, an input stepping through FMPy's input signal, the stop time,
 //! the failure's message through the logger with fmi2Error, three
 //! instances of two models in one process, fmi2Reset, saved states, bad
-//! calls.
+//! calls; the FMI cross-check files of four models checked by FMPy's
+//! cross-check validation (`tests/fmu/cross_check.py`).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -295,4 +296,42 @@ fn co_simulation_at_a_communication_step_of_1e_3_takes_the_steps_of_lagc_run() {
     let summary = stderr.lines().find(|l| l.contains("steps: ")).unwrap();
     let summary = summary.split("steps: ").nth(1).unwrap();
     assert_eq!(work(logged), work(summary), "{logged}\n{summary}");
+}
+
+#[test]
+fn the_fmi_cross_check_files_pass_fmpys_cross_check_validation() {
+    // `_ref.csv`, `_ref.opt` (and `_in.csv` for a driven model) from
+    // `lagc run` in the cross-check repository's layout; FMPy's
+    // validate_test_fmu on each FMU folder, then its simulation as a
+    // cross-check importer checked by validate_cross_check_result
+    // (tests/fmu/cross_check.py).
+    let dir = target().join("cross-check");
+    std::fs::create_dir_all(&dir).unwrap();
+    for model in [
+        "examples/paper.lag",
+        "examples/knife_edge_turning.lag",
+        "examples/vertical_rocket.lag",
+        "tests/data/driven_oscillator.lag",
+    ] {
+        build_fmu(Path::new(model), &dir);
+    }
+    let out = Command::new(python())
+        .arg(crate::root().join("tests/fmu/cross_check.py"))
+        .arg(env!("CARGO_BIN_EXE_lagc"))
+        .arg(crate::root())
+        .arg(&dir)
+        .arg(dir.join("tree"))
+        .env("LAGC_CACHE_DIR", crate::root().join("target/lagc-cache"))
+        .output()
+        .unwrap();
+    let out = checked(out, "cross_check.py");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    eprint!("{stdout}");
+    assert_eq!(
+        stdout
+            .matches("validate_cross_check_result: no problems")
+            .count(),
+        4,
+        "{stdout}"
+    );
 }
