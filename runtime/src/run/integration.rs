@@ -455,6 +455,21 @@ impl<'m> Integration<'m> {
         self.restart_from(t, &fixed)
     }
 
+    /// [`Integration::restart_with_inputs`] on `model` from now on, in
+    /// place of the model the integration held: the same model with other
+    /// param values (a param tuned between steps, issue 26), a change as
+    /// discontinuous as an input's. The integration owns `model` after.
+    pub fn restart_with_model(
+        &mut self,
+        model: Box<dyn DynModel>,
+        t: f64,
+        x: &[f64],
+        inputs: &crate::model::Inputs,
+    ) -> Result<(), Failure> {
+        self.model = Held::Owned(model);
+        self.restart_with_inputs(t, x, inputs)
+    }
+
     /// Moves `x` onto the constraints at `t` (the velocities along the
     /// constraints' normals, the smallest correction; holonomic positions
     /// by Gauss–Newton), in the mode whose candidates are best there.
