@@ -168,8 +168,9 @@ pub struct Instance {
     inputs: Vec<f64>,
     /// `tunable[i]`: param `i` may be set between steps.
     tunable: Vec<bool>,
-    /// An input or a tuned param changed since the last step: the next
-    /// one restarts.
+    /// An input or a tuned param changed and the integration has not
+    /// restarted with it yet (set before initialization ended, or saved
+    /// so).
     changed: bool,
     pub options: Options,
     start: Option<f64>,
@@ -445,8 +446,8 @@ impl Instance {
         match variable {
             Variable::Param(i) if before => self.overrides[i] = Some(value),
             Variable::Param(i) if self.phase == Phase::Stepping && self.tunable[i] => {
-                // The next step restarts with it (and the params computed
-                // from it), as at an input's change.
+                // The integration restarts with it (and the params
+                // computed from it), as at an input's change.
                 if self.overrides[i] != Some(value) {
                     self.overrides[i] = Some(value);
                     self.changed = true;
@@ -492,13 +493,38 @@ impl Instance {
                 }
             }
         }
+        if self.phase == Phase::Stepping {
+            // At once, so that outputs read before the next step see the
+            // new values (an output of an input is direct feedthrough).
+            self.apply_changes()?;
+        }
+        Ok(())
+    }
+
+    /// New inputs, or tuned params, while stepping: a discontinuity, the
+    /// integration restarts where it stands (the components the
+    /// constraints fix recomputed, the others carried over).
+    fn apply_changes(&mut self) -> Result<(), Error> {
+        let Some(integration) = self.integration.as_mut().filter(|_| self.changed) else {
+            return Ok(());
+        };
+        let params = self.prototype.parameters(&self.overrides);
+        let inputs = Inputs::held(&self.inputs);
+        if integration.model().param_values() == params.as_slice() {
+            integration.set_inputs(&inputs)?;
+        } else {
+            let model = self.prototype.with_params(&params);
+            let (t, x) = (integration.t(), integration.state().to_vec());
+            integration.restart_with_model(model, t, &x, &inputs)?;
+        }
+        self.changed = false;
         Ok(())
     }
 
     /// fmi2DoStep from `t` (which must be where the instance stands) over
-    /// `h`. An input changed since the last step is a discontinuity: the
-    /// step restarts the integration from the current state under the
-    /// new inputs, the components the constraints fix recomputed.
+    /// `h`. Inputs and tuned params set while stepping restarted the
+    /// integration when they were set; one still pending (a restored
+    /// state saved so) restarts it here first.
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<Stepped, Error> {
         self.expect(&[Phase::Stepping], "fmi2DoStep")?;
         let scale = t.abs().max(h.abs()).max(1.0);
@@ -517,26 +543,13 @@ impl Instance {
                 return Err(Error(format!("t = {end} is past the stop time {stop}")));
             }
         }
+        self.apply_changes()?;
         let integration = self
             .integration
             .as_mut()
             .expect("stepping has an integration");
         // A last step that lands on the stop time up to rounding ends there.
         let end = end.min(integration.end());
-        if self.changed {
-            // New inputs, or tuned params: a discontinuity, the
-            // integration restarts here.
-            let params = self.prototype.parameters(&self.overrides);
-            let inputs = Inputs::held(&self.inputs);
-            if integration.model().param_values() == params.as_slice() {
-                integration.set_inputs(&inputs)?;
-            } else {
-                let model = self.prototype.with_params(&params);
-                let (t, x) = (integration.t(), integration.state().to_vec());
-                integration.restart_with_model(model, t, &x, &inputs)?;
-            }
-            self.changed = false;
-        }
         match integration.advance_to(end)? {
             Advance::Reached(_) => {
                 self.t = end;

@@ -189,6 +189,9 @@ def two_instances(d):
         fmu.enterInitializationMode()
         fmu.exitInitializationMode()
     c.setReal([rc["F"]], [-1.0])
+    # An output of an input reads the new value at once (direct
+    # feedthrough), before the next step.
+    assert c.getReal([rc["force"]]) == [-1.0], c.getReal([rc["force"]])
     t, h, worst = 0.0, 0.125, 0.0
     for _ in range(24):
         for fmu in (a, b, c):
