@@ -111,6 +111,12 @@ impl Checker<'_> {
     /// Which params may change between steps: none of those fixed, nor of
     /// the params computed from them (a tuned param recomputes those).
     pub(super) fn tunable_params(&self, count: usize) -> Vec<bool> {
+        // Without every param's own params (a param's check not recorded
+        // as "a param") a fixed param's sources are unknown: none is
+        // tunable rather than one wrongly.
+        if self.param_uses.len() != count {
+            return vec![false; count];
+        }
         let mut fixed = vec![false; count];
         for &i in &self.fixed_params {
             if let Some(f) = fixed.get_mut(i) {
@@ -119,7 +125,7 @@ impl Checker<'_> {
         }
         // A param uses only earlier ones: latest first, each fixed param
         // fixes those it is computed from.
-        for j in (0..count.min(self.param_uses.len())).rev() {
+        for j in (0..count).rev() {
             if fixed[j] {
                 for &i in &self.param_uses[j] {
                     if let Some(f) = fixed.get_mut(i) {

@@ -59,6 +59,12 @@ def test_solve_with_inputs_equals_lagc_run_input_to_the_bit(run_cli, tmp_path, m
         assert sol.stats[key] == cli[key], key
     plain = m.solve(method=method)
     assert not np.array_equal(plain.y, sol.y)
+    # solve_batch drives every set the same way.
+    batch = m.solve_batch(
+        params=[{}, {"k": 8.0}], inputs={"F": (SIGNAL_T, SIGNAL_F)}, input_interp=interp,
+        method=method,
+    )
+    assert all(np.array_equal(b.y, sol.y) for b in batch)
 
 
 def test_a_held_step_is_the_motion_by_pieces():
