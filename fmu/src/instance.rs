@@ -591,12 +591,20 @@ impl Instance {
     /// saved state (the importer rolled the time back), under the inputs
     /// and param values saved with it.
     pub fn restore(&mut self, saved: &Saved) -> Result<(), Error> {
+        if self.integration.is_none() && matches!(saved.phase, Phase::Stepping | Phase::Ended) {
+            // A stepping state set on an instance not yet stepping (FMI
+            // allows it after instantiation; a deserialized state): its
+            // integration made first, under the saved values.
+            self.overrides.clone_from(&saved.overrides);
+            self.inputs.clone_from(&saved.inputs);
+            self.initialize(true)?;
+        }
         if let Some(integration) = self.integration.as_mut() {
             let inputs = Inputs::held(&saved.inputs);
-            if saved.overrides == self.overrides {
+            let params = self.prototype.parameters(&saved.overrides);
+            if integration.model().param_values() == params.as_slice() {
                 integration.restart_with_inputs(saved.t, &saved.x, &inputs)?;
             } else {
-                let params = self.prototype.parameters(&saved.overrides);
                 let model = self.prototype.with_params(&params);
                 integration.restart_with_model(model, saved.t, &saved.x, &inputs)?;
             }

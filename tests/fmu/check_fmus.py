@@ -305,7 +305,21 @@ def tuning(d):
     steps(1.0, 8)
     assert fmu.getReal(xv) == first, (fmu.getReal(xv), first)
     fmu.freeFMUState(again)
-    print(f"saved state (and its {len(serial)} serialized bytes): the same steps again, bit for bit")
+    # And on another instance, only instantiated: it steps on from there.
+    other, _ = slave(d, "damped_oscillator", "other")
+    other.instantiate()
+    state = other.deSerializeFMUstate(serial)
+    other.setFMUState(state)
+    t = 1.0
+    for _ in range(8):
+        other.doStep(currentCommunicationPoint=t, communicationStepSize=0.125)
+        t += 0.125
+    assert other.getReal(xv) == first, (other.getReal(xv), first)
+    assert other.getReal([refs["c"]]) == [0.0]
+    other.freeFMUState(state)
+    other.terminate()
+    other.freeInstance()
+    print(f"saved state (and its {len(serial)} serialized bytes, on this instance and another): the same steps again, bit for bit")
     # Foreign bytes are refused with an error, not misread.
     try:
         fmu.deSerializeFMUstate(b"not a state of this FMU")
