@@ -134,6 +134,9 @@ pub struct Integration<'m> {
     end: f64,
     /// Where the integration last started or restarted.
     t_start: f64,
+    /// Where it was made: a restart may go back as far as here (an FMU's
+    /// saved state from before a later restart).
+    t_first: f64,
     x_start: Vec<f64>,
     budget: Budget,
     regime: Regime,
@@ -181,6 +184,7 @@ impl<'m> Integration<'m> {
             options: options.clone(),
             end,
             t_start: t0,
+            t_first: t0,
             x_start: x0.to_vec(),
             budget,
             regime: Regime::default(),
@@ -405,11 +409,11 @@ impl<'m> Integration<'m> {
     /// candidate determined. [`Integration::put_on_constraints`] makes a
     /// state satisfy them. Panics when `x` is not of the model's dimension.
     pub fn restart_from(&mut self, t: f64, x: &[f64]) -> Result<(), Failure> {
-        if !(t >= self.t_start.min(self.t) && t <= self.end) {
+        if !(t >= self.t_first && t <= self.end) {
             return Err(Failure::new(
                 t,
                 FailureKind::OutsideSpan {
-                    from: self.t_start,
+                    from: self.t_first,
                     to: self.end,
                 },
             ));
@@ -458,6 +462,21 @@ impl<'m> Integration<'m> {
         let mut fixed = x.to_vec();
         model.constrained(t, x, &mut fixed)?;
         self.restart_from(t, &fixed)
+    }
+
+    /// [`Integration::restart_with_inputs`] on `model` from now on, in
+    /// place of the model the integration held: the same model with other
+    /// param values (a param tuned between steps, issue 26), a change as
+    /// discontinuous as an input's. The integration owns `model` after.
+    pub fn restart_with_model(
+        &mut self,
+        model: Box<dyn DynModel>,
+        t: f64,
+        x: &[f64],
+        inputs: &crate::model::Inputs,
+    ) -> Result<(), Failure> {
+        self.model = Held::Owned(model);
+        self.restart_with_inputs(t, x, inputs)
     }
 
     /// Moves `x` onto the constraints at `t` (the velocities along the
