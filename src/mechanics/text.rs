@@ -6,7 +6,7 @@
 use super::reduced::{Highest, InitialValue};
 use super::tidy::tidy_terms;
 use super::Derivation;
-use crate::ir::{Arena, ExprId, SharedNames, Symbol};
+use crate::ir::{Arena, ExprId, FxMap, SharedNames, Symbol};
 use std::fmt::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -22,6 +22,9 @@ struct Printer {
     collecting: bool,
     roots: Vec<ExprId>,
     names: SharedNames,
+    /// `tidy_terms` of every expression written, kept from the first pass
+    /// for the second (tidying a large model is most of its text's cost).
+    tidied: FxMap<ExprId, Vec<ExprId>>,
 }
 
 impl Printer {
@@ -30,6 +33,7 @@ impl Printer {
             collecting: true,
             roots: Vec::new(),
             names: SharedNames::none(),
+            tidied: FxMap::default(),
         }
     }
 
@@ -39,6 +43,7 @@ impl Printer {
             collecting: false,
             roots: Vec::new(),
             names: SharedNames::none(),
+            tidied: FxMap::default(),
         }
     }
 
@@ -48,6 +53,7 @@ impl Printer {
             collecting: false,
             names: arena.shared_names(&self.roots, prefix),
             roots: Vec::new(),
+            tidied: self.tidied,
         }
     }
 
@@ -89,7 +95,14 @@ fn name_prefix(arena: &Arena, lets: &[(String, Vec<ExprId>)]) -> String {
 
 /// `e` written as its collected terms, highest derivatives first.
 fn sum(arena: &mut Arena, e: ExprId, style: Style, p: &mut Printer) -> String {
-    let terms = tidy_terms(arena, e);
+    let terms = match p.tidied.get(&e) {
+        Some(terms) => terms.clone(),
+        None => {
+            let terms = tidy_terms(arena, e);
+            p.tidied.insert(e, terms.clone());
+            terms
+        }
+    };
     if p.collecting {
         p.roots.extend_from_slice(&terms);
         return String::new();
