@@ -34,6 +34,9 @@ below the tightest run's error, nothing: no extrapolation); ratio = lagc
 time / peer time (< 1: lagc faster).
 
 Usage: python3 scripts/bench_vs_gsl.py [--quick] [--json OUT] [--models a,b]
+       [--step-to-times] [--samples N]
+--step-to-times: lagc steps onto the sample times too (as rk8pd, rkf78 do);
+--samples 2: the final time only, a step end for every method.
 """
 
 import json
@@ -59,6 +62,10 @@ MODELS = {
 }
 PEER_METHODS = ["rk8pd", "rkf78", "dopri5"]
 SAMPLES = 11
+# `--step-to-times`: lagc cuts its steps to land on the sample times, as
+# rk8pd and rkf78 do (issue 29); `--samples 2`: only the final time, where
+# every method's sample is a step end.
+STEP_TO_TIMES = False
 LEVELS = [10.0 ** -k for k in range(4, 12)]
 
 
@@ -137,7 +144,7 @@ def solve(binary, model, method, rtol, atol, repeat):
             binary, "--method", "direct", "--integrator", "explicit",
             "--rtol", repr(rtol), "--atol", repr(atol), "--samples", str(SAMPLES),
             "--repeat", str(repeat), "--summary", "json",
-        ]
+        ] + (["--step-to-times"] if STEP_TO_TIMES else [])
     else:
         cmd = [PEERS, model, method, repr(rtol), repr(atol), str(SAMPLES), str(repeat)]
     p = subprocess.run(cmd, capture_output=True, text=True)
@@ -189,7 +196,9 @@ def cost_at(points, level):
 
 
 def main():
+    global SAMPLES, STEP_TO_TIMES
     quick = "--quick" in sys.argv
+    STEP_TO_TIMES = "--step-to-times" in sys.argv
     out_json = None
     models = list(MODELS)
     args = sys.argv[1:]
@@ -198,6 +207,8 @@ def main():
             out_json = args[i + 1]
         if a == "--models":
             models = args[i + 1].split(",")
+        if a == "--samples":
+            SAMPLES = int(args[i + 1])
     binaries = build()
     budget = 0.1 if quick else 0.3
     ladder = [10.0 ** -k for k in range(3, 14)]

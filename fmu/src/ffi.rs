@@ -154,6 +154,7 @@ pub fn get_version() -> *const c_char {
 #[allow(clippy::too_many_arguments)]
 pub unsafe fn instantiate(
     prototype: fn() -> Box<dyn DynModel>,
+    tunable: &'static [usize],
     name: *const c_char,
     fmu_type: i32,
     guid: *const c_char,
@@ -172,7 +173,7 @@ pub unsafe fn instantiate(
         let model = prototype();
         let component = Component {
             name: CString::new(unsafe { text(name) }.unwrap_or("")).unwrap_or_default(),
-            instance: Instance::new(model),
+            instance: Instance::new(model).with_tunable(tunable),
             logger,
             environment,
             logging: logging != 0,
@@ -533,6 +534,88 @@ pub unsafe fn free_fmu_state(c: *mut c_void, state: *mut *mut c_void) -> Status 
                 }
             }
             OK
+        })
+    }
+}
+
+/// # Safety
+/// `c` as in [`with`]; `state` from [`get_fmu_state`]; `size` points to
+/// one `size_t`.
+pub unsafe fn serialized_fmu_state_size(
+    c: *mut c_void,
+    state: *mut c_void,
+    size: *mut usize,
+) -> Status {
+    unsafe {
+        with(c, |_| {
+            let (Some((saved, ended_at)), Some(size)) = (
+                (state as *const (Saved, Option<f64>)).as_ref(),
+                size.as_mut(),
+            ) else {
+                return ERROR;
+            };
+            *size = saved.to_bytes(*ended_at).len();
+            OK
+        })
+    }
+}
+
+/// # Safety
+/// `c` as in [`with`]; `state` from [`get_fmu_state`]; `bytes` points to
+/// `size` writable bytes.
+pub unsafe fn serialize_fmu_state(
+    c: *mut c_void,
+    state: *mut c_void,
+    bytes: *mut u8,
+    size: usize,
+) -> Status {
+    unsafe {
+        with(c, |comp| {
+            let Some((saved, ended_at)) = (state as *const (Saved, Option<f64>)).as_ref() else {
+                return ERROR;
+            };
+            let serial = saved.to_bytes(*ended_at);
+            if bytes.is_null() || size < serial.len() {
+                return comp.status(Err(crate::instance::Error(format!(
+                    "fmi2SerializeFMUstate: {size} bytes given, the state takes {} \
+                     (fmi2SerializedFMUstateSize)",
+                    serial.len()
+                ))));
+            }
+            std::ptr::copy_nonoverlapping(serial.as_ptr(), bytes, serial.len());
+            OK
+        })
+    }
+}
+
+/// # Safety
+/// `c` as in [`with`]; `bytes` points to `size` readable bytes; `state`
+/// points to one `fmi2FMUstate` (a new state is made there).
+pub unsafe fn deserialize_fmu_state(
+    c: *mut c_void,
+    bytes: *const u8,
+    size: usize,
+    state: *mut *mut c_void,
+) -> Status {
+    unsafe {
+        with(c, |comp| {
+            let Some(slot) = state.as_mut() else {
+                return ERROR;
+            };
+            if bytes.is_null() {
+                return ERROR;
+            }
+            let serial = std::slice::from_raw_parts(bytes, size);
+            match Saved::from_bytes(serial, &comp.instance) {
+                Ok(saved) => {
+                    if !slot.is_null() {
+                        drop(Box::from_raw(*slot as *mut (Saved, Option<f64>)));
+                    }
+                    *slot = Box::into_raw(Box::new(saved)) as *mut c_void;
+                    OK
+                }
+                Err(error) => comp.status(Err(error)),
+            }
         })
     }
 }

@@ -60,8 +60,102 @@ pub struct Saved {
     t: f64,
     x: Vec<f64>,
     inputs: Vec<f64>,
-    inputs_changed: bool,
+    overrides: Vec<Option<f64>>,
+    changed: bool,
 }
+
+/// The bytes of a serialized state start with these (and a format
+/// number), so that foreign bytes are refused, not misread.
+const SERIAL_MAGIC: &[u8; 8] = b"lagcFMU1";
+
+impl Saved {
+    /// The saved instance (and the time `stop when` ended it at, if it
+    /// did) as bytes (fmi2SerializeFMUstate): little-endian numbers
+    /// after [`SERIAL_MAGIC`], the phase and flags, then `t`, the
+    /// state, the inputs and the param overrides, each list after its
+    /// length.
+    pub fn to_bytes(&self, ended_at: Option<f64>) -> Vec<u8> {
+        let mut out = SERIAL_MAGIC.to_vec();
+        let phase = PHASES.iter().position(|p| *p == self.phase).unwrap_or(0);
+        out.extend([phase as u8, u8::from(self.changed)]);
+        let mut number = |v: f64| out.extend(v.to_le_bytes());
+        number(self.t);
+        number(ended_at.unwrap_or(f64::NAN));
+        for list in [&self.x, &self.inputs] {
+            number(list.len() as f64);
+            list.iter().for_each(|&v| number(v));
+        }
+        number(self.overrides.len() as f64);
+        for o in &self.overrides {
+            // A param the importer did not set is NaN (a set one is finite).
+            number(o.unwrap_or(f64::NAN));
+        }
+        out
+    }
+
+    /// [`Saved::to_bytes`] read back, checked against this instance's
+    /// model (its dimension, inputs and params): an error in words for
+    /// bytes of another model or none of lagc's.
+    pub fn from_bytes(bytes: &[u8], instance: &Instance) -> Result<(Saved, Option<f64>), Error> {
+        let refuse = |why: &str| Error(format!("the serialized FMU state is {why}"));
+        let rest = bytes
+            .strip_prefix(SERIAL_MAGIC.as_slice())
+            .ok_or_else(|| refuse("not one of this FMU's"))?;
+        let (&[phase, changed], rest) = rest
+            .split_first_chunk::<2>()
+            .ok_or_else(|| refuse("cut short"))?;
+        let phase = *PHASES
+            .get(phase as usize)
+            .ok_or_else(|| refuse("corrupt"))?;
+        let mut numbers = rest
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])));
+        if rest.len() % 8 != 0 {
+            return Err(refuse("corrupt"));
+        }
+        let mut next = || numbers.next().ok_or_else(|| refuse("cut short"));
+        let t = next()?;
+        let ended_at = Some(next()?).filter(|v| !v.is_nan());
+        let m = &*instance.prototype;
+        let sizes = [m.dim(), m.input_names().len(), m.param_names().len()];
+        let mut lists: Vec<Vec<f64>> = Vec::new();
+        for size in sizes {
+            let len = next()?;
+            if len != size as f64 {
+                return Err(refuse("of another model"));
+            }
+            lists.push((0..size).map(|_| next()).collect::<Result<_, _>>()?);
+        }
+        if next().is_ok() {
+            return Err(refuse("longer than a state of this model"));
+        }
+        let overrides = lists.pop().unwrap_or_default();
+        let inputs = lists.pop().unwrap_or_default();
+        let x = lists.pop().unwrap_or_default();
+        let saved = Saved {
+            phase,
+            t,
+            x,
+            inputs,
+            overrides: overrides
+                .into_iter()
+                .map(|v| (!v.is_nan()).then_some(v))
+                .collect(),
+            changed: changed != 0,
+        };
+        Ok((saved, ended_at))
+    }
+}
+
+/// The phases by their number in a serialized state.
+const PHASES: [Phase; 6] = [
+    Phase::Instantiated,
+    Phase::Initialization,
+    Phase::Stepping,
+    Phase::Ended,
+    Phase::Terminated,
+    Phase::Failed,
+];
 
 /// One instance of a model.
 pub struct Instance {
@@ -72,8 +166,12 @@ pub struct Instance {
     /// Initial values the importer set (state components the model states).
     given: Vec<Option<f64>>,
     inputs: Vec<f64>,
-    /// An input changed since the last step: the next one restarts.
-    inputs_changed: bool,
+    /// `tunable[i]`: param `i` may be set between steps.
+    tunable: Vec<bool>,
+    /// An input or a tuned param changed and the integration has not
+    /// restarted with it yet (set before initialization ended, or saved
+    /// so).
+    changed: bool,
     pub options: Options,
     start: Option<f64>,
     stop: Option<f64>,
@@ -99,7 +197,8 @@ impl Instance {
             overrides: vec![None; params],
             given: vec![None; dim],
             inputs,
-            inputs_changed: false,
+            tunable: vec![false; params],
+            changed: false,
             options: Options::default(),
             start: None,
             stop: None,
@@ -111,6 +210,17 @@ impl Instance {
         }
     }
 
+    /// The instance with params `tunable` (by index) settable between
+    /// steps.
+    pub fn with_tunable(mut self, tunable: &[usize]) -> Instance {
+        for &i in tunable {
+            if let Some(t) = self.tunable.get_mut(i) {
+                *t = true;
+            }
+        }
+        self
+    }
+
     /// The model's source hash: the FMU's GUID.
     pub fn source_hash(&self) -> &'static str {
         self.prototype.source_hash()
@@ -119,7 +229,9 @@ impl Instance {
     /// Back to the state after instantiation (fmi2Reset).
     pub fn reset(&mut self) {
         let prototype = self.prototype.boxed_clone();
+        let tunable = std::mem::take(&mut self.tunable);
         *self = Instance::new(prototype);
+        self.tunable = tunable;
     }
 
     /// The variable of value reference `vr`.
@@ -216,7 +328,7 @@ impl Instance {
             let end = self.stop.unwrap_or(t1);
             self.integration = Some(Integration::owned(model, &self.options, t0, end, &x0));
         }
-        self.inputs_changed = false;
+        self.changed = false;
         Ok(())
     }
 
@@ -333,10 +445,25 @@ impl Instance {
         }
         match variable {
             Variable::Param(i) if before => self.overrides[i] = Some(value),
+            Variable::Param(i) if self.phase == Phase::Stepping && self.tunable[i] => {
+                // The integration restarts with it (and the params
+                // computed from it), as at an input's change.
+                if self.overrides[i] != Some(value) {
+                    self.overrides[i] = Some(value);
+                    self.changed = true;
+                }
+            }
             Variable::Param(i) => {
                 return Err(Error(format!(
-                    "the param `{}` is fixed after initialization",
-                    name(self.prototype.param_names(), i)
+                    "the param `{}` is fixed after initialization{}",
+                    name(self.prototype.param_names(), i),
+                    if self.tunable[i] {
+                        ""
+                    } else {
+                        " (it enters the Lagrangian, a mass law, a position, a holonomic \
+                         constraint, a `when` or the time span, where a jump would be an \
+                         impulse the restart does not model)"
+                    }
                 )))
             }
             Variable::State(i) if before && self.prototype.initial_kinds()[i] == Initial::Given => {
@@ -362,17 +489,42 @@ impl Instance {
             Variable::Input(i) => {
                 if self.inputs[i] != value {
                     self.inputs[i] = value;
-                    self.inputs_changed = true;
+                    self.changed = true;
                 }
             }
+        }
+        if self.phase == Phase::Stepping {
+            // At once, so that outputs read before the next step see the
+            // new values (an output of an input is direct feedthrough).
+            self.apply_changes()?;
         }
         Ok(())
     }
 
+    /// New inputs, or tuned params, while stepping: a discontinuity, the
+    /// integration restarts where it stands (the components the
+    /// constraints fix recomputed, the others carried over).
+    fn apply_changes(&mut self) -> Result<(), Error> {
+        let Some(integration) = self.integration.as_mut().filter(|_| self.changed) else {
+            return Ok(());
+        };
+        let params = self.prototype.parameters(&self.overrides);
+        let inputs = Inputs::held(&self.inputs);
+        if integration.model().param_values() == params.as_slice() {
+            integration.set_inputs(&inputs)?;
+        } else {
+            let model = self.prototype.with_params(&params);
+            let (t, x) = (integration.t(), integration.state().to_vec());
+            integration.restart_with_model(model, t, &x, &inputs)?;
+        }
+        self.changed = false;
+        Ok(())
+    }
+
     /// fmi2DoStep from `t` (which must be where the instance stands) over
-    /// `h`. An input changed since the last step is a discontinuity: the
-    /// step restarts the integration from the current state under the
-    /// new inputs, the components the constraints fix recomputed.
+    /// `h`. Inputs and tuned params set while stepping restarted the
+    /// integration when they were set; one still pending (a restored
+    /// state saved so) restarts it here first.
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<Stepped, Error> {
         self.expect(&[Phase::Stepping], "fmi2DoStep")?;
         let scale = t.abs().max(h.abs()).max(1.0);
@@ -391,16 +543,13 @@ impl Instance {
                 return Err(Error(format!("t = {end} is past the stop time {stop}")));
             }
         }
+        self.apply_changes()?;
         let integration = self
             .integration
             .as_mut()
             .expect("stepping has an integration");
         // A last step that lands on the stop time up to rounding ends there.
         let end = end.min(integration.end());
-        if self.inputs_changed {
-            integration.set_inputs(&Inputs::held(&self.inputs))?;
-            self.inputs_changed = false;
-        }
         match integration.advance_to(end)? {
             Advance::Reached(_) => {
                 self.t = end;
@@ -433,22 +582,39 @@ impl Instance {
             t: self.t,
             x,
             inputs: self.inputs.clone(),
-            inputs_changed: self.inputs_changed,
+            overrides: self.overrides.clone(),
+            changed: self.changed,
         }
     }
 
     /// Goes back to a saved instance: the integration restarts from the
     /// saved state (the importer rolled the time back), under the inputs
-    /// saved with it.
+    /// and param values saved with it.
     pub fn restore(&mut self, saved: &Saved) -> Result<(), Error> {
-        if let Some(integration) = self.integration.as_mut() {
-            integration.restart_with_inputs(saved.t, &saved.x, &Inputs::held(&saved.inputs))?;
+        if self.integration.is_none() && matches!(saved.phase, Phase::Stepping | Phase::Ended) {
+            // A stepping state set on an instance not yet stepping (FMI
+            // allows it after instantiation; a deserialized state): its
+            // integration made first, under the saved values.
+            self.overrides.clone_from(&saved.overrides);
+            self.inputs.clone_from(&saved.inputs);
+            self.initialize(true)?;
         }
+        if let Some(integration) = self.integration.as_mut() {
+            let inputs = Inputs::held(&saved.inputs);
+            let params = self.prototype.parameters(&saved.overrides);
+            if integration.model().param_values() == params.as_slice() {
+                integration.restart_with_inputs(saved.t, &saved.x, &inputs)?;
+            } else {
+                let model = self.prototype.with_params(&params);
+                integration.restart_with_model(model, saved.t, &saved.x, &inputs)?;
+            }
+        }
+        self.overrides.clone_from(&saved.overrides);
         self.phase = saved.phase;
         self.t = saved.t;
         self.x.clone_from(&saved.x);
         self.inputs.clone_from(&saved.inputs);
-        self.inputs_changed = saved.inputs_changed;
+        self.changed = saved.changed;
         Ok(())
     }
 }

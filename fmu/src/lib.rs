@@ -18,12 +18,19 @@ pub mod instance;
 pub use lagc_runtime;
 
 /// Exports the FMI 2.0 co-simulation functions for the model type `$m`
-/// (a `lagc_runtime::model::Model`).
+/// (a `lagc_runtime::model::Model`); `tunable = [i, …]` lists the params
+/// (by index) an importer may set between steps (lagc decides which:
+/// `check::model::Param::tunable`), none when omitted.
 #[macro_export]
 macro_rules! export_fmu {
     ($m:ty) => {
+        $crate::export_fmu!($m, tunable = []);
+    };
+    ($m:ty, tunable = [$($tunable:expr),* $(,)?]) => {
         /// The model the FMU's functions make instances of.
         type LagcFmuModel = $m;
+        /// The params an importer may tune between steps.
+        const LAGC_FMU_TUNABLE: &[usize] = &[$($tunable),*];
 
         mod fmi2 {
             #![allow(non_snake_case, clippy::missing_safety_doc)]
@@ -66,7 +73,9 @@ macro_rules! export_fmu {
             ) -> *mut c_void {
                 unsafe {
                     ffi::instantiate(
-                        prototype, name, fmu_type, guid, resources, callbacks, visible, logging,
+                        prototype,
+                        super::LAGC_FMU_TUNABLE,
+                        name, fmu_type, guid, resources, callbacks, visible, logging,
                     )
                 }
             }
@@ -203,28 +212,28 @@ macro_rules! export_fmu {
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
                 c: *mut c_void,
-                _state: *mut c_void,
-                _size: *mut usize,
+                state: *mut c_void,
+                size: *mut usize,
             ) -> i32 {
-                unsafe { ffi::unsupported(c, "fmi2SerializedFMUstateSize") }
+                unsafe { ffi::serialized_fmu_state_size(c, state, size) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2SerializeFMUstate(
                 c: *mut c_void,
-                _state: *mut c_void,
-                _bytes: *mut u8,
-                _size: usize,
+                state: *mut c_void,
+                bytes: *mut u8,
+                size: usize,
             ) -> i32 {
-                unsafe { ffi::unsupported(c, "fmi2SerializeFMUstate") }
+                unsafe { ffi::serialize_fmu_state(c, state, bytes, size) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
                 c: *mut c_void,
-                _bytes: *const u8,
-                _size: usize,
-                _state: *mut *mut c_void,
+                bytes: *const u8,
+                size: usize,
+                state: *mut *mut c_void,
             ) -> i32 {
-                unsafe { ffi::unsupported(c, "fmi2DeSerializeFMUstate") }
+                unsafe { ffi::deserialize_fmu_state(c, bytes, size, state) }
             }
             #[no_mangle]
             pub unsafe extern "C" fn fmi2GetDirectionalDerivative(

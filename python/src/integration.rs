@@ -1,12 +1,14 @@
 //! `Integration`: a run that advances on request (`Model.integration`), over
 //! the runtime's `Integration`.
 
-use crate::errors::failed;
+use crate::errors::{failed, unknown};
 use crate::kind;
 use lagc_runtime::driver::Ending;
 use lagc_runtime::integration::{Advance, Integration};
+use lagc_runtime::model::Inputs;
 use lagc_runtime::summary::Summary;
 use numpy::{IntoPyArray, PyArray1};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -18,11 +20,13 @@ use pyo3::types::PyDict;
 #[pyclass(name = "Integration", unsendable)]
 pub struct PyIntegration {
     run: Integration<'static>,
+    /// The inputs' values, held since the last `set_input`.
+    inputs: Vec<f64>,
 }
 
 impl PyIntegration {
-    pub(crate) fn new(run: Integration<'static>) -> PyIntegration {
-        PyIntegration { run }
+    pub(crate) fn new(run: Integration<'static>, inputs: Vec<f64>) -> PyIntegration {
+        PyIntegration { run, inputs }
     }
 }
 
@@ -90,7 +94,7 @@ impl PyIntegration {
     fn restart(&mut self, py: Python<'_>, t: f64, state: Vec<f64>, project: bool) -> PyResult<()> {
         let n = self.run.state().len();
         if state.len() != n {
-            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            return Err(PyValueError::new_err(format!(
                 "the state has {n} components, not {}",
                 state.len()
             )));
@@ -104,6 +108,45 @@ impl PyIntegration {
         restarted
             .and_then(|()| self.run.restart_from(t, &state))
             .map_err(|failure| failed(py, kind(), &failure, Default::default()))
+    }
+
+    /// The inputs' values by name (held since they were last set).
+    #[getter]
+    fn inputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for (name, value) in kind().input_names.iter().zip(&self.inputs) {
+            dict.set_item(name, value)?;
+        }
+        Ok(dict)
+    }
+
+    /// Sets input `name` to `value` from `it.t` on (held until set again).
+    /// A new value is a discontinuity: the integration restarts at `it.t`
+    /// (as `lagc run --input` and the FMU restart at a change), the
+    /// components the constraints fix recomputed under it. Setting the
+    /// value it has changes nothing. KeyError for an unknown input.
+    fn set_input(&mut self, py: Python<'_>, name: &str, value: f64) -> PyResult<()> {
+        let kind = kind();
+        let index = kind
+            .input_names
+            .iter()
+            .position(|n| *n == name)
+            .ok_or_else(|| unknown("input", name, kind.input_names))?;
+        if !value.is_finite() {
+            return Err(PyValueError::new_err(format!(
+                "input `{name}`: {value} is not a finite number"
+            )));
+        }
+        if self.inputs[index] == value {
+            return Ok(());
+        }
+        let mut inputs = self.inputs.clone();
+        inputs[index] = value;
+        self.run
+            .set_inputs(&Inputs::held(&inputs))
+            .map_err(|failure| failed(py, kind, &failure, Default::default()))?;
+        self.inputs = inputs;
+        Ok(())
     }
 
     /// The work so far, as `lagc run --summary json` reports it.

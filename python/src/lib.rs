@@ -43,6 +43,7 @@ pub(crate) struct Kind {
     pub param_names: &'static [&'static str],
     pub state_names: &'static [&'static str],
     pub output_names: &'static [&'static str],
+    pub input_names: &'static [&'static str],
     /// `lagc.IntegrationError`.
     pub error: Py<PyType>,
 }
@@ -80,6 +81,7 @@ pub fn register<M: Model + 'static>(module: &Bound<'_, PyModule>, name: &str) ->
         param_names: M::PARAMS,
         state_names: M::STATE,
         output_names: M::OUTPUTS,
+        input_names: M::INPUTS,
         error: error.clone_ref(py),
     };
     if KIND.set(kind).is_err() && kind_name() != name {

@@ -114,6 +114,12 @@ impl PyModel {
         kind().output_names.to_vec()
     }
 
+    /// The inputs' names (`input u = 0;`), in declaration order.
+    #[getter]
+    fn input_names(&self) -> Vec<&'static str> {
+        kind().input_names.to_vec()
+    }
+
     /// The model's time span `(t0, t1)` with these params.
     #[getter]
     fn time_span(&self) -> (f64, f64) {
@@ -121,20 +127,25 @@ impl PyModel {
     }
 
     /// Solves the model: the state (and outputs) at the times `t` (default:
-    /// 101 evenly spaced over the model's span; times past its end extend
-    /// the run), from the model's initial values with those `initial`
-    /// names replaced (`{"q1'": 2.0}`; values the constraints fix are
-    /// checked against them). `method` is "field" or "direct",
+    /// 101 evenly spaced over the model's span; a time outside the span is
+    /// a ValueError, as `lagc run --times` refuses it — `Model.integration`
+    /// takes a later end), from the model's initial values with those
+    /// `initial` names replaced (`{"q1'": 2.0}`; values the constraints fix
+    /// are checked against them). `method` is "field" or "direct",
     /// `integrator` "auto", "explicit", "stiff" or "magnus" (default: the
     /// model's `integrator` statement, or auto), `rtol`/`atol` the per-step
-    /// tolerance (default 1e-10, 1e-12), `max_steps` the work budget. The
-    /// rows are those `lagc run` prints for the same run, bit for bit.
-    /// `sensitivity=True` adds `sol.sensitivity`, (k, number of state
-    /// components, number of stated initial values + number of params):
-    /// ∂x(t)/∂(y0, p) as `lagc run --sensitivity` writes it (columns named
-    /// by `sol.sensitivity_names`). Raises IntegrationError when the run
-    /// fails, ValueError where sensitivities are not computed.
-    #[pyo3(signature = (t=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, sensitivity=false))]
+    /// tolerance (default 1e-10, 1e-12), `max_steps` the work budget.
+    /// `inputs` drives the model's inputs by name, `{"u": (times, values)}`,
+    /// held between the rows or, with `input_interp="linear"`, interpolated
+    /// (the others hold their defaults); each change restarts the
+    /// integration. The rows are those `lagc run` prints for the same run
+    /// (`--input u=FILE.csv`), bit for bit. `sensitivity=True` adds
+    /// `sol.sensitivity`, (k, number of state components, number of stated
+    /// initial values + number of params): ∂x(t)/∂(y0, p) as `lagc run
+    /// --sensitivity` writes it (columns named by `sol.sensitivity_names`).
+    /// Raises IntegrationError when the run fails, ValueError where
+    /// sensitivities are not computed (with `inputs` among others).
+    #[pyo3(signature = (t=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, inputs=None, input_interp="hold", sensitivity=false))]
     #[allow(clippy::too_many_arguments)]
     fn solve(
         &self,
@@ -146,6 +157,8 @@ impl PyModel {
         rtol: Option<f64>,
         atol: Option<f64>,
         max_steps: Option<usize>,
+        inputs: Option<&Bound<'_, PyDict>>,
+        input_interp: &str,
         sensitivity: bool,
     ) -> PyResult<PySolution> {
         let kind = kind();
@@ -159,7 +172,8 @@ impl PyModel {
         .options()?;
         let times = t.map(request::times).transpose()?;
         let inits = request::initial(kind, initial)?;
-        let request = request::request(&self.overrides, Vec::new(), inits, options, times);
+        let signals = request::inputs(kind, inputs, input_interp)?;
+        let request = request::request(&self.overrides, Vec::new(), inits, options, times, signals);
         let result = py.detach(|| tabulate(&*kind.prototype(), &request));
         let solved = solution(py, kind, result)?;
         if !sensitivity {
@@ -177,10 +191,10 @@ impl PyModel {
     /// Solves the model once per dict of `params` (each overriding this
     /// model's params), on `threads` threads (default: every core) with the
     /// GIL released; the other arguments as for `solve`. Returns the
-    /// Solutions in order. A failure raises the first set's
+    /// Solutions in order (`inputs` and `input_interp` drive every set). A failure raises the first set's
     /// IntegrationError (`errors="raise"`, after every set ran), or stands
     /// in the list in place of its Solution (`errors="return"`).
-    #[pyo3(signature = (t=None, params=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, threads=None, errors="raise"))]
+    #[pyo3(signature = (t=None, params=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, threads=None, errors="raise", inputs=None, input_interp="hold"))]
     #[allow(clippy::too_many_arguments)]
     fn solve_batch<'py>(
         &self,
@@ -195,6 +209,8 @@ impl PyModel {
         max_steps: Option<usize>,
         threads: Option<usize>,
         errors: &str,
+        inputs: Option<&Bound<'py, PyDict>>,
+        input_interp: &str,
     ) -> PyResult<Bound<'py, PyList>> {
         let kind = kind();
         let raise = match errors {
@@ -216,6 +232,7 @@ impl PyModel {
         .options()?;
         let times = t.map(request::times).transpose()?;
         let inits = request::initial(kind, initial)?;
+        let signals = request::inputs(kind, inputs, input_interp)?;
         let requests: Vec<Request> = params
             .unwrap_or_default()
             .iter()
@@ -226,6 +243,7 @@ impl PyModel {
                     inits.clone(),
                     options.clone(),
                     times.clone(),
+                    signals.clone(),
                 ))
             })
             .collect::<PyResult<_>>()?;
@@ -259,8 +277,9 @@ impl PyModel {
 
     /// A run that advances on request (see `Integration`), from the model's
     /// initial values with those `initial` names replaced; it may advance up
-    /// to the model's end time, or `t_end` if later. The other arguments as
-    /// for `solve`.
+    /// to the model's end time, or `t_end` if later. Its inputs hold their
+    /// defaults until `Integration.set_input` changes them. The other
+    /// arguments as for `solve`.
     #[pyo3(signature = (initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, t_end=None))]
     #[allow(clippy::too_many_arguments)]
     fn integration(
@@ -289,12 +308,22 @@ impl PyModel {
             Vec::new(),
             inits,
             options,
-            t_end.map(|t| vec![t]),
+            None,
+            Vec::new(),
         );
         match ready(&*kind.prototype(), &request) {
-            Ok(r) => Ok(PyIntegration::new(Integration::owned(
-                r.model, &r.options, r.t0, r.end, &r.x0,
-            ))),
+            Ok(r) => {
+                if let Some(t) = t_end.filter(|&t| !(t >= r.t0 && t.is_finite())) {
+                    return Err(PyValueError::new_err(format!(
+                        "t_end {t}: give a finite time after the start of the time span, {}",
+                        r.t0
+                    )));
+                }
+                let end = t_end.map_or(r.end, |t| t.max(r.end));
+                let inputs = r.model.input_defaults().to_vec();
+                let run = Integration::owned(r.model, &r.options, r.t0, end, &r.x0);
+                Ok(PyIntegration::new(run, inputs))
+            }
             Err(TableError::Usage(message)) => Err(PyValueError::new_err(message)),
             Err(TableError::Failed(run)) => Err(failed(py, kind, &run.failure, run.table)),
         }

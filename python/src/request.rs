@@ -5,6 +5,7 @@
 use crate::errors::unknown;
 use crate::Kind;
 use lagc_runtime::driver::Options;
+use lagc_runtime::inputs::{Interpolation, Signal};
 use lagc_runtime::method::{IntegratorChoice, Method};
 use lagc_runtime::table::Request;
 use numpy::{PyArray1, PyArrayMethods};
@@ -90,7 +91,49 @@ pub(crate) fn initial(
     by_name("state component", dict, kind.state_names)
 }
 
-/// Output times from a NumPy array, a sequence or one number.
+/// Input signals by name: `{"u": (times, values)}`, each a pair of
+/// sequences (NumPy arrays or lists; one number each is a signal of one
+/// row), held between rows or interpolated linearly (`input_interp`), as
+/// `lagc run --input u=FILE.csv [--input-interp linear]` reads them.
+pub(crate) fn inputs(
+    kind: &Kind,
+    dict: Option<&Bound<'_, PyDict>>,
+    interpolation: &str,
+) -> PyResult<Vec<(usize, Signal)>> {
+    let interpolation = match interpolation {
+        "hold" => Interpolation::Hold,
+        "linear" => Interpolation::Linear,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "input_interp `{other}`: give \"hold\" or \"linear\""
+            )))
+        }
+    };
+    let Some(dict) = dict else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::with_capacity(dict.len());
+    for (key, value) in dict.iter() {
+        let name: String = key.extract()?;
+        let index = kind
+            .input_names
+            .iter()
+            .position(|n| *n == name)
+            .ok_or_else(|| unknown("input", &name, kind.input_names))?;
+        let (t, v): (Bound<'_, PyAny>, Bound<'_, PyAny>) = value.extract().map_err(|_| {
+            PyValueError::new_err(format!(
+                "input `{name}`: give a pair (times, values) of equal lengths"
+            ))
+        })?;
+        let signal = Signal::new(times(&t)?, times(&v)?, interpolation)
+            .map_err(|e| PyValueError::new_err(format!("input `{name}`: {e}")))?;
+        out.push((index, signal));
+    }
+    Ok(out)
+}
+
+/// Output times (or any numbers) from a NumPy array, a sequence or one
+/// number.
 pub(crate) fn times(t: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
     if let Ok(array) = t.cast::<PyArray1<f64>>() {
         return Ok(array.readonly().as_array().to_vec());
@@ -108,6 +151,7 @@ pub(crate) fn request(
     inits: Vec<(usize, f64)>,
     options: Options,
     times: Option<Vec<f64>>,
+    inputs: Vec<(usize, Signal)>,
 ) -> Request {
     let mut params = overrides.to_vec();
     params.extend(set);
@@ -116,5 +160,6 @@ pub(crate) fn request(
         inits,
         options,
         times,
+        inputs,
     }
 }

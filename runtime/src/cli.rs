@@ -21,7 +21,7 @@ pub mod run;
 
 pub use args::{parse, Command, Invocation, MAX_SAMPLES, USAGE};
 pub use bench::ensemble_member;
-pub use run::{plan, prepare, Prepared};
+pub use run::{plan, prepare, prepare_driven, Prepared};
 
 use crate::failure::USAGE_EXIT_STATUS;
 use crate::model::{DynModel, Model};

@@ -15,7 +15,7 @@ use crate::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper
 use crate::system::System;
 use crate::tolerance::{first_non_finite, Tolerance};
 
-mod tableau;
+pub(crate) mod tableau;
 use tableau::*;
 
 /// Hairer's stiffness test (`dop853.f`): `h·ρ` estimated from the last

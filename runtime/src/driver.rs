@@ -8,4 +8,4 @@ pub use crate::run::options::{Ending, Options, Outcome};
 pub use crate::run::regime::{
     best_mode, check_initial_candidates, initial_branches, mode_index, pivot_volumes,
 };
-pub use crate::run::{run, run_ensemble, solve};
+pub use crate::run::{run, run_ensemble, solve, EnsembleOutcome};

@@ -10,7 +10,7 @@
 //! slope is a discontinuity, and the integration restarts there, like at
 //! an event ([`run_driven`], `Integration::set_inputs`).
 
-use crate::driver::{Ending, Options, Outcome};
+use crate::driver::{run, Ending, Options, Outcome};
 use crate::failure::Failure;
 use crate::integration::{Advance, Integration};
 use crate::model::{DynModel, Inputs};
@@ -236,6 +236,37 @@ pub fn run_driven(
         }
     }
     Ok(Driven { outcome, restarts })
+}
+
+/// A run as every caller makes it (`lagc run`, the Python module's
+/// `solve`): without a schedule, [`crate::driver::run`]; with one (a
+/// model with inputs, signals given or not), [`run_driven`], its restarts
+/// counted in the outcome's notes. One function, so that the CSV and the
+/// Python rows of a driven run are the same steps, bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub fn drive(
+    model: &mut dyn DynModel,
+    options: &Options,
+    schedule: Option<&Schedule>,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+    sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
+) -> Result<Outcome, Failure> {
+    let Some(schedule) = schedule else {
+        return run(model, options, t0, t1, x0, times, sample);
+    };
+    let driven = run_driven(model, options, schedule, t0, t1, x0, times, sample)?;
+    let mut outcome = driven.outcome;
+    if driven.restarts > 0 {
+        outcome.report.notes.push(format!(
+            "inputs: restarted at {} change{}",
+            driven.restarts,
+            if driven.restarts == 1 { "" } else { "s" }
+        ));
+    }
+    Ok(outcome)
 }
 
 #[cfg(test)]

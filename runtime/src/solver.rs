@@ -74,10 +74,23 @@ pub trait Solver {
     fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure>;
 
     /// Follows other initial states through the same field (an ensemble:
-    /// exact for affine motions, first order in the spread for others);
-    /// `false` when the method cannot.
-    fn track_members(&mut self, _members: crate::ensemble::States) -> bool {
+    /// exact for affine motions; for others each member corrected to
+    /// `tol`, see [`Solver::member_estimates`]); `false` when the method
+    /// cannot.
+    fn track_members(
+        &mut self,
+        _members: crate::ensemble::States,
+        _tol: crate::tolerance::Tolerance,
+    ) -> bool {
         false
+    }
+
+    /// Each tracked member's largest local error in units of the
+    /// tolerance (infinite: the method could not follow it, and it must be
+    /// integrated on its own); `None` where the members are exact (an
+    /// affine motion's field).
+    fn member_estimates(&self) -> Option<Vec<f64>> {
+        None
     }
 
     /// The tracked members' states at `t` in `[previous_time, time]`, into

@@ -6,9 +6,10 @@
 //! requests on threads (parameter sweeps), and [`rhs_at`]/[`jacobian_at`]
 //! evaluate the reduced system in the regime a state is in.
 
-use crate::cli::{prepare, Invocation, Prepared};
-use crate::driver::{best_mode, initial_branches, run, Options};
+use crate::cli::{prepare_driven, Invocation, Prepared};
+use crate::driver::{best_mode, initial_branches, Options};
 use crate::failure::Failure;
+use crate::inputs::{drive, Schedule, Signal};
 use crate::linalg::Matrix;
 use crate::model::{DynModel, Regime};
 use crate::output::sample_times;
@@ -17,9 +18,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// One run: param overrides and initial values by index, the options, and
-/// the output times (`None`: 101 evenly spaced over the model's span, the
-/// CLI's default).
+/// One run: param overrides and initial values by index, the options, the
+/// output times (`None`: 101 evenly spaced over the model's span, the
+/// CLI's default) and the inputs' signals.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Request {
     /// `(param index, value)`, as `--param`.
@@ -28,6 +29,9 @@ pub struct Request {
     pub inits: Vec<(usize, f64)>,
     pub options: Options,
     pub times: Option<Vec<f64>>,
+    /// `(input index, signal)`, as `--input`; the other inputs hold their
+    /// defaults.
+    pub inputs: Vec<(usize, Signal)>,
 }
 
 impl Request {
@@ -38,6 +42,7 @@ impl Request {
             inits: Vec::new(),
             options: Options::default(),
             times: None,
+            inputs: Vec::new(),
         }
     }
 }
@@ -69,7 +74,8 @@ pub struct Tabulated {
 #[derive(Clone, Debug, PartialEq)]
 pub enum TableError {
     /// The request itself is wrong (the CLI's exit status 2 for usage): a
-    /// time outside the span, times not increasing, a bad tolerance.
+    /// time outside the span, times not increasing, a bad tolerance, a
+    /// signal for a model without inputs.
     Usage(String),
     /// The run failed; the rows before the failure.
     Failed(Box<Failed>),
@@ -109,22 +115,52 @@ fn check_request(request: &Request) -> Result<(), String> {
 }
 
 /// A request made ready to run: the model with the request's params (in
-/// the regime of its start), its initial state checked as the CLI checks
-/// it, the output times and the time the run ends.
+/// the regime of its start, under the inputs there), its initial state
+/// checked as the CLI checks it, the output times, the time the run ends
+/// and the inputs' schedule (`None` for a model without inputs).
 pub struct Ready {
     pub model: Box<dyn DynModel>,
     pub options: Options,
     pub t0: f64,
     pub x0: Vec<f64>,
     pub times: Vec<f64>,
-    /// The model's end time, or the last requested time if later.
+    /// The model's end time.
     pub end: f64,
+    pub schedule: Option<Schedule>,
+}
+
+/// The schedule of `model`'s inputs with these signals, as the CLI's
+/// `--input` makes it: `None` for a model without inputs (signals for one
+/// are a usage error), else every input, the unsignalled at their
+/// defaults.
+fn schedule(model: &dyn DynModel, signals: &[(usize, Signal)]) -> Result<Option<Schedule>, String> {
+    let n = model.input_names().len();
+    if n == 0 {
+        return match signals.is_empty() {
+            true => Ok(None),
+            false => Err("the model has no inputs".to_string()),
+        };
+    }
+    let mut schedule = Schedule {
+        signals: vec![None; n],
+    };
+    for (i, signal) in signals {
+        let slot = schedule
+            .signals
+            .get_mut(*i)
+            .ok_or_else(|| format!("no input has the index {i}"))?;
+        *slot = Some(signal.clone());
+    }
+    Ok(Some(schedule))
 }
 
 /// Makes `request` ready on `prototype`'s model (its params the file's),
-/// with the checks of the CLI (`cli::prepare`).
+/// with the checks of the CLI (`cli::prepare_driven`, and `--times`
+/// within the span: a time past the model's end is refused, as the CLI
+/// refuses it, not run to silently).
 pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, TableError> {
     check_request(request).map_err(TableError::Usage)?;
+    let schedule = schedule(prototype, &request.inputs).map_err(TableError::Usage)?;
     let invocation = Invocation {
         options: Options {
             progress: false,
@@ -142,11 +178,13 @@ pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, Table
         ensemble: None,
         spread: 0.1,
         sensitivity: false,
+        output: None,
         warnings: Vec::new(),
         inputs: Vec::new(),
         interpolation: crate::inputs::Interpolation::Hold,
     };
-    let Prepared { model, t0, t1, x0 } = prepare(prototype, &invocation).map_err(|failure| {
+    let prepared = prepare_driven(prototype, &invocation, schedule.as_ref());
+    let Prepared { model, t0, t1, x0 } = prepared.map_err(|failure| {
         TableError::Failed(Box::new(Failed {
             failure,
             table: Table::default(),
@@ -159,18 +197,24 @@ pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, Table
                     "the time {t} is before the start of the time span, {t0}"
                 )));
             }
+            if let Some(t) = times.iter().find(|&&t| t > t1) {
+                return Err(TableError::Usage(format!(
+                    "the time {t} is past the end of the time span, {t1} (the model's `time` \
+                     statement)"
+                )));
+            }
             times.clone()
         }
         None => sample_times(t0, t1, 101),
     };
-    let end = t1.max(*times.last().unwrap_or(&t1));
     Ok(Ready {
         model,
         options: invocation.options,
         t0,
         x0,
         times,
-        end,
+        end: t1,
+        schedule,
     })
 }
 
@@ -189,7 +233,13 @@ pub fn sensitivities(
         x0,
         times,
         end,
+        ..
     } = ready(prototype, request)?;
+    if !request.inputs.is_empty() {
+        return Err(TableError::Usage(
+            "sensitivities do not combine with driven inputs yet".to_string(),
+        ));
+    }
     if let Some(message) = unsupported(&*model) {
         return Err(TableError::Usage(message));
     }
@@ -219,9 +269,8 @@ pub fn sensitivities(
 }
 
 /// Runs `request` on `prototype`'s model (its params the file's): the
-/// rows at the requested times and the summary. The run ends at the
-/// model's end time or at the last requested time, whichever is later (a
-/// request within the span is the CLI's run, step for step).
+/// rows at the requested times and the summary, the CLI's run step for
+/// step (its inputs' too: `inputs::drive`).
 pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated, TableError> {
     let Ready {
         mut model,
@@ -230,6 +279,7 @@ pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated
         x0,
         times,
         end: t_end,
+        schedule,
     } = ready(prototype, request)?;
     let (n, m) = (model.dim(), model.output_names().len());
     let mut table = Table {
@@ -243,9 +293,10 @@ pub fn tabulate(prototype: &dyn DynModel, request: &Request) -> Result<Tabulated
         (model.states_exact() && request.inits.is_empty()).then_some(0.0);
     let mut exact = vec![None; n];
     let start = Instant::now();
-    let ran = run(
+    let ran = drive(
         &mut *model,
         &options,
+        schedule.as_ref(),
         t0,
         t_end,
         &x0,

@@ -5,6 +5,7 @@
 mod models;
 
 use lagc_runtime::driver::{run, Options};
+use lagc_runtime::inputs::{Interpolation, Signal};
 use lagc_runtime::method::Method;
 use lagc_runtime::model::{DynModel, Model};
 use lagc_runtime::output::sample_times;
@@ -26,6 +27,7 @@ fn rows_are_the_runs_samples_bit_for_bit() {
                 ..Options::default()
             },
             times: Some(vec![0.0, 0.25, 1.0, 7.5]),
+            inputs: Vec::new(),
         };
         let table = tabulate(&*prototype::<Oscillator>(), &request)
             .unwrap()
@@ -107,16 +109,41 @@ fn bad_requests_are_usage_errors() {
 }
 
 #[test]
-fn times_past_the_span_extend_the_run() {
-    let request = Request {
+fn times_past_the_span_are_refused_as_the_cli_refuses_them() {
+    // The span's end is the model's `time` statement: a later time is a
+    // usage error (it used to extend the run silently), the end itself is
+    // a sample.
+    let p = prototype::<Oscillator>();
+    let past = Request {
         times: Some(vec![0.0, 12.0]),
         ..Request::new()
     };
-    let table = tabulate(&*prototype::<Oscillator>(), &request)
-        .unwrap()
-        .table;
-    assert_eq!(table.t, vec![0.0, 12.0]);
-    assert!((table.states[2] - (2.0 * 12.0_f64).cos()).abs() < 1e-8);
+    match tabulate(&*p, &past) {
+        Err(TableError::Usage(message)) => {
+            assert!(message.contains("12 is past the end"), "{message}")
+        }
+        other => panic!("expected a usage error, got {other:?}"),
+    }
+    let end = Request {
+        times: Some(vec![0.0, 10.0]),
+        ..Request::new()
+    };
+    let table = tabulate(&*p, &end).unwrap().table;
+    assert_eq!(table.t, vec![0.0, 10.0]);
+    assert!((table.states[2] - (2.0 * 10.0_f64).cos()).abs() < 1e-8);
+}
+
+#[test]
+fn signals_for_a_model_without_inputs_are_a_usage_error() {
+    let signal = Signal::new(vec![0.0], vec![1.0], Interpolation::Hold).unwrap();
+    let request = Request {
+        inputs: vec![(0, signal)],
+        ..Request::new()
+    };
+    match tabulate(&*prototype::<Oscillator>(), &request) {
+        Err(TableError::Usage(message)) => assert!(message.contains("no inputs"), "{message}"),
+        other => panic!("expected a usage error, got {other:?}"),
+    }
 }
 
 #[test]

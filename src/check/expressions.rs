@@ -93,7 +93,48 @@ impl Checker<'_> {
         if let Some(found) = self.type_of(expr, allowed, &mut uses) {
             self.expect_type(expr, found, wanted, allowed.what);
         }
+        self.note_params(allowed, &uses);
         uses.coords
+    }
+
+    /// Records the params an expression uses where they could not change
+    /// between steps (see `Param::tunable`), and each param's own params.
+    pub(super) fn note_params(&mut self, allowed: Allowed, uses: &Uses) {
+        match allowed.what {
+            "a param" => self.param_uses.push(uses.params.clone()),
+            "an initial value" | "an input's default" | "a let" | "an exact solution" => {}
+            _ if allowed.inputs => {}
+            _ => self.fixed_params.extend_from_slice(&uses.params),
+        }
+    }
+
+    /// Which params may change between steps: none of those fixed, nor of
+    /// the params computed from them (a tuned param recomputes those).
+    pub(super) fn tunable_params(&self, count: usize) -> Vec<bool> {
+        // Without every param's own params (a param's check not recorded
+        // as "a param") a fixed param's sources are unknown: none is
+        // tunable rather than one wrongly.
+        if self.param_uses.len() != count {
+            return vec![false; count];
+        }
+        let mut fixed = vec![false; count];
+        for &i in &self.fixed_params {
+            if let Some(f) = fixed.get_mut(i) {
+                *f = true;
+            }
+        }
+        // A param uses only earlier ones: latest first, each fixed param
+        // fixes those it is computed from.
+        for j in (0..count).rev() {
+            if fixed[j] {
+                for &i in &self.param_uses[j] {
+                    if let Some(f) = fixed.get_mut(i) {
+                        *f = true;
+                    }
+                }
+            }
+        }
+        fixed.into_iter().map(|f| !f).collect()
     }
 
     /// Reports `found` where `wanted` is needed.

@@ -50,6 +50,11 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let outputs = checker.outputs();
     let stop = checker.stop();
     let impacts = checker.impacts(constraint_order, &constraints);
+    let mut params = params;
+    let tunable = checker.tunable_params(params.len());
+    for (param, tunable) in params.iter_mut().zip(tunable) {
+        param.tunable = tunable;
+    }
 
     let mut diagnostics = checker.diagnostics;
     let (Some(lagrangian), Some(time), true) = (lagrangian, time, diagnostics.is_empty()) else {
@@ -100,6 +105,11 @@ struct Checker<'a> {
     coords: Vec<model::Coord>,
     /// Every param's default, once computed (`None` if it could not be).
     param_defaults: Vec<Option<f64>>,
+    /// Params used where they may not change between steps
+    /// (`Param::tunable`), with repeats.
+    fixed_params: Vec<usize>,
+    /// For each param, the params its value uses.
+    param_uses: Vec<Vec<usize>>,
     /// Some constraint was rejected: its coordinate now looks independent,
     /// so "missing initial value" errors would be noise.
     constraints_incomplete: bool,
@@ -121,6 +131,8 @@ impl<'a> Checker<'a> {
             names: HashMap::new(),
             coords: Vec::new(),
             param_defaults: Vec::new(),
+            fixed_params: Vec::new(),
+            param_uses: Vec::new(),
             lets: Vec::new(),
             constraints_incomplete: false,
             unknown_reported: HashSet::new(),

@@ -124,6 +124,16 @@ pub struct Param {
     pub value: Expr,
     /// The value with every earlier param at its default.
     pub default: f64,
+    /// The param may change between steps (an FMU's `tunable` parameter):
+    /// it is used, directly, through lets or through the params computed
+    /// from it, only where an input may be used (forces, velocity
+    /// constraints, points' velocities, outputs, `stop when`) and in
+    /// initial values, which are read once. A param of the Lagrangian, a
+    /// mass law, a position, a holonomic constraint, a `when` or the time
+    /// span stays fixed: a jump there would be an impulse, an ejection of
+    /// matter or a moved body, which a restart carrying the state over
+    /// does not model (the reasons inputs are refused there, E0042).
+    pub tunable: bool,
 }
 
 /// A signal set from outside between steps (`input u = 0;`): held by the

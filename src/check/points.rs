@@ -130,7 +130,9 @@ impl Checker<'_> {
     /// one number (v1 accepted `(z)`, a 1-vector).
     fn check_vector(&mut self, expr: &Expr, allowed: Allowed) -> Vec<Expr> {
         let mut uses = Uses::default();
-        match self.type_of(expr, allowed, &mut uses) {
+        let found = self.type_of(expr, allowed, &mut uses);
+        self.note_params(allowed, &uses);
+        match found {
             Some(Ty::Scalar) | None => vec![expr.clone()],
             Some(Ty::Bool) => {
                 self.report(type_mismatch(

@@ -37,6 +37,8 @@ impl<'a> Checker<'a> {
                 span: name.span,
                 value: value.clone(),
                 default: default.unwrap_or(f64::NAN),
+                // Decided once every statement is checked (`tunable_params`).
+                tunable: false,
             });
         }
         params

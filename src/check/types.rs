@@ -40,6 +40,8 @@ pub struct Uses {
     pub mass: Option<Span>,
     /// The first use of an input.
     pub input: Option<Span>,
+    /// The params used, directly or through lets (for `Param::tunable`).
+    pub params: Vec<usize>,
 }
 
 /// A checked `let`: its type (`None` if its body has errors) and uses.
@@ -406,6 +408,9 @@ impl Checker<'_> {
                 if matches!(found, Some(Name::Input(_))) && allowed.inputs {
                     uses.input.get_or_insert(span);
                 }
+                if let Some(Name::Param(index)) = found {
+                    uses.params.push(index);
+                }
                 if let Some(used) = self.check_var(&name.name, primes, span, allowed) {
                     uses.coords.push(used);
                 }
@@ -473,6 +478,7 @@ impl Checker<'_> {
             self.report(diagnostic);
             return None;
         }
+        uses.params.extend_from_slice(&info.uses.params);
         let mut ok = true;
         if let Some(at) = info.uses.time {
             if allowed.time {

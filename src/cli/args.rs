@@ -112,6 +112,15 @@ pub struct LinearizeArgs {
         allow_hyphen_values = true
     )]
     pub params: Vec<String>,
+    /// The inputs' values at the point: `--input F=0.5` (repeatable; default:
+    /// each input's default). Inputs are held there (their rates zero), and
+    /// ∂f/∂u is printed beside ∂f/∂p.
+    #[arg(
+        long = "input",
+        value_name = "NAME=VALUE,…",
+        allow_hyphen_values = true
+    )]
+    pub inputs: Vec<String>,
     /// The time, for rheonomic models (default: the start of the model's span).
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t: Option<String>,
@@ -208,9 +217,9 @@ pub struct RunArgs {
     /// (`lagc run FILE --help` lists them): `--method field|direct`,
     /// `--integrator auto|explicit|stiff|magnus`, `--param NAME=VALUE`,
     /// `--init NAME=VALUE`, `--rtol R`, `--atol A`, `--samples N`,
-    /// `--times T1,T2,…`, `--estimate-error`, `--plot FILE.svg [--phase X,Y]`,
-    /// `--ensemble K`, `--sensitivity`, `--repeat N`, `--quiet`,
-    /// `--summary text|json`, …;
+    /// `--times T1,T2,…`, `--step-to-times`, `--estimate-error`,
+    /// `--plot FILE.svg [--phase X,Y]`, `--ensemble K`, `--sensitivity`,
+    /// `--repeat N`, `--quiet`, `--summary text|json`, …;
     /// and lagc's own `--verbose`: the model's notes (N0001) on every run,
     /// not only when lagc builds its crate.
     #[arg(

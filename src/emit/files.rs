@@ -68,6 +68,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/field/mod.rs"),
     ),
     (
+        "src/field/members.rs",
+        include_str!("../../runtime/src/field/members.rs"),
+    ),
+    (
         "src/field/quasilinear.rs",
         include_str!("../../runtime/src/field/quasilinear.rs"),
     ),

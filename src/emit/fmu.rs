@@ -26,6 +26,18 @@ pub fn fmu_library_files() -> impl Iterator<Item = (&'static str, &'static str)>
     LIBRARY.iter().copied()
 }
 
+/// The indices of the params an importer may tune, `0, 2`.
+fn tunable_indices(kernel: &Kernel) -> String {
+    let indices: Vec<String> = kernel
+        .params
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.tunable)
+        .map(|(i, _)| i.to_string())
+        .collect();
+    indices.join(", ")
+}
+
 /// An FMU's crate, its modelDescription.xml and its model identifier
 /// (the shared library's name in the archive).
 #[derive(Debug, Clone, PartialEq)]
@@ -62,8 +74,10 @@ pub fn emit_fmu(
             "src/lib.rs" => files.push((
                 path,
                 format!(
-                    "{contents}\n// The FMI 2.0 co-simulation functions of this model.\n\
-                     lagc_fmu::export_fmu!(Model);\n"
+                    "{contents}\n// The FMI 2.0 co-simulation functions of this model (the \
+                     params an importer may tune\n// between steps by index).\n\
+                     lagc_fmu::export_fmu!(Model, tunable = [{}]);\n",
+                    tunable_indices(kernel)
                 ),
             )),
             _ => files.push((path, contents)),
@@ -160,7 +174,7 @@ pub fn model_description(kernel: &Kernel, options: &EmitOptions, identifier: &st
          canHandleVariableCommunicationStepSize=\"true\" canInterpolateInputs=\"false\" \
          maxOutputDerivativeOrder=\"0\" canRunAsynchronuously=\"false\" \
          canBeInstantiatedOnlyOncePerProcess=\"false\" canNotUseMemoryManagementFunctions=\"true\" \
-         canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"false\" \
+         canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" \
          providesDirectionalDerivative=\"false\"/>"
     );
     let _ = writeln!(x, "  <LogCategories>");
@@ -194,10 +208,14 @@ pub fn model_description(kernel: &Kernel, options: &EmitOptions, identifier: &st
         index
     };
     for (p, value) in kernel.params.iter().zip(&params) {
+        // Tunable: set between steps, the integration restarts there;
+        // fixed: it enters what a change could not carry the state over
+        // (`check::model::Param::tunable`).
+        let variability = if p.tunable { "tunable" } else { "fixed" };
         variable(
             &mut x,
             &p.name,
-            "causality=\"parameter\" variability=\"fixed\" initial=\"exact\"",
+            &format!("causality=\"parameter\" variability=\"{variability}\" initial=\"exact\""),
             Some(*value),
         );
     }

@@ -2,7 +2,7 @@
 //! equation (9) with the ansatz inserted, and the coefficient system.
 
 use super::basic::FieldSystem;
-use crate::ir::{Arena, Symbol};
+use crate::ir::{Arena, ExprId, SharedNames, Symbol};
 use std::fmt::Write;
 
 impl FieldSystem {
@@ -34,10 +34,17 @@ impl FieldSystem {
             arena.symbol_name(x1),
             ansatz.join(" + ")
         );
+        let names = self.shared_names(arena);
+        if !names.is_empty() {
+            out.push_str("  shared subexpressions (named once, used below):\n");
+            for (name, e) in names.definitions() {
+                let _ = writeln!(out, "    {name} = {}", arena.definition(e, &names, false));
+            }
+        }
         let _ = writeln!(
             out,
             "  basic equation (9):\n    {} = 0",
-            arena.display(basic)
+            arena.display_named(basic, &names)
         );
         match &self.coefficient_system {
             None => out.push_str(
@@ -58,7 +65,7 @@ impl FieldSystem {
                         out,
                         "    {} = {}{note}",
                         arena.symbol_name(rate),
-                        arena.display(rhs)
+                        arena.display_named(rhs, &names)
                     );
                 }
             }
@@ -68,6 +75,17 @@ impl FieldSystem {
 }
 
 impl FieldSystem {
+    /// Names (`v1`, `v2`, …) for the long parts that (9) and the
+    /// coefficient system share: the motion inserted into (9) repeats
+    /// those of the reduced system.
+    fn shared_names(&self, arena: &Arena) -> SharedNames {
+        let mut roots: Vec<ExprId> = self.basic_equation.into_iter().collect();
+        if let Some(system) = &self.coefficient_system {
+            roots.extend(&system.rhs);
+        }
+        arena.shared_names(&roots, &arena.fresh_prefix("v", &[]))
+    }
+
     /// The field method's lines for the `align*` block of `lagc derive
     /// --format latex`: the ansatz (10), the basic equation (9) and the
     /// coefficient system.
@@ -90,8 +108,16 @@ impl FieldSystem {
             &ansatz,
             "\\text{ansatz (10)}",
         ));
+        let names = self.shared_names(arena);
+        for (_, e) in names.definitions() {
+            out.push_str(&crate::latex::equation(
+                &arena.latex_named(e, &names),
+                &arena.definition(e, &names, true),
+                "\\text{shared}",
+            ));
+        }
         out.push_str(&crate::latex::equation(
-            &arena.latex(basic),
+            &arena.latex_named(basic, &names),
             "0",
             "\\text{(9)}",
         ));
@@ -101,7 +127,7 @@ impl FieldSystem {
                 let tag = format!("\\text{{coefficient system ({kind})}}");
                 out.push_str(&crate::latex::equation(
                     &symbol(rate),
-                    &arena.latex(rhs),
+                    &arena.latex_named(rhs, &names),
                     &tag,
                 ));
             }

@@ -2,7 +2,8 @@
 //! so equal expressions (up to the rules below) share one node.
 //!
 //! Rules: constant folding when the result is finite; flat sums and
-//! products, sorted by a structural order that does not depend on
+//! products (a product of more than [`SEALED_PRODUCT`] factors stays one
+//! factor of the products it enters), sorted by a structural order that does not depend on
 //! construction history; like terms and like powers collected, a number
 //! times a sum distributed when its terms collect with others;
 //! `exp(a)·exp(b) → exp(a+b)`, `(e^a)^b → e^(ab)`; `(a·b)^n → a^n·b^n` and
@@ -12,6 +13,16 @@
 use super::expr::{Arena, ExprId, FxMap, Node, Symbol};
 use crate::syntax::ast::Func;
 use std::cmp::Ordering;
+
+/// A product with more factors than this is not flattened into a product
+/// that it is a factor of: it stays one factor, shared. The chain rule
+/// multiplies a derivative by one more factor per level of nesting
+/// (`sin(sin(…(u)))' = cos(sin(…))·…·cos(u)·u'`); flattened, level `j`
+/// would be a new product of `j` factors, and a second derivative `j` more
+/// of them — `O(d³)` for a nesting `d` deep. Sealed every few factors, each
+/// level adds a product of at most this many factors to the DAG. Products
+/// of models written by hand stay below it, and are flat as before.
+pub(crate) const SEALED_PRODUCT: usize = 12;
 
 /// How many times `mul` may re-run on its own output when collecting powers
 /// produced a new product (e.g. `(a·b)^(1/2)·(a·b)^(1/2) → a·b`).
@@ -211,7 +222,17 @@ impl Arena {
         let mut flat = Vec::with_capacity(factors.len());
         for &f in factors {
             match self.node(f) {
-                Node::Mul(fs) => flat.extend_from_slice(fs),
+                Node::Mul(fs) if fs.len() <= SEALED_PRODUCT => flat.extend_from_slice(fs),
+                // A long product stays one factor (its number comes out).
+                Node::Mul(fs) => match self.node(fs[0]) {
+                    Node::Const(_) => {
+                        flat.push(fs[0]);
+                        let rest: Box<[ExprId]> = fs[1..].into();
+                        let rest = self.intern(Node::Mul(rest));
+                        flat.push(rest);
+                    }
+                    _ => flat.push(f),
+                },
                 _ => flat.push(f),
             }
         }
@@ -424,6 +445,24 @@ impl Arena {
         if rank != Ordering::Equal {
             return rank;
         }
+        if !matches!(self.node(a), Node::Const(_) | Node::Sym(_)) {
+            let key = (a.min(b), a.max(b));
+            let known = self.order_memo.borrow().get(&key).copied();
+            let order = match known {
+                Some(order) => order,
+                None => {
+                    let order = self.cmp_composite(key.0, key.1);
+                    self.order_memo.borrow_mut().insert(key, order);
+                    order
+                }
+            };
+            return if a < b { order } else { order.reverse() };
+        }
+        self.cmp_composite(a, b)
+    }
+
+    /// [`Arena::cmp_base`] of two nodes of one rank, by their structure.
+    fn cmp_composite(&self, a: ExprId, b: ExprId) -> Ordering {
         match (self.node(a), self.node(b)) {
             (Node::Const(x), Node::Const(y)) => x.total_cmp(y),
             (Node::Sym(s), Node::Sym(t)) => self.cmp_symbol(*s, *t),

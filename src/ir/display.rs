@@ -6,6 +6,7 @@
 //! as `a - b`; `x^(1/2)` is written `sqrt(x)`.
 
 use super::expr::{Arena, ExprId, Node, Symbol};
+use super::shared::SharedNames;
 use crate::syntax::ast::Func;
 use std::fmt;
 
@@ -52,6 +53,36 @@ impl Arena {
     pub fn latex(&self, e: ExprId) -> String {
         let mut out = String::new();
         Writer::new(self, Style::Latex).expr(e, Prec::Sum, &mut out);
+        out
+    }
+
+    /// The text of `e` with every node that `names` names written as its
+    /// name (`e` too, when it has one).
+    pub fn display_named(&self, e: ExprId, names: &SharedNames) -> String {
+        self.write_named(e, names, Style::Text, None)
+    }
+
+    /// [`Arena::display_named`] in LaTeX; a name `w3` is written `w_{3}`.
+    pub fn latex_named(&self, e: ExprId, names: &SharedNames) -> String {
+        self.write_named(e, names, Style::Latex, None)
+    }
+
+    /// The definition of a named node: `e` written out, its named parts as
+    /// their names; LaTeX when `latex`.
+    pub fn definition(&self, e: ExprId, names: &SharedNames, latex: bool) -> String {
+        let style = if latex { Style::Latex } else { Style::Text };
+        self.write_named(e, names, style, Some(e))
+    }
+
+    fn write_named(
+        &self,
+        e: ExprId,
+        names: &SharedNames,
+        style: Style,
+        top: Option<ExprId>,
+    ) -> String {
+        let mut out = String::new();
+        Writer::named(self, style, names, top).expr(e, Prec::Sum, &mut out);
         out
     }
 
@@ -184,6 +215,13 @@ fn latex_name(name: &str) -> String {
     }
 }
 
+/// `w3` as `w_{3}`: the prefix upright-italic, the number a subscript.
+fn latex_shared_name(name: &str) -> String {
+    let digits = name.trim_start_matches(|c: char| !c.is_ascii_digit());
+    let prefix = &name[..name.len() - digits.len()];
+    format!("{prefix}_{{{digits}}}")
+}
+
 fn number(v: f64) -> String {
     if v.fract() == 0.0 && v.abs() < 1e15 {
         format!("{}", v as i64)
@@ -195,11 +233,46 @@ fn number(v: f64) -> String {
 struct Writer<'a> {
     arena: &'a Arena,
     style: Style,
+    /// Nodes written as their names (none by default).
+    names: Option<&'a SharedNames>,
+    /// The node being defined: written out even when it has a name.
+    top: Option<ExprId>,
 }
 
 impl<'a> Writer<'a> {
     fn new(arena: &'a Arena, style: Style) -> Writer<'a> {
-        Writer { arena, style }
+        Writer {
+            arena,
+            style,
+            names: None,
+            top: None,
+        }
+    }
+
+    fn named(
+        arena: &'a Arena,
+        style: Style,
+        names: &'a SharedNames,
+        top: Option<ExprId>,
+    ) -> Writer<'a> {
+        Writer {
+            arena,
+            style,
+            names: Some(names),
+            top,
+        }
+    }
+
+    /// The name `e` is written as, if any.
+    fn name_of(&self, e: ExprId) -> Option<String> {
+        if self.top == Some(e) {
+            return None;
+        }
+        let name = self.names?.get(e)?;
+        Some(match self.style {
+            Style::Text => name.to_string(),
+            Style::Latex => latex_shared_name(name),
+        })
     }
 
     fn open(&self, out: &mut String) {
@@ -222,6 +295,13 @@ impl<'a> Writer<'a> {
 
     /// Writes `e` (or `−e` when `flip`) in context `ctx`.
     fn term(&self, e: ExprId, ctx: Prec, flip: bool, out: &mut String) {
+        if let Some(name) = self.name_of(e) {
+            if flip {
+                out.push('-');
+            }
+            out.push_str(&name);
+            return;
+        }
         match self.arena.node(e) {
             Node::Const(v) => {
                 let v = if flip { -v } else { *v };
@@ -299,6 +379,9 @@ impl<'a> Writer<'a> {
     }
 
     fn is_negative(&self, e: ExprId) -> bool {
+        if self.name_of(e).is_some() {
+            return false;
+        }
         match self.arena.node(e) {
             Node::Const(v) => *v < 0.0,
             Node::Mul(fs) => self.arena.as_const(fs[0]).is_some_and(|c| c < 0.0),

@@ -7,6 +7,8 @@
 //! this file only interns nodes that are already canonical.
 
 use crate::syntax::ast::Func;
+use std::cell::RefCell;
+use std::cmp::Ordering;
 use std::collections::{BTreeSet, HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hash, Hasher};
 
@@ -45,7 +47,8 @@ pub enum Symbol {
 }
 
 /// One node of the DAG. Canonical invariants (kept by the constructors):
-/// `Add`/`Mul` are flat, have ≥ 2 children in canonical order, and a `Mul`'s
+/// `Add`/`Mul` are flat (but for long products kept whole as factors,
+/// `canon::SEALED_PRODUCT`), have ≥ 2 children in canonical order, and a `Mul`'s
 /// numeric coefficient (≠ 1) is its first child; constants are never `-0.0`.
 #[derive(Debug, Clone)]
 pub enum Node {
@@ -173,6 +176,11 @@ pub struct Arena {
     /// Lowered lets by `(index, primes)`: a let is lowered once per arena,
     /// however often it is used (SPEC §2.2: lets are shared).
     pub(crate) lets: FxMap<(u32, u32), Box<[ExprId]>>,
+    /// The canonical order of two composite nodes, keyed smaller id first
+    /// (`canon.rs`): the order is structural, so comparing `cos(sin^k(u))`
+    /// with `cos(sin^j(u))` walks both chains; remembered, every pair of
+    /// nodes is walked once for the life of the arena.
+    pub(crate) order_memo: RefCell<FxMap<(ExprId, ExprId), Ordering>>,
     zero: ExprId,
     one: ExprId,
 }
@@ -190,6 +198,7 @@ impl Arena {
             symbol_index: FxMap::default(),
             derivatives: FxMap::default(),
             lets: FxMap::default(),
+            order_memo: RefCell::new(FxMap::default()),
             zero: ExprId(0),
             one: ExprId(0),
         };

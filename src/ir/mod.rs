@@ -16,6 +16,7 @@
 //! | `subst.rs` | simultaneous substitution |
 //! | `eval.rs` | numbers |
 //! | `display.rs` | text and LaTeX |
+//! | `shared.rs` | names for the shared subexpressions of printed text |
 //! | `lower.rs` | AST → IR |
 
 mod canon;
@@ -25,6 +26,7 @@ mod eval;
 mod expr;
 mod jet;
 mod lower;
+mod shared;
 mod subst;
 mod trig;
 
@@ -36,3 +38,4 @@ pub use expr::{postorder, Arena, ExprId, Names, Node, Seen, Symbol};
 pub use lower::{
     lower, names_of, select, try_lower, try_lower_components, try_lower_condition, Cond, LowerError,
 };
+pub use shared::{SharedNames, MIN_NAMED_SAVING, MIN_NAMED_SIZE};

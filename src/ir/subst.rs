@@ -99,7 +99,22 @@ impl Arena {
     /// on either side, yet are not `c + 0·x'` — their value at `x' = 0`
     /// is one branch, not the expression.
     pub fn is_affine_in(&mut self, e: ExprId, vars: &[Symbol]) -> bool {
-        if vars.iter().any(|&x| self.switches_on(e, x)) {
+        // `switches_on` for every var, with one walk of `e`.
+        let switching: Vec<ExprId> = if vars.iter().any(|&x| self.depends_on(e, x)) {
+            self.reachable(&[e])
+                .into_iter()
+                .filter_map(|n| match self.node(n) {
+                    Node::Select(g, _, _) => Some(*g),
+                    _ => None,
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        if vars
+            .iter()
+            .any(|&x| self.depends_on(e, x) && switching.iter().any(|&g| self.depends_on(g, x)))
+        {
             return false;
         }
         vars.iter().all(|&x| {

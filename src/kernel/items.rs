@@ -14,6 +14,8 @@ use crate::mechanics::{InitialValue, ReducedSystem};
 pub struct KernelParam {
     pub name: String,
     pub value: ExprId,
+    /// It may change between steps (`check::model::Param::tunable`).
+    pub tunable: bool,
 }
 
 pub fn params(arena: &mut Arena, model: &Model) -> Vec<KernelParam> {
@@ -23,6 +25,7 @@ pub fn params(arena: &mut Arena, model: &Model) -> Vec<KernelParam> {
         .map(|p| KernelParam {
             name: p.name.clone(),
             value: lower(arena, &p.value, model),
+            tunable: p.tunable,
         })
         .collect()
 }

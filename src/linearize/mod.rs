@@ -48,6 +48,9 @@ pub struct Request {
     pub at: Vec<String>,
     /// `NAME=VALUE` param overrides (comma-separated too).
     pub params: Vec<String>,
+    /// `NAME=VALUE` input values at the point (default: the inputs'
+    /// defaults), comma-separated too.
+    pub inputs: Vec<String>,
     /// The time, for rheonomic models (default: the start of the model's span).
     pub t: Option<String>,
     /// `A` as expressions of the params and the state components not given.
@@ -77,6 +80,10 @@ pub struct Linearization {
     /// `--param` recomputes them).
     pub params: Vec<String>,
     pub b_params: Vec<Vec<f64>>,
+    /// The inputs (SPEC §2.3) and ∂f/∂u, rows as `state`, the inputs held
+    /// at their values at the point.
+    pub inputs: Vec<String>,
+    pub b_inputs: Vec<Vec<f64>>,
     pub eigenvalues: Vec<Eigenvalue>,
     /// `f` at the point, per component of `state`, and whether it is zero
     /// to rounding (`|f_i| ≤ 1e-9` of its rounding scale).

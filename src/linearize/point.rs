@@ -110,6 +110,39 @@ pub(super) fn params(
     })
 }
 
+/// The inputs' values at the point: `--input NAME=VALUE`, else each
+/// input's default.
+pub(super) fn inputs(model: &Model, given: &[(String, f64)]) -> Result<Vec<f64>, LinearizeError> {
+    let names: Vec<&str> = model.inputs.iter().map(|u| u.name.as_str()).collect();
+    for (name, _) in given {
+        if !names.contains(&name.as_str()) {
+            let mut help = match crate::suggest::closest(name, names.iter().copied()) {
+                Some(c) => format!("did you mean `{c}`? "),
+                None => String::new(),
+            };
+            if names.is_empty() {
+                help.push_str("the model declares no `input`");
+            } else {
+                help.push_str(&format!("the inputs are {}", names.join(", ")));
+            }
+            return Err(LinearizeError::usage(
+                format!("unknown input `{name}` in `--input`"),
+                help,
+            ));
+        }
+    }
+    Ok(model
+        .inputs
+        .iter()
+        .map(|u| {
+            given
+                .iter()
+                .find(|(n, _)| *n == u.name)
+                .map_or(u.default, |&(_, v)| v)
+        })
+        .collect())
+}
+
 /// The time: `--t`, else the start of the model's span.
 pub(super) fn time(
     arena: &mut Arena,

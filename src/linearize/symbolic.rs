@@ -15,6 +15,9 @@ pub(super) struct SymbolicInput<'a> {
     pub(super) implicit: Option<&'a Implicit>,
     pub(super) at: &'a [(usize, f64)],
     pub(super) overrides: &'a [(String, f64)],
+    /// `--input` values: each input stands in as the param after the
+    /// model's params and the inputs before it.
+    pub(super) inputs: &'a [(String, f64)],
     pub(super) model: &'a Model,
     pub(super) t: Option<f64>,
 }
@@ -33,6 +36,12 @@ pub(super) fn symbolic(arena: &mut Arena, input: &SymbolicInput) -> Symbolic {
         if let Some(i) = input.model.params.iter().position(|p| &p.name == name) {
             let c = arena.constant(*v);
             map.insert(Symbol::Param(i as u32), c);
+        }
+    }
+    for (name, v) in input.inputs {
+        if let Some(i) = input.model.inputs.iter().position(|u| &u.name == name) {
+            let c = arena.constant(*v);
+            map.insert(Symbol::Param((input.model.params.len() + i) as u32), c);
         }
     }
     if let Some(t) = input.t {

@@ -55,12 +55,27 @@ pub(super) fn linearize_in(
     let overrides = point::items(&request.params, "--param")?;
     let at = point::items(&request.at, "--at")?;
     let at = point::resolve_at(&at, &names, model)?;
-    let params = point::params(&mut arena, model, &overrides)?;
+    let mut params = point::params(&mut arena, model, &overrides)?;
     let t = point::time(&mut arena, model, request.t.as_deref(), &params.values)?;
+    let np = params.values.len();
 
     // Mass laws are functions of t (or of q): substituted, so that every
     // expression below is one of t, params and the state.
     let mut subst: HashMap<Symbol, ExprId> = HashMap::new();
+    // Inputs are held at their values (`--input`, else their defaults):
+    // each stands in as one more param after the model's, so that ∂f/∂u is
+    // taken as ∂f/∂p is (through the constraints' closure too), and its
+    // rate is zero (the point is an operating point of constant inputs).
+    let given_inputs = point::items(&request.inputs, "--input")?;
+    let input_values = point::inputs(model, &given_inputs)?;
+    for (i, (input, &value)) in model.inputs.iter().zip(&input_values).enumerate() {
+        let stand_in = arena.symbol(Symbol::Param((np + i) as u32));
+        subst.insert(Symbol::Input(i as u32), stand_in);
+        let zero = arena.zero();
+        subst.insert(Symbol::InputRate(i as u32), zero);
+        arena.names.params.push(input.name.clone());
+        params.values.push(value);
+    }
     for (i, m) in model.masses.iter().enumerate() {
         let law = lower(&mut arena, &m.law, model);
         subst.insert(Symbol::Mass(i as u32), law);
@@ -345,14 +360,14 @@ pub(super) fn linearize_in(
         }
     }
 
-    // ∂f/∂p, total through the params declared after each.
+    // ∂f/∂p and ∂f/∂u (the inputs' stand-ins after the params), the params'
+    // total through the params declared after each.
+    let np_all = params.values.len();
     let param_partials = Partials::new(
         &mut arena,
         &rates,
         implicit.as_ref(),
-        &(0..model.params.len() as u32)
-            .map(Symbol::Param)
-            .collect::<Vec<_>>(),
+        &(0..np_all as u32).map(Symbol::Param).collect::<Vec<_>>(),
     );
     let mut b_partial = evaluate_rows(
         &arena,
@@ -362,7 +377,7 @@ pub(super) fn linearize_in(
         &param_partials.d_z,
         g_z.as_ref(),
         &env,
-        model.params.len(),
+        np_all,
     )?;
     if let Some(c) = &closure {
         // The dependent positions move with the params too.
@@ -370,8 +385,7 @@ pub(super) fn linearize_in(
             .iter()
             .map(|row| row[free.len()..].to_vec())
             .collect();
-        let param_symbols: Vec<Symbol> =
-            (0..model.params.len() as u32).map(Symbol::Param).collect();
+        let param_symbols: Vec<Symbol> = (0..np_all as u32).map(Symbol::Param).collect();
         let dz = closure_slopes(&mut arena, c, &param_symbols, &env)?;
         for (row, bound_row) in b_partial.iter_mut().zip(&through) {
             for (p, cell) in row.iter_mut().enumerate() {
@@ -387,9 +401,9 @@ pub(super) fn linearize_in(
     let b_params: Vec<Vec<f64>> = kept
         .iter()
         .map(|&i| {
-            (0..params.values.len())
+            (0..np)
                 .map(|j| {
-                    (0..params.values.len())
+                    (0..np)
                         .map(|k| b_partial[i][k] * chain[k][j])
                         .filter(|v| *v != 0.0)
                         .sum()
@@ -397,6 +411,7 @@ pub(super) fn linearize_in(
                 .collect()
         })
         .collect();
+    let b_inputs: Vec<Vec<f64>> = kept.iter().map(|&i| b_partial[i][np..].to_vec()).collect();
 
     // The residual f at the point, zero to rounding or not.
     let mut residual = Vec::with_capacity(kept.len());
@@ -448,6 +463,7 @@ pub(super) fn linearize_in(
                 implicit: implicit.as_ref(),
                 at: &at,
                 overrides: &overrides,
+                inputs: &given_inputs,
                 model,
                 t: request.t.as_ref().map(|_| t),
             },
@@ -468,6 +484,8 @@ pub(super) fn linearize_in(
         a,
         params: model.params.iter().map(|p| p.name.clone()).collect(),
         b_params,
+        inputs: model.inputs.iter().map(|u| u.name.clone()).collect(),
+        b_inputs,
         eigenvalues,
         residual,
         equilibrium,
@@ -669,7 +687,8 @@ fn evaluate_rows(
 /// `T[k][j] = dp_k/dp_j` with the params after `p_j` recomputed from it
 /// (an overridden one is not recomputed).
 fn param_chain(arena: &mut Arena, params: &Params, env: &dyn Fn(Symbol) -> f64) -> Vec<Vec<f64>> {
-    let np = params.values.len();
+    // The model's params only (the inputs' stand-ins follow their values).
+    let np = params.exprs.len();
     let mut t = vec![vec![0.0; np]; np];
     for k in 0..np {
         t[k][k] = 1.0;

@@ -146,6 +146,14 @@ impl Linearization {
             ", \"B_params\": {}",
             list(&self.b_params, |row| list(row, |&v| num(v)))
         );
+        if !self.inputs.is_empty() {
+            let _ = write!(
+                out,
+                ", \"inputs\": {}, \"B_inputs\": {}",
+                list(&self.inputs, |s| json_string(s)),
+                list(&self.b_inputs, |row| list(row, |&v| num(v)))
+            );
+        }
         out.push_str("}\n");
         out
     }
@@ -382,6 +390,17 @@ impl fmt::Display for Linearization {
         if !self.params.is_empty() && self.symbolic.is_none() {
             writeln!(f, "\n∂f/∂p (columns: {}):", self.params.join(", "))?;
             for (s, row) in self.state.iter().zip(&self.b_params) {
+                let cells: Vec<String> = row.iter().map(|&v| short(v)).collect();
+                writeln!(f, "  {}: {}", rate_of(s), cells.join(", "))?;
+            }
+        }
+        if !self.inputs.is_empty() && self.symbolic.is_none() {
+            writeln!(
+                f,
+                "\n∂f/∂u (columns: {}; the inputs held at their values):",
+                self.inputs.join(", ")
+            )?;
+            for (s, row) in self.state.iter().zip(&self.b_inputs) {
                 let cells: Vec<String> = row.iter().map(|&v| short(v)).collect();
                 writeln!(f, "  {}: {}", rate_of(s), cells.join(", "))?;
             }

@@ -12,7 +12,7 @@
 //! divided out and the laws put in for (7).
 
 use super::reduced::Highest;
-use super::sample::{eval_scaled, Rng, SamplePoint};
+use super::sample::{eval_scaled_in, Rng, SamplePoint};
 use super::star::{jet, project, Elimination};
 use super::Derivation;
 use crate::diagnostic::{codes, Diagnostic};
@@ -305,6 +305,7 @@ pub fn cross_check(derivation: &mut Derivation) -> Result<CrossCheck, CrossCheck
     roots.extend(&written);
     let rows = derivation.equations.len();
     let masses = arena.names().masses.len();
+    let reachable = arena.reachable(&roots);
     let mut rng = Rng::new(0x6d75_6c74);
     let mut points = 0;
     let mut worst: f64 = 0.0;
@@ -322,7 +323,7 @@ pub fn cross_check(derivation: &mut Derivation) -> Result<CrossCheck, CrossCheck
                 }
             }
         }
-        let values = eval_scaled(arena, &roots, &|s| point.value(s));
+        let values = eval_scaled_in(arena, &reachable, &roots, &|s| point.value(s));
         if !values.iter().all(|v| v.is_finite()) {
             continue;
         }

@@ -2,7 +2,7 @@
 //! the numeric checks of the mechanics (cross-check, homogeneity in the
 //! masses, affinity, singular mass matrix) all compare values at such points.
 
-use crate::ir::{apply_func, pow_value, Arena, ExprId, Func, Node, Symbol};
+use crate::ir::{apply_func, pow_value, Arena, ExprId, Func, FxMap, Node, Symbol};
 use std::collections::HashMap;
 
 /// The one small deterministic PRNG (SplitMix64) of lagc and its tests:
@@ -138,9 +138,21 @@ impl Scaled {
 /// Evaluates `roots` with their rounding scales (first-order propagation:
 /// `|f'(a)| · scale(a)` through functions and powers).
 pub fn eval_scaled(arena: &Arena, roots: &[ExprId], env: &dyn Fn(Symbol) -> f64) -> Vec<Scaled> {
-    let mut memo: HashMap<ExprId, Scaled> = HashMap::new();
-    for e in arena.reachable(roots) {
-        let get = |memo: &HashMap<ExprId, Scaled>, c: &ExprId| memo[c];
+    eval_scaled_in(arena, &arena.reachable(roots), roots, env)
+}
+
+/// [`eval_scaled`] with the nodes reachable from `roots` given, children
+/// first (`Arena::reachable`): a check at many points walks the DAG once.
+pub fn eval_scaled_in(
+    arena: &Arena,
+    reachable: &[ExprId],
+    roots: &[ExprId],
+    env: &dyn Fn(Symbol) -> f64,
+) -> Vec<Scaled> {
+    let mut memo: FxMap<ExprId, Scaled> = FxMap::default();
+    memo.reserve(reachable.len());
+    for &e in reachable {
+        let get = |memo: &FxMap<ExprId, Scaled>, c: &ExprId| memo[c];
         let s = match arena.node(e) {
             Node::Const(v) => Scaled {
                 value: *v,

@@ -6,7 +6,7 @@
 use super::reduced::{Highest, InitialValue};
 use super::tidy::tidy_terms;
 use super::Derivation;
-use crate::ir::{Arena, ExprId, Symbol};
+use crate::ir::{Arena, ExprId, FxMap, SharedNames, Symbol};
 use std::fmt::Write;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -15,14 +15,103 @@ enum Style {
     Latex,
 }
 
+/// How [`sum`] writes: the first pass only collects the terms it would
+/// print (the roots of the shared names), the second prints them, each
+/// named shared part as its name.
+struct Printer {
+    collecting: bool,
+    roots: Vec<ExprId>,
+    names: SharedNames,
+    /// `tidy_terms` of every expression written, kept from the first pass
+    /// for the second (tidying a large model is most of its text's cost).
+    tidied: FxMap<ExprId, Vec<ExprId>>,
+}
+
+impl Printer {
+    fn collecting() -> Printer {
+        Printer {
+            collecting: true,
+            roots: Vec::new(),
+            names: SharedNames::none(),
+            tidied: FxMap::default(),
+        }
+    }
+
+    /// Every expression written out (the impacts' few short lines).
+    fn plain() -> Printer {
+        Printer {
+            collecting: false,
+            roots: Vec::new(),
+            names: SharedNames::none(),
+            tidied: FxMap::default(),
+        }
+    }
+
+    /// The printer of the second pass: names for what the first collected.
+    fn printing(self, arena: &Arena, prefix: &str) -> Printer {
+        Printer {
+            collecting: false,
+            names: arena.shared_names(&self.roots, prefix),
+            roots: Vec::new(),
+            tidied: self.tidied,
+        }
+    }
+
+    /// The definitions of the shared names, as a text section or LaTeX lines.
+    fn definitions(&self, arena: &Arena, style: Style) -> String {
+        let mut out = String::new();
+        if self.names.is_empty() {
+            return out;
+        }
+        if style == Style::Text {
+            out.push_str("\nshared subexpressions (named once, used below):\n");
+        }
+        for (name, e) in self.names.definitions() {
+            match style {
+                Style::Text => {
+                    let _ = writeln!(
+                        out,
+                        "  {name} = {}",
+                        arena.definition(e, &self.names, false)
+                    );
+                }
+                Style::Latex => out.push_str(&crate::latex::equation(
+                    &arena.latex_named(e, &self.names),
+                    &arena.definition(e, &self.names, true),
+                    "\\text{shared}",
+                )),
+            }
+        }
+        out
+    }
+}
+
+/// The prefix of the shared names: `w` (`w1`, `w2`, …) unless a name of
+/// the model's is `w` and digits.
+fn name_prefix(arena: &Arena, lets: &[(String, Vec<ExprId>)]) -> String {
+    let lets: Vec<&str> = lets.iter().map(|(name, _)| name.as_str()).collect();
+    arena.fresh_prefix("w", &lets)
+}
+
 /// `e` written as its collected terms, highest derivatives first.
-fn sum(arena: &mut Arena, e: ExprId, style: Style) -> String {
-    let terms = tidy_terms(arena, e);
+fn sum(arena: &mut Arena, e: ExprId, style: Style, p: &mut Printer) -> String {
+    let terms = match p.tidied.get(&e) {
+        Some(terms) => terms.clone(),
+        None => {
+            let terms = tidy_terms(arena, e);
+            p.tidied.insert(e, terms.clone());
+            terms
+        }
+    };
+    if p.collecting {
+        p.roots.extend_from_slice(&terms);
+        return String::new();
+    }
     let mut out = String::new();
     for (i, &t) in terms.iter().enumerate() {
         let s = match style {
-            Style::Text => arena.display(t).to_string(),
-            Style::Latex => arena.latex(t),
+            Style::Text => arena.display_named(t, &p.names),
+            Style::Latex => arena.latex_named(t, &p.names),
         };
         match (i, s.strip_prefix('-')) {
             (0, _) => out.push_str(&s),
@@ -64,7 +153,14 @@ impl Derivation {
     /// The derivation as plain text.
     pub fn text(&self) -> String {
         let mut arena = self.arena.clone();
-        let a = &mut arena;
+        let mut first = Printer::collecting();
+        self.text_with(&mut arena, &mut first);
+        let prefix = name_prefix(&arena, &self.lets);
+        let mut second = first.printing(&arena, &prefix);
+        self.text_with(&mut arena, &mut second)
+    }
+
+    fn text_with(&self, a: &mut Arena, p: &mut Printer) -> String {
         let mut out = String::new();
         let coords: Vec<String> = (0..self.coordinates as u32)
             .map(|j| a.symbol_name(jet(j, 0)))
@@ -87,6 +183,7 @@ impl Derivation {
             independent.join(", "),
             self.reduced.order
         );
+        out.push_str(&p.definitions(a, Style::Text));
         let inputs = &a.names().inputs;
         if !inputs.is_empty() {
             // Set from outside between steps; `u'` is an input's rate on a
@@ -96,7 +193,7 @@ impl Derivation {
         if !self.lets.is_empty() {
             out.push_str("\nlets:\n");
             for (name, value) in &self.lets {
-                let parts: Vec<String> = value.iter().map(|&e| sum(a, e, Style::Text)).collect();
+                let parts: Vec<String> = value.iter().map(|&e| sum(a, e, Style::Text, p)).collect();
                 let shown = if parts.len() == 1 {
                     parts[0].clone()
                 } else {
@@ -112,8 +209,8 @@ impl Derivation {
                 "\nholonomic constraints (kept at position level), differentiated {times}:"
             );
             for &(f, h) in &self.holonomic {
-                let f = sum(a, f, Style::Text);
-                let h = sum(a, h, Style::Text);
+                let f = sum(a, f, Style::Text, p);
+                let h = sum(a, h, Style::Text, p);
                 let _ = writeln!(out, "  {f} = 0");
                 let _ = writeln!(out, "    D^{}: {h} = 0", self.k);
             }
@@ -124,8 +221,8 @@ impl Derivation {
                 "\nconstraints not linear in their candidates (kept as written), differentiated once:"
             );
             for &(f, h) in &self.raised {
-                let f = sum(a, f, Style::Text);
-                let h = sum(a, h, Style::Text);
+                let f = sum(a, f, Style::Text, p);
+                let h = sum(a, h, Style::Text, p);
                 let _ = writeln!(out, "  {f} = 0");
                 let _ = writeln!(out, "    D: {h} = 0");
             }
@@ -134,7 +231,7 @@ impl Derivation {
             out.push_str("\nconstraints:\n");
             for &(d, phi) in &self.constraints {
                 let lhs = a.symbol_name(jet(d, self.k));
-                let rhs = sum(a, phi, Style::Text);
+                let rhs = sum(a, phi, Style::Text, p);
                 let _ = writeln!(out, "  {lhs} = {rhs}");
             }
         }
@@ -143,15 +240,15 @@ impl Derivation {
                 "\nmass laws of the state (frozen in L and (4); their rates M' along the \
                  motion in the reactive forces; their laws in (7)):\n",
             );
-            for (m, law, rate) in self.state_law_rates(a, Style::Text) {
+            for (m, law, rate) in self.state_law_rates(a, Style::Text, p) {
                 let _ = writeln!(out, "  {m} = {law}");
                 let _ = writeln!(out, "  {m}' = {rate}");
             }
         }
         out.push_str("\nequations (4):\n");
         for eq in &self.equations {
-            let lhs = sum(a, eq.lhs, Style::Text);
-            let rhs = sum(a, eq.rhs, Style::Text);
+            let lhs = sum(a, eq.lhs, Style::Text, p);
+            let rhs = sum(a, eq.rhs, Style::Text, p);
             let _ = writeln!(out, "  {}: {lhs} = {rhs}", coords[eq.coord as usize]);
         }
         let divided: Vec<String> = self
@@ -171,7 +268,7 @@ impl Derivation {
         if !divided.is_empty() {
             let _ = writeln!(out, "\nmasses divided out: {}", divided.join("; "));
         }
-        self.write_reduced(a, &mut out, Style::Text);
+        self.write_reduced(a, &mut out, Style::Text, p);
         let state: Vec<String> = self
             .reduced
             .state
@@ -199,7 +296,7 @@ impl Derivation {
             let what = match value {
                 InitialValue::Given(e) => format!("{}", a.display(*e)),
                 InitialValue::Constraint(e) => {
-                    format!("{}  (fixed by the constraints)", sum(a, *e, Style::Text))
+                    format!("{}  (fixed by the constraints)", sum(a, *e, Style::Text, p))
                 }
                 InitialValue::Solved => "solved from (4) at t0".to_string(),
             };
@@ -211,13 +308,13 @@ impl Derivation {
             match &stage.explicit {
                 Some(solution) => {
                     for (&z, &e) in stage.unknowns.iter().zip(solution) {
-                        let rhs = sum(a, e, Style::Text);
+                        let rhs = sum(a, e, Style::Text, p);
                         let _ = writeln!(out, "  {} = {rhs}", a.symbol_name(z));
                     }
                 }
                 None => {
                     for &r in &stage.residual {
-                        let rhs = sum(a, r, Style::Text);
+                        let rhs = sum(a, r, Style::Text, p);
                         let _ = writeln!(out, "  0 = {rhs}");
                     }
                 }
@@ -235,10 +332,18 @@ impl Derivation {
     /// more lines (the field method's) to follow in one block.
     pub fn latex_lines(&self) -> String {
         let mut arena = self.arena.clone();
-        let a = &mut arena;
+        let mut first = Printer::collecting();
+        self.latex_lines_with(&mut arena, &mut first);
+        let prefix = name_prefix(&arena, &self.lets);
+        let mut second = first.printing(&arena, &prefix);
+        let lines = self.latex_lines_with(&mut arena, &mut second);
+        second.definitions(&arena, Style::Latex) + &lines
+    }
+
+    fn latex_lines_with(&self, a: &mut Arena, p: &mut Printer) -> String {
         let mut out = String::new();
         for (name, value) in &self.lets {
-            let parts: Vec<String> = value.iter().map(|&e| sum(a, e, Style::Latex)).collect();
+            let parts: Vec<String> = value.iter().map(|&e| sum(a, e, Style::Latex, p)).collect();
             let shown = if parts.len() == 1 {
                 parts[0].clone()
             } else {
@@ -248,14 +353,14 @@ impl Derivation {
             out.push_str(&crate::latex::equation(&lhs, &shown, "\\text{let}"));
         }
         for &(f, h) in &self.raised {
-            let f = sum(a, f, Style::Latex);
-            let h = sum(a, h, Style::Latex);
+            let f = sum(a, f, Style::Latex, p);
+            let h = sum(a, h, Style::Latex, p);
             out.push_str(&crate::latex::equation(&f, "0", "\\text{kept as written}"));
             out.push_str(&crate::latex::equation(&h, "0", "\\text{its derivative}"));
         }
         for &(f, h) in &self.holonomic {
-            let f = sum(a, f, Style::Latex);
-            let h = sum(a, h, Style::Latex);
+            let f = sum(a, f, Style::Latex, p);
+            let h = sum(a, h, Style::Latex, p);
             out.push_str(&crate::latex::equation(&f, "0", "\\text{holonomic}"));
             out.push_str(&crate::latex::equation(
                 &h,
@@ -265,10 +370,10 @@ impl Derivation {
         }
         for &(d, phi) in &self.constraints {
             let lhs = name(a, jet(d, self.k), Style::Latex);
-            let rhs = sum(a, phi, Style::Latex);
+            let rhs = sum(a, phi, Style::Latex, p);
             out.push_str(&crate::latex::equation(&lhs, &rhs, "\\text{constraint}"));
         }
-        for (m, law, rate) in self.state_law_rates(a, Style::Latex) {
+        for (m, law, rate) in self.state_law_rates(a, Style::Latex, p) {
             out.push_str(&crate::latex::equation(&m, &law, "\\text{mass law}"));
             out.push_str(&crate::latex::equation(
                 &format!("{m}'"),
@@ -277,8 +382,8 @@ impl Derivation {
             ));
         }
         for eq in &self.equations {
-            let lhs = sum(a, eq.lhs, Style::Latex);
-            let rhs = sum(a, eq.rhs, Style::Latex);
+            let lhs = sum(a, eq.lhs, Style::Latex, p);
+            let rhs = sum(a, eq.rhs, Style::Latex, p);
             let q = name(a, jet(eq.coord, 0), Style::Latex);
             out.push_str(&crate::latex::equation(
                 &lhs,
@@ -286,39 +391,44 @@ impl Derivation {
                 &format!("\\text{{(4) for }} {q}"),
             ));
         }
-        self.write_reduced(a, &mut out, Style::Latex);
+        self.write_reduced(a, &mut out, Style::Latex, p);
         out
     }
 
     /// `(M, law, Ṁ)` for every mass law of the state: `Ṁ = ∂M/∂t +
     /// Σ ∂M/∂q_j q_j'`, the rate the reactive forces use.
-    fn state_law_rates(&self, a: &mut Arena, style: Style) -> Vec<(String, String, String)> {
+    fn state_law_rates(
+        &self,
+        a: &mut Arena,
+        style: Style,
+        p: &mut Printer,
+    ) -> Vec<(String, String, String)> {
         self.state_laws
             .iter()
             .map(|&(i, law)| {
                 let rate = super::reactive_forces::rate_along_motion(a, law);
                 (
                     name(a, Symbol::Mass(i), style),
-                    sum(a, law, style),
-                    sum(a, rate, style),
+                    sum(a, law, style, p),
+                    sum(a, rate, style, p),
                 )
             })
             .collect()
     }
 
-    fn write_reduced(&self, a: &mut Arena, out: &mut String, style: Style) {
+    fn write_reduced(&self, a: &mut Arena, out: &mut String, style: Style, p: &mut Printer) {
         let u = self.reduced.order;
         match (&self.reduced.highest, style) {
             (Highest::Explicit(exprs), Style::Text) => {
                 out.push_str("\nreduced system (7), explicit:\n");
                 for (j, &e) in exprs.iter().enumerate() {
-                    let rhs = sum(a, e, style);
+                    let rhs = sum(a, e, style, p);
                     let _ = writeln!(out, "  {} = {rhs}", a.symbol_name(jet(j as u32, u)));
                 }
             }
             (Highest::Explicit(exprs), Style::Latex) => {
                 for (j, &e) in exprs.iter().enumerate() {
-                    let rhs = sum(a, e, style);
+                    let rhs = sum(a, e, style, p);
                     let lhs = name(a, jet(j as u32, u), style);
                     out.push_str(&crate::latex::equation(&lhs, &rhs, "\\text{(7)}"));
                 }
@@ -347,7 +457,7 @@ impl Derivation {
                     );
                 }
                 for &r in residual {
-                    let rhs = sum(a, r, style);
+                    let rhs = sum(a, r, style, p);
                     match style {
                         Style::Text => {
                             let _ = writeln!(out, "  0 = {rhs}");
@@ -359,7 +469,7 @@ impl Derivation {
                     }
                 }
                 for &(d, e) in dependent {
-                    let rhs = sum(a, e, style);
+                    let rhs = sum(a, e, style, p);
                     let lhs = name(a, jet(d, u), style);
                     match style {
                         Style::Text => {
@@ -397,6 +507,7 @@ impl Derivation {
         }
         let mut arena = self.arena.clone();
         let a = &mut arena;
+        let p = &mut Printer::plain();
         if style == Style::Text {
             out.push_str(
                 "\nimpacts (at the event where the condition becomes true; every new value \
@@ -409,7 +520,7 @@ impl Derivation {
             }
             for reset in &impact.resets {
                 let value = crate::ir::lower(a, &reset.value, model);
-                let rhs = sum(a, value, style);
+                let rhs = sum(a, value, style, p);
                 let lhs = name(a, jet(reset.coord as u32, reset.order), style);
                 match style {
                     Style::Text => {
@@ -440,7 +551,7 @@ impl Derivation {
             out.push_str("  then, from the new state, what the constraints fix:\n");
         }
         for (s, e) in fixed {
-            let rhs = sum(a, e, style);
+            let rhs = sum(a, e, style, p);
             let lhs = name(a, s, style);
             match style {
                 Style::Text => {

@@ -3,8 +3,8 @@ closed forms. Run by tests/it/fmu.rs in a venv with fmpy 0.3.32 and scipy:
 
     python check_fmus.py CASE DIR
 
-where DIR holds paper.fmu, driven_oscillator.fmu,
-rocket_burnout_landing.fmu and newton_no_root.fmu. Prints what it
+where DIR holds paper.fmu, damped_oscillator.fmu, driven_oscillator.fmu,
+stepped_oscillator.fmu, rocket_burnout_landing.fmu and newton_no_root.fmu. Prints what it
 measured; exits non-zero (an assertion) when a check fails.
 """
 
@@ -189,6 +189,9 @@ def two_instances(d):
         fmu.enterInitializationMode()
         fmu.exitInitializationMode()
     c.setReal([rc["F"]], [-1.0])
+    # An output of an input reads the new value at once (direct
+    # feedthrough), before the next step.
+    assert c.getReal([rc["force"]]) == [-1.0], c.getReal([rc["force"]])
     t, h, worst = 0.0, 0.125, 0.0
     for _ in range(24):
         for fmu in (a, b, c):
@@ -240,6 +243,103 @@ def two_instances(d):
     for fmu in (a, b, c):
         fmu.freeInstance()
     print("reset, saved states and bad calls: as specified")
+
+
+def damped(t, x0, v0, m=1.0, k=4.0, c=0.4):
+    """m x'' + c x' + k x = 0 from (x0, v0) at 0 (underdamped or undamped)."""
+    gam, w0 = c / (2 * m), np.sqrt(k / m)
+    wd = np.sqrt(w0 * w0 - gam * gam)
+    e = np.exp(-gam * t)
+    x = e * (x0 * np.cos(wd * t) + (v0 + gam * x0) / wd * np.sin(wd * t))
+    v = e * (v0 * np.cos(wd * t) - (gam * v0 + w0 * w0 * x0) / wd * np.sin(wd * t))
+    return x, v
+
+
+def tuning(d):
+    # examples/damped_oscillator.lag: m x'' + c x' + k x = 0. The damping c
+    # enters only a force: tunable; m and k enter the Lagrangian: fixed.
+    md = fmpy.read_model_description(f"{d}/damped_oscillator.fmu")
+    variability = {v.name: v.variability for v in md.modelVariables if v.causality == "parameter"}
+    assert (variability["c"], variability["m"], variability["k"]) == ("tunable", "fixed", "fixed"), variability
+    fmu, refs = slave(d, "damped_oscillator", "tuned")
+    fmu.instantiate()
+    fmu.setupExperiment(tolerance=RTOL, startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    xv = [refs["x"], refs["der(x)"]]
+
+    def steps(t, n, h=0.125):
+        for _ in range(n):
+            fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+            t += h
+        return t
+
+    def error(got, want):
+        return max(abs(g - w) / max(1.0, abs(w)) for g, w in zip(got, want))
+
+    t = steps(0.0, 8)
+    x1, v1 = fmu.getReal(xv)
+    worst = error([x1, v1], damped(1.0, 1.0, 0.0))
+    # c tuned to 0 at t = 1: from there the undamped motion from (x1, v1).
+    fmu.setReal([refs["c"]], [0.0])
+    assert fmu.getReal([refs["c"], refs["gam"]]) == [0.0, 0.0]
+    saved = fmu.getFMUState()
+    t = steps(t, 8)
+    first = fmu.getReal(xv)
+    worst = max(worst, error(first, damped(1.0, x1, v1, c=0.0)))
+    print(f"damped oscillator, c tuned from 0.4 to 0 at t = 1 through FMPy: largest error {worst:.3e}")
+    assert worst < 10 * RTOL, worst
+    # A saved state goes back with its param values: tuned again after
+    # the save, c is 0 once the state is set, and the steps after it are
+    # the same restart from the same state, bit for bit.
+    fmu.setReal([refs["c"]], [0.4])
+    fmu.setFMUState(saved)
+    assert fmu.getReal([refs["c"]]) == [0.0]
+    steps(1.0, 8)
+    assert fmu.getReal(xv) == first, (fmu.getReal(xv), first)
+    # Serialized and read back: the same again.
+    serial = fmu.serializeFMUstate(saved)
+    fmu.freeFMUState(saved)
+    again = fmu.deSerializeFMUstate(serial)
+    fmu.setFMUState(again)
+    steps(1.0, 8)
+    assert fmu.getReal(xv) == first, (fmu.getReal(xv), first)
+    fmu.freeFMUState(again)
+    # And on another instance, only instantiated: it steps on from there.
+    other, _ = slave(d, "damped_oscillator", "other")
+    other.instantiate()
+    state = other.deSerializeFMUstate(serial)
+    other.setFMUState(state)
+    t = 1.0
+    for _ in range(8):
+        other.doStep(currentCommunicationPoint=t, communicationStepSize=0.125)
+        t += 0.125
+    assert other.getReal(xv) == first, (other.getReal(xv), first)
+    assert other.getReal([refs["c"]]) == [0.0]
+    other.freeFMUState(state)
+    other.terminate()
+    other.freeInstance()
+    print(f"saved state (and its {len(serial)} serialized bytes, on this instance and another): the same steps again, bit for bit")
+    # Foreign bytes are refused with an error, not misread.
+    try:
+        fmu.deSerializeFMUstate(b"not a state of this FMU")
+        raise AssertionError("foreign bytes were read as a state")
+    except FMICallException as e:
+        assert e.status == 3, e.status
+    fmu.freeInstance()
+    # A fixed param set after initialization: an error naming why.
+    fmu, refs = slave(d, "damped_oscillator", "fixed")
+    fmu.instantiate()
+    fmu.setupExperiment(tolerance=RTOL, startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    try:
+        fmu.setReal([refs["k"]], [5.0])
+        raise AssertionError("a fixed param was set after initialization")
+    except FMICallException as e:
+        assert e.status == 3, e.status
+    fmu.freeInstance()
+    print("a fixed param set after initialization: fmi2Error")
 
 
 def steps(d):
@@ -306,6 +406,6 @@ if __name__ == "__main__":
     if sys.argv[1] == "versus_run":
         versus_run(sys.argv[2], sys.argv[3])
         sys.exit(0)
-    {"steps": steps, "paper": paper, "driven": driven, "stop_and_failure": stop_and_failure, "two_instances": two_instances}[
+    {"steps": steps, "paper": paper, "driven": driven, "stop_and_failure": stop_and_failure, "two_instances": two_instances, "tuning": tuning}[
         sys.argv[1]
     ](sys.argv[2])

@@ -6,15 +6,17 @@
 //! values, an input stepping through FMPy's input signal, the stop time,
 //! the failure's message through the logger with fmi2Error, three
 //! instances of two models in one process, fmi2Reset, saved states, bad
-//! calls.
+//! calls; the FMI cross-check files of four models checked by FMPy's
+//! cross-check validation (`tests/fmu/cross_check.py`).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 /// The models, by their path under the repository.
-const MODELS: [&str; 5] = [
+const MODELS: [&str; 6] = [
     "examples/paper.lag",
+    "examples/damped_oscillator.lag",
     "tests/data/driven_oscillator.lag",
     "tests/data/stepped_oscillator.lag",
     "examples/rocket_burnout_landing.lag",
@@ -235,6 +237,12 @@ fn a_stop_ends_the_simulation_and_a_failure_is_an_error_with_lagcs_message() {
 }
 
 #[test]
+fn a_tunable_param_set_between_steps_restarts_and_saved_states_come_back_bit_for_bit() {
+    let out = check("tuning");
+    assert!(out.contains("bit for bit"), "{out}");
+}
+
+#[test]
 fn instances_of_two_models_in_one_process_are_independent() {
     check("two_instances");
 }
@@ -295,4 +303,94 @@ fn co_simulation_at_a_communication_step_of_1e_3_takes_the_steps_of_lagc_run() {
     let summary = stderr.lines().find(|l| l.contains("steps: ")).unwrap();
     let summary = summary.split("steps: ").nth(1).unwrap();
     assert_eq!(work(logged), work(summary), "{logged}\n{summary}");
+}
+
+#[test]
+fn the_fmi_cross_check_files_pass_fmpys_cross_check_validation() {
+    // `_ref.csv`, `_ref.opt` (and `_in.csv` for a driven model) from
+    // `lagc run` in the cross-check repository's layout; FMPy's
+    // validate_test_fmu on each FMU folder, then its simulation as a
+    // cross-check importer checked by validate_cross_check_result
+    // (tests/fmu/cross_check.py).
+    let dir = target().join("cross-check");
+    std::fs::create_dir_all(&dir).unwrap();
+    for model in [
+        "examples/paper.lag",
+        "examples/knife_edge_turning.lag",
+        "examples/vertical_rocket.lag",
+        "tests/data/driven_oscillator.lag",
+    ] {
+        build_fmu(Path::new(model), &dir);
+    }
+    let out = Command::new(python())
+        .arg(crate::root().join("tests/fmu/cross_check.py"))
+        .arg(env!("CARGO_BIN_EXE_lagc"))
+        .arg(crate::root())
+        .arg(&dir)
+        .arg(dir.join("tree"))
+        .env("LAGC_CACHE_DIR", crate::root().join("target/lagc-cache"))
+        .output()
+        .unwrap();
+    let out = checked(out, "cross_check.py");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    eprint!("{stdout}");
+    assert_eq!(
+        stdout
+            .matches("validate_cross_check_result: no problems")
+            .count(),
+        4,
+        "{stdout}"
+    );
+}
+
+/// Which params an FMU lets an importer tune between steps
+/// (`check::model::Param::tunable`): those used only where an input may
+/// be (forces, through lets too) and in initial values; fixed where a
+/// jump would be an impulse or a moved body, and the params those are
+/// computed from.
+#[test]
+fn params_are_tunable_only_where_a_change_between_steps_is_sound() {
+    let tunable = |source: &str| -> Vec<(String, bool)> {
+        let model = crate::check_bytes(source.as_bytes(), "model.lag").unwrap();
+        model
+            .params
+            .iter()
+            .map(|p| (p.name.clone(), p.tunable))
+            .collect()
+    };
+    let named = |pairs: &[(&str, bool)]| -> Vec<(String, bool)> {
+        pairs.iter().map(|&(n, t)| (n.to_string(), t)).collect()
+    };
+    // k in the Lagrangian fixes k0 it is computed from; T is the span's
+    // end; c reaches the force through c2 and a let; x0 is read once.
+    let source = "param k0 = 4;\nparam k = 2 * k0;\nparam c = 0.1;\nparam c2 = c;\n\
+                  param T = 5;\nparam x0 = 1;\nlet drag = c2 * x';\ncoord x;\n\
+                  lagrangian = x'^2 / 2 - k / 2 * x^2;\nforce x = -drag;\n\
+                  initial x = x0, x' = 0;\ntime 0 .. T;\n";
+    assert_eq!(
+        tunable(source),
+        named(&[
+            ("k0", false),
+            ("k", false),
+            ("c", true),
+            ("c2", true),
+            ("T", false),
+            ("x0", true),
+        ])
+    );
+    let example = |name: &str| {
+        let path = crate::root().join(format!("examples/{name}.lag"));
+        tunable(&std::fs::read_to_string(path).unwrap())
+    };
+    // A mass law (the paper), a holonomic constraint and the Lagrangian
+    // (the pendulum), an impact's reset (the ball): fixed.
+    assert!(example("paper").iter().all(|(_, t)| !t));
+    assert!(example("cartesian_pendulum").iter().all(|(_, t)| !t));
+    let ball = example("bouncing_ball");
+    assert!(ball.contains(&("e".to_string(), false)), "{ball:?}");
+    assert!(ball.contains(&("g".to_string(), false)), "{ball:?}");
+    // The damping of the damped oscillator: a force only.
+    let damped = example("damped_oscillator");
+    assert!(damped.contains(&("c".to_string(), true)), "{damped:?}");
+    assert!(damped.contains(&("m".to_string(), false)), "{damped:?}");
 }

@@ -23,6 +23,7 @@ fn request(at: &str, params: &str) -> Request {
         },
         t: None,
         symbolic: false,
+        inputs: vec![],
     }
 }
 
@@ -275,6 +276,81 @@ fn params_derivative_is_the_total_one() {
     // phi'' = −c phi'/(Ia + m R²) = −c phi'/(1.5 m R²): ∂/∂m = c phi'/(1.5 m² R²).
     let expected = 0.05 * 4.0 / (1.5 * 0.25);
     assert!((lin.b_params[row][m] - expected).abs() < 1e-12, "{lin}");
+}
+
+/// ∂f/∂u (issue 27): against the closed form, and against central
+/// differences of the residual f in the input's value (f is evaluated
+/// from the equations, ∂f/∂u from their symbolic partials).
+#[test]
+fn inputs_derivative_is_the_closed_form_and_the_residuals_slope() {
+    let with = |file: &str, at: &str, params: &str, inputs: &str| {
+        let mut req = request(at, params);
+        req.inputs = vec![inputs.to_string()];
+        run(file, &req).unwrap_or_else(|e| panic!("{file}: {e}"))
+    };
+    // m x'' + k x = F: ∂x''/∂F = 1/m.
+    for (m, f) in [(2.0, 0.5), (4.0, -3.0)] {
+        let file = "tests/data/driven_oscillator.lag";
+        let (at, params) = ("x=0.3,x'=-1", format!("m={m}"));
+        let lin = with(file, at, &params, &format!("F={f}"));
+        assert_eq!(lin.inputs, ["F"]);
+        let row = lin.state.iter().position(|s| s == "x'").expect("x'");
+        assert!((lin.b_inputs[row][0] - 1.0 / m).abs() < 1e-14, "{lin}");
+        let h = 1e-4;
+        let up = with(file, at, &params, &format!("F={}", f + h));
+        let down = with(file, at, &params, &format!("F={}", f - h));
+        for (i, b) in lin.b_inputs.iter().enumerate() {
+            let slope = (up.residual[i] - down.residual[i]) / (2.0 * h);
+            assert!(
+                (b[0] - slope).abs() < 1e-9,
+                "row {i}: {} against {slope}",
+                b[0]
+            );
+        }
+    }
+    // The path slope y'/x' = u steered from outside, a spring in y: the
+    // rate of y is y' = u x' (∂/∂u = x'), and with u held
+    // ∂x''/∂u = −k y (1 − u²) / (m (1 + u²)²).
+    let file = "tests/data/steered_spring.lag";
+    let (at, u) = ("y=0.5,x'=2", 0.3);
+    let lin = with(file, at, "", &format!("u={u}"));
+    let y = lin.state.iter().position(|s| s == "y").expect("y");
+    let xd = lin.state.iter().position(|s| s == "x'").expect("x'");
+    let (k, m, y0) = (4.0, 1.5, 0.5);
+    let expected = -k * y0 * (1.0 - u * u) / (m * (1.0 + u * u) * (1.0 + u * u));
+    assert!((lin.b_inputs[y][0] - 2.0).abs() < 1e-14, "{lin}");
+    assert!((lin.b_inputs[xd][0] - expected).abs() < 1e-14, "{lin}");
+    let h = 1e-4;
+    let up = with(file, at, "", &format!("u={}", u + h));
+    let down = with(file, at, "", &format!("u={}", u - h));
+    for (i, b) in lin.b_inputs.iter().enumerate() {
+        let slope = (up.residual[i] - down.residual[i]) / (2.0 * h);
+        assert!(
+            (b[0] - slope).abs() < 1e-8,
+            "row {i}: {} against {slope}",
+            b[0]
+        );
+    }
+    assert!(
+        lin.json().contains("\"inputs\": [\"u\"], \"B_inputs\": [["),
+        "{}",
+        lin.json()
+    );
+    // Symbolic A names the input, or substitutes its given value.
+    let mut req = request(at, "");
+    req.symbolic = true;
+    let text = run(file, &req).expect("linearizes").to_string();
+    assert!(text.contains("∂y'/∂x' = u\n"), "{text}");
+    req.inputs = vec!["u=0.5".to_string()];
+    let text = run(file, &req).expect("linearizes").to_string();
+    assert!(text.contains("∂y'/∂x' = 0.5\n"), "{text}");
+    // A model without inputs prints none; an unknown input is named.
+    assert!(!ok("examples/paper.lag", "", "").json().contains("B_inputs"));
+    let mut req = request("", "");
+    req.inputs = vec!["G=1".to_string()];
+    let err = run("tests/data/driven_oscillator.lag", &req).expect_err("unknown input");
+    assert_eq!(err.kind, ErrorKind::Usage);
+    insta::assert_snapshot!("linearize_error_unknown_input", err.to_string());
 }
 
 #[test]

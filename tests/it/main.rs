@@ -4,6 +4,8 @@ mod bit_identity;
 mod cache;
 mod check_build;
 mod cli;
+mod depth;
+mod ensemble;
 mod errors;
 mod examples;
 mod expect;

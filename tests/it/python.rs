@@ -22,6 +22,7 @@ const REQUIREMENTS: &str = "maturin>=1.9.4,<2\npytest>=8\nnumpy>=1.24\ndask[dist
 const MODELS: &[(&str, &str)] = &[
     ("examples/paper.lag", "paper"),
     ("tests/data/rocket_outputs.lag", "rocket_outputs"),
+    ("tests/data/driven_oscillator.lag", "driven_oscillator"),
 ];
 
 fn base() -> PathBuf {

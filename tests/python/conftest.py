@@ -1,7 +1,8 @@
 """Shared set-up of the Python module's tests (tests/it/python.rs runs them).
 
-They run against the *installed* modules `paper` (examples/paper.lag) and
-`rocket_outputs` (tests/data/rocket_outputs.lag), built by
+They run against the *installed* modules `paper` (examples/paper.lag),
+`rocket_outputs` (tests/data/rocket_outputs.lag) and `driven_oscillator`
+(tests/data/driven_oscillator.lag, an input), built by
 `lagc build --python` and pip-installed into a virtual environment of their
 own. The environment gives:
 

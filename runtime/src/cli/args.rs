@@ -39,6 +39,10 @@ usage: MODEL [OPTIONS]
                          (default 101; 1 prints the final state only);
                          output times never change the steps
   --times T1,T2,...      output at these times instead
+  --step-to-times        cut the steps to land on every output time (a stop
+                         time, as SUNDIALS and GSL's driver do): the samples
+                         carry the step's error instead of the continuous
+                         extension's, and the steps depend on the output
   --estimate-error       also run at a 100× tighter tolerance and report the
                          largest difference (an estimate of the global error;
                          like the error against `exact` lines, relative:
@@ -52,8 +56,9 @@ usage: MODEL [OPTIONS]
   --ensemble K           K initial states around the model's (spread by
                          --spread, default 0.1 of each value) through one
                          field, against K direct integrations: times and
-                         the largest difference (exact for affine motions,
-                         first order in the spread otherwise)
+                         the largest difference (exact for affine motions;
+                         otherwise each member corrected to the tolerance,
+                         or integrated on its own where the field cannot)
   --spread S             the ensemble's relative spread
   --sensitivity          also write dX(t)/dY0 for every initial value the
                          model states and dX(t)/dP for every param, as the
@@ -61,6 +66,9 @@ usage: MODEL [OPTIONS]
                          equations integrated with the motion by the direct
                          method, inside its error control, with their jumps
                          at events; refused for run-time candidates)
+  -o FILE                with --ensemble: write the members' states to FILE
+                         as CSV (member,t,<state...>, member by member)
+                         instead of timing them against direct integrations
   --repeat N             solve N times (after a warm-up) and report the
                          smallest wall time
   --quiet                no CSV on stdout
@@ -96,6 +104,8 @@ pub struct Invocation {
     pub spread: f64,
     /// `--sensitivity`: the forward sensitivities as extra columns.
     pub sensitivity: bool,
+    /// `-o FILE`: the ensemble's states are written there.
+    pub output: Option<String>,
     /// Warnings to print before running (e.g. a tolerance below rounding).
     pub warnings: Vec<String>,
     /// `--input NAME=FILE`: `(name, file)`, checked against the model's
@@ -166,6 +176,7 @@ pub fn parse(
         ensemble: None,
         sensitivity: false,
         spread: 0.1,
+        output: None,
         warnings: Vec::new(),
         inputs: Vec::new(),
         interpolation: Interpolation::Hold,
@@ -244,6 +255,7 @@ pub fn parse(
             }
             "--estimate-error" => inv.estimate_error = true,
             "--sensitivity" => inv.sensitivity = true,
+            "--step-to-times" => inv.options.step_to_times = true,
             "--ensemble" => inv.ensemble = Some(count(flag, value(flag, &mut args)?, 10_000_000)?),
             "--spread" => {
                 let s = number(flag, value(flag, &mut args)?)?;
@@ -252,6 +264,7 @@ pub fn parse(
                 }
                 inv.spread = s;
             }
+            "-o" | "--output" => inv.output = Some(value(flag, &mut args)?.to_string()),
             "--repeat" => inv.repeat = count(flag, value(flag, &mut args)?, 1_000_000)?,
             "--quiet" => inv.quiet = true,
             "--summary" => match value(flag, &mut args)? {
@@ -307,6 +320,13 @@ pub fn parse(
             }
             other => return Err(format!("unknown argument `{other}`")),
         }
+    }
+    if inv.output.is_some() && inv.ensemble.is_none() {
+        return Err(
+            "`-o FILE` writes an ensemble's states: it needs `--ensemble K` (a single run's \
+             CSV goes to stdout)"
+                .to_string(),
+        );
     }
     if let Some(phase) = phase {
         let plot = inv

@@ -1,5 +1,7 @@
-//! `--ensemble K`: one field for K initial states timed against K direct
-//! integrations (a benchmark harness).
+//! `--ensemble K`: one field for K initial states. With `-o FILE` the
+//! members' states are written there as CSV (`member,t,<state…>`, member
+//! by member); without it, the field is timed against K direct
+//! integrations (a benchmark harness) and their largest difference shown.
 
 use super::args::Invocation;
 use super::exit::fail;
@@ -57,6 +59,9 @@ pub(crate) fn ensemble(
         }
         members.push(member);
     }
+    if let Some(file) = &inv.output {
+        return write_ensemble(model, inv, (t0, t1), times, members, file);
+    }
     let n = x0.len();
     let quiet = Options {
         progress: false,
@@ -76,6 +81,7 @@ pub(crate) fn ensemble(
     let mut field_states = vec![0.0; times.len() * count * n];
     let mut direct_states = vec![0.0; times.len() * count * n];
     let mut method = String::new();
+    let mut counts = (count, 0, None);
     let initial = crate::ensemble::States::from_rows(&members);
     for _ in 0..solves {
         let mut kept = Duration::ZERO;
@@ -94,17 +100,15 @@ pub(crate) fn ensemble(
             kept += copying.elapsed();
         });
         match outcome {
-            Ok(outcome) => method = outcome.report.method,
-            Err(failure) => {
-                if failure.kind == FailureKind::NotAffine {
-                    eprintln!(
-                        "error: `--ensemble` needs a model without events or implicit \
-                         constraints"
-                    );
-                    return ExitCode::from(USAGE_EXIT_STATUS);
-                }
-                return fail(inv.json, &failure);
+            Ok(outcome) => {
+                method = outcome.outcome.report.method;
+                counts = (
+                    outcome.along_field,
+                    outcome.on_their_own,
+                    outcome.largest_estimate,
+                );
             }
+            Err(failure) => return refuse(inv, &failure),
         }
         field_time = field_time.min(start.elapsed().saturating_sub(kept));
         let start = Instant::now();
@@ -132,10 +136,12 @@ pub(crate) fn ensemble(
         .zip(&direct_states)
         .fold(0.0_f64, |m, (f, d)| m.max((f - d).abs() / d.abs().max(1.0)));
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let (along, own, estimate) = counts;
     if inv.json {
         eprintln!(
             "{{\"ensemble\":{count},\"method\":{},\"spread\":{},\"ensemble_field_s\":{},\
-             \"one_field_s\":{},\"direct_s\":{},\"largest_difference\":{},\"runs\":{}}}",
+             \"one_field_s\":{},\"direct_s\":{},\"largest_difference\":{},\"runs\":{},\
+             \"along_field\":{along},\"on_their_own\":{own},\"largest_estimate\":{}}}",
             json_string(&method),
             crate::summary::json_number(Some(inv.spread)),
             crate::summary::json_number(Some(field_time.as_secs_f64())),
@@ -143,17 +149,118 @@ pub(crate) fn ensemble(
             crate::summary::json_number(Some(direct_time.as_secs_f64())),
             crate::summary::json_number(Some(difference)),
             solves,
+            crate::summary::json_number(estimate),
         );
     } else {
         eprintln!(
             "ensemble of {count} initial states (spread {}), {} samples: one field ({method}) \
              for all: {:.3} ms; the field for one: {:.3} ms; {count} direct integrations: \
-             {:.3} ms; largest difference: {difference:.3e}",
+             {:.3} ms; largest difference: {difference:.3e}; {}",
             inv.spread,
             times.len(),
             ms(field_time),
             ms(one_time),
             ms(direct_time),
+            members_line(along, own, estimate),
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+/// How the members were followed, for the summary.
+fn members_line(along: usize, own: usize, estimate: Option<f64>) -> String {
+    match estimate {
+        None => format!("{along} members exact through the field (an affine motion)"),
+        Some(e) => format!(
+            "{along} members corrected along the field (largest local error {e:.2} of the \
+             tolerance), {own} integrated on their own"
+        ),
+    }
+}
+
+/// The ensemble refused: a model it cannot follow, or a failure.
+fn refuse(inv: &Invocation, failure: &crate::failure::Failure) -> ExitCode {
+    if failure.kind == FailureKind::NotAffine {
+        eprintln!("error: `--ensemble` needs a model without events or implicit constraints");
+        return ExitCode::from(USAGE_EXIT_STATUS);
+    }
+    fail(inv.json, failure)
+}
+
+/// `--ensemble K -o FILE`: the members' states as CSV, `member,t,<state…>`,
+/// member by member (member 0 is the model's own initial state); the
+/// summary on stderr.
+fn write_ensemble(
+    model: &mut dyn DynModel,
+    inv: &Invocation,
+    (t0, t1): (f64, f64),
+    times: &[f64],
+    members: Vec<Vec<f64>>,
+    file: &str,
+) -> ExitCode {
+    use crate::run::run_ensemble;
+    use std::io::Write;
+    let count = members.len();
+    let n = members.first().map_or(0, Vec::len);
+    let options = Options {
+        progress: false,
+        ..inv.options.clone()
+    };
+    let start = Instant::now();
+    let mut sampled: Vec<(f64, Vec<f64>)> = Vec::with_capacity(times.len());
+    let initial = crate::ensemble::States::from_rows(&members);
+    let outcome = run_ensemble(model, &options, t0, t1, initial, times, |t, states| {
+        sampled.push((t, states.data.clone()))
+    });
+    let outcome = match outcome {
+        Ok(outcome) => outcome,
+        Err(failure) => return refuse(inv, &failure),
+    };
+    let elapsed = start.elapsed();
+    let write = || -> std::io::Result<()> {
+        let mut out = std::io::BufWriter::new(std::fs::File::create(file)?);
+        write!(out, "member,t")?;
+        for name in model.state_names() {
+            write!(out, ",{name}")?;
+        }
+        writeln!(out)?;
+        for m in 0..count {
+            for (t, data) in &sampled {
+                write!(out, "{m},")?;
+                crate::output::write_row(&mut out, *t, &data[m * n..(m + 1) * n], &[])?;
+            }
+        }
+        out.flush()
+    };
+    if let Err(error) = write() {
+        eprintln!("error: cannot write `{file}`: {error}");
+        return ExitCode::from(USAGE_EXIT_STATUS);
+    }
+    let line = members_line(
+        outcome.along_field,
+        outcome.on_their_own,
+        outcome.largest_estimate,
+    );
+    if inv.json {
+        eprintln!(
+            "{{\"ensemble\":{count},\"method\":{},\"spread\":{},\"output\":{},\
+             \"seconds\":{},\"along_field\":{},\"on_their_own\":{},\"largest_estimate\":{}}}",
+            json_string(&outcome.outcome.report.method),
+            crate::summary::json_number(Some(inv.spread)),
+            json_string(file),
+            crate::summary::json_number(Some(elapsed.as_secs_f64())),
+            outcome.along_field,
+            outcome.on_their_own,
+            crate::summary::json_number(outcome.largest_estimate),
+        );
+    } else {
+        eprintln!(
+            "ensemble of {count} initial states (spread {}), {} samples each, written to \
+             {file}: {}; {:.3} ms",
+            inv.spread,
+            sampled.len(),
+            line,
+            elapsed.as_secs_f64() * 1e3,
         );
     }
     ExitCode::SUCCESS

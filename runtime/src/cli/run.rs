@@ -7,13 +7,12 @@ use super::args::Invocation;
 use super::bench::ensemble;
 use super::exit::fail;
 use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
-use crate::inputs::{run_driven, Schedule, Signal};
+use crate::inputs::{drive, Schedule, Signal};
 use crate::method::{IntegratorChoice, Method};
 use crate::model::{DynModel, Initial};
 use crate::output::{sample_times, write_header, write_row};
 use crate::plot::write_plot;
 use crate::run::options::{Ending, Options};
-use crate::run::run;
 use crate::summary::Summary;
 use std::io::Write;
 use std::process::ExitCode;
@@ -385,34 +384,6 @@ fn estimate(
         Ok(())
     })?;
     Ok(largest)
-}
-
-/// A run, or, for a model with inputs, a run restarted at every change of
-/// an input ([`run_driven`]; the summary counts them).
-#[allow(clippy::too_many_arguments)]
-fn drive(
-    model: &mut dyn DynModel,
-    options: &Options,
-    schedule: Option<&Schedule>,
-    t0: f64,
-    t1: f64,
-    x0: &[f64],
-    times: &[f64],
-    sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
-) -> Result<crate::run::options::Outcome, Failure> {
-    let Some(schedule) = schedule else {
-        return run(model, options, t0, t1, x0, times, sample);
-    };
-    let driven = run_driven(model, options, schedule, t0, t1, x0, times, sample)?;
-    let mut outcome = driven.outcome;
-    if driven.restarts > 0 {
-        outcome.report.notes.push(format!(
-            "inputs: restarted at {} change{}",
-            driven.restarts,
-            if driven.restarts == 1 { "" } else { "s" }
-        ));
-    }
-    Ok(outcome)
 }
 
 /// The inputs' schedule of a run: `None` for a model without inputs; the

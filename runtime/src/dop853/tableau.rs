@@ -5,10 +5,10 @@
 
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
-pub(super) const STAGES: usize = 12;
+pub(crate) const STAGES: usize = 12;
 
 /// Nodes `c_i` of the twelve stages.
-pub(super) const C: [f64; STAGES] = [
+pub(crate) const C: [f64; STAGES] = [
     0.0,
     0.526001519587677318785587544488e-01,
     0.789002279381515978178381316732e-01,
@@ -24,7 +24,7 @@ pub(super) const C: [f64; STAGES] = [
 ];
 
 /// The non-zero entries `(j, a_ij)` of row `i` of the Butcher matrix.
-pub(super) const A: [&[(usize, f64)]; STAGES] = [
+pub(crate) const A: [&[(usize, f64)]; STAGES] = [
     &[],
     &[(0, 5.26001519587677318785587544488e-2)],
     &[
@@ -99,7 +99,7 @@ pub(super) const A: [&[(usize, f64)]; STAGES] = [
 ];
 
 /// Weights of the 8th-order solution.
-pub(super) const B: [(usize, f64); 8] = [
+pub(crate) const B: [(usize, f64); 8] = [
     (0, 5.42937341165687622380535766363e-2),
     (5, 4.45031289275240888144113950566e0),
     (6, 1.89151789931450038304281599044e0),
@@ -111,14 +111,14 @@ pub(super) const B: [(usize, f64); 8] = [
 ];
 
 /// The 3rd-order estimate: `B·k − BHH·k`.
-pub(super) const BHH: [(usize, f64); 3] = [
+pub(crate) const BHH: [(usize, f64); 3] = [
     (0, 0.244094488188976377952755905512e+00),
     (8, 0.733846688281611857341361741547e+00),
     (11, 0.220588235294117647058823529412e-01),
 ];
 
 /// The 5th-order error estimate.
-pub(super) const ER: [(usize, f64); 8] = [
+pub(crate) const ER: [(usize, f64); 8] = [
     (0, 0.1312004499419488073250102996e-01),
     (5, -0.1225156446376204440720569753e+01),
     (6, -0.4957589496572501915214079952e+00),
@@ -132,8 +132,8 @@ pub(super) const ER: [(usize, f64); 8] = [
 /// The three extra stages of the continuous extension: node, then the
 /// non-zero `(j, a_ij)` with `j` indexing `k[0..12]`, `k_new = k[12]`
 /// (`X(t + h, y_new)`), and the extra stages `k[13]`, `k[14]`.
-pub(super) const C_EXTRA: [f64; 3] = [0.1, 0.2, 0.777777777777777777777777777778];
-pub(super) const A_EXTRA: [&[(usize, f64)]; 3] = [
+pub(crate) const C_EXTRA: [f64; 3] = [0.1, 0.2, 0.777777777777777777777777777778];
+pub(crate) const A_EXTRA: [&[(usize, f64)]; 3] = [
     &[
         (0, 5.61675022830479523392909219681e-2),
         (6, 2.53500210216624811088794765333e-1),
@@ -167,7 +167,7 @@ pub(super) const A_EXTRA: [&[(usize, f64)]; 3] = [
 ];
 
 /// The rows `d4..d7` of the continuous extension over `k[0..16]`.
-pub(super) const D: [[f64; 16]; 4] = [
+pub(crate) const D: [[f64; 16]; 4] = [
     [
         -0.84289382761090128651353491142e+01,
         0.0,

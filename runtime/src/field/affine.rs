@@ -269,7 +269,7 @@ impl Solver for AffineField {
         .map(|s| vec![s])
     }
 
-    fn track_members(&mut self, members: States) -> bool {
+    fn track_members(&mut self, members: States, _tol: crate::tolerance::Tolerance) -> bool {
         self.members = Some(members);
         true
     }

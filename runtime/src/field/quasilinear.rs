@@ -21,7 +21,8 @@
 
 use super::coefficients::{FieldSystem, Iterate, LinearizedMotion, ProjectiveCoefficients};
 use super::conditions::{recover, recover_state};
-use super::window::{member_states, SharedField, StepperKind, StoredStep, Window, WindowStep};
+use super::members::{Frame, Frames, Members};
+use super::window::{propagator, SharedField, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::budget::Budget;
 use crate::dop853::dense_step_between;
@@ -238,10 +239,8 @@ pub struct QuasilinearField {
     state_pool: Vec<Vec<f64>>,
     /// The windows' coefficients are integrated by RODAS4.
     stiff: bool,
-    /// Ensemble members' states at the current anchor, and at the accepted
-    /// window's anchor.
-    members: Option<States>,
-    window_members: Option<States>,
+    /// Ensemble members, corrected to the tolerance along each window.
+    members: Option<Members>,
     /// The failure that ended the last accepted window's pass (the work
     /// budget): reported by the next advance.
     pending: Option<Failure>,
@@ -275,7 +274,6 @@ impl QuasilinearField {
             state_pool: Vec::new(),
             stiff,
             members: None,
-            window_members: None,
         }
     }
 
@@ -495,11 +493,16 @@ impl Solver for QuasilinearField {
                 states: pass.states,
                 outputs: vec![None; count],
             });
-            if let Some(anchors) = self.members.take() {
-                let mut ends = States::default();
-                self.members_of_window(model, end_time, &anchors, &mut ends)?;
-                self.window_members = Some(anchors);
-                self.members = Some(ends);
+            if let Some(members) = self.members.as_mut() {
+                if let Some(window) = self.accepted.as_mut() {
+                    let steps = window.steps.len();
+                    let mut frames = WindowFrames {
+                        window,
+                        model,
+                        options: &self.options,
+                    };
+                    members.through(&mut frames, model, (self.t, end_time), steps)?;
+                }
             }
             self.t_prev = self.t;
             self.t = end_time;
@@ -634,8 +637,8 @@ impl Solver for QuasilinearField {
         Ok(out)
     }
 
-    fn track_members(&mut self, members: States) -> bool {
-        self.members = Some(members);
+    fn track_members(&mut self, members: States, tol: Tolerance) -> bool {
+        self.members = Some(Members::new(members, tol));
         true
     }
 
@@ -645,17 +648,24 @@ impl Solver for QuasilinearField {
         t: f64,
         out: &mut States,
     ) -> Result<(), Failure> {
-        match self.window_members.take() {
-            Some(anchors) => {
-                let states = self.members_of_window(model, t, &anchors, out);
-                self.window_members = Some(anchors);
-                states
-            }
-            None => {
-                out.clone_from(self.members.as_ref().unwrap_or(&States::default()));
-                Ok(())
-            }
-        }
+        let Some(members) = self.members.as_mut() else {
+            out.clone_from(&States::default());
+            return Ok(());
+        };
+        let Some(window) = self.accepted.as_mut() else {
+            out.clone_from(&members.states);
+            return Ok(());
+        };
+        let mut frames = WindowFrames {
+            window,
+            model,
+            options: &self.options,
+        };
+        members.at(&mut frames, model, t, out)
+    }
+
+    fn member_estimates(&self) -> Option<Vec<f64>> {
+        self.members.as_ref().map(|m| m.estimates.clone())
     }
 
     fn report(&self) -> Report {
@@ -672,62 +682,21 @@ impl Solver for QuasilinearField {
             passes: Some(self.passes),
             predictor: Some(self.predictor_stats),
             linearizations: self.linearizations,
-            notes: Vec::new(),
+            notes: self
+                .members
+                .iter()
+                .map(|m| {
+                    format!(
+                        "ensemble members: {} shared steps, {} rejected",
+                        m.steps, m.rejected
+                    )
+                })
+                .collect(),
         }
     }
 }
 
 impl QuasilinearField {
-    /// The members' states at `t` within the accepted window, from their
-    /// states at its anchor: through the field of the motion linearised
-    /// along the reference (first order in their distance from it).
-    fn members_of_window(
-        &mut self,
-        model: &dyn DynModel,
-        t: f64,
-        anchors: &States,
-        out: &mut States,
-    ) -> Result<(), Failure> {
-        let Some(window) = self.accepted.as_mut() else {
-            out.clone_from(anchors);
-            return Ok(());
-        };
-        let n = window.anchor_x.len();
-        let i = window
-            .steps
-            .iter()
-            .position(|s| t <= s.t_new())
-            .unwrap_or(window.steps.len() - 1);
-        let source = ProjectiveCoefficients::new(model, &window.path);
-        if window.prepared[i].is_none() {
-            window.prepared[i] = Some(window.steps[i].prepare(&source)?);
-        }
-        let mut y = vec![0.0; n * (n + 1)];
-        if let Some(dense) = &window.prepared[i] {
-            dense.eval(t, &mut y);
-        }
-        let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
-        let singular = || {
-            Failure::new(
-                t,
-                FailureKind::SingularConditionMatrix {
-                    condition: f64::INFINITY,
-                },
-            )
-        };
-        source.field(&y, &mut f, &mut s).ok_or_else(singular)?;
-        let reference = recover(&f, &s, &window.anchor_x).ok_or_else(singular)?;
-        let shared = SharedField {
-            system: &source,
-            options: &self.options,
-            anchor_x: &window.anchor_x,
-            reference: &reference,
-            y: &y,
-            t,
-        };
-        member_states(&shared, anchors, out)
-    }
-
     /// One pass of the field along `iterate` from the current anchor,
     /// until the window ends.
     fn pass<I: Iterate>(
@@ -827,6 +796,75 @@ impl QuasilinearField {
             largest_condition,
             field_h: window.proposed_step(),
         })
+    }
+}
+
+/// An accepted window's frames for its ensemble members: the reference's
+/// linear motion, its propagator (both from the window's field) and the
+/// linearisation at the predictor, at any time within the window.
+struct WindowFrames<'a> {
+    window: &'a mut AcceptedWindow,
+    model: &'a dyn DynModel,
+    options: &'a FieldOptions,
+}
+
+impl Frames for WindowFrames<'_> {
+    fn breaks(&self) -> Vec<f64> {
+        self.window.steps.iter().map(StoredStep::t_new).collect()
+    }
+
+    fn frame(&mut self, t: f64, out: &mut Frame) -> Result<(), Failure> {
+        let window = &mut *self.window;
+        let n = window.anchor_x.len();
+        let singular = || {
+            Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: f64::INFINITY,
+                },
+            )
+        };
+        out.t = t;
+        if window.steps.is_empty() {
+            out.x_lin.copy_from_slice(&window.anchor_x);
+            out.phi.fill(0.0);
+            for i in 0..n {
+                out.phi[i * n + i] = 1.0;
+            }
+        } else {
+            let i = window
+                .steps
+                .iter()
+                .position(|s| t <= s.t_new())
+                .unwrap_or(window.steps.len() - 1);
+            let source = ProjectiveCoefficients::new(self.model, &window.path);
+            if window.prepared[i].is_none() {
+                window.prepared[i] = Some(window.steps[i].prepare(&source)?);
+            }
+            let mut y = vec![0.0; n * (n + 1)];
+            if let Some(dense) = &window.prepared[i] {
+                dense.eval(t, &mut y);
+            }
+            let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
+            source.field(&y, &mut f, &mut s).ok_or_else(singular)?;
+            let reference = recover(&f, &s, &window.anchor_x).ok_or_else(singular)?;
+            let shared = SharedField {
+                system: &source,
+                options: self.options,
+                anchor_x: &window.anchor_x,
+                reference: &reference,
+                y: &y,
+                t,
+            };
+            propagator(&shared, &window.anchor_x, &mut out.x_lin, &mut out.phi)?;
+        }
+        window.path.eval(t, &mut out.p)?;
+        out.a.fill(0.0);
+        self.model.linearize(t, &out.p, &mut out.xp, &mut out.a)?;
+        if !out.invert() {
+            return Err(singular());
+        }
+        Ok(())
     }
 }
 

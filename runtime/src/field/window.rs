@@ -694,6 +694,26 @@ pub fn member_states<F: FieldSystem + ?Sized>(
         return member_states_each(shared, anchors, out);
     }
     let base = anchors.row(0);
+    let (mut x_b, mut phi) = (Vec::new(), Vec::new());
+    propagator(shared, base, &mut x_b, &mut phi)?;
+    out.n = n;
+    out.data.clear();
+    out.data.reserve(anchors.data.len());
+    affine_map(&x_b, &phi, base, &anchors.data, &mut out.data);
+    Ok(())
+}
+
+/// The affine map of the shared field from the anchor time to its time,
+/// `x(t) = x_b(t) + Φ(t) (x0 − base)`: `x_b` the state of `base`,
+/// `phi[i·n + j] = ∂x_j(t)/∂x0_i`, from `N + 1` conditioned solutions (the
+/// map is affine, so the differences are exact but for rounding).
+pub fn propagator<F: FieldSystem + ?Sized>(
+    shared: &SharedField<'_, F>,
+    base: &[f64],
+    x_b: &mut Vec<f64>,
+    phi: &mut Vec<f64>,
+) -> Result<(), Failure> {
+    let n = base.len();
     let mut probes = States {
         n,
         data: Vec::with_capacity((n + 1) * n),
@@ -709,18 +729,15 @@ pub fn member_states<F: FieldSystem + ?Sized>(
     }
     let mut solved = States::default();
     member_states_each(shared, &probes, &mut solved)?;
-    let x_b = solved.row(0);
-    // phi[i * n + j] = ∂x_j(t)/∂x0_i.
-    let mut phi = vec![0.0; n * n];
+    x_b.clear();
+    x_b.extend_from_slice(solved.row(0));
+    phi.clear();
+    phi.resize(n * n, 0.0);
     for i in 0..n {
         for j in 0..n {
             phi[i * n + j] = (solved.row(i + 1)[j] - x_b[j]) / deltas[i];
         }
     }
-    out.n = n;
-    out.data.clear();
-    out.data.reserve(anchors.data.len());
-    affine_map(x_b, &phi, base, &anchors.data, &mut out.data);
     Ok(())
 }
 

@@ -134,6 +134,9 @@ pub struct Integration<'m> {
     end: f64,
     /// Where the integration last started or restarted.
     t_start: f64,
+    /// Where it was made: a restart may go back as far as here (an FMU's
+    /// saved state from before a later restart).
+    t_first: f64,
     x_start: Vec<f64>,
     budget: Budget,
     regime: Regime,
@@ -148,6 +151,9 @@ pub struct Integration<'m> {
     t: f64,
     x: Vec<f64>,
     progress: Progress,
+    /// The time the caller last asked for: with `step_to_times`, no step
+    /// passes it.
+    target: f64,
     pieces: Option<Vec<Piece>>,
     /// The work of the solvers before the last restart.
     earlier: Option<Report>,
@@ -178,6 +184,7 @@ impl<'m> Integration<'m> {
             options: options.clone(),
             end,
             t_start: t0,
+            t_first: t0,
             x_start: x0.to_vec(),
             budget,
             regime: Regime::default(),
@@ -189,6 +196,7 @@ impl<'m> Integration<'m> {
             t: t0,
             x: x0.to_vec(),
             progress: Progress::new(false, t0, end),
+            target: end,
             pieces: None,
             earlier: None,
         };
@@ -309,6 +317,7 @@ impl<'m> Integration<'m> {
                 },
             ));
         }
+        self.target = t;
         loop {
             match &self.done {
                 Some(Ok(Ending::End)) => return Ok(Advance::Reached(self.t)),
@@ -400,11 +409,11 @@ impl<'m> Integration<'m> {
     /// candidate determined. [`Integration::put_on_constraints`] makes a
     /// state satisfy them. Panics when `x` is not of the model's dimension.
     pub fn restart_from(&mut self, t: f64, x: &[f64]) -> Result<(), Failure> {
-        if !(t >= self.t_start.min(self.t) && t <= self.end) {
+        if !(t >= self.t_first && t <= self.end) {
             return Err(Failure::new(
                 t,
                 FailureKind::OutsideSpan {
-                    from: self.t_start,
+                    from: self.t_first,
                     to: self.end,
                 },
             ));
@@ -453,6 +462,21 @@ impl<'m> Integration<'m> {
         let mut fixed = x.to_vec();
         model.constrained(t, x, &mut fixed)?;
         self.restart_from(t, &fixed)
+    }
+
+    /// [`Integration::restart_with_inputs`] on `model` from now on, in
+    /// place of the model the integration held: the same model with other
+    /// param values (a param tuned between steps, issue 26), a change as
+    /// discontinuous as an input's. The integration owns `model` after.
+    pub fn restart_with_model(
+        &mut self,
+        model: Box<dyn DynModel>,
+        t: f64,
+        x: &[f64],
+        inputs: &crate::model::Inputs,
+    ) -> Result<(), Failure> {
+        self.model = Held::Owned(model);
+        self.restart_with_inputs(t, x, inputs)
     }
 
     /// Moves `x` onto the constraints at `t` (the velocities along the
@@ -528,8 +552,15 @@ impl<'m> Integration<'m> {
         let model = self.model.get();
         let s = self.stepping.as_mut().expect("a run that steps");
         let pending = self.pending.as_ref().expect("a pending step");
+        // A step cut to land on `t` holds its own state there, not the
+        // continuous extension's reading of it.
+        let on_step_end = self.options.step_to_times && t == s.solver.time();
         let mut read = || -> Result<(), Failure> {
-            s.solver.dense(model, t, &mut self.x)?;
+            if on_step_end {
+                self.x.copy_from_slice(s.solver.state());
+            } else {
+                s.solver.dense(model, t, &mut self.x)?;
+            }
             // No output is off the constraints.
             if let Some(keeper) = self.keeper.as_mut() {
                 keeper.project(model, self.regime.mode, t, &mut self.x)?;
@@ -579,6 +610,9 @@ impl<'m> Integration<'m> {
         let mut t_limit = pace.limit(solver.time(), self.end);
         if let Some(t) = pivot_limit.take() {
             t_limit = t_limit.min(t);
+        }
+        if self.options.step_to_times && self.target > solver.time() {
+            t_limit = t_limit.min(self.target);
         }
         if let Err(mut failure) = solver.advance(model, t_limit, budget) {
             if matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) {

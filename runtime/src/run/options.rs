@@ -20,6 +20,12 @@ pub struct Options {
     pub max_steps: usize,
     /// Show progress on stderr (when it is a terminal) for long runs.
     pub progress: bool,
+    /// Cut the steps to land on every time the caller advances to (what
+    /// SUNDIALS calls a stop time, DifferentialEquations.jl `tstops`): the
+    /// samples carry the step's error instead of the continuous
+    /// extension's, at the price of steps that depend on the output. Off
+    /// by default: output times never change the answer.
+    pub step_to_times: bool,
 }
 
 impl Default for Options {
@@ -32,6 +38,7 @@ impl Default for Options {
             reanchor: true,
             max_steps: crate::budget::DEFAULT_MAX_STEPS,
             progress: false,
+            step_to_times: false,
         }
     }
 }

@@ -20,6 +20,7 @@ pub(crate) fn linearize(args: &LinearizeArgs) -> ExitCode {
         params: args.params.clone(),
         t: args.t.clone(),
         symbolic: args.symbolic,
+        inputs: args.inputs.clone(),
     };
     status(compile(
         &args.file,

@@ -72,6 +72,7 @@ fn paper_model() -> Model {
         span: Span::default(),
         value: n(default),
         default,
+        tunable: false,
     };
     let coord = |name: &str| Coord {
         name: name.into(),
