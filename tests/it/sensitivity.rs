@@ -365,3 +365,39 @@ fn sensitivities_are_refused_where_they_are_not_computed() {
         assert!(out.rows.is_empty(), "{model}: no CSV");
     }
 }
+
+#[test]
+fn an_undriven_input_holds_its_default_and_a_driven_run_is_refused() {
+    // The driven oscillator, m x'' + k x = F with F at its default 0.5:
+    // the sensitivities of the undriven run agree with differences; with
+    // `--input` (a signal whose changes they do not follow yet) they are
+    // refused with exit 2, never columns that ignore the signal.
+    let path = crate::root().join("tests/data/driven_oscillator.lag");
+    let binary = crate::generated::build_file(&path);
+    let worst = disagreement_of(
+        &binary,
+        "driven_oscillator",
+        "1,2.5,4",
+        1,
+        &[],
+        &[
+            ("--init", "x", 0.0, "x0"),
+            ("--init", "x'", 0.0, "x'0"),
+            ("--param", "m", 2.0, "m"),
+            ("--param", "k", 8.0, "k"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+    let signal = std::env::temp_dir().join(format!("lagc-sens-input-{}.csv", std::process::id()));
+    std::fs::write(&signal, "t,F\n0,1\n1,-2\n").unwrap();
+    let input = format!("F={}", signal.display());
+    let out = run(&binary, &["--sensitivity", "--input", &input]);
+    let _ = std::fs::remove_file(&signal);
+    assert_eq!(out.code, 2, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("does not combine with `--input`"),
+        "{}",
+        out.stderr
+    );
+    assert!(out.rows.is_empty(), "no CSV");
+}

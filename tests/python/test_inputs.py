@@ -146,3 +146,14 @@ def test_times_past_the_end_are_refused_and_integration_may_go_on():
         m.integration(t_end=-1.0)
     with pytest.raises(lagc.IntegrationError):
         m.integration().advance_to(6.0)
+
+
+def test_sensitivities_of_a_driven_run_are_refused_in_words():
+    """Sensitivities do not follow an input's changes yet: asking for both
+    raises ValueError (as `lagc run --sensitivity --input` exits 2), never
+    columns that ignore the signal; undriven, the same model has them."""
+    m = osc.Model()
+    with pytest.raises(ValueError, match="inputs"):
+        m.solve(t=[0.0, 1.0, 2.0], inputs={"F": (SIGNAL_T, SIGNAL_F)}, sensitivity=True)
+    sol = m.solve(t=[0.0, 1.0, 2.0], sensitivity=True)
+    assert sol.sensitivity.shape[0] == 3

@@ -154,7 +154,10 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     if inv.sensitivity {
         let refused = if inv.ensemble.is_some() {
             Some("`--sensitivity` does not combine with `--ensemble`".to_string())
-        } else if schedule.is_some() {
+        } else if !inv.inputs.is_empty() {
+            // Undriven inputs hold their defaults, which the sensitivities'
+            // run reads as the model holds them; a signal's changes are
+            // not followed yet.
             Some("`--sensitivity` does not combine with `--input` yet".to_string())
         } else {
             crate::sensitivity::unsupported(&*model)
