@@ -181,6 +181,16 @@ pub struct Arena {
     /// with `cos(sin^j(u))` walks both chains; remembered, every pair of
     /// nodes is walked once for the life of the arena.
     pub(crate) order_memo: RefCell<FxMap<(ExprId, ExprId), Ordering>>,
+    /// The marks of [`Arena::reachable`], all false between walks: a walk
+    /// clears only what it marked, so walking a small expression of a
+    /// large arena (the tidy forms' operation counts, one per expression)
+    /// costs its own size, not a fresh `Vec` of the arena's.
+    walk_marks: RefCell<Vec<bool>>,
+    /// The marks of `union_meta` by symbol slot, all false between calls:
+    /// a union of free-symbol sets marks each symbol once instead of
+    /// sorting every child's set together (long sums of terms that hold
+    /// most of the symbols).
+    symbol_marks: Vec<bool>,
     zero: ExprId,
     one: ExprId,
 }
@@ -199,6 +209,8 @@ impl Arena {
             derivatives: FxMap::default(),
             lets: FxMap::default(),
             order_memo: RefCell::new(FxMap::default()),
+            walk_marks: RefCell::new(Vec::new()),
+            symbol_marks: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
         };
@@ -334,8 +346,15 @@ impl Arena {
 
     /// Distinct nodes reachable from `roots`, each once (post-order).
     pub fn reachable(&self, roots: &[ExprId]) -> Vec<ExprId> {
-        let mut seen = vec![false; self.nodes.len()];
-        postorder(roots, |e| self.children(e), &mut seen)
+        let mut seen = self.walk_marks.take();
+        seen.resize(self.nodes.len(), false);
+        let order = postorder(roots, |e| self.children(e), &mut seen);
+        // Every node marked was put in `order`.
+        for &e in &order {
+            seen[e.index()] = false;
+        }
+        self.walk_marks.replace(seen);
+        order
     }
 
     /// Distinct nodes reachable from `roots`.
@@ -390,16 +409,24 @@ impl Arena {
         }
     }
 
-    fn union_meta(&self, children: &[ExprId]) -> Meta {
+    fn union_meta(&mut self, children: &[ExprId]) -> Meta {
+        let marks = &mut self.symbol_marks;
+        marks.resize(self.symbols.len(), false);
         let mut free: Vec<u32> = Vec::new();
         let mut varies = false;
         for c in children {
             let m = &self.meta[c.index()];
-            free.extend_from_slice(&m.free);
+            for &i in m.free.iter() {
+                if !std::mem::replace(&mut marks[i as usize], true) {
+                    free.push(i);
+                }
+            }
             varies |= m.varies;
         }
+        for &i in &free {
+            marks[i as usize] = false;
+        }
         free.sort_unstable();
-        free.dedup();
         Meta {
             free: free.into_boxed_slice(),
             varies,

@@ -252,3 +252,42 @@ fn a_number_times_a_sum_distributes_when_its_terms_collect() {
         other => panic!("{other:?}"),
     }
 }
+
+/// `reachable` and the free-symbol unions reuse marks across calls: every
+/// call must see all of its own nodes and symbols however much an earlier
+/// call shared with it, and nothing of the earlier call's.
+#[test]
+fn walks_and_free_symbols_do_not_leak_between_calls() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let y = sym(&mut a, q(1, 0));
+    let t = sym(&mut a, Symbol::Time);
+    let sx = a.func(Func::Sin, x);
+    let e1 = a.mul(&[sx, y]);
+    let e2 = a.add(&[sx, t]);
+    let sorted = |mut v: Vec<lagc::ir::ExprId>| {
+        v.sort();
+        v
+    };
+    let r1 = a.reachable(&[e1]);
+    assert_eq!(sorted(r1.clone()), sorted(vec![x, sx, y, e1]));
+    assert_eq!(r1.last(), Some(&e1));
+    // `sx` and `x`, met by the first walk, are met again by the second.
+    let r2 = a.reachable(&[e2]);
+    assert_eq!(sorted(r2), sorted(vec![x, sx, t, e2]));
+    let r12 = a.reachable(&[e1, e2]);
+    assert_eq!(sorted(r12), sorted(vec![x, sx, y, e1, t, e2]));
+    assert_eq!(a.dag_size(&[e2]), 4);
+    // Unions of overlapping sets, one after the other.
+    let m = sym(&mut a, M0);
+    let e3 = a.mul(&[e1, e2, m]);
+    let e4 = a.add(&[e2, x]);
+    assert_eq!(
+        a.free_symbols(e3),
+        [q(0, 0), q(1, 0), Symbol::Time, M0].into_iter().collect()
+    );
+    assert_eq!(
+        a.free_symbols(e4),
+        [q(0, 0), Symbol::Time].into_iter().collect()
+    );
+}
