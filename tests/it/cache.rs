@@ -70,16 +70,19 @@ fn a_damaged_cached_binary_is_rebuilt() {
     std::fs::write(&model, oscillator(3.0)).unwrap();
     assert!((final_x(&lagc_run(&model)) - 3f64.cos()).abs() < 1e-8);
     let release = crate::root().join("target/lagc-cache/target/release");
+    // The binary just run is the newest of the model's name: a target
+    // directory kept across source changes holds older ones too.
     let binary = std::fs::read_dir(&release)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .find(|p| {
+        .filter(|p| {
             p.file_name()
                 .unwrap()
                 .to_string_lossy()
                 .starts_with("lag-damaged-oscillator-")
                 && p.extension().is_none()
         })
+        .max_by_key(|p| std::fs::metadata(p).and_then(|m| m.modified()).ok())
         .expect("the model's binary");
     std::fs::write(&binary, b"#!/bin/sh\necho 0,0,0\n").unwrap();
     let rerun = lagc_run(&model);
