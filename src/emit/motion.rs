@@ -273,6 +273,25 @@ fn explicit(
     }
 }
 
+/// An implicit system's source of values: its unknown highest derivatives
+/// as `z[k]`, every other symbol as `from_x` gives it.
+pub(super) fn from_unknowns<'a>(
+    unknowns: &[Symbol],
+    from_x: Source<'a>,
+) -> impl Fn(Symbol) -> Option<TokenStream> + 'a {
+    let unknown_at: HashMap<Symbol, usize> =
+        unknowns.iter().enumerate().map(|(k, &s)| (s, k)).collect();
+    move |s: Symbol| {
+        unknown_at
+            .get(&s)
+            .map(|&k| {
+                let k = index(k);
+                quote! { z[#k] }
+            })
+            .or_else(|| from_x(s))
+    }
+}
+
 fn implicit(
     kernel: &Kernel,
     names: &mut SymbolNames,
@@ -285,21 +304,7 @@ fn implicit(
     let m = i.unknowns.len();
     let n = kernel.state.len();
     let size = index(m);
-    let unknown_at: HashMap<Symbol, usize> = i
-        .unknowns
-        .iter()
-        .enumerate()
-        .map(|(k, &s)| (s, k))
-        .collect();
-    let from_xz = |s: Symbol| {
-        unknown_at
-            .get(&s)
-            .map(|&k| {
-                let k = index(k);
-                quote! { z[#k] }
-            })
-            .or_else(|| from_x(s))
-    };
+    let from_xz = from_unknowns(&i.unknowns, from_x);
     let g_z_cells = |target: TokenStream, values: &[TokenStream]| -> Vec<TokenStream> {
         i.g_z
             .iter()

@@ -48,21 +48,7 @@ pub fn param_jacobian_code(
             let m = i.unknowns.len();
             let size = index(m);
             let np = index(kernel.params.len());
-            let unknown_at: std::collections::HashMap<Symbol, usize> = i
-                .unknowns
-                .iter()
-                .enumerate()
-                .map(|(k, &s)| (s, k))
-                .collect();
-            let from_xz = |s: Symbol| {
-                unknown_at
-                    .get(&s)
-                    .map(|&k| {
-                        let k = index(k);
-                        quote! { z[#k] }
-                    })
-                    .or_else(|| from_x(s))
-            };
+            let from_xz = super::motion::from_unknowns(&i.unknowns, from_x);
             let mut roots: Vec<ExprId> = partials.cells.iter().map(|&(_, _, e)| e).collect();
             let mut dep_cells = Vec::new();
             for d in &i.dependent {
