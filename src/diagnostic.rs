@@ -326,6 +326,10 @@ pub mod codes {
     /// A given initial position of a holonomic constraint's dependent
     /// coordinate that Newton moved onto the constraints (SPEC §2.3).
     pub const INITIAL_POSITION_CORRECTED: &str = "N0002";
+    /// An initial position of a holonomic constraint's dependent coordinate
+    /// that the file does not give: Newton from 0 put it on the constraints
+    /// (SPEC §2.3).
+    pub const INITIAL_POSITION_COMPLETED: &str = "N0003";
     // Warnings (a model that still compiles) get their own series.
     /// A number literal too small for f64: it is read as 0.
     pub const LITERAL_UNDERFLOWS: &str = "W0001";

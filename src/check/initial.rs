@@ -87,11 +87,12 @@ impl Checker<'_> {
         first_statement: Option<crate::span::Span>,
     ) {
         for coord in 0..self.coords.len() {
-            // A holonomic constraint's dependent needs its position only
-            // (a starting value for Newton); its derivatives below k
-            // follow from the constraint's.
+            // A holonomic constraint's dependent needs nothing: its given
+            // position is only Newton's starting value (0 when it is not
+            // given, note N0003), and its derivatives below k follow from
+            // the constraint's.
             let required_below = match constraints.iter().find(|c| c.coord == coord) {
-                Some(c) if c.is_holonomic() => 1,
+                Some(c) if c.is_holonomic() => 0,
                 Some(_) => k,
                 None => 2,
             };
@@ -124,6 +125,22 @@ impl Checker<'_> {
             ));
             if let Some(statement) = first_statement {
                 diagnostic = diagnostic.with_secondary(statement, "initial values are given here");
+            }
+            // A missing position in a model with holonomic constraints: say
+            // which positions the constraints complete, so that the user
+            // gives the others.
+            let completed: Vec<String> = constraints
+                .iter()
+                .filter(|c| c.is_holonomic() && c.coord != coord)
+                .map(|c| format!("`{}`", self.coords[c.coord].name))
+                .collect();
+            if !completed.is_empty() && missing[0] == format!("`{}`", coordinate.name) {
+                diagnostic = diagnostic.with_note(format!(
+                    "the holonomic constraints complete the position of {} from the \
+                     others; `{}` is not one of them",
+                    completed.join(", "),
+                    coordinate.name
+                ));
             }
             // A later candidate of an implicit constraint: the initial
             // values take the first candidate as the derivative the

@@ -81,8 +81,17 @@ pub fn initial_values(
             initial.push(InitialValue::Solved);
             continue;
         }
+        let completed_by_newton =
+            order == 0 && closure.is_some_and(|closure| closure.unknowns.contains(&symbol));
         match given.get(&symbol) {
             Some(&(e, _)) => initial.push(InitialValue::Given(e)),
+            // A dependent position not given: Newton on the constraints
+            // starts from 0 (here and at run time), note N0003.
+            None if completed_by_newton => {
+                let zero = arena.zero();
+                initial.push(InitialValue::Given(zero));
+                values.insert(symbol, 0.0);
+            }
             None => errors.push(
                 Diagnostic::error(
                     codes::MISSING_INITIAL,
@@ -109,7 +118,26 @@ pub fn initial_values(
         match closure_newton(arena, closure, &start, &env) {
             Ok(solution) => {
                 for ((&z, &from), &to) in closure.unknowns.iter().zip(&start).zip(&solution) {
-                    if !close(from, to) {
+                    if !given.contains_key(&z) {
+                        let name = arena.symbol_name(z);
+                        notes.push(
+                            Diagnostic::note_diagnostic(
+                                codes::INITIAL_POSITION_COMPLETED,
+                                format!("the initial value of `{name}` is completed from the constraints"),
+                            )
+                            .with_primary(model.time.span, "the motion starts here")
+                            .with_note(format!(
+                                "`{name}` is not given: at t = {t0}, Newton on `{}` from \
+                                 `{name}` = 0 gives `{name}` = {to} (params at their defaults); \
+                                 the run starts there",
+                                closure.text
+                            ))
+                            .with_help(format!(
+                                "give `{name} = …` to start near another configuration \
+                                 the constraints allow"
+                            )),
+                        );
+                    } else if !close(from, to) {
                         if let Some(&(_, user)) = given.get(&z) {
                             let name = arena.symbol_name(z);
                             notes.push(
@@ -149,6 +177,18 @@ pub fn initial_values(
                     "give `{name}` (and the other dependent coordinates) closer to a \
                      configuration that satisfies the constraints"
                 ));
+                let omitted: Vec<String> = closure
+                    .unknowns
+                    .iter()
+                    .filter(|z| !given.contains_key(z))
+                    .map(|&z| format!("`{}`", arena.symbol_name(z)))
+                    .collect();
+                if !omitted.is_empty() {
+                    diagnostic = diagnostic.with_note(format!(
+                        "{} not given: Newton started from 0 there",
+                        omitted.join(", ")
+                    ));
+                }
                 diagnostic = match given.get(&z) {
                     Some(&(_, user)) => {
                         diagnostic.with_primary(user.span, "starting from this value")
