@@ -32,44 +32,22 @@
 // `!(x > 0.0)` is meant: it is true for NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod api;
-pub mod budget;
-pub mod cli;
 pub mod closure;
-pub mod controller;
-pub mod dense;
-pub mod direct;
 pub mod domain;
-pub mod dop853;
-pub mod driver;
 pub mod ensemble;
-pub mod events;
 pub mod failure;
-pub mod field;
 pub mod highest;
-pub mod impacts;
-pub mod inputs;
-pub mod keep;
+pub mod io;
 pub mod linalg;
-pub mod magnus;
 pub mod math;
 pub mod method;
 pub mod model;
-pub mod output;
-pub mod plot;
-pub mod progress;
+pub mod ode;
 pub mod quantity;
-pub mod rodas4;
 pub mod run;
-pub mod segment;
-pub mod sensitivity;
-pub mod solver;
-pub mod stepper;
-pub mod summary;
-pub mod system;
-pub mod table;
-pub mod tolerance;
-pub mod watch;
 
-// Where these have always been (generated crates name `solution::Solution`).
-pub use run::{integration, solution};
+// The flat names every module had before the folders.
+pub use io::{api, cli, driver, output, plot, summary, table};
+pub use method::{direct, field, segment, solver};
+pub use ode::{budget, controller, dense, dop853, magnus, rodas4, stepper, system, tolerance};
+pub use run::{events, impacts, inputs, integration, keep, progress, sensitivity, solution, watch};

@@ -18,10 +18,17 @@
 //! solution) and the ensemble's [`run_ensemble`].
 
 pub mod diagnosis;
+pub mod events;
+pub mod impacts;
+pub mod inputs;
 pub mod integration;
+pub mod keep;
 pub mod options;
+pub mod progress;
 pub mod regime;
+pub mod sensitivity;
 pub mod solution;
+pub mod watch;
 
 use crate::budget::Budget;
 use crate::failure::{Failure, FailureKind};

@@ -1,5 +1,10 @@
 //! The integrators a run can use, and the user's choice among them.
 
+pub mod direct;
+pub mod field;
+pub mod segment;
+pub mod solver;
+
 use crate::budget::Budget;
 use crate::dop853::Dop853;
 use crate::failure::Failure;
