@@ -32,6 +32,7 @@
 // `!(x > 0.0)` is meant: it is true for NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod choice;
 pub mod closure;
 pub mod domain;
 pub mod ensemble;

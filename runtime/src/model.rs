@@ -8,9 +8,9 @@
 //! not need keep their defaults, so a model without events, outputs or a
 //! coefficient system emits nothing for them.
 
+use crate::choice::IntegratorChoice;
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::method::IntegratorChoice;
 
 /// How a state component's initial value is found (SPEC §1.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -6,6 +6,7 @@
 /// The runtime crate's files, relative to its root.
 const RUNTIME: &[(&str, &str)] = &[
     ("Cargo.toml", include_str!("../../runtime/Cargo.toml")),
+    ("src/choice.rs", include_str!("../../runtime/src/choice.rs")),
     (
         "src/closure.rs",
         include_str!("../../runtime/src/closure.rs"),

@@ -28,9 +28,9 @@
 //! println!("{:?}", solution.at(2.5));
 //! ```
 
+use crate::choice::{IntegratorChoice, Method};
 use crate::failure::{Failure, FailureKind};
-use crate::field::Anchor;
-use crate::method::{IntegratorChoice, Method};
+use crate::method::field::Anchor;
 use crate::model::{DynModel, Initial, Model};
 use crate::run::integration::Integration;
 use crate::run::options::Options;
@@ -133,7 +133,9 @@ pub fn solve_sensitivity(
     given: &[Option<f64>],
     options: &Options,
 ) -> Result<Sensitivities, Failure> {
-    use crate::sensitivity::{column_names, initial as start_of, unsupported, Augmented, Start};
+    use crate::run::sensitivity::{
+        column_names, initial as start_of, unsupported, Augmented, Start,
+    };
     if let Some(message) = unsupported(&*model) {
         return Err(Failure::new(
             model.time_span().0,

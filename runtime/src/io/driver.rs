@@ -1,5 +1,5 @@
 //! The run's public names where they have always been: the run itself
-//! lives in [`crate::run`] (the steppable [`crate::integration::Integration`]
+//! lives in [`crate::run`] (the steppable [`crate::run::integration::Integration`]
 //! and the loops over it).
 
 pub use crate::run::diagnosis::{diagnose, MassScale};

@@ -6,14 +6,15 @@
 //! requests on threads (parameter sweeps), and [`rhs_at`]/[`jacobian_at`]
 //! evaluate the reduced system in the regime a state is in.
 
-use crate::cli::{prepare_driven, Invocation, Prepared};
-use crate::driver::{best_mode, initial_branches, Options};
 use crate::failure::Failure;
-use crate::inputs::{drive, Schedule, Signal};
+use crate::io::cli::{prepare_driven, Invocation, Prepared};
+use crate::io::output::sample_times;
+use crate::io::summary::Summary;
 use crate::linalg::Matrix;
 use crate::model::{DynModel, Regime};
-use crate::output::sample_times;
-use crate::summary::Summary;
+use crate::run::inputs::{drive, Schedule, Signal};
+use crate::run::options::Options;
+use crate::run::regime::{best_mode, initial_branches};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
@@ -181,7 +182,7 @@ pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, Table
         output: None,
         warnings: Vec::new(),
         inputs: Vec::new(),
-        interpolation: crate::inputs::Interpolation::Hold,
+        interpolation: crate::run::inputs::Interpolation::Hold,
     };
     let prepared = prepare_driven(prototype, &invocation, schedule.as_ref());
     let Prepared { model, t0, t1, x0 } = prepared.map_err(|failure| {
@@ -219,13 +220,13 @@ pub fn ready(prototype: &dyn DynModel, request: &Request) -> Result<Ready, Table
 }
 
 /// The forward sensitivities of `request`'s run at its times (each row
-/// `S` column by column, [`crate::sensitivity::sample`]); a usage error
+/// `S` column by column, [`crate::run::sensitivity::sample`]); a usage error
 /// where they are not computed.
 pub fn sensitivities(
     prototype: &dyn DynModel,
     request: &Request,
 ) -> Result<Vec<Vec<f64>>, TableError> {
-    use crate::sensitivity::{sample, unsupported, Start};
+    use crate::run::sensitivity::{sample, unsupported, Start};
     let Ready {
         model,
         options,

@@ -3,14 +3,15 @@
 //! step where Hairer's stiffness test fires; `Explicit` keeps DOP853 and
 //! only reports the detection; `Stiff` is RODAS4 throughout.
 
-use crate::budget::Budget;
+use crate::choice::IntegratorChoice;
 use crate::failure::Failure;
-use crate::method::{AnyStepper, Integrator, IntegratorChoice};
+use crate::method::solver::{Report, Solver};
 use crate::model::DynModel;
-use crate::solver::{Report, Solver};
-use crate::stepper::{Clocked, Stepper};
-use crate::system::ModelSystem;
-use crate::tolerance::{Stats, Tolerance};
+use crate::ode::budget::Budget;
+use crate::ode::stepper::{Clocked, Stepper};
+use crate::ode::system::ModelSystem;
+use crate::ode::tolerance::{Stats, Tolerance};
+use crate::ode::{AnyStepper, Integrator};
 
 pub struct Direct {
     choice: IntegratorChoice,
@@ -146,9 +147,12 @@ impl Solver for Direct {
         Ok(())
     }
 
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure> {
+    fn segments(
+        &mut self,
+        model: &dyn DynModel,
+    ) -> Result<Vec<crate::method::segment::Segment>, Failure> {
         let dense = self.stepper.dense_step(&ModelSystem(model))?;
-        Ok(vec![crate::segment::Segment::State(dense)])
+        Ok(vec![crate::method::segment::Segment::State(dense)])
     }
 
     fn report(&self) -> Report {

@@ -2,8 +2,8 @@
 //! (a [`crate::run::solution::Solution`] keeps one per step): the state's own
 //! continuous extension, or the field's coefficients with their anchor.
 
-use crate::field::conditions::recover_state;
-use crate::stepper::DenseStep;
+use crate::method::field::conditions::recover_state;
+use crate::ode::stepper::DenseStep;
 
 /// The motion over one step, from its continuous extension.
 #[derive(Clone, Debug)]
@@ -65,7 +65,7 @@ impl Segment {
                 let mut v = vec![0.0; n * (n + 1)];
                 y.eval(t, &mut v);
                 let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
-                if !crate::field::coefficients::projective_field(&v, &mut f, &mut s) {
+                if !crate::method::field::coefficients::projective_field(&v, &mut f, &mut s) {
                     return false;
                 }
                 match recover_state(&f, &s, anchor) {

@@ -2,10 +2,10 @@
 //! and the run driver: advance one step, interpolate within it, restart at
 //! an event, report the work.
 
-use crate::budget::Budget;
 use crate::failure::Failure;
 use crate::model::DynModel;
-use crate::tolerance::Stats;
+use crate::ode::budget::Budget;
+use crate::ode::tolerance::Stats;
 
 /// What a method did, for the run summary.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -71,7 +71,10 @@ pub trait Solver {
 
     /// The continuous extension of the last advance, as values that outlive
     /// the solver (for [`crate::run::solution::Solution`]).
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure>;
+    fn segments(
+        &mut self,
+        model: &dyn DynModel,
+    ) -> Result<Vec<crate::method::segment::Segment>, Failure>;
 
     /// Follows other initial states through the same field (an ensemble:
     /// exact for affine motions; for others each member corrected to
@@ -80,7 +83,7 @@ pub trait Solver {
     fn track_members(
         &mut self,
         _members: crate::ensemble::States,
-        _tol: crate::tolerance::Tolerance,
+        _tol: crate::ode::tolerance::Tolerance,
     ) -> bool {
         false
     }

@@ -34,7 +34,7 @@ pub struct Controller {
 
 /// The largest growth per step while ramping up from a guessed first step
 /// (SUNDIALS CVODE allows 10⁴ after its first step, `ETAMX1`): the
-/// starting step ([`crate::tolerance::initial_step`]) is a cautious
+/// starting step ([`crate::ode::tolerance::initial_step`]) is a cautious
 /// estimate, a hundred to ten thousand times shorter than the tolerance
 /// allows where a component starts at zero, and growing from it by
 /// `max_scale` per step costs several steps that buy no accuracy.

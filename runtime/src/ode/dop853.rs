@@ -7,13 +7,13 @@
 // The coefficients are kept to the digits Hairer published them with.
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
-use crate::budget::Budget;
-use crate::controller::Controller;
-use crate::dense::{contd8, DenseKind};
 use crate::failure::Failure;
-use crate::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
-use crate::system::System;
-use crate::tolerance::{first_non_finite, Tolerance};
+use crate::ode::budget::Budget;
+use crate::ode::controller::Controller;
+use crate::ode::dense::{contd8, DenseKind};
+use crate::ode::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
+use crate::ode::system::System;
+use crate::ode::tolerance::{first_non_finite, Tolerance};
 
 pub(crate) mod tableau;
 use tableau::*;
@@ -482,7 +482,7 @@ impl Stepper for Dop853 {
     ) -> Result<(), Failure> {
         let n = self.y.len();
         let step = self.clock.last_step();
-        if let Some(end) = crate::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
+        if let Some(end) = crate::ode::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
             out.copy_from_slice(end);
             return Ok(());
         }
@@ -499,7 +499,7 @@ impl Stepper for Dop853 {
     }
 }
 
-pub use crate::dense::DenseStep;
+pub use crate::ode::dense::DenseStep;
 
 impl DenseStep {
     fn dop853(t_old: f64, t_new: f64, h: f64, cont: Vec<f64>) -> DenseStep {
@@ -668,7 +668,7 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
                 .map(|i| y_old[i] + h * B.iter().map(|&(j, w)| w * k[j * n + i]).sum::<f64>())
                 .collect();
             let miss: Vec<f64> = own_end.iter().zip(y_new).map(|(a, b)| a - b).collect();
-            crate::tolerance::rms_norm(&miss, y_old, y_new, tol)
+            crate::ode::tolerance::rms_norm(&miss, y_old, y_new, tol)
         }
         None => 0.0,
     };

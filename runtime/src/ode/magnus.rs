@@ -14,12 +14,12 @@
 //! their difference `/15` estimates the error of the two half steps, and
 //! the accepted state is the Richardson combination.
 
-use crate::budget::Budget;
-use crate::controller::Controller;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{expm, Matrix};
-use crate::stepper::{Clock, Clocked, ErrorMeasure, StepOutcome};
-use crate::tolerance::{first_non_finite, Stats};
+use crate::ode::budget::Budget;
+use crate::ode::controller::Controller;
+use crate::ode::stepper::{Clock, Clocked, ErrorMeasure, StepOutcome};
+use crate::ode::tolerance::{first_non_finite, Stats};
 
 /// Offset of the two Gauss–Legendre nodes from the midpoint, in units of `h`.
 const GAUSS_OFFSET: f64 = 0.288_675_134_594_812_9; // √3/6
@@ -157,7 +157,7 @@ impl Magnus {
         out: &mut [f64],
     ) -> Result<(), Failure> {
         let step = self.clock.last_step();
-        if let Some(end) = crate::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
+        if let Some(end) = crate::ode::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
             out.copy_from_slice(end);
             return Ok(());
         }

@@ -9,14 +9,14 @@
 // The coefficients are kept as Hairer printed them.
 #![allow(clippy::excessive_precision, clippy::unreadable_literal)]
 
-use crate::budget::Budget;
-use crate::controller::Controller;
-use crate::dense::{rodas4_dense, DenseKind, DenseStep};
 use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
-use crate::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
-use crate::system::System;
-use crate::tolerance::{first_non_finite, rms_norm, Tolerance};
+use crate::ode::budget::Budget;
+use crate::ode::controller::Controller;
+use crate::ode::dense::{rodas4_dense, DenseKind, DenseStep};
+use crate::ode::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
+use crate::ode::system::System;
+use crate::ode::tolerance::{first_non_finite, rms_norm, Tolerance};
 
 mod tableau;
 use tableau::*;
@@ -273,7 +273,7 @@ impl Stepper for Rodas4 {
         out: &mut [f64],
     ) -> Result<(), Failure> {
         let step = self.clock.last_step();
-        if let Some(end) = crate::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
+        if let Some(end) = crate::ode::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
             out.copy_from_slice(end);
             return Ok(());
         }

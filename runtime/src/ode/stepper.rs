@@ -1,10 +1,12 @@
 //! The interface of a one-step integrator with dense output.
 
-use crate::budget::Budget;
-use crate::controller::Controller;
 use crate::failure::{Failure, FailureKind};
-use crate::system::System;
-use crate::tolerance::{first_non_finite, initial_step, step_toward, underflows, Stats, Tolerance};
+use crate::ode::budget::Budget;
+use crate::ode::controller::Controller;
+use crate::ode::system::System;
+use crate::ode::tolerance::{
+    first_non_finite, initial_step, step_toward, underflows, Stats, Tolerance,
+};
 
 /// Where a one-step integrator is and how long its next step is: the
 /// bookkeeping DOP853, RODAS4 and Magnus-4 share, with their step-size
@@ -260,7 +262,7 @@ pub trait ErrorMeasure {
     /// under `tol` (`hairer_error` in `dop853.rs`): the integrator then
     /// computes it in the pass that forms the step instead of calling
     /// [`ErrorMeasure::measure`].
-    fn hairer_tolerance(&self) -> Option<crate::tolerance::Tolerance> {
+    fn hairer_tolerance(&self) -> Option<crate::ode::tolerance::Tolerance> {
         None
     }
 }
@@ -273,4 +275,4 @@ pub enum StepOutcome {
     Declined,
 }
 
-pub use crate::dense::DenseStep;
+pub use crate::ode::dense::DenseStep;

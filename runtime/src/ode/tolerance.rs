@@ -2,7 +2,7 @@
 //! and the initial step guess.
 
 use crate::failure::Failure;
-use crate::system::System;
+use crate::ode::system::System;
 
 /// Mixed error tolerance: component `i` of a local error is acceptable
 /// when it is below `atol + rtol·|x_i|`. A per-step tolerance: the global

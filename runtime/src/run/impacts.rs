@@ -18,8 +18,8 @@
 
 use crate::failure::Failure;
 use crate::model::{DynModel, Regime};
+use crate::ode::tolerance::Tolerance;
 use crate::run::options::Ending;
-use crate::tolerance::Tolerance;
 
 /// What the impacts did at an event.
 #[derive(Clone, Copy, Debug, PartialEq)]

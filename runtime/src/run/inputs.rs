@@ -10,10 +10,11 @@
 //! slope is a discontinuity, and the integration restarts there, like at
 //! an event ([`run_driven`], `Integration::set_inputs`).
 
-use crate::driver::{run, Ending, Options, Outcome};
 use crate::failure::Failure;
-use crate::integration::{Advance, Integration};
 use crate::model::{DynModel, Inputs};
+use crate::run::integration::{Advance, Integration};
+use crate::run::options::{Ending, Options, Outcome};
+use crate::run::run;
 
 /// How a signal goes between its samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -179,7 +180,7 @@ pub struct Driven {
 /// ([`Integration::set_inputs`]: the components the constraints fix
 /// recomputed, the others carried over), and to every time of `times`,
 /// where `sample(t, x)` is called (a sample at a change time sees the new
-/// inputs), as [`crate::driver::run`] samples. The work budget is one for
+/// inputs), as [`crate::run::run`] samples. The work budget is one for
 /// the whole run.
 #[allow(clippy::too_many_arguments)]
 pub fn run_driven(
@@ -239,7 +240,7 @@ pub fn run_driven(
 }
 
 /// A run as every caller makes it (`lagc run`, the Python module's
-/// `solve`): without a schedule, [`crate::driver::run`]; with one (a
+/// `solve`): without a schedule, [`crate::run::run`]; with one (a
 /// model with inputs, signals given or not), [`run_driven`], its restarts
 /// counted in the outcome's notes. One function, so that the CSV and the
 /// Python rows of a driven run are the same steps, bit for bit.

@@ -24,7 +24,7 @@
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{solve_dense, Matrix};
 use crate::model::{DynModel, Initial};
-use crate::tolerance::Tolerance;
+use crate::ode::tolerance::Tolerance;
 
 /// The residual (relative to the tolerance) above which the state after a
 /// step is projected. Below it the drift is left to grow: a projection

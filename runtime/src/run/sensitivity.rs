@@ -25,9 +25,9 @@
 //! (on which they are invariant), and the command line prints the state
 //! from the ordinary run beside it.
 
+use crate::choice::{IntegratorChoice, Method};
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::method::{IntegratorChoice, Method};
 use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
 use crate::run::options::{Ending, Options};
 use crate::run::regime::{best_mode, initial_branches};

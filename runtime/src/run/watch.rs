@@ -17,8 +17,8 @@
 //!   size at the start make the constraint the failure's name and cause.
 
 use crate::failure::{Failure, FailureKind};
+use crate::method::solver::Solver;
 use crate::model::{DomainKind, DynModel};
-use crate::solver::Solver;
 
 /// An end within this fraction of its argument's scale is reached: the
 /// rounding of the argument's terms.

@@ -2,10 +2,10 @@
 //! dependencies); `lagc run` calls [`parse`] too, so that bad usage is
 //! reported before anything is built.
 
-use crate::field::Anchor;
-use crate::inputs::Interpolation;
-use crate::method::{IntegratorChoice, Method};
-use crate::plot::PlotRequest;
+use crate::choice::{IntegratorChoice, Method};
+use crate::io::plot::PlotRequest;
+use crate::method::field::Anchor;
+use crate::run::inputs::Interpolation;
 use crate::run::options::Options;
 
 /// The most samples a run may print: beyond it the request is surely a

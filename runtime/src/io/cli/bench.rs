@@ -5,12 +5,12 @@
 
 use super::args::Invocation;
 use super::exit::fail;
+use crate::choice::Method;
 use crate::failure::{FailureKind, USAGE_EXIT_STATUS};
-use crate::method::Method;
+use crate::io::summary::json_string;
 use crate::model::DynModel;
 use crate::run::options::Options;
 use crate::run::run;
-use crate::summary::json_string;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -48,7 +48,7 @@ pub(crate) fn ensemble(
     // Moved states are put back on the constraints, as every state of a
     // run is: a member off them would be projected by its direct run and
     // not by the field.
-    let mut keeper = crate::keep::Keeper::new(model, inv.options.tol);
+    let mut keeper = crate::run::keep::Keeper::new(model, inv.options.tol);
     let mut members: Vec<Vec<f64>> = Vec::with_capacity(count);
     for k in 0..count {
         let mut member = ensemble_member(x0, k, inv.spread);
@@ -143,13 +143,13 @@ pub(crate) fn ensemble(
              \"one_field_s\":{},\"direct_s\":{},\"largest_difference\":{},\"runs\":{},\
              \"along_field\":{along},\"on_their_own\":{own},\"largest_estimate\":{}}}",
             json_string(&method),
-            crate::summary::json_number(Some(inv.spread)),
-            crate::summary::json_number(Some(field_time.as_secs_f64())),
-            crate::summary::json_number(Some(one_time.as_secs_f64())),
-            crate::summary::json_number(Some(direct_time.as_secs_f64())),
-            crate::summary::json_number(Some(difference)),
+            crate::io::summary::json_number(Some(inv.spread)),
+            crate::io::summary::json_number(Some(field_time.as_secs_f64())),
+            crate::io::summary::json_number(Some(one_time.as_secs_f64())),
+            crate::io::summary::json_number(Some(direct_time.as_secs_f64())),
+            crate::io::summary::json_number(Some(difference)),
             solves,
-            crate::summary::json_number(estimate),
+            crate::io::summary::json_number(estimate),
         );
     } else {
         eprintln!(
@@ -227,7 +227,7 @@ fn write_ensemble(
         for m in 0..count {
             for (t, data) in &sampled {
                 write!(out, "{m},")?;
-                crate::output::write_row(&mut out, *t, &data[m * n..(m + 1) * n], &[])?;
+                crate::io::output::write_row(&mut out, *t, &data[m * n..(m + 1) * n], &[])?;
             }
         }
         out.flush()
@@ -246,12 +246,12 @@ fn write_ensemble(
             "{{\"ensemble\":{count},\"method\":{},\"spread\":{},\"output\":{},\
              \"seconds\":{},\"along_field\":{},\"on_their_own\":{},\"largest_estimate\":{}}}",
             json_string(&outcome.outcome.report.method),
-            crate::summary::json_number(Some(inv.spread)),
+            crate::io::summary::json_number(Some(inv.spread)),
             json_string(file),
-            crate::summary::json_number(Some(elapsed.as_secs_f64())),
+            crate::io::summary::json_number(Some(elapsed.as_secs_f64())),
             outcome.along_field,
             outcome.on_their_own,
-            crate::summary::json_number(outcome.largest_estimate),
+            crate::io::summary::json_number(outcome.largest_estimate),
         );
     } else {
         eprintln!(

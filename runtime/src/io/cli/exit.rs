@@ -2,7 +2,7 @@
 //! line under `--summary json`), and its exit status.
 
 use crate::failure::Failure;
-use crate::summary::json_string;
+use crate::io::summary::json_string;
 use std::process::ExitCode;
 
 pub(crate) fn fail(json: bool, failure: &Failure) -> ExitCode {

@@ -6,14 +6,14 @@
 use super::args::Invocation;
 use super::bench::ensemble;
 use super::exit::fail;
+use crate::choice::{IntegratorChoice, Method};
 use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
-use crate::inputs::{drive, Schedule, Signal};
-use crate::method::{IntegratorChoice, Method};
+use crate::io::output::{sample_times, write_header, write_row};
+use crate::io::plot::write_plot;
+use crate::io::summary::Summary;
 use crate::model::{DynModel, Initial};
-use crate::output::{sample_times, write_header, write_row};
-use crate::plot::write_plot;
+use crate::run::inputs::{drive, Schedule, Signal};
 use crate::run::options::{Ending, Options};
-use crate::summary::Summary;
 use std::io::Write;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -160,7 +160,7 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
             // not followed yet.
             Some("`--sensitivity` does not combine with `--input` yet".to_string())
         } else {
-            crate::sensitivity::unsupported(&*model)
+            crate::run::sensitivity::unsupported(&*model)
         };
         if let Some(message) = refused {
             eprintln!("error: {message}");
@@ -188,7 +188,7 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     if !inv.quiet {
         let mut extra: Vec<String> = model.output_names().iter().map(|s| s.to_string()).collect();
         if found.is_some() {
-            extra.extend(crate::sensitivity::headers(&*model));
+            extra.extend(crate::run::sensitivity::headers(&*model));
         }
         let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
         written = write_header(&mut out, model.state_names(), &extra);
@@ -327,7 +327,7 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
 }
 
 /// The sensitivities at every sample time and a note for the summary
-/// ([`crate::sensitivity::sample`]).
+/// ([`crate::run::sensitivity::sample`]).
 #[allow(clippy::too_many_arguments)]
 fn sensitivities(
     prototype: &dyn DynModel,
@@ -338,7 +338,7 @@ fn sensitivities(
     x0: &[f64],
     times: &[f64],
 ) -> Result<(Vec<Vec<f64>>, String), Failure> {
-    use crate::sensitivity::{sample, Start};
+    use crate::run::sensitivity::{sample, Start};
     let mut overrides = vec![None; prototype.param_names().len()];
     for &(i, v) in &inv.params {
         overrides[i] = Some(v);

@@ -8,16 +8,16 @@ use super::coefficients::{
 };
 use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
-use crate::budget::Budget;
-use crate::dop853::dense_step_between_measured;
 use crate::ensemble::States;
 use crate::failure::Failure;
+use crate::method::solver::{Report, Solver};
 use crate::model::DynModel;
-use crate::solver::{Report, Solver};
-use crate::stepper::DenseStep;
-use crate::system::ModelSystem;
-use crate::tolerance::Tolerance;
-use crate::tolerance::{rms_norm, underflows, Stats};
+use crate::ode::budget::Budget;
+use crate::ode::dop853::dense_step_between_measured;
+use crate::ode::stepper::DenseStep;
+use crate::ode::system::ModelSystem;
+use crate::ode::tolerance::Tolerance;
+use crate::ode::tolerance::{rms_norm, underflows, Stats};
 use std::cell::RefCell;
 
 pub struct AffineField {
@@ -261,7 +261,10 @@ impl Solver for AffineField {
         Ok(())
     }
 
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure> {
+    fn segments(
+        &mut self,
+        model: &dyn DynModel,
+    ) -> Result<Vec<crate::method::segment::Segment>, Failure> {
         let window = &mut self.window;
         with_system(model, self.options.magnus, &self.scratch, |system| {
             window.segment(system)
@@ -269,7 +272,7 @@ impl Solver for AffineField {
         .map(|s| vec![s])
     }
 
-    fn track_members(&mut self, members: States, _tol: crate::tolerance::Tolerance) -> bool {
+    fn track_members(&mut self, members: States, _tol: crate::ode::tolerance::Tolerance) -> bool {
         self.members = Some(members);
         true
     }

@@ -15,7 +15,7 @@
 use crate::failure::Failure;
 use crate::linalg::Matrix;
 use crate::model::DynModel;
-use crate::system::System;
+use crate::ode::system::System;
 use std::cell::RefCell;
 
 /// A first-order system whose state `y` represents the field's
@@ -515,7 +515,7 @@ impl<I: Iterate + ?Sized> System for LinearizedMotion<'_, I> {
     }
 
     fn component_name(&self, i: usize) -> String {
-        crate::system::ModelSystem(self.linear.model).component_name(i)
+        crate::ode::system::ModelSystem(self.linear.model).component_name(i)
     }
 }
 

@@ -26,13 +26,13 @@
 //! own (too far from the reference), or whose equations fail, is dropped:
 //! the run integrates it on its own ([`crate::run::run_ensemble`]).
 
-use crate::dop853::hairer_error;
-use crate::dop853::tableau::{A, B, BHH, C, ER, STAGES};
 use crate::ensemble::States;
 use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
 use crate::model::DynModel;
-use crate::tolerance::Tolerance;
+use crate::ode::dop853::hairer_error;
+use crate::ode::dop853::tableau::{A, B, BHH, C, ER, STAGES};
+use crate::ode::tolerance::Tolerance;
 
 /// What a member needs of the window at time `t`.
 #[derive(Clone, Debug)]

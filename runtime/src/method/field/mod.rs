@@ -18,7 +18,7 @@ pub mod window;
 
 pub use window::Anchor;
 
-use crate::tolerance::Tolerance;
+use crate::ode::tolerance::Tolerance;
 
 /// How the field method runs.
 #[derive(Clone, Debug, PartialEq)]
@@ -96,7 +96,7 @@ pub(crate) fn explain(
     let mut broken_at = |t: f64| -> Option<Failure> {
         match model.rhs(t, x, &mut rate) {
             Err(failure) => Some(failure),
-            Ok(()) => crate::tolerance::first_non_finite(&rate).map(|i| {
+            Ok(()) => crate::ode::tolerance::first_non_finite(&rate).map(|i| {
                 let name = model.state_names().get(i).map_or("x", |s| s);
                 Failure::non_finite_rate(t, format!("{name}'"))
             }),

@@ -24,18 +24,18 @@ use super::conditions::{recover, recover_state};
 use super::members::{Frame, Frames, Members};
 use super::window::{propagator, SharedField, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
-use crate::budget::Budget;
-use crate::dop853::dense_step_between;
 use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
-use crate::method::{AnyStepper, Integrator};
+use crate::method::solver::{Report, Solver};
 use crate::model::DynModel;
-use crate::solver::{Report, Solver};
-use crate::stepper::DenseStep;
-use crate::stepper::{Clocked, Stepper};
-use crate::system::ModelSystem;
-use crate::tolerance::{underflows, Stats, Tolerance};
+use crate::ode::budget::Budget;
+use crate::ode::dop853::dense_step_between;
+use crate::ode::stepper::DenseStep;
+use crate::ode::stepper::{Clocked, Stepper};
+use crate::ode::system::ModelSystem;
+use crate::ode::tolerance::{underflows, Stats, Tolerance};
+use crate::ode::{AnyStepper, Integrator};
 use std::cell::{Cell, RefCell};
 
 /// Newton's error bound a window may reach, in units of the tolerance.
@@ -608,7 +608,10 @@ impl Solver for QuasilinearField {
         Ok(())
     }
 
-    fn segments(&mut self, model: &dyn DynModel) -> Result<Vec<crate::segment::Segment>, Failure> {
+    fn segments(
+        &mut self,
+        model: &dyn DynModel,
+    ) -> Result<Vec<crate::method::segment::Segment>, Failure> {
         let Some(window) = self.accepted.as_mut() else {
             return Ok(Vec::new());
         };
@@ -619,7 +622,7 @@ impl Solver for QuasilinearField {
             if window.steps[i].is_explicit() {
                 self.linearizations += window.build_output(model, i)?;
                 if let Some(d) = &window.outputs[i] {
-                    out.push(crate::segment::Segment::State(d.clone()));
+                    out.push(crate::method::segment::Segment::State(d.clone()));
                 }
                 continue;
             }
@@ -628,7 +631,7 @@ impl Solver for QuasilinearField {
                 window.prepared[i] = Some(window.steps[i].prepare(&source)?);
             }
             if let Some(y) = &window.prepared[i] {
-                out.push(crate::segment::Segment::Projective {
+                out.push(crate::method::segment::Segment::Projective {
                     y: y.clone(),
                     anchor: window.anchor_x.clone(),
                 });

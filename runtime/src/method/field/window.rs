@@ -12,16 +12,16 @@
 use super::coefficients::FieldSystem;
 use super::conditions::{recover, recover_state, Recovered};
 use super::FieldOptions;
-use crate::budget::Budget;
-use crate::dop853::{hairer_error, Dop853, RawStep};
 use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
-use crate::magnus::{LinearGenerator, Magnus};
-use crate::rodas4::Rodas4;
-use crate::segment::Segment;
-use crate::stepper::{Clocked, DenseStep, ErrorMeasure, StepOutcome, Stepper};
-use crate::tolerance::{Stats, Tolerance};
+use crate::method::segment::Segment;
+use crate::ode::budget::Budget;
+use crate::ode::dop853::{hairer_error, Dop853, RawStep};
+use crate::ode::magnus::{LinearGenerator, Magnus};
+use crate::ode::rodas4::Rodas4;
+use crate::ode::stepper::{Clocked, DenseStep, ErrorMeasure, StepOutcome, Stepper};
+use crate::ode::tolerance::{Stats, Tolerance};
 
 /// The free anchor values `c_2..c_N` used at every (re-)anchoring.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -353,7 +353,7 @@ impl Window {
                     None => {
                         let mut slope = vec![0.0; y.len()];
                         system.rhs(t, &y, &mut slope)?;
-                        crate::tolerance::initial_step(
+                        crate::ode::tolerance::initial_step(
                             system,
                             t,
                             &y,
