@@ -28,7 +28,7 @@
 use crate::choice::{IntegratorChoice, Method};
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
+use crate::model::{Domain, DynModel, Initial, Inputs, Regime};
 use crate::run::options::{Ending, Options};
 use crate::run::regime::{best_mode, initial_branches};
 use crate::run::run;
@@ -498,6 +498,11 @@ impl Augmented {
     }
 }
 
+// What this does not state is a model's without the feature (the
+// trait's defaults): no outputs, no candidates, no kept constraints, no
+// coefficient system, no exact solution, no pivots: the augmented
+// system is integrated directly (`unsupported` names the models it
+// cannot serve).
 impl DynModel for Augmented {
     fn name(&self) -> &'static str {
         self.inner.name()
@@ -518,9 +523,6 @@ impl DynModel for Augmented {
     fn initial_kinds(&self) -> &'static [Initial] {
         self.inner.initial_kinds()
     }
-    fn output_names(&self) -> &'static [&'static str] {
-        &[]
-    }
     fn mass_names(&self) -> &'static [&'static str] {
         self.inner.mass_names()
     }
@@ -536,35 +538,8 @@ impl DynModel for Augmented {
     fn switches(&self) -> usize {
         self.inner.switches()
     }
-    fn constraints(&self) -> &'static [Candidates] {
-        &[]
-    }
     fn impacts(&self) -> &'static [&'static str] {
         self.inner.impacts()
-    }
-    fn affine(&self) -> bool {
-        false
-    }
-    fn coefficients_linear(&self) -> bool {
-        false
-    }
-    fn states_exact(&self) -> bool {
-        false
-    }
-    fn keeps_constraints(&self) -> bool {
-        false
-    }
-    fn keeps_positions(&self) -> bool {
-        false
-    }
-    fn fixed_components(&self) -> &'static [&'static [usize]] {
-        &[]
-    }
-    fn has_param_jacobian(&self) -> bool {
-        false
-    }
-    fn param_jacobian(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
-        Ok(())
     }
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64> {
         self.inner.parameters(overrides)
@@ -641,41 +616,6 @@ impl DynModel for Augmented {
         }
         Ok(())
     }
-    fn linearize(
-        &self,
-        t: f64,
-        x: &[f64],
-        dx: &mut [f64],
-        jac: &mut Matrix,
-    ) -> Result<(), Failure> {
-        self.rhs(t, x, dx)?;
-        self.jacobian(t, x, jac)
-    }
-    fn coefficients(&self, t: f64, _f: &[f64], _df: &mut [f64]) -> Result<(), Failure> {
-        Err(Failure::not_affine(t))
-    }
-    fn coefficient_jacobian(&self, t: f64, _f: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
-        Err(Failure::not_affine(t))
-    }
-    fn coefficient_time_partial(
-        &self,
-        t: f64,
-        _f: &[f64],
-        _dfdt: &mut [f64],
-    ) -> Result<(), Failure> {
-        Err(Failure::not_affine(t))
-    }
-    fn exact(&self, _t: f64, _out: &mut [Option<f64>]) {}
-    fn constrained(&self, _t: f64, _x: &[f64], _kept: &mut [f64]) -> Result<(), Failure> {
-        Ok(())
-    }
-    fn kept_gradient(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
-        Ok(())
-    }
-    fn project_closure(&self, _t: f64, _x: &mut [f64]) -> Result<(), Failure> {
-        Ok(())
-    }
-    fn outputs(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]) {
         self.inner.switching_functions(t, &x[..self.n], g);
     }
@@ -701,7 +641,6 @@ impl DynModel for Augmented {
     ) -> Result<(), Failure> {
         self.jump(before, switched, t, x_before, x)
     }
-    fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     fn domains(&self) -> &'static [Domain] {
         self.inner.domains()
     }
