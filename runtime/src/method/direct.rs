@@ -8,16 +8,20 @@ use crate::failure::Failure;
 use crate::method::solver::{Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
-use crate::ode::stepper::{Clocked, Stepper};
+use crate::ode::stepper::{OfModel, StepperOf};
 use crate::ode::system::ModelSystem;
 use crate::ode::tolerance::{Stats, Tolerance};
-use crate::ode::{AnyStepper, Integrator};
+use crate::ode::Integrator;
 
 pub struct Direct {
     choice: IntegratorChoice,
     tol: Tolerance,
     h_max: f64,
-    stepper: AnyStepper,
+    /// The integrator running now, and its stepper: one dynamic call per
+    /// step; inside a step the right side is called statically
+    /// (`Stepper`'s comment).
+    integrator: Integrator,
+    stepper: StepperOf<OfModel>,
     /// Work of the integrators before the current one.
     done: Stats,
     first: Integrator,
@@ -45,11 +49,12 @@ impl Direct {
             IntegratorChoice::Stiff => Integrator::Stiff,
             _ => Integrator::Explicit,
         };
-        let stepper = AnyStepper::new(first, &ModelSystem(model), t0, x0, tol, h_max, None)?;
+        let stepper = first.start::<OfModel>(&ModelSystem(model), t0, x0, tol, h_max, None)?;
         Ok(Direct {
             choice,
             tol,
             h_max,
+            integrator: first,
             stepper,
             done: Stats::default(),
             first,
@@ -64,7 +69,7 @@ impl Direct {
 
     /// The integrator finishing the run.
     pub fn integrator(&self) -> Integrator {
-        self.stepper.integrator()
+        self.integrator
     }
 
     fn method_name(&self) -> String {
@@ -75,10 +80,10 @@ impl Direct {
             Some(_) => format!(
                 "direct ({} → {})",
                 self.first.name(),
-                self.stepper.integrator().name()
+                self.integrator.name()
             ),
             // concat, not format!: every solve's report asks.
-            None => ["direct (", self.stepper.integrator().name(), ")"].concat(),
+            None => ["direct (", self.integrator.name(), ")"].concat(),
         }
     }
 }
@@ -133,10 +138,9 @@ impl Solver for Direct {
 
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         let h = self.stepper.proposed_step();
-        let integrator = self.stepper.integrator();
+        let integrator = self.integrator;
         self.done += self.stepper.stats();
-        self.stepper = AnyStepper::new(
-            integrator,
+        self.stepper = integrator.start::<OfModel>(
             &ModelSystem(model),
             t,
             x,
@@ -152,7 +156,10 @@ impl Solver for Direct {
         model: &dyn DynModel,
     ) -> Result<Vec<crate::method::segment::Segment>, Failure> {
         let dense = self.stepper.dense_step(&ModelSystem(model))?;
-        Ok(vec![crate::method::segment::Segment::State(dense)])
+        Ok(dense
+            .into_iter()
+            .map(crate::method::segment::Segment::State)
+            .collect())
     }
 
     fn report(&self) -> Report {
@@ -192,7 +199,7 @@ impl Direct {
     fn judge_the_switch(&mut self, model: &dyn DynModel, before: f64) -> Result<(), Failure> {
         const TRIAL_STEPS: usize = 20;
         const REQUIRED_GAIN: f64 = 2.0;
-        if self.stepper.integrator() != Integrator::Stiff {
+        if self.integrator != Integrator::Stiff {
             return Ok(());
         }
         self.stiff_steps += 1;
@@ -211,7 +218,7 @@ impl Direct {
     fn switch_if_stiff(&mut self, model: &dyn DynModel) -> Result<(), Failure> {
         if self.switched_at.is_some()
             && self.switched_back_at.is_none()
-            && self.stepper.integrator() == Integrator::Explicit
+            && self.integrator == Integrator::Explicit
             && self.stiff_steps == 0
         {
             self.explicit_step = self.stepper.time() - self.stepper.previous_time();
@@ -231,8 +238,7 @@ impl Direct {
     ) -> Result<(), Failure> {
         let (t, x) = (self.stepper.time(), self.stepper.state().to_vec());
         self.done += self.stepper.stats();
-        self.stepper = AnyStepper::new(
-            integrator,
+        self.stepper = integrator.start::<OfModel>(
             &ModelSystem(model),
             t,
             &x,
@@ -240,6 +246,7 @@ impl Direct {
             self.h_max,
             Some(h),
         )?;
+        self.integrator = integrator;
         Ok(())
     }
 }

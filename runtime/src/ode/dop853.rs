@@ -10,8 +10,8 @@
 use crate::failure::Failure;
 use crate::ode::budget::Budget;
 use crate::ode::controller::Controller;
-use crate::ode::dense::{contd8, DenseKind};
-use crate::ode::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
+use crate::ode::dense::Extension;
+use crate::ode::stepper::{stalled, Clock, Clocked, ErrorMeasure, Start, StepOutcome, Stepper};
 use crate::ode::system::System;
 use crate::ode::tolerance::{first_non_finite, Tolerance};
 
@@ -454,7 +454,7 @@ impl Clocked for Dop853 {
     }
 }
 
-impl Stepper for Dop853 {
+impl<S: System + ?Sized> Stepper<S> for Dop853 {
     fn state(&self) -> &[f64] {
         &self.y
     }
@@ -463,23 +463,24 @@ impl Stepper for Dop853 {
         self.stiffness_detected
     }
 
-    fn step<S: System + ?Sized>(
+    fn step(&mut self, system: &S, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+        let mut measure = HairerMeasure(self.tol);
+        // The inherent step, with this measure's type: no dynamic call
+        // per attempt.
+        Dop853::step_measured(self, system, t_limit, budget, &mut measure).map(|_| ())
+    }
+
+    fn step_measured(
         &mut self,
         system: &S,
         t_limit: f64,
         budget: &Budget,
-    ) -> Result<(), Failure> {
-        let mut measure = HairerMeasure(self.tol);
-        self.step_measured(system, t_limit, budget, &mut measure)
-            .map(|_| ())
+        measure: &mut dyn ErrorMeasure,
+    ) -> Result<StepOutcome, Failure> {
+        Dop853::step_measured(self, system, t_limit, budget, measure)
     }
 
-    fn dense<S: System + ?Sized>(
-        &mut self,
-        system: &S,
-        t: f64,
-        out: &mut [f64],
-    ) -> Result<(), Failure> {
+    fn dense(&mut self, system: &S, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let n = self.y.len();
         let step = self.clock.last_step();
         if let Some(end) = crate::ode::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
@@ -497,18 +498,43 @@ impl Stepper for Dop853 {
         );
         Ok(())
     }
+
+    fn dense_step(&mut self, system: &S) -> Result<Option<DenseStep>, Failure> {
+        Dop853::dense_step(self, system).map(Some)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
 }
 
 pub use crate::ode::dense::DenseStep;
 
 impl DenseStep {
     fn dop853(t_old: f64, t_new: f64, h: f64, cont: Vec<f64>) -> DenseStep {
-        DenseStep {
-            t_old,
-            t_new,
-            h,
-            kind: DenseKind::Dop853 { cont },
-        }
+        DenseStep::new(t_old, t_new, h, std::sync::Arc::new(Contd8 { cont }))
+    }
+}
+
+/// DOP853's continuous extension of order 7: Hairer's `contd8`
+/// coefficients, 8 blocks of `n`.
+#[derive(Debug)]
+struct Contd8 {
+    cont: Vec<f64>,
+}
+
+impl Extension for Contd8 {
+    fn eval(&self, theta: f64, out: &mut [f64]) {
+        contd8(&self.cont, self.cont.len() / 8, theta, out);
+    }
+}
+
+/// Hairer's `contd8`: the continuous extension at `θ = (t − t_old)/h`.
+fn contd8(c: &[f64], n: usize, s: f64, out: &mut [f64]) {
+    let s1 = 1.0 - s;
+    for (i, o) in out.iter_mut().enumerate().take(n) {
+        let conf1 = c[4 * n + i] + s * (c[5 * n + i] + s1 * (c[6 * n + i] + s * c[7 * n + i]));
+        *o = c[i] + s * (c[n + i] + s1 * (c[2 * n + i] + s * (c[3 * n + i] + s1 * conf1)));
     }
 }
 
@@ -762,5 +788,20 @@ fn combine<const R: usize>(dst: &mut [f64], base: &[f64], h: f64, row: &[(f64, &
 fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     for (yi, xi) in y.iter_mut().zip(x) {
         *yi += a * xi;
+    }
+}
+
+impl Start for Dop853 {
+    const NAME: &'static str = "DOP853";
+
+    fn start<S: System + ?Sized>(
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure> {
+        Dop853::new(system, t0, y0, tol, h_max, h0)
     }
 }

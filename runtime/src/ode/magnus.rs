@@ -18,8 +18,10 @@ use crate::failure::{Failure, FailureKind};
 use crate::linalg::{expm, Matrix};
 use crate::ode::budget::Budget;
 use crate::ode::controller::Controller;
-use crate::ode::stepper::{Clock, Clocked, ErrorMeasure, StepOutcome};
-use crate::ode::tolerance::{first_non_finite, Stats};
+use crate::ode::stepper::{
+    Clock, Clocked, DenseStep, ErrorMeasure, RmsMeasure, StepOutcome, Stepper,
+};
+use crate::ode::tolerance::{first_non_finite, Stats, Tolerance};
 
 /// Offset of the two Gauss–Legendre nodes from the midpoint, in units of `h`.
 const GAUSS_OFFSET: f64 = 0.288_675_134_594_812_9; // √3/6
@@ -35,6 +37,7 @@ pub trait LinearGenerator {
 }
 
 pub struct Magnus {
+    tol: Tolerance,
     clock: Clock,
     y: Vec<f64>,
     y_old: Vec<f64>,
@@ -51,8 +54,11 @@ impl Clocked for Magnus {
 }
 
 impl Magnus {
-    pub fn new(t0: f64, y0: &[f64], h0: f64) -> Magnus {
+    /// At `(t0, y0)`, about to try a step of `h0`; `tol` is its own
+    /// measure's ([`Stepper::step`]: the field measures the state instead).
+    pub fn new(t0: f64, y0: &[f64], h0: f64, tol: Tolerance) -> Magnus {
         Magnus {
+            tol,
             clock: Clock::new(
                 t0,
                 h0,
@@ -166,5 +172,40 @@ impl Magnus {
         let yy = Matrix::from_column_major(m, self.y_old.len() / m, self.y_old.clone());
         out.copy_from_slice(p.mul(&yy).as_slice());
         Ok(())
+    }
+}
+
+impl<G: LinearGenerator + ?Sized> Stepper<G> for Magnus {
+    fn state(&self) -> &[f64] {
+        &self.y
+    }
+
+    fn step(&mut self, system: &G, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+        let mut measure = RmsMeasure(self.tol);
+        // The inherent step, with this measure's type: no dynamic call
+        // per attempt.
+        Magnus::step_measured(self, system, t_limit, budget, &mut measure).map(|_| ())
+    }
+
+    fn step_measured(
+        &mut self,
+        system: &G,
+        t_limit: f64,
+        budget: &Budget,
+        measure: &mut dyn ErrorMeasure,
+    ) -> Result<StepOutcome, Failure> {
+        Magnus::step_measured(self, system, t_limit, budget, measure)
+    }
+
+    fn dense(&mut self, system: &G, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        Magnus::dense(self, system, t, out)
+    }
+
+    fn dense_step(&mut self, _system: &G) -> Result<Option<DenseStep>, Failure> {
+        Ok(None)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
     }
 }

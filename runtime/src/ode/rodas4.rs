@@ -13,10 +13,12 @@ use crate::failure::Failure;
 use crate::linalg::{Lu, Matrix};
 use crate::ode::budget::Budget;
 use crate::ode::controller::Controller;
-use crate::ode::dense::{rodas4_dense, DenseKind, DenseStep};
-use crate::ode::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper};
+use crate::ode::dense::{DenseStep, Extension};
+use crate::ode::stepper::{
+    stalled, Clock, Clocked, ErrorMeasure, RmsMeasure, Start, StepOutcome, Stepper,
+};
 use crate::ode::system::System;
-use crate::ode::tolerance::{first_non_finite, rms_norm, Tolerance};
+use crate::ode::tolerance::{first_non_finite, Tolerance};
 
 mod tableau;
 use tableau::*;
@@ -130,24 +132,6 @@ impl Rodas4 {
     }
 }
 
-/// The RMS norm of RODAS4's error estimate, scaled by the tolerance.
-struct RmsMeasure(Tolerance);
-
-impl ErrorMeasure for RmsMeasure {
-    fn measure(
-        &mut self,
-        _t0: f64,
-        h: f64,
-        y0: &[f64],
-        y1: &[f64],
-        _e3: &[f64],
-        e5: &[f64],
-    ) -> Option<f64> {
-        let e: Vec<f64> = e5.iter().map(|v| v * h).collect();
-        Some(rms_norm(&e, y0, y1, self.0))
-    }
-}
-
 impl Rodas4 {
     /// One accepted step under `measure`, which sees the error estimate
     /// per unit step (twice, as `e3` and `e5`), or
@@ -226,17 +210,17 @@ impl Rodas4 {
 
     /// The last accepted step's continuous extension, detached.
     pub fn dense_step(&self) -> DenseStep {
-        DenseStep {
-            t_old: self.clock.t_old,
-            t_new: self.clock.t,
-            h: self.clock.h_old,
-            kind: DenseKind::Rodas4 {
+        DenseStep::new(
+            self.clock.t_old,
+            self.clock.t,
+            self.clock.h_old,
+            std::sync::Arc::new(Rodas4Extension {
                 y_old: self.y_old.clone(),
                 y: self.y.clone(),
                 d2: self.dense_d2.clone(),
                 d3: self.dense_d3.clone(),
-            },
-        }
+            }),
+        )
     }
 }
 
@@ -250,28 +234,29 @@ impl Clocked for Rodas4 {
     }
 }
 
-impl Stepper for Rodas4 {
+impl<S: System + ?Sized> Stepper<S> for Rodas4 {
     fn state(&self) -> &[f64] {
         &self.y
     }
 
-    fn step<S: System + ?Sized>(
+    fn step(&mut self, system: &S, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+        let mut measure = RmsMeasure(self.tol);
+        // The inherent step, with this measure's type: no dynamic call
+        // per attempt.
+        Rodas4::step_measured(self, system, t_limit, budget, &mut measure).map(|_| ())
+    }
+
+    fn step_measured(
         &mut self,
         system: &S,
         t_limit: f64,
         budget: &Budget,
-    ) -> Result<(), Failure> {
-        let mut measure = RmsMeasure(self.tol);
-        self.step_measured(system, t_limit, budget, &mut measure)
-            .map(|_| ())
+        measure: &mut dyn ErrorMeasure,
+    ) -> Result<StepOutcome, Failure> {
+        Rodas4::step_measured(self, system, t_limit, budget, measure)
     }
 
-    fn dense<S: System + ?Sized>(
-        &mut self,
-        _system: &S,
-        t: f64,
-        out: &mut [f64],
-    ) -> Result<(), Failure> {
+    fn dense(&mut self, _system: &S, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         let step = self.clock.last_step();
         if let Some(end) = crate::ode::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
             out.copy_from_slice(end);
@@ -280,5 +265,51 @@ impl Stepper for Rodas4 {
         let s = (t - self.clock.t_old) / self.clock.h_old;
         rodas4_dense(&self.y_old, &self.y, &self.dense_d2, &self.dense_d3, s, out);
         Ok(())
+    }
+
+    fn dense_step(&mut self, _system: &S) -> Result<Option<DenseStep>, Failure> {
+        Ok(Some(Rodas4::dense_step(self)))
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
+/// RODAS4's continuous extension of order 3, detached.
+#[derive(Debug)]
+struct Rodas4Extension {
+    y_old: Vec<f64>,
+    y: Vec<f64>,
+    d2: Vec<f64>,
+    d3: Vec<f64>,
+}
+
+impl Extension for Rodas4Extension {
+    fn eval(&self, theta: f64, out: &mut [f64]) {
+        rodas4_dense(&self.y_old, &self.y, &self.d2, &self.d3, theta, out);
+    }
+}
+
+/// RODAS4's continuous extension at `θ`.
+fn rodas4_dense(y_old: &[f64], y: &[f64], d2: &[f64], d3: &[f64], s: f64, out: &mut [f64]) {
+    let s1 = 1.0 - s;
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = y_old[i] * s1 + s * (y[i] + s1 * (d2[i] + s * d3[i]));
+    }
+}
+
+impl Start for Rodas4 {
+    const NAME: &'static str = "RODAS4";
+
+    fn start<S: System + ?Sized>(
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure> {
+        Rodas4::new(system, t0, y0, tol, h_max, h0)
     }
 }

@@ -190,28 +190,44 @@ pub trait Clocked {
     }
 }
 
-/// A one-step integrator holding its current time and state, and the dense
-/// output of its last step.
-pub trait Stepper: Clocked {
+/// A one-step integrator with dense output, as an object: a method holds
+/// a `Box<dyn Stepper<S>>` (an [`StepperOf`](crate::ode::StepperOf)) and
+/// pays one dynamic call per step. The system `S` is the trait's
+/// parameter, not a method's, so that the trait is object-safe and yet
+/// each integrator's stage loop is compiled for the system it steps: the
+/// right side is called statically inside a step. That matters for direct
+/// DOP853 on small models (docs/BENCHMARKS.md §10: its cost per
+/// evaluation is one call through the model's vtable and a few
+/// nanoseconds of bookkeeping; a `&dyn System` here would add a second
+/// indirect call to every evaluation).
+pub trait Stepper<S: ?Sized>: Clocked {
+    /// The state at [`Clocked::time`].
     fn state(&self) -> &[f64];
 
     /// Takes one accepted step that does not pass `t_limit` (landing on it
-    /// exactly when it is reached), drawing every attempt from `budget`.
-    fn step<S: System + ?Sized>(
+    /// exactly when it is reached), drawing every attempt from `budget`,
+    /// under the integrator's own error measure.
+    fn step(&mut self, system: &S, t_limit: f64, budget: &Budget) -> Result<(), Failure>;
+
+    /// [`Stepper::step`] under `measure` (the field method measures the
+    /// state it recovers from the coefficients); [`StepOutcome::Declined`]
+    /// when the measure declines the step (then nothing changed).
+    fn step_measured(
         &mut self,
         system: &S,
         t_limit: f64,
         budget: &Budget,
-    ) -> Result<(), Failure>;
+        measure: &mut dyn ErrorMeasure,
+    ) -> Result<StepOutcome, Failure>;
 
     /// The state at `t` in `[previous_time, time]` from the last step's
     /// continuous extension (may cost a few evaluations, once per step).
-    fn dense<S: System + ?Sized>(
-        &mut self,
-        system: &S,
-        t: f64,
-        out: &mut [f64],
-    ) -> Result<(), Failure>;
+    fn dense(&mut self, system: &S, t: f64, out: &mut [f64]) -> Result<(), Failure>;
+
+    /// The last step's continuous extension as a value that outlives the
+    /// next step; `None` for an integrator without one of its own
+    /// (Magnus: its caller reads the state at points of the step).
+    fn dense_step(&mut self, system: &S) -> Result<Option<DenseStep>, Failure>;
 
     /// The time at which an explicit integrator found its step held by
     /// stability rather than accuracy, repeatedly; `None` if it never did or
@@ -219,6 +235,48 @@ pub trait Stepper: Clocked {
     fn stiffness_detected(&self) -> Option<f64> {
         None
     }
+
+    /// The integrator itself, for a caller that keeps one integrator's
+    /// steps in a form of its own (the quasilinear field keeps DOP853's
+    /// stages and builds the extension only for the steps output asks
+    /// for).
+    fn as_any(&self) -> &dyn std::any::Any;
+}
+
+/// How an integrator of the registry (`crate::ode::Integrator`) starts.
+pub trait Start: Sized + 'static {
+    /// Its name in messages and summaries (`DOP853`).
+    const NAME: &'static str;
+
+    /// At `(t0, y0)` on `system`; `h_max` bounds the first step's guess,
+    /// `h0`, when given, replaces the guess (a restart keeps the step
+    /// that worked).
+    fn start<S: System + ?Sized>(
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure>;
+}
+
+/// The systems a method steps, one for each borrow they are made from
+/// (`ModelSystem<'m>` over the model a call is given): a stepper object
+/// for all of them ([`StepperOf`]) outlives each borrow.
+pub trait Family: 'static {
+    type System<'a>: System + ?Sized;
+}
+
+/// A stepper for every system of the family `F`, as an object.
+pub type StepperOf<F> = Box<dyn for<'a> Stepper<<F as Family>::System<'a>>>;
+
+/// The family of a model's reduced systems, over the model each call
+/// borrows: what direct integration steps.
+pub struct OfModel;
+
+impl Family for OfModel {
+    type System<'a> = crate::ode::system::ModelSystem<'a>;
 }
 
 /// How a an integrator step's error estimates become one scaled error (≤ 1
@@ -264,6 +322,25 @@ pub trait ErrorMeasure {
     /// [`ErrorMeasure::measure`].
     fn hairer_tolerance(&self) -> Option<crate::ode::tolerance::Tolerance> {
         None
+    }
+}
+
+/// The RMS norm of an error estimate (per unit step, in `e5`), scaled by
+/// the tolerance: RODAS4's and Magnus-4's own measure.
+pub struct RmsMeasure(pub Tolerance);
+
+impl ErrorMeasure for RmsMeasure {
+    fn measure(
+        &mut self,
+        _t0: f64,
+        h: f64,
+        y0: &[f64],
+        y1: &[f64],
+        _e3: &[f64],
+        e5: &[f64],
+    ) -> Option<f64> {
+        let e: Vec<f64> = e5.iter().map(|v| v * h).collect();
+        Some(crate::ode::tolerance::rms_norm(&e, y0, y1, self.0))
     }
 }
 

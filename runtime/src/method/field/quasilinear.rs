@@ -32,10 +32,10 @@ use crate::model::DynModel;
 use crate::ode::budget::Budget;
 use crate::ode::dop853::dense_step_between;
 use crate::ode::stepper::DenseStep;
-use crate::ode::stepper::{Clocked, Stepper};
+use crate::ode::stepper::{OfModel, StepperOf};
 use crate::ode::system::ModelSystem;
 use crate::ode::tolerance::{underflows, Stats, Tolerance};
-use crate::ode::{AnyStepper, Integrator};
+use crate::ode::Integrator;
 use std::cell::{Cell, RefCell};
 
 /// Newton's error bound a window may reach, in units of the tolerance.
@@ -54,7 +54,7 @@ struct Predictor<'a> {
     budget: &'a Budget,
     t0: f64,
     x0: Vec<f64>,
-    stepper: RefCell<AnyStepper>,
+    stepper: RefCell<StepperOf<OfModel>>,
     steps: RefCell<Vec<DenseStep>>,
     cursor: Cell<usize>,
     /// The first failure of the predictor (reported by the window).
@@ -73,7 +73,7 @@ impl<'a> Predictor<'a> {
         h0: Option<f64>,
         integrator: Integrator,
     ) -> Result<Self, Failure> {
-        let stepper = AnyStepper::new(integrator, &ModelSystem(model), t0, x0, tol, h_max, h0)?;
+        let stepper = integrator.start::<OfModel>(&ModelSystem(model), t0, x0, tol, h_max, h0)?;
         Ok(Predictor {
             model,
             budget,
@@ -91,8 +91,11 @@ impl<'a> Predictor<'a> {
         let system = ModelSystem(self.model);
         while stepper.time() < t && stepper.time() < t_limit {
             stepper.step(&system, t_limit, self.budget)?;
-            let dense = stepper.dense_step(&system)?;
-            self.steps.borrow_mut().push(dense);
+            // Every registered integrator has a continuous extension of
+            // its own (only Magnus-4, which is not registered, has none).
+            if let Some(dense) = stepper.dense_step(&system)? {
+                self.steps.borrow_mut().push(dense);
+            }
         }
         Ok(())
     }
@@ -768,7 +771,7 @@ impl QuasilinearField {
                     largest_condition = largest_condition.max(window.recovered().condition);
                     // Reuse the storage of the last window's steps.
                     let mut stored = self.pool.pop().unwrap_or_default();
-                    window.store_step(&mut stored);
+                    window.store_step(&source, &mut stored)?;
                     steps.push(stored);
                     let mut state = self.state_pool.pop().unwrap_or_default();
                     state.clear();

@@ -19,9 +19,9 @@ use crate::method::segment::Segment;
 use crate::ode::budget::Budget;
 use crate::ode::dop853::{hairer_error, Dop853, RawStep};
 use crate::ode::magnus::{LinearGenerator, Magnus};
-use crate::ode::rodas4::Rodas4;
-use crate::ode::stepper::{Clocked, DenseStep, ErrorMeasure, StepOutcome, Stepper};
+use crate::ode::stepper::{DenseStep, ErrorMeasure, Family, StepOutcome, StepperOf};
 use crate::ode::tolerance::{Stats, Tolerance};
+use crate::ode::Integrator;
 
 /// The free anchor values `c_2..c_N` used at every (re-)anchoring.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -177,16 +177,6 @@ pub enum WindowStep {
     Ended,
 }
 
-/// The integrator of a window's coefficients: DOP853, or RODAS4 where the
-/// coefficient system is stiff (it is linear in the projective form, so
-/// RODAS4's Jacobian is exact), or the Magnus integrator (projective form
-/// only).
-enum WindowStepper {
-    Explicit(Dop853),
-    Stiff(Rodas4),
-    Magnus(Magnus),
-}
-
 /// Which integrator a window uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StepperKind {
@@ -195,18 +185,22 @@ pub enum StepperKind {
     Magnus,
 }
 
-/// A field system's projective form as the Magnus integrator sees it.
-struct AsGenerator<'a, F: FieldSystem + ?Sized>(&'a F);
+/// The field systems a window steps, over the borrow each call makes:
+/// its integrator is one object (`StepperOf<OfField>`) for all of them.
+pub struct OfField;
 
-impl<F: FieldSystem + ?Sized> LinearGenerator for AsGenerator<'_, F> {
+impl Family for OfField {
+    type System<'a> = dyn FieldSystem + 'a;
+}
+
+/// A field system's projective form as the Magnus integrator sees it.
+impl LinearGenerator for dyn FieldSystem + '_ {
     fn order(&self) -> usize {
-        self.0.coefficients() + 1
+        self.coefficients() + 1
     }
 
     fn generator(&self, t: f64, b: &mut Matrix) -> Result<(), Failure> {
-        self.0
-            .generator(t, b)
-            .unwrap_or(Err(Failure::new(t, FailureKind::NotAffine)))
+        FieldSystem::generator(self, t, b).unwrap_or(Err(Failure::new(t, FailureKind::NotAffine)))
     }
 }
 
@@ -255,41 +249,15 @@ impl StoredStep {
     }
 }
 
-macro_rules! each {
-    ($self:expr, $s:ident => $e:expr) => {
-        match $self {
-            WindowStepper::Explicit($s) => $e,
-            WindowStepper::Stiff($s) => $e,
-            WindowStepper::Magnus($s) => $e,
-        }
-    };
-}
-
-/// Like `each!` for the generic methods Magnus takes another system for.
-macro_rules! each_system {
-    ($self:expr, $system:expr, $s:ident, $sys:ident => $e:expr) => {
-        match $self {
-            WindowStepper::Explicit($s) => {
-                let $sys = $system;
-                $e
-            }
-            WindowStepper::Stiff($s) => {
-                let $sys = $system;
-                $e
-            }
-            WindowStepper::Magnus($s) => {
-                let $sys = &AsGenerator($system);
-                $e
-            }
-        }
-    };
-}
-
 /// One anchored field.
 pub struct Window {
     pub anchor_t: f64,
     pub anchor_x: Vec<f64>,
-    stepper: WindowStepper,
+    /// The integrator of the coefficients (one dynamic call per step;
+    /// the coefficient system is a `dyn FieldSystem` in any case, as the
+    /// affine field's always was), and which one it is.
+    stepper: StepperOf<OfField>,
+    kind: StepperKind,
     /// The recovered state at the stepper's time, and its conditioning.
     current: Recovered,
     previous_state: Vec<f64>,
@@ -300,8 +268,8 @@ pub struct Window {
 
 impl Window {
     /// Anchors a field at `(t, x)`; `h0` is the first step to try.
-    pub fn open<F: FieldSystem + ?Sized>(
-        system: &F,
+    pub fn open(
+        system: &dyn FieldSystem,
         options: &FieldOptions,
         t: f64,
         x: &[f64],
@@ -340,13 +308,13 @@ impl Window {
                 },
             ));
         }
-        let magnus_possible = system
-            .generator(t, &mut Matrix::zeros(n + 1, n + 1))
-            .is_some();
-        let stepper = match kind {
-            StepperKind::Stiff => {
-                WindowStepper::Stiff(Rodas4::new(system, t, &y, options.tol, h_max, h0)?)
-            }
+        let magnus_possible =
+            FieldSystem::generator(system, t, &mut Matrix::zeros(n + 1, n + 1)).is_some();
+        let (stepper, kind): (StepperOf<OfField>, _) = match kind {
+            StepperKind::Stiff => (
+                Integrator::Stiff.start::<OfField>(system, t, &y, options.tol, h_max, h0)?,
+                StepperKind::Stiff,
+            ),
             StepperKind::Magnus if magnus_possible => {
                 let h = match h0 {
                     Some(h) => h,
@@ -364,14 +332,21 @@ impl Window {
                         )?
                     }
                 };
-                WindowStepper::Magnus(Magnus::new(t, &y, h))
+                (
+                    Box::new(Magnus::new(t, &y, h, options.tol)),
+                    StepperKind::Magnus,
+                )
             }
-            _ => WindowStepper::Explicit(Dop853::new(system, t, &y, options.tol, h_max, h0)?),
+            _ => (
+                Integrator::Explicit.start::<OfField>(system, t, &y, options.tol, h_max, h0)?,
+                StepperKind::Explicit,
+            ),
         };
         Ok(Window {
             anchor_t: t,
             anchor_x: x.to_vec(),
             stepper,
+            kind,
             previous_state: x.to_vec(),
             current,
             steps: 0,
@@ -381,28 +356,21 @@ impl Window {
     }
 
     pub fn time(&self) -> f64 {
-        each!(&self.stepper, s => s.time())
+        self.stepper.time()
     }
 
     pub fn previous_time(&self) -> f64 {
-        each!(&self.stepper, s => s.previous_time())
+        self.stepper.previous_time()
     }
 
     /// Whether DOP853 found the coefficient system stiff.
     pub fn stiffness_detected(&self) -> bool {
-        match &self.stepper {
-            WindowStepper::Explicit(s) => s.stiffness_detected().is_some(),
-            _ => false,
-        }
+        self.stepper.stiffness_detected().is_some()
     }
 
     /// The integrator this window uses.
     pub fn kind(&self) -> StepperKind {
-        match self.stepper {
-            WindowStepper::Explicit(_) => StepperKind::Explicit,
-            WindowStepper::Stiff(_) => StepperKind::Stiff,
-            WindowStepper::Magnus(_) => StepperKind::Magnus,
-        }
+        self.kind
     }
 
     pub fn state(&self) -> &[f64] {
@@ -440,22 +408,22 @@ impl Window {
     }
 
     pub fn proposed_step(&self) -> f64 {
-        each!(&self.stepper, s => s.proposed_step())
+        self.stepper.proposed_step()
     }
 
     pub fn propose_step(&mut self, h: f64) {
-        each!(&mut self.stepper, s => s.propose_step(h))
+        self.stepper.propose_step(h)
     }
 
     pub fn stats(&self) -> Stats {
-        each!(&self.stepper, s => s.stats())
+        self.stepper.stats()
     }
 
     /// One step of the field; [`WindowStep::Ended`] when the conditions
     /// would degrade past the limits (then nothing changed).
-    pub fn step<F: FieldSystem + ?Sized>(
+    pub fn step(
         &mut self,
-        system: &F,
+        system: &dyn FieldSystem,
         options: &FieldOptions,
         t_limit: f64,
         budget: &Budget,
@@ -470,14 +438,18 @@ impl Window {
             declined: None,
             b: &mut self.buffers,
         };
-        let mut outcome = each_system!(&mut self.stepper, system, s, sys => s.step_measured(sys, t_limit, budget, &mut measure))?;
+        let mut outcome = self
+            .stepper
+            .step_measured(system, t_limit, budget, &mut measure)?;
         // A step the conditions decline may fit shorter (the sensitivities'
         // growth rises with the step): try a quarter of it once before
         // ending the window, whose fresh start costs more.
         if outcome == StepOutcome::Declined && self.steps > 0 {
-            let h = 0.25 * (measure_step_length(&self.stepper));
-            each!(&mut self.stepper, s => s.propose_step(h));
-            outcome = each_system!(&mut self.stepper, system, s, sys => s.step_measured(sys, t_limit, budget, &mut measure))?;
+            let h = 0.25 * self.stepper.proposed_step();
+            self.stepper.propose_step(h);
+            outcome = self
+                .stepper
+                .step_measured(system, t_limit, budget, &mut measure)?;
         }
         self.declined = measure.declined;
         match outcome {
@@ -498,9 +470,9 @@ impl Window {
 
     /// The state at `t` within the last step (the coefficients' continuous
     /// extension, then the conditions at `t`).
-    pub fn dense<F: FieldSystem + ?Sized>(
+    pub fn dense(
         &mut self,
-        system: &F,
+        system: &dyn FieldSystem,
         t: f64,
         out: &mut [f64],
     ) -> Result<(), Failure> {
@@ -513,7 +485,7 @@ impl Window {
             return Ok(());
         }
         let mut y = vec![0.0; system.dim()];
-        each_system!(&mut self.stepper, system, s, sys => s.dense(sys, t, &mut y))?;
+        self.stepper.dense(system, t, &mut y)?;
         let singular = || {
             Failure::new(
                 t,
@@ -541,9 +513,9 @@ impl Window {
     /// The states of other initial states through this field at the
     /// window's current time: `anchors[m]` is member `m`'s state at the
     /// window's anchor time.
-    pub fn members<F: FieldSystem + ?Sized>(
+    pub fn members(
         &mut self,
-        system: &F,
+        system: &dyn FieldSystem,
         options: &FieldOptions,
         anchors: &States,
         out: &mut States,
@@ -553,20 +525,20 @@ impl Window {
     }
 
     /// [`Window::members`] at a time `t` within the last step.
-    pub fn members_at<F: FieldSystem + ?Sized>(
+    pub fn members_at(
         &mut self,
-        system: &F,
+        system: &dyn FieldSystem,
         options: &FieldOptions,
         t: f64,
         anchors: &States,
         out: &mut States,
     ) -> Result<(), Failure> {
         let (y, reference, t) = if t >= self.time() || self.steps == 0 {
-            let y = each!(&self.stepper, s => s.state()).to_vec();
+            let y = self.stepper.state().to_vec();
             (y, self.current.clone(), self.time())
         } else {
             let mut y = vec![0.0; system.dim()];
-            each_system!(&mut self.stepper, system, s, sys => s.dense(sys, t, &mut y))?;
+            self.stepper.dense(system, t, &mut y)?;
             let b = &mut self.buffers;
             let reference = system
                 .field(&y, &mut b.f, &mut b.s)
@@ -593,14 +565,13 @@ impl Window {
     }
 
     /// The last step's continuous extension as a value.
-    pub fn segment<F: FieldSystem + ?Sized>(&mut self, system: &F) -> Result<Segment, Failure> {
+    pub fn segment(&mut self, system: &dyn FieldSystem) -> Result<Segment, Failure> {
         let anchor = self.anchor_x.clone();
-        let y = match &mut self.stepper {
-            WindowStepper::Explicit(s) => s.dense_step(system)?,
-            WindowStepper::Stiff(s) => s.dense_step(),
-            WindowStepper::Magnus(_) => {
-                // No continuous extension of its own: the state at the
-                // step's Chebyshev points.
+        let y = match self.stepper.dense_step(system)? {
+            Some(y) => y,
+            None => {
+                // No continuous extension of its own (Magnus): the state
+                // at the step's Chebyshev points.
                 let (a, b) = (self.previous_time(), self.time());
                 let n = anchor.len();
                 let mut t = Vec::with_capacity(8);
@@ -625,20 +596,25 @@ impl Window {
 
     /// The last step, kept for dense output later, into `dst` (its
     /// storage reused).
-    pub fn store_step(&self, dst: &mut StoredStep) {
-        match &self.stepper {
-            WindowStepper::Explicit(s) => {
-                if !matches!(dst, StoredStep::Raw(_)) {
-                    *dst = StoredStep::Raw(RawStep::default());
-                }
-                if let StoredStep::Raw(raw) = dst {
-                    s.raw_step_into(raw);
-                }
+    pub fn store_step(
+        &mut self,
+        system: &dyn FieldSystem,
+        dst: &mut StoredStep,
+    ) -> Result<(), Failure> {
+        // DOP853's stages, its extension built only for the steps output
+        // asks for; another integrator's extension now (the quasilinear
+        // field uses no Magnus windows, which have none).
+        if let Some(s) = self.stepper.as_any().downcast_ref::<Dop853>() {
+            if !matches!(dst, StoredStep::Raw(_)) {
+                *dst = StoredStep::Raw(RawStep::default());
             }
-            WindowStepper::Stiff(s) => *dst = StoredStep::Ready(s.dense_step()),
-            // The quasilinear field does not use Magnus windows.
-            WindowStepper::Magnus(_) => {}
+            if let StoredStep::Raw(raw) = dst {
+                s.raw_step_into(raw);
+            }
+        } else if let Some(dense) = self.stepper.dense_step(system)? {
+            *dst = StoredStep::Ready(dense);
         }
+        Ok(())
     }
 }
 
@@ -834,11 +810,6 @@ fn member_states_each<F: FieldSystem + ?Sized>(
         out.data.extend(reference.member(&f, &s, x0));
     }
     Ok(())
-}
-
-/// The length of the step the stepper would try next.
-fn measure_step_length(stepper: &WindowStepper) -> f64 {
-    each!(stepper, s => s.proposed_step())
 }
 
 #[cfg(test)]
