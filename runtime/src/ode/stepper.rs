@@ -191,7 +191,7 @@ pub trait Clocked {
 }
 
 /// A one-step integrator with dense output, as an object: a method holds
-/// a `Box<dyn Stepper<S>>` (an [`StepperOf`](crate::ode::StepperOf)) and
+/// a `Box<dyn Stepper<S>>` (a [`StepperOf`]) and
 /// pays one dynamic call per step. The system `S` is the trait's
 /// parameter, not a method's, so that the trait is object-safe and yet
 /// each integrator's stage loop is compiled for the system it steps: the
