@@ -2,7 +2,7 @@
 //! Newton over the dependent coordinates for the initial positions
 //! (completed from the given ones), and the projection of a run's state
 //! onto the constraints along their normals, which the keeper
-//! (`crate::keep`) makes before it keeps the velocities. The generated code
+//! (`crate::run::keep`) makes before it keeps the velocities. The generated code
 //! supplies `f` and its partials.
 
 use crate::failure::{Failure, FailureKind};

@@ -6,70 +6,43 @@
 //! is one line, [`cli::main`]. Everything that does not depend on the
 //! model lives here, compiled and tested once.
 //!
-//! | module | what it holds |
+//! Its layers, one folder each, bottom up; a module imports only its own
+//! layer and those below (`tests/layers.rs`):
+//!
+//! | layer | modules |
 //! |---|---|
-//! | `model` | the trait generated code implements |
-//! | `closure` | Newton on holonomic constraints (initial positions, keeping) |
-//! | `failure` | run-time failures with their physical cause (exit 3) |
-//! | `linalg` | dense matrices, LU, fixed-size LU and `L D Lᵀ` solves, `expm` |
-//! | `math` | `sin_cos`: a sine and a cosine in one call |
-//! | `tolerance`, `controller`, `budget` | tolerances, the PI step controller, the work budget |
-//! | `system`, `stepper` | what integrators integrate, and their interface |
-//! | `dop853`, `rodas4` | the integrators, with dense output |
-//! | `dense` | a step's continuous extension as a value (`DenseStep`) |
-//! | `method` | integrator choice |
-//! | `run/` | the run: `integration` (a run as an object: `advance_to(t)`, the state, a restart from a given state), `options`, `regime` (branches, candidates), `diagnosis`, `solution`; the loops over an integration (`run::run`, `run::solve`) |
-//! | `segment` | one step's motion as a value, for a `Solution` |
-//! | `driver` | the run's public names where they have always been (re-exports of `run`) |
-//! | `events`, `impacts` | locating events; the resets of `when` at them |
-//! | `inputs` | inputs set from outside: their values in the model, signals, runs restarted at their changes |
-//! | `table` | a run's rows as numbers (bit for bit the CLI's), many runs on threads |
-//! | `sensitivity` | forward sensitivities: the variational equations as an augmented system |
-//! | `quantity` | the quantity a failure is about, as a value |
-//! | `watch` | the constraints as written along a run: where a branch ends, a failure's cause |
+//! | the root | `model` (the trait generated code implements, and `DynModel`, its object-safe face), `choice` (the user's method and integrator), `failure`, `quantity` (what a failure is about), `domain`, `linalg` (matrices, LU, `L D Lᵀ`, `expm`), `math` (`sin_cos`), `highest` (the highest derivatives' solves), `closure` (Newton on holonomic constraints), `ensemble` (members' states) |
+//! | `ode/` | the one-step integrators: `stepper` (the object-safe `Stepper<S>`, `Clock`, error measures), `dense` (a step's extension as a value), `dop853`, `rodas4`, `magnus`, `controller`, `tolerance`, `budget`, `system`; `ode/mod.rs` registers the integrators, one line each |
+//! | `method/` | the methods behind `solver::Solver`: `direct`, `field/`; `segment`, a step's motion for a `Solution` |
+//! | `run/` | the run: `integration` (a run as an object: `advance_to(t)`, the state, a restart), `options`, `regime` (branches, candidates), `diagnosis`, `solution`, `events`, `impacts` (`when`), `keep` (constraints kept), `watch` (the constraints as written), `progress`, `inputs`, `sensitivity`; the loops (`run::run`, `run::solve`) |
+//! | `io/` | the edge: `api` (Rust entry points), `cli/` (the generated binary), `table` (rows as numbers, many runs on threads), `output`, `summary`, `plot`, `driver` (the run's old public names) |
+//!
+//! Every module is also re-exported under its old flat name
+//! (`lagc_runtime::dop853`, `lagc_runtime::solution`, …): generated
+//! crates, the Python module and the FMU name them so.
 
 // Numerical kernels index several arrays with one loop variable; and
 // `!(x > 0.0)` is meant: it is true for NaN.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod api;
-pub mod budget;
-pub mod cli;
+pub mod choice;
 pub mod closure;
-pub mod controller;
-pub mod dense;
-pub mod direct;
 pub mod domain;
-pub mod dop853;
-pub mod driver;
 pub mod ensemble;
-pub mod events;
 pub mod failure;
-pub mod field;
 pub mod highest;
-pub mod impacts;
-pub mod inputs;
-pub mod keep;
+pub mod io;
 pub mod linalg;
-pub mod magnus;
 pub mod math;
 pub mod method;
 pub mod model;
-pub mod output;
-pub mod plot;
-pub mod progress;
+pub mod ode;
 pub mod quantity;
-pub mod rodas4;
 pub mod run;
-pub mod segment;
-pub mod sensitivity;
-pub mod solver;
-pub mod stepper;
-pub mod summary;
-pub mod system;
-pub mod table;
-pub mod tolerance;
-pub mod watch;
 
-// Where these have always been (generated crates name `solution::Solution`).
-pub use run::{integration, solution};
+// The flat names every module had before the folders (generated crates,
+// the Python module and the FMU use them; the runtime itself does not).
+pub use io::{api, cli, driver, output, plot, summary, table};
+pub use method::{direct, field, segment, solver};
+pub use ode::{budget, controller, dense, dop853, magnus, rodas4, stepper, system, tolerance};
+pub use run::{events, impacts, inputs, integration, keep, progress, sensitivity, solution, watch};

@@ -8,9 +8,9 @@
 //! not need keep their defaults, so a model without events, outputs or a
 //! coefficient system emits nothing for them.
 
+use crate::choice::IntegratorChoice;
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::method::IntegratorChoice;
 
 /// How a state component's initial value is found (SPEC §1.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -360,6 +360,12 @@ pub fn dimension<M: Model>() -> usize {
 /// its model's own functions and this thin forwarding impl: a new model
 /// builds in about a second instead of instantiating the whole runtime
 /// again (the `lagc run` latency of a model never built before).
+///
+/// Every model gives its names, dimensions, params, time span, initial
+/// state, right side with its Jacobian and time partial, and copies; the
+/// rest defaults as in [`Model`] to a model without the feature (no
+/// outputs, switches, constraints, coefficient system, …), so a wrapper
+/// (`crate::run::sensitivity::Augmented`) states only what it changes.
 pub trait DynModel {
     /// [`Model::NAME`].
     fn name(&self) -> &'static str;
@@ -378,37 +384,69 @@ pub trait DynModel {
     /// [`Model::INITIAL`].
     fn initial_kinds(&self) -> &'static [Initial];
     /// [`Model::OUTPUTS`].
-    fn output_names(&self) -> &'static [&'static str];
+    fn output_names(&self) -> &'static [&'static str] {
+        &[]
+    }
     /// [`Model::MASSES`].
-    fn mass_names(&self) -> &'static [&'static str];
+    fn mass_names(&self) -> &'static [&'static str] {
+        &[]
+    }
     /// [`Model::INPUTS`].
-    fn input_names(&self) -> &'static [&'static str];
+    fn input_names(&self) -> &'static [&'static str] {
+        &[]
+    }
     /// [`Model::INPUT_DEFAULTS`].
-    fn input_defaults(&self) -> &'static [f64];
+    fn input_defaults(&self) -> &'static [f64] {
+        &[]
+    }
     /// [`Model::DECLARED_INTEGRATOR`].
-    fn declared_integrator(&self) -> Option<IntegratorChoice>;
+    fn declared_integrator(&self) -> Option<IntegratorChoice> {
+        None
+    }
     /// [`Model::SWITCHES`].
-    fn switches(&self) -> usize;
+    fn switches(&self) -> usize {
+        0
+    }
     /// [`Model::CONSTRAINTS`].
-    fn constraints(&self) -> &'static [Candidates];
+    fn constraints(&self) -> &'static [Candidates] {
+        &[]
+    }
     /// [`Model::IMPACTS`].
-    fn impacts(&self) -> &'static [&'static str];
+    fn impacts(&self) -> &'static [&'static str] {
+        &[]
+    }
     /// [`Model::AFFINE`].
-    fn affine(&self) -> bool;
+    fn affine(&self) -> bool {
+        false
+    }
     /// [`Model::COEFFICIENTS_LINEAR`].
-    fn coefficients_linear(&self) -> bool;
+    fn coefficients_linear(&self) -> bool {
+        false
+    }
     /// [`Model::EXACT`].
-    fn states_exact(&self) -> bool;
+    fn states_exact(&self) -> bool {
+        false
+    }
     /// [`Model::KEEPS_CONSTRAINTS`].
-    fn keeps_constraints(&self) -> bool;
+    fn keeps_constraints(&self) -> bool {
+        false
+    }
     /// [`Model::KEEPS_POSITIONS`].
-    fn keeps_positions(&self) -> bool;
+    fn keeps_positions(&self) -> bool {
+        false
+    }
     /// [`Model::FIXED`].
-    fn fixed_components(&self) -> &'static [&'static [usize]];
+    fn fixed_components(&self) -> &'static [&'static [usize]] {
+        &[]
+    }
     /// [`Model::PARAM_JACOBIAN`].
-    fn has_param_jacobian(&self) -> bool;
+    fn has_param_jacobian(&self) -> bool {
+        false
+    }
     /// [`Model::param_jacobian`].
-    fn param_jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+    fn param_jacobian(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
+    }
 
     /// [`Model::parameters`].
     fn parameters(&self, overrides: &[Option<f64>]) -> Vec<f64>;
@@ -424,9 +462,9 @@ pub trait DynModel {
     /// [`Model::initial_state`].
     fn initial_state(&self, given: &[Option<f64>]) -> Result<Vec<f64>, Failure>;
     /// [`Model::set_regime`].
-    fn set_regime(&mut self, regime: &Regime);
+    fn set_regime(&mut self, _regime: &Regime) {}
     /// [`Model::set_inputs`].
-    fn set_inputs(&mut self, inputs: &Inputs);
+    fn set_inputs(&mut self, _inputs: &Inputs) {}
     /// [`Model::rhs`].
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::jacobian`].
@@ -434,42 +472,75 @@ pub trait DynModel {
     /// [`Model::time_partial`].
     fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure>;
     /// [`Model::linearize`].
-    fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix)
-        -> Result<(), Failure>;
+    fn linearize(
+        &self,
+        t: f64,
+        x: &[f64],
+        dx: &mut [f64],
+        jac: &mut Matrix,
+    ) -> Result<(), Failure> {
+        self.rhs(t, x, dx)?;
+        self.jacobian(t, x, jac)
+    }
     /// [`Model::coefficients`].
-    fn coefficients(&self, t: f64, f: &[f64], df: &mut [f64]) -> Result<(), Failure>;
+    fn coefficients(&self, t: f64, _f: &[f64], _df: &mut [f64]) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
     /// [`Model::coefficient_jacobian`].
-    fn coefficient_jacobian(&self, t: f64, f: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+    fn coefficient_jacobian(&self, t: f64, _f: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
     /// [`Model::coefficient_time_partial`].
-    fn coefficient_time_partial(&self, t: f64, f: &[f64], dfdt: &mut [f64]) -> Result<(), Failure>;
+    fn coefficient_time_partial(
+        &self,
+        t: f64,
+        _f: &[f64],
+        _dfdt: &mut [f64],
+    ) -> Result<(), Failure> {
+        Err(Failure::not_affine(t))
+    }
     /// [`Model::exact`].
-    fn exact(&self, t: f64, out: &mut [Option<f64>]);
+    fn exact(&self, _t: f64, _out: &mut [Option<f64>]) {}
     /// [`Model::constrained`].
-    fn constrained(&self, t: f64, x: &[f64], kept: &mut [f64]) -> Result<(), Failure>;
+    fn constrained(&self, _t: f64, _x: &[f64], _kept: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
     /// [`Model::kept_gradient`].
-    fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
+    fn kept_gradient(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+        Ok(())
+    }
     /// [`Model::project_closure`].
-    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure>;
+    fn project_closure(&self, _t: f64, _x: &mut [f64]) -> Result<(), Failure> {
+        Ok(())
+    }
     /// [`Model::outputs`].
-    fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]);
+    fn outputs(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     /// [`Model::switching_functions`].
-    fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]);
+    fn switching_functions(&self, _t: f64, _x: &[f64], _g: &mut [f64]) {}
     /// [`Model::stop`].
-    fn stop(&self, branches: &[bool]) -> bool;
+    fn stop(&self, _branches: &[bool]) -> bool {
+        false
+    }
     /// [`Model::impact_holds`].
-    fn impact_holds(&self, w: usize, branches: &[bool]) -> bool;
+    fn impact_holds(&self, _w: usize, _branches: &[bool]) -> bool {
+        false
+    }
     /// [`Model::impact_reset`].
-    fn impact_reset(&self, w: usize, t: f64, x: &[f64], out: &mut [f64]);
+    fn impact_reset(&self, _w: usize, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     /// [`Model::pivots`].
-    fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]);
+    fn pivots(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     /// [`Model::DOMAINS`].
-    fn domains(&self) -> &'static [Domain];
+    fn domains(&self) -> &'static [Domain] {
+        &[]
+    }
     /// [`Model::domain_values`].
-    fn domain_values(&self, t: f64, x: &[f64], out: &mut [f64]);
+    fn domain_values(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     /// [`Model::masses_at`].
-    fn masses(&self, t: f64, x: &[f64], out: &mut [f64]);
+    fn masses(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
     /// [`Model::mass_matrix`].
-    fn mass_matrix(&self, t: f64, x: &[f64]) -> Option<Matrix>;
+    fn mass_matrix(&self, _t: f64, _x: &[f64]) -> Option<Matrix> {
+        None
+    }
 
     /// At an event at `t` (the switches `switched` changed sign, the
     /// regime was `before` and is now the model's own, the state was

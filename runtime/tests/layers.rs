@@ -105,10 +105,7 @@ fn paths(module: &str, code: &str) -> Vec<Vec<String>> {
 /// The module a path leads into: its longest prefix that is a module,
 /// after the crate root's re-exports of modules.
 fn target(path: &[String], modules: &BTreeMap<String, String>) -> Option<String> {
-    let aliases = [
-        ("solution", "run::solution"),
-        ("integration", "run::integration"),
-    ];
+    let aliases = aliases(modules);
     let mut path = path.to_vec();
     if let Some(first) = path.first() {
         if let Some((_, to)) = aliases.iter().find(|(from, _)| first == from) {
@@ -121,6 +118,33 @@ fn target(path: &[String], modules: &BTreeMap<String, String>) -> Option<String>
         .rev()
         .map(|k| path[..k].join("::"))
         .find(|candidate| modules.contains_key(candidate))
+}
+
+/// The crate root's re-exports of modules under their old flat names
+/// (`pub use ode::{dop853, …}` makes `crate::dop853` name `ode::dop853`):
+/// `(name, module)`.
+fn aliases(modules: &BTreeMap<String, String>) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let root = modules.get("").map_or(String::new(), |s| code(s));
+    for line in root.split(';') {
+        let Some(rest) = line.trim().strip_prefix("pub use ") else {
+            continue;
+        };
+        let (base, names) = match rest.split_once("::{") {
+            Some((base, group)) => (base, group.trim_end_matches('}').to_string()),
+            None => match rest.rsplit_once("::") {
+                Some((base, name)) => (base, name.to_string()),
+                None => continue,
+            },
+        };
+        for name in names.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+            let module = format!("{base}::{name}");
+            if modules.contains_key(&module) {
+                out.push((name.to_string(), module));
+            }
+        }
+    }
+    out
 }
 
 fn imports() -> BTreeMap<String, BTreeSet<String>> {
@@ -155,8 +179,8 @@ fn no_two_runtime_modules_import_each_other() {
     );
     // The reader sees what it should: the run imports the integrators'
     // interface, never the other way.
-    assert!(graph["run::integration"].contains("solver"));
-    assert!(!graph["solver"].iter().any(|t| t.starts_with("run")));
+    assert!(graph["run::integration"].contains("method::solver"));
+    assert!(!graph["method::solver"].iter().any(|t| t.starts_with("run")));
 }
 
 #[test]
@@ -181,4 +205,93 @@ fn the_checker_sees_an_import_both_ways() {
         paths("a::y", &code("// crate::a::x\n")),
         Vec::<Vec<String>>::new()
     );
+}
+
+/// The runtime's layers, bottom up: the model and its plain values at the
+/// root; the one-step integrators (`ode/`); the methods over them
+/// (`method/`); the run (`run/`); the edge (`io/`). A module imports only
+/// its own layer and those below.
+const LAYERS: [&str; 5] = ["", "ode", "method", "run", "io"];
+
+fn layer(module: &str) -> usize {
+    let top = module.split("::").next().unwrap_or("");
+    LAYERS.iter().position(|l| *l == top).unwrap_or(0)
+}
+
+/// Edges from a module to a module of a higher layer (the crate's root,
+/// whose re-exports only keep the old names, excepted).
+fn upward(graph: &BTreeMap<String, BTreeSet<String>>) -> Vec<String> {
+    let mut out = Vec::new();
+    for (a, targets) in graph {
+        if a.is_empty() {
+            continue;
+        }
+        for b in targets {
+            if layer(b) > layer(a) {
+                out.push(format!("{a} -> {b}"));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_module_imports_a_layer_above_its_own() {
+    let graph = imports();
+    let up = upward(&graph);
+    assert!(up.is_empty(), "imports into a higher layer: {up:?}");
+    // Every layer is there, and the reader sees the expected edges.
+    assert!(graph["method::direct"].contains("ode::stepper"));
+    assert!(graph["run::integration"].contains("method::solver"));
+    assert!(graph["io::cli::run"].iter().any(|t| t.starts_with("run")));
+}
+
+#[test]
+fn the_runtime_names_its_modules_by_their_folders() {
+    // The crate root re-exports the old flat names (`crate::dop853`) for
+    // the generated crates, the Python module and the FMU; the runtime's
+    // own code names each module where it lives (`crate::ode::dop853`).
+    let modules = modules();
+    let aliases = aliases(&modules);
+    let mut flat = Vec::new();
+    for (module, source) in &modules {
+        if module.is_empty() {
+            continue;
+        }
+        for path in paths(module, &code(source)) {
+            let from_crate = source_names_crate_path(source, &path);
+            if from_crate && aliases.iter().any(|(name, _)| path.first() == Some(name)) {
+                flat.push(format!("{module}: crate::{}", path.join("::")));
+            }
+        }
+    }
+    flat.sort();
+    flat.dedup();
+    assert!(
+        flat.is_empty(),
+        "modules named by their old flat names: {flat:?}"
+    );
+}
+
+/// Whether `path` (from the root) is written `crate::…` in `source` (not
+/// reached through `super::`).
+fn source_names_crate_path(source: &str, path: &[String]) -> bool {
+    path.first()
+        .is_some_and(|first| code(source).contains(&format!("crate::{first}")))
+}
+
+#[test]
+fn the_layer_check_sees_an_import_upward() {
+    let mut graph = BTreeMap::new();
+    graph.insert(
+        "ode::stepper".to_string(),
+        BTreeSet::from(["run::options".to_string()]),
+    );
+    graph.insert("run::options".to_string(), BTreeSet::new());
+    assert_eq!(upward(&graph), vec!["ode::stepper -> run::options"]);
+    graph.insert(
+        "ode::stepper".to_string(),
+        BTreeSet::from(["model".to_string(), "ode::system".to_string()]),
+    );
+    assert!(upward(&graph).is_empty());
 }

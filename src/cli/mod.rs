@@ -83,6 +83,30 @@ pub fn write_runtime(dir: &Path) -> std::io::Result<()> {
     for (path, contents) in lagc::emit::runtime_files() {
         cache::write_if_changed(&dir.join(path), contents.as_bytes())?;
     }
+    remove_stale_sources(dir)
+}
+
+/// Removes the `.rs` files under `dir/src` that are not the runtime's: an
+/// earlier version's, where a module has since moved (`src/method.rs`
+/// beside the new `src/method/mod.rs` does not build).
+fn remove_stale_sources(dir: &Path) -> std::io::Result<()> {
+    let known: std::collections::HashSet<std::path::PathBuf> = lagc::emit::runtime_files()
+        .map(|(path, _)| dir.join(path))
+        .collect();
+    let mut folders = vec![dir.join("src")];
+    while let Some(folder) = folders.pop() {
+        let Ok(entries) = std::fs::read_dir(&folder) else {
+            continue;
+        };
+        for entry in entries {
+            let path = entry?.path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") && !known.contains(&path) {
+                std::fs::remove_file(&path)?;
+            }
+        }
+    }
     Ok(())
 }
 

@@ -6,121 +6,186 @@
 /// The runtime crate's files, relative to its root.
 const RUNTIME: &[(&str, &str)] = &[
     ("Cargo.toml", include_str!("../../runtime/Cargo.toml")),
-    ("src/api.rs", include_str!("../../runtime/src/api.rs")),
-    ("src/budget.rs", include_str!("../../runtime/src/budget.rs")),
-    ("src/cli.rs", include_str!("../../runtime/src/cli.rs")),
-    (
-        "src/cli/args.rs",
-        include_str!("../../runtime/src/cli/args.rs"),
-    ),
-    (
-        "src/cli/bench.rs",
-        include_str!("../../runtime/src/cli/bench.rs"),
-    ),
-    (
-        "src/cli/exit.rs",
-        include_str!("../../runtime/src/cli/exit.rs"),
-    ),
-    (
-        "src/cli/run.rs",
-        include_str!("../../runtime/src/cli/run.rs"),
-    ),
+    ("src/choice.rs", include_str!("../../runtime/src/choice.rs")),
     (
         "src/closure.rs",
         include_str!("../../runtime/src/closure.rs"),
     ),
-    (
-        "src/controller.rs",
-        include_str!("../../runtime/src/controller.rs"),
-    ),
-    ("src/dense.rs", include_str!("../../runtime/src/dense.rs")),
-    ("src/direct.rs", include_str!("../../runtime/src/direct.rs")),
     ("src/domain.rs", include_str!("../../runtime/src/domain.rs")),
-    ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
-    (
-        "src/dop853/tableau.rs",
-        include_str!("../../runtime/src/dop853/tableau.rs"),
-    ),
-    ("src/driver.rs", include_str!("../../runtime/src/driver.rs")),
     (
         "src/ensemble.rs",
         include_str!("../../runtime/src/ensemble.rs"),
     ),
-    ("src/events.rs", include_str!("../../runtime/src/events.rs")),
     (
         "src/failure.rs",
         include_str!("../../runtime/src/failure.rs"),
     ),
     (
-        "src/field/affine.rs",
-        include_str!("../../runtime/src/field/affine.rs"),
-    ),
-    (
-        "src/field/coefficients.rs",
-        include_str!("../../runtime/src/field/coefficients.rs"),
-    ),
-    (
-        "src/field/conditions.rs",
-        include_str!("../../runtime/src/field/conditions.rs"),
-    ),
-    (
-        "src/field/mod.rs",
-        include_str!("../../runtime/src/field/mod.rs"),
-    ),
-    (
-        "src/field/members.rs",
-        include_str!("../../runtime/src/field/members.rs"),
-    ),
-    (
-        "src/field/quasilinear.rs",
-        include_str!("../../runtime/src/field/quasilinear.rs"),
-    ),
-    (
-        "src/field/window.rs",
-        include_str!("../../runtime/src/field/window.rs"),
-    ),
-    (
         "src/highest.rs",
         include_str!("../../runtime/src/highest.rs"),
     ),
+    ("src/io/api.rs", include_str!("../../runtime/src/io/api.rs")),
+    ("src/io/cli.rs", include_str!("../../runtime/src/io/cli.rs")),
     (
-        "src/impacts.rs",
-        include_str!("../../runtime/src/impacts.rs"),
+        "src/io/cli/args.rs",
+        include_str!("../../runtime/src/io/cli/args.rs"),
     ),
-    ("src/inputs.rs", include_str!("../../runtime/src/inputs.rs")),
-    ("src/keep.rs", include_str!("../../runtime/src/keep.rs")),
+    (
+        "src/io/cli/bench.rs",
+        include_str!("../../runtime/src/io/cli/bench.rs"),
+    ),
+    (
+        "src/io/cli/exit.rs",
+        include_str!("../../runtime/src/io/cli/exit.rs"),
+    ),
+    (
+        "src/io/cli/run.rs",
+        include_str!("../../runtime/src/io/cli/run.rs"),
+    ),
+    (
+        "src/io/driver.rs",
+        include_str!("../../runtime/src/io/driver.rs"),
+    ),
+    ("src/io/mod.rs", include_str!("../../runtime/src/io/mod.rs")),
+    (
+        "src/io/output.rs",
+        include_str!("../../runtime/src/io/output.rs"),
+    ),
+    (
+        "src/io/plot.rs",
+        include_str!("../../runtime/src/io/plot.rs"),
+    ),
+    (
+        "src/io/summary.rs",
+        include_str!("../../runtime/src/io/summary.rs"),
+    ),
+    (
+        "src/io/table.rs",
+        include_str!("../../runtime/src/io/table.rs"),
+    ),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
-    ("src/magnus.rs", include_str!("../../runtime/src/magnus.rs")),
     ("src/math.rs", include_str!("../../runtime/src/math.rs")),
-    ("src/method.rs", include_str!("../../runtime/src/method.rs")),
-    ("src/model.rs", include_str!("../../runtime/src/model.rs")),
-    ("src/output.rs", include_str!("../../runtime/src/output.rs")),
-    ("src/plot.rs", include_str!("../../runtime/src/plot.rs")),
     (
-        "src/progress.rs",
-        include_str!("../../runtime/src/progress.rs"),
+        "src/method/direct.rs",
+        include_str!("../../runtime/src/method/direct.rs"),
+    ),
+    (
+        "src/method/field/affine.rs",
+        include_str!("../../runtime/src/method/field/affine.rs"),
+    ),
+    (
+        "src/method/field/coefficients.rs",
+        include_str!("../../runtime/src/method/field/coefficients.rs"),
+    ),
+    (
+        "src/method/field/conditions.rs",
+        include_str!("../../runtime/src/method/field/conditions.rs"),
+    ),
+    (
+        "src/method/field/members.rs",
+        include_str!("../../runtime/src/method/field/members.rs"),
+    ),
+    (
+        "src/method/field/mod.rs",
+        include_str!("../../runtime/src/method/field/mod.rs"),
+    ),
+    (
+        "src/method/field/quasilinear.rs",
+        include_str!("../../runtime/src/method/field/quasilinear.rs"),
+    ),
+    (
+        "src/method/field/window.rs",
+        include_str!("../../runtime/src/method/field/window.rs"),
+    ),
+    (
+        "src/method/mod.rs",
+        include_str!("../../runtime/src/method/mod.rs"),
+    ),
+    (
+        "src/method/segment.rs",
+        include_str!("../../runtime/src/method/segment.rs"),
+    ),
+    (
+        "src/method/solver.rs",
+        include_str!("../../runtime/src/method/solver.rs"),
+    ),
+    ("src/model.rs", include_str!("../../runtime/src/model.rs")),
+    (
+        "src/ode/budget.rs",
+        include_str!("../../runtime/src/ode/budget.rs"),
+    ),
+    (
+        "src/ode/controller.rs",
+        include_str!("../../runtime/src/ode/controller.rs"),
+    ),
+    (
+        "src/ode/dense.rs",
+        include_str!("../../runtime/src/ode/dense.rs"),
+    ),
+    (
+        "src/ode/dop853.rs",
+        include_str!("../../runtime/src/ode/dop853.rs"),
+    ),
+    (
+        "src/ode/dop853/tableau.rs",
+        include_str!("../../runtime/src/ode/dop853/tableau.rs"),
+    ),
+    (
+        "src/ode/magnus.rs",
+        include_str!("../../runtime/src/ode/magnus.rs"),
+    ),
+    (
+        "src/ode/mod.rs",
+        include_str!("../../runtime/src/ode/mod.rs"),
+    ),
+    (
+        "src/ode/rodas4.rs",
+        include_str!("../../runtime/src/ode/rodas4.rs"),
+    ),
+    (
+        "src/ode/rodas4/tableau.rs",
+        include_str!("../../runtime/src/ode/rodas4/tableau.rs"),
+    ),
+    (
+        "src/ode/stepper.rs",
+        include_str!("../../runtime/src/ode/stepper.rs"),
+    ),
+    (
+        "src/ode/system.rs",
+        include_str!("../../runtime/src/ode/system.rs"),
+    ),
+    (
+        "src/ode/tolerance.rs",
+        include_str!("../../runtime/src/ode/tolerance.rs"),
     ),
     (
         "src/quantity.rs",
         include_str!("../../runtime/src/quantity.rs"),
     ),
     (
-        "src/sensitivity.rs",
-        include_str!("../../runtime/src/sensitivity.rs"),
-    ),
-    ("src/rodas4.rs", include_str!("../../runtime/src/rodas4.rs")),
-    (
-        "src/rodas4/tableau.rs",
-        include_str!("../../runtime/src/rodas4/tableau.rs"),
-    ),
-    (
         "src/run/diagnosis.rs",
         include_str!("../../runtime/src/run/diagnosis.rs"),
     ),
     (
+        "src/run/events.rs",
+        include_str!("../../runtime/src/run/events.rs"),
+    ),
+    (
+        "src/run/impacts.rs",
+        include_str!("../../runtime/src/run/impacts.rs"),
+    ),
+    (
+        "src/run/inputs.rs",
+        include_str!("../../runtime/src/run/inputs.rs"),
+    ),
+    (
         "src/run/integration.rs",
         include_str!("../../runtime/src/run/integration.rs"),
+    ),
+    (
+        "src/run/keep.rs",
+        include_str!("../../runtime/src/run/keep.rs"),
     ),
     (
         "src/run/mod.rs",
@@ -131,33 +196,25 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/run/options.rs"),
     ),
     (
+        "src/run/progress.rs",
+        include_str!("../../runtime/src/run/progress.rs"),
+    ),
+    (
         "src/run/regime.rs",
         include_str!("../../runtime/src/run/regime.rs"),
+    ),
+    (
+        "src/run/sensitivity.rs",
+        include_str!("../../runtime/src/run/sensitivity.rs"),
     ),
     (
         "src/run/solution.rs",
         include_str!("../../runtime/src/run/solution.rs"),
     ),
     (
-        "src/segment.rs",
-        include_str!("../../runtime/src/segment.rs"),
+        "src/run/watch.rs",
+        include_str!("../../runtime/src/run/watch.rs"),
     ),
-    ("src/solver.rs", include_str!("../../runtime/src/solver.rs")),
-    (
-        "src/stepper.rs",
-        include_str!("../../runtime/src/stepper.rs"),
-    ),
-    (
-        "src/summary.rs",
-        include_str!("../../runtime/src/summary.rs"),
-    ),
-    ("src/system.rs", include_str!("../../runtime/src/system.rs")),
-    ("src/table.rs", include_str!("../../runtime/src/table.rs")),
-    (
-        "src/tolerance.rs",
-        include_str!("../../runtime/src/tolerance.rs"),
-    ),
-    ("src/watch.rs", include_str!("../../runtime/src/watch.rs")),
 ];
 
 /// The runtime crate's sources `(path relative to its root, contents)`; a

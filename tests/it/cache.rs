@@ -103,6 +103,30 @@ fn lagc_build(model: &str, out: &Path, force: bool) -> Output {
     command.output().unwrap()
 }
 
+/// A build over an earlier version's output removes the runtime files the
+/// runtime no longer has: a module moved into a folder (`src/method.rs`
+/// became `src/method/mod.rs`) left both, and the crate did not build
+/// (E0761).
+#[test]
+fn build_removes_the_runtime_files_an_earlier_version_left() {
+    let dir = scratch("build_stale_runtime").join("out");
+    assert_eq!(
+        lagc_build("examples/paper.lag", &dir, false).status.code(),
+        Some(0)
+    );
+    let stale = dir.join("lagc-runtime/src/method.rs");
+    let moved = dir.join("lagc-runtime/src/dop853.rs");
+    std::fs::write(&stale, "// an earlier runtime's file\n").unwrap();
+    std::fs::write(&moved, "// an earlier runtime's file\n").unwrap();
+    assert_eq!(
+        lagc_build("examples/paper.lag", &dir, false).status.code(),
+        Some(0)
+    );
+    assert!(!stale.exists() && !moved.exists());
+    assert!(dir.join("lagc-runtime/src/method/mod.rs").is_file());
+    assert!(dir.join("lagc-runtime/src/lib.rs").is_file());
+}
+
 /// `lagc build -o DIR` writes into a new or empty directory, or one an
 /// earlier build wrote; it refuses a user's project unless `--force`.
 #[test]

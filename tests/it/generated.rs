@@ -49,8 +49,30 @@ fn write(generated: &GeneratedCrate, dir: &Path) {
     for (path, contents) in &generated.files {
         write_file(&dir.join(path), contents);
     }
+    let runtime = base().join("runtime");
     for (path, contents) in lagc::emit::runtime_files() {
-        write_file(&base().join("runtime").join(path), contents);
+        write_file(&runtime.join(path), contents);
+    }
+    remove_stale_sources(&runtime);
+}
+
+/// Removes the shared runtime's `.rs` files that are no longer the
+/// runtime's (a module that moved leaves its old file, and `method.rs`
+/// beside `method/mod.rs` does not build).
+fn remove_stale_sources(runtime: &Path) {
+    let known: Vec<PathBuf> = lagc::emit::runtime_files()
+        .map(|(path, _)| runtime.join(path))
+        .collect();
+    let mut folders = vec![runtime.join("src")];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") && !known.contains(&path) {
+                std::fs::remove_file(&path).unwrap();
+            }
+        }
     }
 }
 

@@ -234,7 +234,7 @@ fn build_python_writes_a_project_named_after_the_file() {
     assert!(
         read("lagc-python/Cargo.toml").contains("lagc-runtime = { path = \"../lagc-runtime\" }")
     );
-    assert!(out.join("lagc-runtime/src/table.rs").is_file());
+    assert!(out.join("lagc-runtime/src/io/table.rs").is_file());
 
     // A module name Python accepts from any file stem.
     let odd = dir.join("2d arm.lag");

@@ -24,27 +24,27 @@
 //! its end is acted on, exactly as the run loop this object replaces
 //! read them.
 
-use crate::budget::Budget;
-use crate::direct::Direct;
-use crate::events::{locate, SwitchPace};
+use crate::choice::{IntegratorChoice, Method};
 use crate::failure::{Failure, FailureKind};
-use crate::field::affine::AffineField;
-use crate::field::quasilinear::QuasilinearField;
-use crate::field::FieldOptions;
-use crate::impacts::{AtEvent, Impacts};
-use crate::keep::Keeper;
-use crate::method::{IntegratorChoice, Method};
+use crate::method::direct::Direct;
+use crate::method::field::affine::AffineField;
+use crate::method::field::quasilinear::QuasilinearField;
+use crate::method::field::FieldOptions;
+use crate::method::solver::{Report, Solver};
 use crate::model::{DynModel, Regime};
-use crate::progress::Progress;
+use crate::ode::budget::Budget;
 use crate::run::diagnosis::{check_masses, diagnose, near_singular_configuration, MassScale};
+use crate::run::events::{locate, SwitchPace};
+use crate::run::impacts::{AtEvent, Impacts};
+use crate::run::keep::Keeper;
 use crate::run::options::{Ending, Options, Outcome};
+use crate::run::progress::Progress;
 use crate::run::regime::{
     best_mode, check_initial_candidates, initial_branches, pivot_crossed, pivot_volumes,
     switch_candidates, PivotCrossing,
 };
 use crate::run::solution::Piece;
-use crate::solver::{Report, Solver};
-use crate::watch::ConstraintWatch;
+use crate::run::watch::ConstraintWatch;
 
 /// Why [`Integration::advance_to`] returned.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -18,16 +18,23 @@
 //! solution) and the ensemble's [`run_ensemble`].
 
 pub mod diagnosis;
+pub mod events;
+pub mod impacts;
+pub mod inputs;
 pub mod integration;
+pub mod keep;
 pub mod options;
+pub mod progress;
 pub mod regime;
+pub mod sensitivity;
 pub mod solution;
+pub mod watch;
 
-use crate::budget::Budget;
+use crate::choice::Method;
 use crate::failure::{Failure, FailureKind};
-use crate::method::Method;
 use crate::model::DynModel;
-use crate::tolerance::Tolerance;
+use crate::ode::budget::Budget;
+use crate::ode::tolerance::Tolerance;
 use integration::{make_solver, Advance, Integration};
 use options::{Ending, Options, Outcome};
 use solution::Solution;
@@ -110,7 +117,7 @@ pub struct EnsembleOutcome {
 /// Integrates `members` (at least one; the first is the reference)
 /// through one field: `sample(t, states)` at every time of `times`. Exact
 /// for affine models. For the others each member is corrected in each
-/// window's frame to the tolerance ([`crate::field::members`]), and a
+/// window's frame to the tolerance ([`crate::method::field::members`]), and a
 /// member the field cannot follow within it is integrated on its own:
 /// never first order in the spread. The members are taken, not copied,
 /// and an affine motion's samples are written into one buffer as they

@@ -1,11 +1,11 @@
 //! What a run is asked to do ([`Options`]) and what it did ([`Outcome`],
 //! [`Ending`]).
 
-use crate::field::Anchor;
-use crate::method::{IntegratorChoice, Method};
+use crate::choice::{IntegratorChoice, Method};
+use crate::method::field::Anchor;
+use crate::method::solver::Report;
 use crate::model::DynModel;
-use crate::solver::Report;
-use crate::tolerance::Tolerance;
+use crate::ode::tolerance::Tolerance;
 
 /// How to integrate.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,7 +36,7 @@ impl Default for Options {
             tol: Tolerance::default(),
             anchor: Anchor::Zero,
             reanchor: true,
-            max_steps: crate::budget::DEFAULT_MAX_STEPS,
+            max_steps: crate::ode::budget::DEFAULT_MAX_STEPS,
             progress: false,
             step_to_times: false,
         }
@@ -94,5 +94,5 @@ pub struct Outcome {
     pub budget_used: usize,
     /// The constraints' residuals and projections (models whose
     /// constraints fix state components).
-    pub kept: Option<crate::keep::Kept>,
+    pub kept: Option<crate::run::keep::Kept>,
 }

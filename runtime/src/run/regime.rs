@@ -5,8 +5,8 @@
 //! choice is good.
 
 use crate::failure::{Failure, FailureKind};
+use crate::method::solver::Solver;
 use crate::model::{DynModel, Regime};
-use crate::solver::Solver;
 
 /// The initial regime at `(t0, x0)`: branches from the switching
 /// functions' signs (a function exactly zero takes the sign it has a moment
@@ -79,7 +79,7 @@ const INITIAL_PIVOT_RATIO: f64 = 1e-8;
 /// computed y' = x' tan(π/2) = 1.6e16 and stopped at t = 5e-14 naming the
 /// pivot).
 pub fn check_initial_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
-    crate::keep::check_given_fixed(model, t0, x0)?;
+    crate::run::keep::check_given_fixed(model, t0, x0)?;
     let constraints = model.constraints();
     if constraints.is_empty() {
         return Ok(());

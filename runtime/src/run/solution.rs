@@ -2,8 +2,8 @@
 //! `solve(...) -> Solution` with `Solution::at(t)`): the continuous
 //! extension of every step, kept in order.
 
+pub use crate::method::segment::Segment;
 use crate::run::options::{Ending, Outcome};
-pub use crate::segment::Segment;
 
 /// A segment valid up to `until` (an event may end it before its step).
 #[derive(Clone, Debug)]

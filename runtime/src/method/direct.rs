@@ -1,0 +1,252 @@
+//! Direct integration of the reduced system (7) with the user's choice of
+//! integrator: `Auto` starts with DOP853 and continues with RODAS4 from the
+//! step where Hairer's stiffness test fires; `Explicit` keeps DOP853 and
+//! only reports the detection; `Stiff` is RODAS4 throughout.
+
+use crate::choice::IntegratorChoice;
+use crate::failure::Failure;
+use crate::method::solver::{Report, Solver};
+use crate::model::DynModel;
+use crate::ode::budget::Budget;
+use crate::ode::stepper::{OfModel, StepperOf};
+use crate::ode::system::ModelSystem;
+use crate::ode::tolerance::{Stats, Tolerance};
+use crate::ode::Integrator;
+
+pub struct Direct {
+    choice: IntegratorChoice,
+    tol: Tolerance,
+    h_max: f64,
+    /// The integrator running now, and its stepper: one dynamic call per
+    /// step; inside a step the right side is called statically
+    /// (`Stepper`'s comment).
+    integrator: Integrator,
+    stepper: StepperOf<OfModel>,
+    /// Work of the integrators before the current one.
+    done: Stats,
+    first: Integrator,
+    stiffness_detected_at: Option<f64>,
+    switched_at: Option<f64>,
+    /// DOP853's last step length before the switch, to judge whether
+    /// RODAS4 pays (see [`Direct::advance`]).
+    explicit_step: f64,
+    stiff_steps: usize,
+    stiff_distance: f64,
+    /// Switched back to DOP853: RODAS4 was not cheaper.
+    switched_back_at: Option<f64>,
+}
+
+impl Direct {
+    pub fn new(
+        model: &dyn DynModel,
+        choice: IntegratorChoice,
+        tol: Tolerance,
+        t0: f64,
+        x0: &[f64],
+        h_max: f64,
+    ) -> Result<Direct, Failure> {
+        let first = match choice {
+            IntegratorChoice::Stiff => Integrator::Stiff,
+            _ => Integrator::Explicit,
+        };
+        let stepper = first.start::<OfModel>(&ModelSystem(model), t0, x0, tol, h_max, None)?;
+        Ok(Direct {
+            choice,
+            tol,
+            h_max,
+            integrator: first,
+            stepper,
+            done: Stats::default(),
+            first,
+            stiffness_detected_at: None,
+            switched_at: None,
+            explicit_step: 0.0,
+            stiff_steps: 0,
+            stiff_distance: 0.0,
+            switched_back_at: None,
+        })
+    }
+
+    /// The integrator finishing the run.
+    pub fn integrator(&self) -> Integrator {
+        self.integrator
+    }
+
+    fn method_name(&self) -> String {
+        if self.switched_back_at.is_some() {
+            return "direct (DOP853 → RODAS4 → DOP853)".to_string();
+        }
+        match self.switched_at {
+            Some(_) => format!(
+                "direct ({} → {})",
+                self.first.name(),
+                self.integrator.name()
+            ),
+            // concat, not format!: every solve's report asks.
+            None => ["direct (", self.integrator.name(), ")"].concat(),
+        }
+    }
+}
+
+impl Solver for Direct {
+    fn time(&self) -> f64 {
+        self.stepper.time()
+    }
+
+    fn previous_time(&self) -> f64 {
+        self.stepper.previous_time()
+    }
+
+    fn state(&self) -> &[f64] {
+        self.stepper.state()
+    }
+
+    fn advance(
+        &mut self,
+        model: &dyn DynModel,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure> {
+        // A switch decided after the last step happens now: the driver has
+        // used that step's (DOP853) dense output by the time it asks for
+        // the next step.
+        self.switch_if_stiff(model)?;
+        let system = ModelSystem(model);
+        let before = self.stepper.time();
+        self.stepper.step(&system, t_limit, budget)?;
+        if self.switched_at.is_some() && self.switched_back_at.is_none() {
+            self.judge_the_switch(model, before)?;
+        }
+        if self.stiffness_detected_at.is_none() {
+            self.stiffness_detected_at = self.stepper.stiffness_detected();
+            let switches = matches!(
+                self.choice,
+                IntegratorChoice::Auto | IntegratorChoice::Magnus
+            );
+            if self.stiffness_detected_at.is_some() && switches {
+                // The switch happens after this step: its dense output was
+                // made by DOP853 and stays valid until the next step.
+                self.switched_at = Some(self.stepper.time());
+            }
+        }
+        Ok(())
+    }
+
+    fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        self.stepper.dense(&ModelSystem(model), t, out)
+    }
+
+    fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        let h = self.stepper.proposed_step();
+        let integrator = self.integrator;
+        self.done += self.stepper.stats();
+        self.stepper = integrator.start::<OfModel>(
+            &ModelSystem(model),
+            t,
+            x,
+            self.tol,
+            self.h_max,
+            Some(h),
+        )?;
+        Ok(())
+    }
+
+    fn segments(
+        &mut self,
+        model: &dyn DynModel,
+    ) -> Result<Vec<crate::method::segment::Segment>, Failure> {
+        let dense = self.stepper.dense_step(&ModelSystem(model))?;
+        Ok(dense
+            .into_iter()
+            .map(crate::method::segment::Segment::State)
+            .collect())
+    }
+
+    fn report(&self) -> Report {
+        let mut notes = Vec::new();
+        if let Some(t) = self.switched_back_at {
+            notes.push(format!(
+                "back to DOP853 at t = {t:e}: RODAS4's steps were not long enough to pay \
+                 for its cost"
+            ));
+        }
+        match (self.switched_at, self.stiffness_detected_at) {
+            (Some(t), _) => notes.push(format!(
+                "switched to RODAS4 at t = {t:e} (DOP853 detected stiffness)"
+            )),
+            (None, Some(t)) => notes.push(format!(
+                "the motion looks stiff from t = {t:e} on; RODAS4 may be faster \
+                 (--integrator stiff or auto)"
+            )),
+            (None, None) => {}
+        }
+        Report {
+            method: self.method_name(),
+            stats: self.done + self.stepper.stats(),
+            notes,
+            ..Report::default()
+        }
+    }
+}
+
+impl Direct {
+    /// After switching to RODAS4 on detected stiffness, whether it pays: a
+    /// RODAS4 step costs about as much as a DOP853 step (six evaluations,
+    /// a Jacobian and an LU against twelve evaluations), so unless its
+    /// steps are clearly longer than DOP853's stability-limited ones, go
+    /// back (the mass-loss spring at loose tolerances: stiff by Hairer's
+    /// test, yet RODAS4 took ten times the work).
+    fn judge_the_switch(&mut self, model: &dyn DynModel, before: f64) -> Result<(), Failure> {
+        const TRIAL_STEPS: usize = 20;
+        const REQUIRED_GAIN: f64 = 2.0;
+        if self.integrator != Integrator::Stiff {
+            return Ok(());
+        }
+        self.stiff_steps += 1;
+        self.stiff_distance += self.stepper.time() - before;
+        if self.stiff_steps == TRIAL_STEPS {
+            let mean = self.stiff_distance / TRIAL_STEPS as f64;
+            if mean < REQUIRED_GAIN * self.explicit_step {
+                self.switched_back_at = Some(self.stepper.time());
+                self.restart_with(model, Integrator::Explicit, self.explicit_step)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Performs a pending switch to RODAS4.
+    fn switch_if_stiff(&mut self, model: &dyn DynModel) -> Result<(), Failure> {
+        if self.switched_at.is_some()
+            && self.switched_back_at.is_none()
+            && self.integrator == Integrator::Explicit
+            && self.stiff_steps == 0
+        {
+            self.explicit_step = self.stepper.time() - self.stepper.previous_time();
+            let h = self.stepper.proposed_step();
+            self.restart_with(model, Integrator::Stiff, h)?;
+        }
+        Ok(())
+    }
+
+    /// Continues from the current state with `integrator`, first step `h`;
+    /// the finished stepper's statistics are kept.
+    fn restart_with(
+        &mut self,
+        model: &dyn DynModel,
+        integrator: Integrator,
+        h: f64,
+    ) -> Result<(), Failure> {
+        let (t, x) = (self.stepper.time(), self.stepper.state().to_vec());
+        self.done += self.stepper.stats();
+        self.stepper = integrator.start::<OfModel>(
+            &ModelSystem(model),
+            t,
+            &x,
+            self.tol,
+            self.h_max,
+            Some(h),
+        )?;
+        self.integrator = integrator;
+        Ok(())
+    }
+}

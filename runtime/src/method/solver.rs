@@ -1,0 +1,110 @@
+//! The interface between a method (direct integration, the field method)
+//! and the run driver: advance one step, interpolate within it, restart at
+//! an event, report the work.
+
+use crate::failure::Failure;
+use crate::model::DynModel;
+use crate::ode::budget::Budget;
+use crate::ode::tolerance::Stats;
+
+/// What a method did, for the run summary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// e.g. `field (DOP853)`, `direct (DOP853 → RODAS4)`.
+    pub method: String,
+    /// Work of every integrator the method ran (for the field: the
+    /// coefficient steps, and the predictor's under `predictor`).
+    pub stats: Stats,
+    /// Field: the largest condition number of the conditions (13).
+    pub largest_condition: Option<f64>,
+    /// Field: how many times the field was re-anchored.
+    pub reanchorings: Option<usize>,
+    /// Quasilinear field: windows accepted, passes over them, and the
+    /// predictor's work.
+    pub windows: Option<usize>,
+    pub passes: Option<usize>,
+    pub predictor: Option<Stats>,
+    /// Evaluations of `X` with `∂X/∂x` (the field's linearisations).
+    pub linearizations: usize,
+    /// Lines for the summary (a switch of integrator, a stiffness note).
+    pub notes: Vec<String>,
+}
+
+/// A method advancing a model's motion step by step.
+pub trait Solver {
+    /// The time of the last accepted step's end.
+    fn time(&self) -> f64;
+    /// The time of the last accepted step's start.
+    fn previous_time(&self) -> f64;
+    /// The state at [`Solver::time`].
+    fn state(&self) -> &[f64];
+    /// Takes one step (never past `t_limit`, landing on it exactly when
+    /// reached), drawing on `budget`.
+    fn advance(
+        &mut self,
+        model: &dyn DynModel,
+        t_limit: f64,
+        budget: &Budget,
+    ) -> Result<(), Failure>;
+    /// The state at `t` in `[previous_time, time]`.
+    fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure>;
+    /// The ends of the integrator's own steps within the last advance, in
+    /// order, the last being [`Solver::time`] (into `out`, cleared first).
+    /// One advance of the quasilinear field covers a whole window of
+    /// steps: the driver looks at the switching functions within each of
+    /// them, as it does within a step of direct integration, or an
+    /// oscillation inside a window hides its crossings.
+    fn step_ends(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.push(self.time());
+    }
+    /// Starts afresh from `(t, x)` (after an event changed the regime).
+    fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
+    /// Goes on from `x`, the state at [`Solver::time`] projected onto the
+    /// constraints: no discontinuity, so a method may keep what it has
+    /// learnt of the step sizes.
+    fn project(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        self.restart(model, t, x)
+    }
+    /// The work so far.
+    fn report(&self) -> Report;
+
+    /// The continuous extension of the last advance, as values that outlive
+    /// the solver (for [`crate::run::solution::Solution`]).
+    fn segments(
+        &mut self,
+        model: &dyn DynModel,
+    ) -> Result<Vec<crate::method::segment::Segment>, Failure>;
+
+    /// Follows other initial states through the same field (an ensemble:
+    /// exact for affine motions; for others each member corrected to
+    /// `tol`, see [`Solver::member_estimates`]); `false` when the method
+    /// cannot.
+    fn track_members(
+        &mut self,
+        _members: crate::ensemble::States,
+        _tol: crate::ode::tolerance::Tolerance,
+    ) -> bool {
+        false
+    }
+
+    /// Each tracked member's largest local error in units of the
+    /// tolerance (infinite: the method could not follow it, and it must be
+    /// integrated on its own); `None` where the members are exact (an
+    /// affine motion's field).
+    fn member_estimates(&self) -> Option<Vec<f64>> {
+        None
+    }
+
+    /// The tracked members' states at `t` in `[previous_time, time]`, into
+    /// `out` (reused from sample to sample: ten thousand members are a
+    /// buffer that should not be allocated anew at every output time).
+    fn members_at(
+        &mut self,
+        _model: &dyn DynModel,
+        t: f64,
+        _out: &mut crate::ensemble::States,
+    ) -> Result<(), Failure> {
+        Err(Failure::new(t, crate::failure::FailureKind::NotAffine))
+    }
+}

@@ -1,0 +1,812 @@
+//! DOP853: the explicit Runge–Kutta method of order 8 of Dormand and Prince
+//! with Hairer's combined 5th/3rd-order error estimate and his continuous
+//! extension of order 7 (HNW I, II.10; `dop853.f`, `contd8`), under the
+//! PI step-size controller. Dense output costs three more evaluations per
+//! step, spent only for steps whose interior is asked for.
+
+// The coefficients are kept to the digits Hairer published them with.
+#![allow(clippy::excessive_precision, clippy::unreadable_literal)]
+
+use crate::failure::Failure;
+use crate::ode::budget::Budget;
+use crate::ode::controller::Controller;
+use crate::ode::dense::Extension;
+use crate::ode::stepper::{stalled, Clock, Clocked, ErrorMeasure, Start, StepOutcome, Stepper};
+use crate::ode::system::System;
+use crate::ode::tolerance::{first_non_finite, Tolerance};
+
+pub(crate) mod tableau;
+use tableau::*;
+
+/// Hairer's stiffness test (`dop853.f`): `h·ρ` estimated from the last
+/// stage, `h ‖X(t+h, y₁) − X(t+h, ŷ)‖ / ‖y₁ − ŷ‖`, past the edge of
+/// DOP853's stability region (≈ 6.1 on the negative real axis) on
+/// `STIFF_STEPS` tests, not interrupted by `NON_STIFF_STEPS` tests below it.
+const STIFF_H_RHO: f64 = 6.1;
+const STIFF_STEPS: usize = 15;
+const NON_STIFF_STEPS: usize = 6;
+
+/// Hairer's measure (`dop853.f`): `|h| ε₅ / √(n (ε₅² + 0.01 ε₃²))`, the
+/// sums scaled by `atol + rtol·max(|y0|, |y1|)`.
+pub struct HairerMeasure(pub Tolerance);
+
+impl ErrorMeasure for HairerMeasure {
+    fn measure(
+        &mut self,
+        _t0: f64,
+        h: f64,
+        y0: &[f64],
+        y1: &[f64],
+        e3: &[f64],
+        e5: &[f64],
+    ) -> Option<f64> {
+        Some(hairer_error(self.0, h, y0, y1, e3, e5))
+    }
+
+    fn hairer_tolerance(&self) -> Option<Tolerance> {
+        Some(self.0)
+    }
+}
+
+/// Hairer's combined error norm of DOP853.
+pub fn hairer_error(tol: Tolerance, h: f64, y0: &[f64], y1: &[f64], e3: &[f64], e5: &[f64]) -> f64 {
+    let n = y0.len();
+    let (y1, e3, e5) = (&y1[..n], &e3[..n], &e5[..n]);
+    let (mut err3, mut err5) = (0.0, 0.0);
+    for i in 0..n {
+        let inverse = 1.0 / (tol.atol + tol.rtol * y0[i].abs().max(y1[i].abs()));
+        let (a, b) = (e3[i] * inverse, e5[i] * inverse);
+        err3 += a * a;
+        err5 += b * b;
+    }
+    hairer_combine(h, n, err3, err5)
+}
+
+/// Hairer's norm from the sums of squares of the scaled 3rd- and
+/// 5th-order estimates over `n` components.
+#[inline]
+fn hairer_combine(h: f64, n: usize, err3: f64, err5: f64) -> f64 {
+    let denominator = if err5 + 0.01 * err3 > 0.0 {
+        err5 + 0.01 * err3
+    } else {
+        1.0
+    };
+    let err = h.abs() * err5 * (1.0 / (n.max(1) as f64 * denominator)).sqrt();
+    if err.is_finite() {
+        err
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Blocks of `n` numbers in [`Dop853`]'s stage buffer after the 16 stages:
+/// the state at which a stage is evaluated;
+const STAGE_STATE: usize = STAGES + 4;
+/// the 3rd- and 5th-order error estimates of the last attempt, per unit
+/// step (multiply by `h`);
+const ERROR3: usize = STAGE_STATE + 1;
+const ERROR5: usize = ERROR3 + 1;
+/// the 8 blocks of the continuous extension's coefficients.
+const CONT: usize = ERROR5 + 1;
+const BLOCKS: usize = CONT + 8;
+
+/// The DOP853 integrator at time `t` with state `y`.
+pub struct Dop853 {
+    tol: Tolerance,
+    clock: Clock,
+    y: Vec<f64>,
+    /// Stages, `n` numbers each in one buffer (stage `j` at `j n`):
+    /// `k[0] = X(t, y)` (first same as last), `k[1..12]` the stages of the
+    /// last step, `k[12]` the rate at the last step's start after a step is
+    /// accepted (kept for the continuous extension), `k[13..16]` its extra
+    /// stages; then, in the same buffer (one allocation a solver, not
+    /// five: a small model's solve is a few microseconds), the blocks at
+    /// [`STAGE_STATE`], [`ERROR3`], [`ERROR5`] and [`CONT`].
+    k: Vec<f64>,
+    y_trial: Vec<f64>,
+    /// The last accepted step's start state.
+    y_old: Vec<f64>,
+    /// The continuous extension's coefficients (the 8 blocks at [`CONT`])
+    /// are those of the last accepted step.
+    dense_ready: bool,
+    stiff_tests: usize,
+    non_stiff_tests: usize,
+    stiffness_detected: Option<f64>,
+}
+
+impl Dop853 {
+    /// Starts at `(t0, y0)`; `h_max` bounds the first step guess; `h0`, when
+    /// given, replaces the guess (a restart keeps the step that worked).
+    pub fn new<S: System + ?Sized>(
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure> {
+        let n = y0.len();
+        let mut k = vec![0.0; BLOCKS * n];
+        let controller = Controller::dop853();
+        let clock = Clock::start(system, t0, y0, &mut k[..n], tol, 8, h_max, h0, controller)?;
+        Ok(Dop853 {
+            tol,
+            clock,
+            y: y0.to_vec(),
+            k,
+            y_trial: vec![0.0; n],
+            y_old: y0.to_vec(),
+            dense_ready: false,
+            stiff_tests: 0,
+            non_stiff_tests: 0,
+            stiffness_detected: None,
+        })
+    }
+
+    /// The slope `X(t, y)` at the current state.
+    pub fn slope(&self) -> &[f64] {
+        &self.k[..self.y.len()]
+    }
+
+    /// One accepted step under `measure` (see [`Stepper::step`]), or
+    /// [`StepOutcome::Declined`] when the measure declines it.
+    pub fn step_measured<S: System + ?Sized, E: ErrorMeasure + ?Sized>(
+        &mut self,
+        system: &S,
+        t_limit: f64,
+        budget: &Budget,
+        measure: &mut E,
+    ) -> Result<StepOutcome, Failure> {
+        let mut last_non_finite = false;
+        let mut rate_broken: Option<usize> = None;
+        loop {
+            let (h, reaches_limit) = self.clock.attempt(t_limit, budget, |h| {
+                let component =
+                    last_non_finite.then(|| first_non_finite(&self.y_trial).unwrap_or(0));
+                stalled(system, self.clock.t, h, component, rate_broken)
+            })?;
+            let fused = measure.hairer_tolerance();
+            let (finite, fused_error) = self.attempt(system, h, fused)?;
+            let err = if !finite {
+                f64::INFINITY
+            } else if fused.is_some() {
+                fused_error
+            } else {
+                self.clock.controller.end_ramp();
+                let n = self.y.len();
+                match measure.measure(
+                    self.clock.t,
+                    h,
+                    &self.y,
+                    &self.y_trial,
+                    &self.k[ERROR3 * n..(ERROR3 + 1) * n],
+                    &self.k[ERROR5 * n..(ERROR5 + 1) * n],
+                ) {
+                    Some(err) => err,
+                    None => return Ok(self.clock.decline()),
+                }
+            };
+            if !finite {
+                // A stage overflowed: the step was too long for a solution
+                // that grows fast, or it reached past where the rates are
+                // defined (a force infinite at a finite state); retry
+                // shorter, and remember which, for the diagnosis should the
+                // step underflow.
+                self.clock.reject(h, f64::INFINITY);
+                match self.broken_rate(h) {
+                    Some(i) => {
+                        rate_broken = Some(i);
+                        last_non_finite = false;
+                    }
+                    None => last_non_finite = true,
+                }
+            } else if err <= 1.0 {
+                let t_new = self.clock.end(h, reaches_limit, t_limit);
+                // The slope at the step's end (kept in k[12] until the
+                // step is taken: it is the next step's first stage).
+                let n = self.y.len();
+                let end_slope = &mut self.k[12 * n..13 * n];
+                system.rhs(t_new, &self.y_trial, end_slope)?;
+                self.clock.stats.rhs_evaluations += 1;
+                if let Some(i) = first_non_finite(end_slope) {
+                    self.clock.reject_short(h);
+                    rate_broken = Some(i);
+                    last_non_finite = false;
+                    continue;
+                }
+                let h_next = self.clock.controller.accept(h, err);
+                // y_old ← y ← y_trial without copying.
+                std::mem::swap(&mut self.y_old, &mut self.y);
+                std::mem::swap(&mut self.y, &mut self.y_trial);
+                self.clock.accept(h, t_new, h_next, reaches_limit);
+                // k[0] becomes the new slope; X(t_old) moves to k[12] for
+                // the continuous extension.
+                let (start, rest) = self.k.split_at_mut(12 * n);
+                start[..n].swap_with_slice(&mut rest[..n]);
+                self.dense_ready = false;
+                self.test_stiffness(h);
+                return Ok(StepOutcome::Accepted);
+            } else {
+                self.clock.reject(h, err);
+                last_non_finite = false;
+            }
+        }
+    }
+
+    /// Hairer's test after an accepted step of length `h`: `y` is the new
+    /// state, `k[0] = X(t, y)`, and the last stage `k[11] = X(t, y₁)` was
+    /// evaluated at the same time at `stage_state = y₁`.
+    fn test_stiffness(&mut self, h: f64) {
+        let (mut numerator, mut denominator) = (0.0, 0.0);
+        let n = self.y.len();
+        let (slope, last) = (&self.k[..n], &self.k[(STAGES - 1) * n..STAGES * n]);
+        let (y, y1) = (
+            &self.y[..n],
+            &self.k[STAGE_STATE * n..(STAGE_STATE + 1) * n],
+        );
+        for i in 0..n {
+            let (a, b) = (slope[i] - last[i], y[i] - y1[i]);
+            numerator += a * a;
+            denominator += b * b;
+        }
+        if denominator <= 0.0 || !numerator.is_finite() {
+            return;
+        }
+        let h_rho = h.abs() * (numerator / denominator).sqrt();
+        if h_rho > STIFF_H_RHO {
+            self.non_stiff_tests = 0;
+            self.stiff_tests += 1;
+            if self.stiff_tests >= STIFF_STEPS && self.stiffness_detected.is_none() {
+                self.stiffness_detected = Some(self.clock.t);
+            }
+        } else {
+            self.non_stiff_tests += 1;
+            if self.non_stiff_tests >= NON_STIFF_STEPS {
+                self.stiff_tests = 0;
+            }
+        }
+    }
+
+    /// After an attempt of step `h` that was not finite: the component of
+    /// the first stage whose rate is not finite although its state is (a
+    /// force or mass law undefined ahead), `None` when a state overflowed
+    /// first (the motion grows without bound). Recomputes the stage
+    /// states, so it costs nothing on the way of finite steps.
+    fn broken_rate(&mut self, h: f64) -> Option<usize> {
+        let n = self.y.len();
+        let (k, scratch) = self.k.split_at_mut(STAGE_STATE * n);
+        let stage_state = &mut scratch[..n];
+        for s in 1..STAGES {
+            stage_state.copy_from_slice(&self.y);
+            for &(j, a) in A[s] {
+                axpy(h * a, &k[j * n..(j + 1) * n], stage_state);
+            }
+            if first_non_finite(stage_state).is_some() {
+                return None;
+            }
+            if let Some(i) = first_non_finite(&k[s * n..(s + 1) * n]) {
+                return Some(i);
+            }
+        }
+        None
+    }
+
+    /// Computes the stages, `y_trial` and the two error estimates (per
+    /// unit step) for step `h`: `false` when a stage is not finite; with
+    /// `hairer`, Hairer's norm of the step under that tolerance, computed
+    /// in the same pass (else `0`).
+    ///
+    /// Each stage state is one pass over the components summing the
+    /// stage's row with its coefficients known at compile time (Hairer's
+    /// `dop853.f` loops), and `y_trial` with both error estimates one more
+    /// pass: for the small systems of mechanics (n = 2…12) a whole-vector
+    /// `axpy` per coefficient cost more in loop overhead than the
+    /// arithmetic, and the loops vectorise as well for the field's large
+    /// coefficient systems.
+    // Inlined into each step: the stepper's vtable instantiates a second
+    // caller (`Stepper::step_measured`, the field's measure), and LLVM
+    // then kept this out of line, which cost direct DOP853 about 27 % more
+    // instructions on the rocket (callgrind, BENCHMARKS §10).
+    #[inline(always)]
+    fn attempt<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        h: f64,
+        hairer: Option<Tolerance>,
+    ) -> Result<(bool, f64), Failure> {
+        let n = self.y.len();
+        let t = self.clock.t;
+        let y = &self.y[..n];
+        let (k, scratch) = self.k.split_at_mut(STAGE_STATE * n);
+        let (ys, scratch) = scratch.split_at_mut(n);
+        let (error3, scratch) = scratch.split_at_mut(n);
+        let error5 = &mut scratch[..n];
+        macro_rules! stage {
+            ($s:literal, $r:literal) => {{
+                let (done, rest) = k.split_at_mut($s * n);
+                let row: [(f64, &[f64]); $r] = std::array::from_fn(|m| {
+                    let j = A[$s][m].0;
+                    (A[$s][m].1, &done[j * n..(j + 1) * n])
+                });
+                combine(ys, y, h, &row);
+                system.rhs(t + C[$s] * h, ys, &mut rest[..n])?;
+            }};
+        }
+        stage!(1, 1);
+        stage!(2, 2);
+        stage!(3, 2);
+        stage!(4, 3);
+        stage!(5, 3);
+        stage!(6, 4);
+        stage!(7, 5);
+        stage!(8, 6);
+        stage!(9, 7);
+        stage!(10, 8);
+        stage!(11, 9);
+        self.clock.stats.rhs_evaluations += STAGES - 1;
+        let ks: [&[f64]; STAGES] = std::array::from_fn(|j| &k[j * n..(j + 1) * n]);
+        let y_trial = &mut self.y_trial[..n];
+        // 0·v is 0 for every finite v and NaN otherwise: one sum tells
+        // whether every number of the step is finite.
+        let mut poison = 0.0;
+        let (mut err3, mut err5) = (0.0, 0.0);
+        for i in 0..n {
+            let mut b = 0.0;
+            for &(j, w) in &B {
+                b += w * ks[j][i];
+            }
+            let mut e5 = 0.0;
+            for &(j, w) in &ER {
+                e5 += w * ks[j][i];
+            }
+            let e3 = b
+                - BHH[0].1 * ks[BHH[0].0][i]
+                - BHH[1].1 * ks[BHH[1].0][i]
+                - BHH[2].1 * ks[BHH[2].0][i];
+            let y1 = y[i] + h * b;
+            y_trial[i] = y1;
+            error3[i] = e3;
+            error5[i] = e5;
+            poison += 0.0 * y1 + 0.0 * e3 + 0.0 * e5;
+            if let Some(tol) = hairer {
+                let inverse = 1.0 / (tol.atol + tol.rtol * y[i].abs().max(y1.abs()));
+                let (a, b) = (e3 * inverse, e5 * inverse);
+                err3 += a * a;
+                err5 += b * b;
+            }
+        }
+        let err = if hairer.is_some() {
+            hairer_combine(h, n, err3, err5)
+        } else {
+            0.0
+        };
+        Ok((poison == 0.0, err))
+    }
+
+    /// The continuous extension of the last step (Hairer's `dop853.f`,
+    /// `IOUT ≥ 2`): three more stages and the coefficients `cont`.
+    fn prepare_dense<S: System + ?Sized>(&mut self, system: &S) -> Result<(), Failure> {
+        let n = self.y.len();
+        let (stages, rest) = self.k.split_at_mut(13 * n);
+        let (extra, rest) = rest.split_at_mut((STAGE_STATE - 13) * n);
+        let (stage_state, rest) = rest.split_at_mut(n);
+        let cont = &mut rest[(CONT - STAGE_STATE - 1) * n..(BLOCKS - STAGE_STATE - 1) * n];
+        continuous_extension(
+            system,
+            self.clock.t_old,
+            self.clock.h_old,
+            &self.y_old,
+            &self.y,
+            &FlatStages { data: stages, n },
+            extra,
+            stage_state,
+            cont,
+        )?;
+        self.clock.stats.rhs_evaluations += 3;
+        self.dense_ready = true;
+        Ok(())
+    }
+
+    /// The last accepted step as data, to build its continuous extension
+    /// later (the field method keeps the steps of a window until the window
+    /// is accepted, and prepares only those that output asks for).
+    pub fn raw_step(&self) -> RawStep {
+        let mut step = RawStep::default();
+        self.raw_step_into(&mut step);
+        step
+    }
+
+    /// [`Dop853::raw_step`] into an existing value, reusing its storage.
+    pub fn raw_step_into(&self, dst: &mut RawStep) {
+        dst.t_old = self.clock.t_old;
+        dst.h = self.clock.h_old;
+        dst.t_new = self.clock.t;
+        dst.data.clear();
+        dst.data.reserve(15 * self.y.len());
+        dst.data.extend_from_slice(&self.y_old);
+        dst.data.extend_from_slice(&self.y);
+        dst.data.extend_from_slice(&self.k[..13 * self.y.len()]);
+    }
+
+    /// The prepared continuous extension of the last accepted step, as a
+    /// value that outlives the integrator's next step.
+    pub fn dense_step<S: System + ?Sized>(&mut self, system: &S) -> Result<DenseStep, Failure> {
+        if !self.dense_ready {
+            self.prepare_dense(system)?;
+        }
+        Ok(DenseStep::dop853(
+            self.clock.t_old,
+            self.clock.t,
+            self.clock.h_old,
+            self.cont().to_vec(),
+        ))
+    }
+
+    /// The continuous extension's coefficients (valid when `dense_ready`).
+    fn cont(&self) -> &[f64] {
+        let n = self.y.len();
+        &self.k[CONT * n..BLOCKS * n]
+    }
+}
+
+impl Clocked for Dop853 {
+    fn clock(&self) -> &Clock {
+        &self.clock
+    }
+
+    fn clock_mut(&mut self) -> &mut Clock {
+        &mut self.clock
+    }
+}
+
+impl<S: System + ?Sized> Stepper<S> for Dop853 {
+    fn state(&self) -> &[f64] {
+        &self.y
+    }
+
+    fn stiffness_detected(&self) -> Option<f64> {
+        self.stiffness_detected
+    }
+
+    fn step(&mut self, system: &S, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
+        let mut measure = HairerMeasure(self.tol);
+        // The inherent step, with this measure's type: no dynamic call
+        // per attempt.
+        Dop853::step_measured(self, system, t_limit, budget, &mut measure).map(|_| ())
+    }
+
+    fn step_measured(
+        &mut self,
+        system: &S,
+        t_limit: f64,
+        budget: &Budget,
+        measure: &mut dyn ErrorMeasure,
+    ) -> Result<StepOutcome, Failure> {
+        Dop853::step_measured(self, system, t_limit, budget, measure)
+    }
+
+    fn dense(&mut self, system: &S, t: f64, out: &mut [f64]) -> Result<(), Failure> {
+        let n = self.y.len();
+        let step = self.clock.last_step();
+        if let Some(end) = crate::ode::stepper::outside_last_step(t, step, &self.y_old, &self.y) {
+            out.copy_from_slice(end);
+            return Ok(());
+        }
+        if !self.dense_ready {
+            self.prepare_dense(system)?;
+        }
+        contd8(
+            self.cont(),
+            n,
+            (t - self.clock.t_old) / self.clock.h_old,
+            out,
+        );
+        Ok(())
+    }
+
+    fn dense_step(&mut self, system: &S) -> Result<Option<DenseStep>, Failure> {
+        Dop853::dense_step(self, system).map(Some)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
+pub use crate::ode::dense::DenseStep;
+
+impl DenseStep {
+    fn dop853(t_old: f64, t_new: f64, h: f64, cont: Vec<f64>) -> DenseStep {
+        DenseStep::new(t_old, t_new, h, std::sync::Arc::new(Contd8 { cont }))
+    }
+}
+
+/// DOP853's continuous extension of order 7: Hairer's `contd8`
+/// coefficients, 8 blocks of `n`.
+#[derive(Debug)]
+struct Contd8 {
+    cont: Vec<f64>,
+}
+
+impl Extension for Contd8 {
+    fn eval(&self, theta: f64, out: &mut [f64]) {
+        contd8(&self.cont, self.cont.len() / 8, theta, out);
+    }
+}
+
+/// Hairer's `contd8`: the continuous extension at `θ = (t − t_old)/h`.
+fn contd8(c: &[f64], n: usize, s: f64, out: &mut [f64]) {
+    let s1 = 1.0 - s;
+    for (i, o) in out.iter_mut().enumerate().take(n) {
+        let conf1 = c[4 * n + i] + s * (c[5 * n + i] + s1 * (c[6 * n + i] + s * c[7 * n + i]));
+        *o = c[i] + s * (c[n + i] + s1 * (c[2 * n + i] + s * (c[3 * n + i] + s1 * conf1)));
+    }
+}
+
+/// Stage `j` of Hairer's numbering (`0` the rate at the step's start,
+/// `12` at its end, `13..16` the extra stages of the extension) in this
+/// module's storage (`k[0]` the end rate, `k[12]` the start rate).
+fn stage<'a, K: Stages + ?Sized>(k: &'a K, extra: &'a [f64], j: usize) -> &'a [f64] {
+    match j {
+        0 => k.stage(12),
+        12 => k.stage(0),
+        13.. => {
+            let n = extra.len() / 3;
+            &extra[(j - 13) * n..(j - 12) * n]
+        }
+        _ => k.stage(j),
+    }
+}
+
+/// The 13 stages of a step as this module stores them (`k[0]` the end
+/// rate, `k[12]` the start rate): the stepper's vectors, or a stored
+/// step's one buffer.
+trait Stages {
+    fn stage(&self, j: usize) -> &[f64];
+}
+
+/// Stages stored one after another, `n` numbers each.
+struct FlatStages<'a> {
+    data: &'a [f64],
+    n: usize,
+}
+
+impl Stages for FlatStages<'_> {
+    fn stage(&self, j: usize) -> &[f64] {
+        &self.data[j * self.n..(j + 1) * self.n]
+    }
+}
+
+/// Computes the three extra stages into `extra` and the coefficients
+/// `cont` (8 blocks of `n`) of the 7th-order continuous extension, with
+/// `k` the 13 stages of the step as the stepper keeps them. Written as
+/// whole-vector updates (one `axpy` per stage) so that it vectorises: the
+/// field's coefficient systems have `(N+1)²` components.
+#[allow(clippy::too_many_arguments)]
+fn continuous_extension<S: System + ?Sized, K: Stages + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y: &[f64],
+    k: &K,
+    extra: &mut [f64],
+    stage_state: &mut [f64],
+    cont: &mut [f64],
+) -> Result<(), Failure> {
+    let n = y.len();
+    let (y, y_old) = (&y[..n], &y_old[..n]);
+    let stage_state = &mut stage_state[..n];
+    let extra = &mut extra[..3 * n];
+    macro_rules! extra_stage {
+        ($e:literal, $r:literal) => {{
+            let (done, rest) = extra.split_at_mut($e * n);
+            let row: [(f64, &[f64]); $r] = std::array::from_fn(|m| {
+                let j = A_EXTRA[$e][m].0;
+                let stage = if j >= 13 {
+                    &done[(j - 13) * n..(j - 12) * n]
+                } else {
+                    &stage(k, &[], j)[..n]
+                };
+                (A_EXTRA[$e][m].1, stage)
+            });
+            combine(stage_state, y_old, h, &row);
+            system.rhs(t_old + C_EXTRA[$e] * h, stage_state, &mut rest[..n])?;
+        }};
+    }
+    extra_stage!(0, 8);
+    extra_stage!(1, 8);
+    extra_stage!(2, 8);
+    // The stages D uses (Hairer's numbering), as slices of length n.
+    const USED: [usize; 12] = [0, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+    let extra = &*extra;
+    let used: [&[f64]; 12] = std::array::from_fn(|m| &stage(k, extra, USED[m])[..n]);
+    let (start_rate, end_rate) = (&k.stage(12)[..n], &k.stage(0)[..n]);
+    let (c0, rest) = cont.split_at_mut(n);
+    let (c1, rest) = rest.split_at_mut(n);
+    let (c2, rest) = rest.split_at_mut(n);
+    let (c3, rest) = rest.split_at_mut(n);
+    let (c4, rest) = rest.split_at_mut(n);
+    let (c5, rest) = rest.split_at_mut(n);
+    let (c6, c7) = rest.split_at_mut(n);
+    let c7 = &mut c7[..n];
+    for i in 0..n {
+        let y_diff = y[i] - y_old[i];
+        let bspl = h * start_rate[i] - y_diff;
+        c0[i] = y_old[i];
+        c1[i] = y_diff;
+        c2[i] = bspl;
+        c3[i] = y_diff - h * end_rate[i] - bspl;
+        let mut d = [0.0; 4];
+        for (m, stage) in used.iter().enumerate() {
+            let v = stage[i];
+            for r in 0..4 {
+                d[r] += D[r][USED[m]] * v;
+            }
+        }
+        c4[i] = h * d[0];
+        c5[i] = h * d[1];
+        c6[i] = h * d[2];
+        c7[i] = h * d[3];
+    }
+    Ok(())
+}
+
+/// The 7th-order continuous extension over `[t_old, t_old + h]` of one
+/// DOP853 step of `system` from `y_old`, pinned to the end state `y_new`
+/// given by the caller (a more accurate one than this step's own: the field
+/// method's recovered state). 16 evaluations of `system`. The field method
+/// uses it for its output between steps, on the motion linearised along
+/// its predictor: the coefficients' extension, recovered through the
+/// conditions, was up to 30× less accurate between the steps than at them.
+pub fn dense_step_between<S: System + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y_new: &[f64],
+) -> Result<DenseStep, Failure> {
+    dense_step_between_measured(system, t_old, h, y_old, y_new, None).map(|(step, _)| step)
+}
+
+/// [`dense_step_between`], and with `tol` how far the step's own end
+/// misses `y_new` (Hairer's scaled RMS norm; `0` without `tol`): above 1
+/// the step is too long for one explicit step of `system`, and so is its
+/// continuous extension.
+pub fn dense_step_between_measured<S: System + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y_new: &[f64],
+    tol: Option<Tolerance>,
+) -> Result<(DenseStep, f64), Failure> {
+    let n = y_old.len();
+    // Hairer's stage numbering: k[0] the start rate, k[1..12] the stages.
+    let mut k = vec![0.0; (STAGES + 1) * n];
+    system.rhs(t_old, y_old, &mut k[..n])?;
+    let mut stage_state = vec![0.0; n];
+    for s in 1..STAGES {
+        stage_state.copy_from_slice(y_old);
+        for &(j, a) in A[s] {
+            axpy(h * a, &k[j * n..(j + 1) * n], &mut stage_state);
+        }
+        system.rhs(t_old + C[s] * h, &stage_state, &mut k[s * n..(s + 1) * n])?;
+    }
+    let miss = match tol {
+        Some(tol) => {
+            let own_end: Vec<f64> = (0..n)
+                .map(|i| y_old[i] + h * B.iter().map(|&(j, w)| w * k[j * n + i]).sum::<f64>())
+                .collect();
+            let miss: Vec<f64> = own_end.iter().zip(y_new).map(|(a, b)| a - b).collect();
+            crate::ode::tolerance::rms_norm(&miss, y_old, y_new, tol)
+        }
+        None => 0.0,
+    };
+    system.rhs(t_old + h, y_new, &mut k[STAGES * n..])?;
+    // This module's storage: k[0] the end rate, k[12] the start rate.
+    let (start, rest) = k.split_at_mut(STAGES * n);
+    start[..n].swap_with_slice(&mut rest[..n]);
+    let mut extra = vec![0.0; 3 * n];
+    let mut cont = vec![0.0; 8 * n];
+    continuous_extension(
+        system,
+        t_old,
+        h,
+        y_old,
+        y_new,
+        &FlatStages { data: &k, n },
+        &mut extra,
+        &mut stage_state,
+        &mut cont,
+    )?;
+    if first_non_finite(&cont).is_some() {
+        return Err(Failure::non_finite(t_old, system.component_name(0)));
+    }
+    Ok((DenseStep::dop853(t_old, t_old + h, h, cont), miss))
+}
+
+/// An accepted step as data (see [`Dop853::raw_step`]): one buffer of
+/// `15 n` numbers, `y_old`, `y` and the 13 stages (`k[0]` the end rate,
+/// `k[1..12]` the stages, `k[12]` the start rate) — one allocation a
+/// stored step, not fifteen.
+#[derive(Clone, Debug, Default)]
+pub struct RawStep {
+    pub t_old: f64,
+    pub t_new: f64,
+    h: f64,
+    data: Vec<f64>,
+}
+
+impl RawStep {
+    fn n(&self) -> usize {
+        self.data.len() / 15
+    }
+
+    /// The state at the step's end.
+    pub fn end_state(&self) -> &[f64] {
+        let n = self.n();
+        &self.data[n..2 * n]
+    }
+
+    /// The step's continuous extension (three evaluations of `system`,
+    /// which must be the system the step was taken on).
+    pub fn prepare<S: System + ?Sized>(&self, system: &S) -> Result<DenseStep, Failure> {
+        let n = self.n();
+        let (y_old, rest) = self.data.split_at(n);
+        let (y, stages) = rest.split_at(n);
+        let mut extra = vec![0.0; 3 * n];
+        let mut stage_state = vec![0.0; n];
+        let mut cont = vec![0.0; 8 * n];
+        continuous_extension(
+            system,
+            self.t_old,
+            self.h,
+            y_old,
+            y,
+            &FlatStages { data: stages, n },
+            &mut extra,
+            &mut stage_state,
+            &mut cont,
+        )?;
+        Ok(DenseStep::dop853(self.t_old, self.t_new, self.h, cont))
+    }
+}
+
+/// `dst = base + h Σ_m a_m k_m` component by component; `R` is a
+/// compile-time row length, so the inner sum unrolls.
+#[inline(always)]
+fn combine<const R: usize>(dst: &mut [f64], base: &[f64], h: f64, row: &[(f64, &[f64]); R]) {
+    let n = dst.len();
+    let base = &base[..n];
+    for i in 0..n {
+        let mut acc = 0.0;
+        for (a, k) in row {
+            acc += a * k[i];
+        }
+        dst[i] = base[i] + h * acc;
+    }
+}
+
+/// `y += a x`.
+#[inline]
+fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += a * xi;
+    }
+}
+
+impl Start for Dop853 {
+    const NAME: &'static str = "DOP853";
+
+    fn start<S: System + ?Sized>(
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<Self, Failure> {
+        Dop853::new(system, t0, y0, tol, h_max, h0)
+    }
+}

@@ -1,0 +1,415 @@
+//! Keeping the constraints (SPEC §2.3): the state components a constraint
+//! fixes (the dependent velocities of first-order constraints) are
+//! integrated as free state, so they drift from the values the constraint
+//! requires wherever its right side depends on a dependent coordinate —
+//! the residual `e = q_d' − φ` obeys `e' = −φ_{q_d} e` and grows
+//! exponentially where that partial keeps its sign (a four-bar's closure
+//! lost 7 % by t = 15 with exit 0; shared/notes/constraint-drift.md).
+//!
+//! The remedy is projection (Hairer, Lubich, Wanner, *Geometric Numerical
+//! Integration*, IV.4): after an accepted step whose residual has grown to
+//! a fraction of the tolerance, the state is put back on the constraints
+//! and the method goes on from there, its step sizes kept (a projection
+//! is no discontinuity); every output is projected, so no sample is off
+//! the constraints. The error estimate of a step is taken before its
+//! projection, so the integrator's order is kept.
+//!
+//! The projection moves the velocities along the constraints' normals
+//! (Gauss–Newton on `h_c = v_{d_c} − φ_c(t, q, v) = 0`, the smallest
+//! correction), not the dependent velocity alone: near a poor pivot (a
+//! knife edge heading across y) the constraint's value `φ = tan θ x'`
+//! multiplies the error of `x'`, and moving `y'` onto it made the circling
+//! knife edge 3× less accurate than leaving it.
+
+use crate::failure::{Failure, FailureKind};
+use crate::linalg::{solve_dense, Matrix};
+use crate::model::{DynModel, Initial};
+use crate::ode::tolerance::Tolerance;
+
+/// The residual (relative to the tolerance) above which the state after a
+/// step is projected. Below it the drift is left to grow: a projection
+/// re-anchors the field, and the residual seeded by one step is usually a
+/// small fraction of the tolerance. A tenth keeps every carried residual
+/// an order below what the step's own error may be.
+pub const PROJECT_ABOVE: f64 = 0.1;
+
+/// A correction this many times the tolerance, and above
+/// [`BROKEN_ABOVE`] of its component's size, is no drift that an accepted
+/// step can carry: the motion left the constraint (its branch ended, or it
+/// passed a singular point of it). Projected, it would go on as another
+/// motion with exit 0 — the explicit rising branch `y' = sqrt(c² − x'²)`
+/// went on past its apex to speed² 77 where the constraint holds it at 1.
+pub const BROKEN_TIMES_TOLERANCE: f64 = 1e4;
+pub const BROKEN_ABOVE: f64 = 1e-6;
+
+/// Gauss–Newton iterations of one projection: constraints affine in the
+/// velocities (the usual case) take one, and the second confirms it.
+const ITERATIONS: usize = 6;
+
+/// The constraints' residuals along one run, and the projections made.
+#[derive(Clone, Debug)]
+pub struct Keeper {
+    tol: Tolerance,
+    /// The fixed components of `mode` (state indices).
+    mode: Option<usize>,
+    fixed: Vec<usize>,
+    /// The velocity block `q^(u−1)` (state indices), which projections move.
+    velocities: std::ops::Range<usize>,
+    kept: Vec<f64>,
+    gradient: Matrix,
+    /// The last projection's result.
+    projected: Vec<f64>,
+    /// Buffers of a projection (one per constraint, and the Gram matrix),
+    /// kept from step to step: most steps only measure the residual, and
+    /// allocations were a third of a small model's cost of keeping.
+    scratch: Scratch,
+    largest: f64,
+    largest_absolute: f64,
+    largest_at: f64,
+    projections: usize,
+}
+
+#[derive(Clone, Debug, Default)]
+struct Scratch {
+    residual: Vec<f64>,
+    gram: Vec<f64>,
+    lambda: Vec<f64>,
+}
+
+/// What the summary says of the constraints kept.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Kept {
+    /// The largest distance from the constraints that the integration
+    /// carried (the correction of a projection), relative to the
+    /// tolerance `atol + rtol·|x|`, and absolute.
+    pub largest: f64,
+    pub largest_absolute: f64,
+    pub largest_at: f64,
+    /// Projections after steps (every output is projected too).
+    pub projections: usize,
+}
+
+impl Keeper {
+    /// `None` for a model that fixes no state component.
+    pub fn new(model: &dyn DynModel, tol: Tolerance) -> Option<Keeper> {
+        let n = model.dim();
+        let coordinates = model.coordinates();
+        (model.keeps_constraints() || model.keeps_positions()).then(|| Keeper {
+            tol,
+            mode: None,
+            fixed: Vec::new(),
+            velocities: n.saturating_sub(coordinates)..n,
+            kept: vec![0.0; n],
+            gradient: Matrix::zeros(n, n),
+            projected: vec![0.0; n],
+            scratch: Scratch::default(),
+            largest: 0.0,
+            largest_absolute: 0.0,
+            largest_at: f64::NAN,
+            projections: 0,
+        })
+    }
+
+    /// After an accepted step in `mode`: `Some(projected state)` when the
+    /// state has drifted past [`PROJECT_ABOVE`] of the tolerance.
+    pub fn after_step(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &[f64],
+    ) -> Result<Option<&[f64]>, Failure> {
+        if self.project_from(model, mode, t, x, true, true)? > PROJECT_ABOVE {
+            self.projections += 1;
+            Ok(Some(&self.projected))
+        } else {
+            Ok(None)
+        }
+    }
+
+    /// Projects `x` (an output, or the state at an event) onto the
+    /// constraints in place.
+    pub fn project(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<(), Failure> {
+        self.project_in_place(model, mode, t, x, true)
+    }
+
+    /// Puts a state that was made, not integrated (an ensemble's member
+    /// moved off the model's initial state), on the constraints: no
+    /// distance is recorded or judged.
+    pub fn put_on(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+    ) -> Result<(), Failure> {
+        self.project_in_place(model, mode, t, x, false)
+    }
+
+    fn project_in_place(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &mut [f64],
+        judged: bool,
+    ) -> Result<(), Failure> {
+        self.project_from(model, mode, t, x, judged, false)?;
+        x.copy_from_slice(&self.projected);
+        Ok(())
+    }
+
+    pub fn kept(&self) -> Kept {
+        Kept {
+            largest: self.largest,
+            largest_absolute: self.largest_absolute,
+            largest_at: self.largest_at,
+            projections: self.projections,
+        }
+    }
+
+    /// `x` projected onto the constraints, into `self.projected`; the
+    /// distance (the first correction) relative to the tolerance, recorded
+    /// and judged when `judged` (a state the integration carried). With
+    /// `bounded`, a state whose residual bounds its distance below
+    /// [`PROJECT_ABOVE`] is left as it is, and the bound is the distance
+    /// recorded: the normals' Gram matrix `I + G Gᵀ` is at least the
+    /// identity, so no component of the correction exceeds `‖h‖₂` (most
+    /// steps end there, and this saves them the partials and the solve).
+    fn project_from(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &[f64],
+        judged: bool,
+        bounded: bool,
+    ) -> Result<f64, Failure> {
+        if self.mode != Some(mode) {
+            self.fixed = fixed_components(model, mode);
+            self.mode = Some(mode);
+        }
+        self.projected.copy_from_slice(x);
+        // Holonomic constraints first: the positions and their derivatives
+        // along the constraints' normals (the same in every mode).
+        let mut closure = (0.0_f64, 0.0_f64);
+        if model.keeps_positions() {
+            model.project_closure(t, &mut self.projected)?;
+            let mut worst = 0;
+            for (i, (&before, &after)) in x.iter().zip(&self.projected).enumerate() {
+                let delta = (after - before).abs();
+                let scale = self.tol.atol + self.tol.rtol * before.abs().max(after.abs());
+                if delta / scale > closure.0 {
+                    worst = i;
+                }
+                closure = (closure.0.max(delta / scale), closure.1.max(delta));
+            }
+            let size = x[worst].abs().max(self.projected[worst].abs()).max(1.0);
+            if judged && closure.0 > BROKEN_TIMES_TOLERANCE && closure.1 > BROKEN_ABOVE * size {
+                return Err(Failure::new(
+                    t,
+                    FailureKind::ConstraintLeft {
+                        component: model.state_names()[worst].to_string(),
+                        residual: closure.1,
+                    },
+                ));
+            }
+        }
+        let m = self.fixed.len();
+        let mut scratch = std::mem::take(&mut self.scratch);
+        scratch.residual.resize(m, 0.0);
+        scratch.gram.resize(m * m, 0.0);
+        scratch.lambda.resize(m, 0.0);
+        let Scratch {
+            residual,
+            gram: normal_gram,
+            lambda,
+        } = &mut scratch;
+        let mut distance: Option<(f64, f64)> = None;
+        let mut last = (0.0_f64, 0.0_f64);
+        for _ in 0..ITERATIONS {
+            self.kept.copy_from_slice(&self.projected);
+            model.constrained(t, &self.projected, &mut self.kept)?;
+            for (c, &j) in self.fixed.iter().enumerate() {
+                if !self.kept[j].is_finite() {
+                    return Err(Failure::new(
+                        t,
+                        FailureKind::ConstraintUndefined {
+                            component: model.state_names()[j].to_string(),
+                        },
+                    ));
+                }
+                residual[c] = self.projected[j] - self.kept[j];
+            }
+            if bounded && distance.is_none() {
+                let norm = residual.iter().map(|h| h * h).sum::<f64>().sqrt();
+                let smallest = self
+                    .velocities
+                    .clone()
+                    .map(|i| self.tol.atol + self.tol.rtol * x[i].abs())
+                    .fold(f64::INFINITY, f64::min);
+                if norm <= PROJECT_ABOVE * smallest {
+                    // The holonomic constraints' correction (already in
+                    // `projected`) counts too.
+                    let (relative, absolute) = if closure.0 > norm / smallest {
+                        closure
+                    } else {
+                        (norm / smallest, norm)
+                    };
+                    if relative > self.largest {
+                        (self.largest, self.largest_absolute, self.largest_at) =
+                            (relative, absolute, t);
+                    }
+                    self.scratch = scratch;
+                    return Ok(relative);
+                }
+            }
+            self.gradient.fill(0.0);
+            model.kept_gradient(t, &self.projected, &mut self.gradient)?;
+            // The normals J_c = e_{d_c} − ∂φ_c/∂v over the velocities; the
+            // smallest correction is Δv = −Jᵀ (J Jᵀ)⁻¹ h.
+            let normal = |keeper: &Keeper, c: usize, i: usize| -> f64 {
+                let j = keeper.fixed[c];
+                f64::from(u8::from(i == j)) - keeper.gradient[(j, i)]
+            };
+            for a in 0..m {
+                for b in 0..m {
+                    normal_gram[a * m + b] = self
+                        .velocities
+                        .clone()
+                        .map(|i| normal(self, a, i) * normal(self, b, i))
+                        .sum();
+                }
+            }
+            lambda.copy_from_slice(residual);
+            let solved = if m == 1 {
+                lambda[0] /= normal_gram[0];
+                lambda[0].is_finite()
+            } else {
+                solve_dense(m, normal_gram, lambda)
+            };
+            let (mut relative, mut absolute) = (0.0_f64, 0.0_f64);
+            let mut worst = self.fixed.first().copied().unwrap_or(0);
+            for i in self.velocities.clone() {
+                let delta = if solved {
+                    -(0..m).map(|c| normal(self, c, i) * lambda[c]).sum::<f64>()
+                } else {
+                    // Normals that are not independent: the dependent
+                    // components take their values.
+                    match self.fixed.iter().position(|&j| j == i) {
+                        Some(c) => -residual[c],
+                        None => 0.0,
+                    }
+                };
+                let v = self.projected[i];
+                self.projected[i] = v + delta;
+                let scale = self.tol.atol + self.tol.rtol * v.abs().max(self.projected[i].abs());
+                if delta.abs() / scale > relative {
+                    worst = i;
+                }
+                relative = relative.max(delta.abs() / scale);
+                absolute = absolute.max(delta.abs());
+            }
+            if distance.is_none() {
+                let size = x[worst].abs().max(self.projected[worst].abs()).max(1.0);
+                if judged && relative > BROKEN_TIMES_TOLERANCE && absolute > BROKEN_ABOVE * size {
+                    return Err(self.left(model, t, residual, absolute));
+                }
+                distance = Some((relative, absolute));
+            }
+            last = (relative, absolute);
+            if relative <= 1e-3 {
+                break;
+            }
+        }
+        // Gauss–Newton that does not settle within the tolerance: no point
+        // of the constraints near the state (a branch that ends).
+        if last.0 > 1.0 {
+            return Err(self.left(model, t, residual, last.1));
+        }
+        self.scratch = scratch;
+        let (relative, absolute) = distance.unwrap_or((0.0, 0.0));
+        let (relative, absolute) = if closure.0 > relative {
+            closure
+        } else {
+            (relative, absolute)
+        };
+        if judged && relative > self.largest {
+            self.largest = relative;
+            self.largest_absolute = absolute;
+            self.largest_at = t;
+        }
+        Ok(relative)
+    }
+
+    /// The failure of a state that has left the constraints, naming the
+    /// fixed component with the largest residual.
+    fn left(&self, model: &dyn DynModel, t: f64, residual: &[f64], distance: f64) -> Failure {
+        let c = (0..residual.len())
+            .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
+            .unwrap_or(0);
+        Failure::new(
+            t,
+            FailureKind::ConstraintLeft {
+                component: model.state_names()[self.fixed[c]].to_string(),
+                residual: distance,
+            },
+        )
+    }
+}
+
+/// Checks the components that mode 0 fixes but the initial values give
+/// (the candidate of a non-linear constraint, kept as written: its value
+/// chooses the root the motion starts on): each must be the root of its
+/// constraint near it, found by iterating the kept value (Newton's
+/// `v − f/f_v`) from it. A value off the constraint is the user's
+/// (`--init`, `--param`), and a run from it would start off the
+/// constraint: it stops before the run, naming the root near it.
+pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
+    let Some(fixed) = model.fixed_components().first() else {
+        return Ok(());
+    };
+    let given: Vec<usize> = fixed
+        .iter()
+        .copied()
+        .filter(|&j| model.initial_kinds().get(j) == Some(&Initial::Given))
+        .collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    let mut x = x0.to_vec();
+    let mut kept = x0.to_vec();
+    for _ in 0..50 {
+        model.constrained(t0, &x, &mut kept)?;
+        let mut moved = 0.0_f64;
+        for &j in &given {
+            moved = moved.max((kept[j] - x[j]).abs() / x[j].abs().max(1.0));
+            x[j] = kept[j];
+        }
+        if !(moved > 4.0 * f64::EPSILON) {
+            break;
+        }
+    }
+    for &j in &given {
+        crate::model::check_stated(t0, model.state_names()[j], x0[j], x[j])?;
+    }
+    Ok(())
+}
+
+/// The state components the constraints fix in `mode`: the generated
+/// table's (a crate of several modes has one for each), else those the
+/// initial values take as fixed (a single mode).
+fn fixed_components(model: &dyn DynModel, mode: usize) -> Vec<usize> {
+    if let Some(fixed) = model.fixed_components().get(mode) {
+        return fixed.to_vec();
+    }
+    (0..model.dim())
+        .filter(|&j| model.initial_kinds()[j] == Initial::Constraint)
+        .collect()
+}
