@@ -216,6 +216,13 @@ impl<F: FieldSystem + ?Sized> LinearGenerator for AsGenerator<'_, F> {
 pub enum StoredStep {
     Raw(RawStep),
     Ready(DenseStep),
+    /// A Magnus step: its start, from which a shorter Magnus step gives
+    /// the coefficients anywhere inside it ([`crate::magnus::propagate`]).
+    Exponential {
+        t_old: f64,
+        t_new: f64,
+        y_old: Vec<f64>,
+    },
 }
 
 impl Default for StoredStep {
@@ -229,6 +236,7 @@ impl StoredStep {
         match self {
             StoredStep::Raw(r) => r.t_old,
             StoredStep::Ready(d) => d.t_old,
+            StoredStep::Exponential { t_old, .. } => *t_old,
         }
     }
 
@@ -242,16 +250,38 @@ impl StoredStep {
         match self {
             StoredStep::Raw(r) => r.t_new,
             StoredStep::Ready(d) => d.t_new,
+            StoredStep::Exponential { t_new, .. } => *t_new,
         }
     }
 
     /// The continuous extension (three evaluations of `system` for a raw
-    /// DOP853 step; `system` must be the one the step was taken on).
-    pub fn prepare<F: FieldSystem + ?Sized>(&self, system: &F) -> Result<DenseStep, Failure> {
+    /// DOP853 step; `system` must be the one the step was taken on);
+    /// `None` for a Magnus step, which has none (see
+    /// [`StoredStep::exponential_at`]).
+    pub fn prepare<F: FieldSystem + ?Sized>(
+        &self,
+        system: &F,
+    ) -> Result<Option<DenseStep>, Failure> {
         match self {
-            StoredStep::Raw(r) => r.prepare(system),
-            StoredStep::Ready(d) => Ok(d.clone()),
+            StoredStep::Raw(r) => r.prepare(system).map(Some),
+            StoredStep::Ready(d) => Ok(Some(d.clone())),
+            StoredStep::Exponential { .. } => Ok(None),
         }
+    }
+
+    /// A Magnus step's coefficients at `t` inside it (a Magnus step from
+    /// its start); `false` for the other kinds.
+    pub fn exponential_at<F: FieldSystem + ?Sized>(
+        &self,
+        system: &F,
+        t: f64,
+        out: &mut [f64],
+    ) -> Result<bool, Failure> {
+        let StoredStep::Exponential { t_old, y_old, .. } = self else {
+            return Ok(false);
+        };
+        crate::magnus::propagate(&AsGenerator(system), *t_old, t - t_old, y_old, out)?;
+        Ok(true)
     }
 }
 
@@ -636,8 +666,19 @@ impl Window {
                 }
             }
             WindowStepper::Stiff(s) => *dst = StoredStep::Ready(s.dense_step()),
-            // The quasilinear field does not use Magnus windows.
-            WindowStepper::Magnus(_) => {}
+            WindowStepper::Magnus(s) => {
+                let mut y_old = match std::mem::take(dst) {
+                    StoredStep::Exponential { y_old, .. } => y_old,
+                    _ => Vec::new(),
+                };
+                y_old.clear();
+                y_old.extend_from_slice(s.previous_state());
+                *dst = StoredStep::Exponential {
+                    t_old: s.previous_time(),
+                    t_new: s.time(),
+                    y_old,
+                };
+            }
         }
     }
 }
