@@ -63,7 +63,7 @@ fn the_field_keeps_long_windows_on_a_stiff_joint_and_meets_its_tolerance() {
 /// to the Magnus integrator, which follows the fast mode exactly where it
 /// is constant, and the predictor stays explicit. RODAS4 there (the rule
 /// before, which cannot tell a vibration from a decay) took 7,049 field
-/// steps and 287 ms (error 1.1e-4); Magnus 470 steps and about 5 ms
+/// steps and 287 ms (error 1.1e-4); Magnus 470 steps and 5–10 ms
 /// (1.25e-4, direct DOP853 1.1e-4 at the same tolerance). Fails without
 /// the exponential windows (the method says RODAS4, the steps 7,049).
 /// Every sample but the ends lies inside a Magnus step, so the samples

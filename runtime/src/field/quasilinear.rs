@@ -782,8 +782,8 @@ impl QuasilinearField {
     /// step; RODAS4 (order 4, damping what it cannot resolve, an LU of
     /// the N(N+1) system a step) took 7,049 steps and 287 ms on
     /// tests/data/stiff_joint.lag at rtol 1e-6 (error 1.1e-4), Magnus
-    /// windows with a DOP853 predictor 470 steps and 4.9 ms (1.25e-4;
-    /// direct DOP853 1.1 ms, 1.1e-4).
+    /// windows with a DOP853 predictor 470 steps and 4.9–9.5 ms under
+    /// load (1.25e-4; direct DOP853 1.1 ms, 1.1e-4).
     fn window_kind(&self) -> StepperKind {
         if self.options.magnus || (self.stiff && self.oscillatory && self.options.auto_stiff) {
             StepperKind::Magnus
