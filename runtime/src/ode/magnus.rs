@@ -36,6 +36,53 @@ pub trait LinearGenerator {
     fn generator(&self, t: f64, b: &mut Matrix) -> Result<(), Failure>;
 }
 
+/// `exp(Ω)` over `[t, t + h]`: the order-4 Magnus propagator (two
+/// evaluations of the generator and one matrix exponential).
+pub fn propagator<G: LinearGenerator + ?Sized>(
+    system: &G,
+    t: f64,
+    h: f64,
+) -> Result<Matrix, Failure> {
+    let m = system.order();
+    let mid = t + 0.5 * h;
+    let mut b1 = Matrix::zeros(m, m);
+    let mut b2 = Matrix::zeros(m, m);
+    system.generator(mid - GAUSS_OFFSET * h, &mut b1)?;
+    system.generator(mid + GAUSS_OFFSET * h, &mut b2)?;
+    let commutator = {
+        let mut c = b2.mul(&b1);
+        let d = b1.mul(&b2);
+        for (x, y) in c.as_mut_slice().iter_mut().zip(d.as_slice()) {
+            *x -= y;
+        }
+        c
+    };
+    let mut omega = Matrix::zeros(m, m);
+    for (i, o) in omega.as_mut_slice().iter_mut().enumerate() {
+        *o = 0.5 * h * (b1.as_slice()[i] + b2.as_slice()[i])
+            + COMMUTATOR_WEIGHT * h * h * commutator.as_slice()[i];
+    }
+    Ok(expm(&omega))
+}
+
+/// `exp(Ω) Y` over `[t, t + h]` from `y` (`Y` column by column), into
+/// `out`: the state a step of length `h` reaches, for output inside an
+/// accepted step (a shorter step than the accepted one, so at least as
+/// accurate).
+pub fn propagate<G: LinearGenerator + ?Sized>(
+    system: &G,
+    t: f64,
+    h: f64,
+    y: &[f64],
+    out: &mut [f64],
+) -> Result<(), Failure> {
+    let m = system.order();
+    let p = propagator(system, t, h)?;
+    let yy = Matrix::from_column_major(m, y.len() / m, y.to_vec());
+    out.copy_from_slice(p.mul(&yy).as_slice());
+    Ok(())
+}
+
 pub struct Magnus {
     tol: Tolerance,
     clock: Clock,
@@ -74,6 +121,11 @@ impl Magnus {
         &self.y
     }
 
+    /// The state at the last step's start.
+    pub fn previous_state(&self) -> &[f64] {
+        &self.y_old
+    }
+
     /// `exp(Ω)` over `[t, t + h]`.
     fn propagator<G: LinearGenerator + ?Sized>(
         &mut self,
@@ -81,28 +133,9 @@ impl Magnus {
         t: f64,
         h: f64,
     ) -> Result<Matrix, Failure> {
-        let m = system.order();
-        let mid = t + 0.5 * h;
-        let mut b1 = Matrix::zeros(m, m);
-        let mut b2 = Matrix::zeros(m, m);
-        system.generator(mid - GAUSS_OFFSET * h, &mut b1)?;
-        system.generator(mid + GAUSS_OFFSET * h, &mut b2)?;
         self.clock.stats.rhs_evaluations += 2;
-        let commutator = {
-            let mut c = b2.mul(&b1);
-            let d = b1.mul(&b2);
-            for (x, y) in c.as_mut_slice().iter_mut().zip(d.as_slice()) {
-                *x -= y;
-            }
-            c
-        };
-        let mut omega = Matrix::zeros(m, m);
-        for (i, o) in omega.as_mut_slice().iter_mut().enumerate() {
-            *o = 0.5 * h * (b1.as_slice()[i] + b2.as_slice()[i])
-                + COMMUTATOR_WEIGHT * h * h * commutator.as_slice()[i];
-        }
         self.clock.stats.matrix_exponentials += 1;
-        Ok(expm(&omega))
+        propagator(system, t, h)
     }
 
     /// One accepted step under `measure` (the error estimate per unit step

@@ -19,7 +19,7 @@ use crate::method::segment::Segment;
 use crate::ode::budget::Budget;
 use crate::ode::dop853::{hairer_error, Dop853, RawStep};
 use crate::ode::magnus::{LinearGenerator, Magnus};
-use crate::ode::stepper::{DenseStep, ErrorMeasure, Family, StepOutcome, StepperOf};
+use crate::ode::stepper::{Clocked, DenseStep, ErrorMeasure, Family, StepOutcome, StepperOf};
 use crate::ode::tolerance::{Stats, Tolerance};
 use crate::ode::Integrator;
 
@@ -210,6 +210,13 @@ impl LinearGenerator for dyn FieldSystem + '_ {
 pub enum StoredStep {
     Raw(RawStep),
     Ready(DenseStep),
+    /// A Magnus step: its start, from which a shorter Magnus step gives
+    /// the coefficients anywhere inside it ([`crate::ode::magnus::propagate`]).
+    Exponential {
+        t_old: f64,
+        t_new: f64,
+        y_old: Vec<f64>,
+    },
 }
 
 impl Default for StoredStep {
@@ -223,6 +230,7 @@ impl StoredStep {
         match self {
             StoredStep::Raw(r) => r.t_old,
             StoredStep::Ready(d) => d.t_old,
+            StoredStep::Exponential { t_old, .. } => *t_old,
         }
     }
 
@@ -236,16 +244,38 @@ impl StoredStep {
         match self {
             StoredStep::Raw(r) => r.t_new,
             StoredStep::Ready(d) => d.t_new,
+            StoredStep::Exponential { t_new, .. } => *t_new,
         }
     }
 
     /// The continuous extension (three evaluations of `system` for a raw
-    /// DOP853 step; `system` must be the one the step was taken on).
-    pub fn prepare<F: FieldSystem + ?Sized>(&self, system: &F) -> Result<DenseStep, Failure> {
+    /// DOP853 step; `system` must be the one the step was taken on);
+    /// `None` for a Magnus step, which has none (see
+    /// [`StoredStep::exponential_at`]).
+    pub fn prepare<F: FieldSystem + ?Sized>(
+        &self,
+        system: &F,
+    ) -> Result<Option<DenseStep>, Failure> {
         match self {
-            StoredStep::Raw(r) => r.prepare(system),
-            StoredStep::Ready(d) => Ok(d.clone()),
+            StoredStep::Raw(r) => r.prepare(system).map(Some),
+            StoredStep::Ready(d) => Ok(Some(d.clone())),
+            StoredStep::Exponential { .. } => Ok(None),
         }
+    }
+
+    /// A Magnus step's coefficients at `t` inside it (a Magnus step from
+    /// its start); `false` for the other kinds.
+    pub fn exponential_at(
+        &self,
+        system: &dyn FieldSystem,
+        t: f64,
+        out: &mut [f64],
+    ) -> Result<bool, Failure> {
+        let StoredStep::Exponential { t_old, y_old, .. } = self else {
+            return Ok(false);
+        };
+        crate::ode::magnus::propagate(system, *t_old, t - t_old, y_old, out)?;
+        Ok(true)
     }
 }
 
@@ -602,8 +632,8 @@ impl Window {
         dst: &mut StoredStep,
     ) -> Result<(), Failure> {
         // DOP853's stages, its extension built only for the steps output
-        // asks for; another integrator's extension now (the quasilinear
-        // field uses no Magnus windows, which have none).
+        // asks for; a Magnus step's start (it has no extension of its
+        // own); another integrator's extension now.
         if let Some(s) = self.stepper.as_any().downcast_ref::<Dop853>() {
             if !matches!(dst, StoredStep::Raw(_)) {
                 *dst = StoredStep::Raw(RawStep::default());
@@ -611,6 +641,20 @@ impl Window {
             if let StoredStep::Raw(raw) = dst {
                 s.raw_step_into(raw);
             }
+        } else if let Some(s) = self.stepper.as_any().downcast_ref::<Magnus>() {
+            // A Magnus step: its start, from which a shorter Magnus step
+            // gives the output within it.
+            let mut y_old = match std::mem::take(dst) {
+                StoredStep::Exponential { y_old, .. } => y_old,
+                _ => Vec::new(),
+            };
+            y_old.clear();
+            y_old.extend_from_slice(s.previous_state());
+            *dst = StoredStep::Exponential {
+                t_old: s.previous_time(),
+                t_new: s.time(),
+                y_old,
+            };
         } else if let Some(dense) = self.stepper.dense_step(system)? {
             *dst = StoredStep::Ready(dense);
         }
