@@ -688,7 +688,7 @@ impl Solver for QuasilinearField {
                 ts.push(tk);
                 xs.push(state);
             }
-            out.push(crate::segment::Segment::Points { t: ts, x: xs });
+            out.push(crate::method::segment::Segment::Points { t: ts, x: xs });
         }
         Ok(out)
     }
