@@ -444,7 +444,10 @@ pub(super) fn linearize_in(
                 "the right side divides by zero or leaves a function's domain here: choose another point",
             ));
         }
-        if value.abs() > ZERO * scale {
+        // Written so that a scale that is not a number (a part the
+        // evaluation could not scale) cannot call a non-zero rate zero.
+        let zero = value == 0.0 || value.abs() <= ZERO * scale;
+        if !zero {
             equilibrium = false;
         }
         residual.push(value);
