@@ -1,0 +1,269 @@
+//! `Model.linearize(at=…, params=…, inputs=…, t=…)`: `lagc linearize`
+//! from Python (issue 27). The symbolic half — the free state, the
+//! ignorable coordinates, the rates with the constraints' fixed components
+//! substituted, their exact partials in the free state, the params and the
+//! inputs — is the compiler's (`src/linearize/parts.rs`), printed into the
+//! module as `impl Linear for Model` (`src/emit/linear.rs`); this file
+//! evaluates it at a point in the order `src/linearize/system.rs` does, so
+//! the result is the command line's `--format json` to rounding.
+
+use lagc_runtime::linalg::Matrix;
+use lagc_runtime::model::{Inputs, Model};
+
+/// Which state components the linearization holds. Indices into the state
+/// are the model's; "free position" `i` is `free[i]`.
+pub struct LinearLayout {
+    /// Why the module carries no linearization (`None`: it does).
+    pub unavailable: Option<&'static str>,
+    /// The state components the constraints do not fix.
+    pub free: &'static [usize],
+    /// Free positions of `A`'s state (no ignorable coordinates).
+    pub kept: &'static [usize],
+    /// Free positions of the ignorable coordinates.
+    pub ignorable: &'static [usize],
+    /// The state components the constraints fix, in `linear_fixed`'s order.
+    pub fixed: &'static [usize],
+}
+
+/// The linearization's symbolic half, printed by lagc for one model. Every
+/// function reads the params from the model, the inputs from the values it
+/// holds (`set_inputs`), the state from `x` (free components only).
+pub trait Linear {
+    const LAYOUT: LinearLayout;
+    /// Per free position: the model's stated initial value.
+    fn linear_stated(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    /// Per fixed component: the value the constraints give it.
+    fn linear_fixed(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    /// Per free position: its rate `f`.
+    fn linear_rates(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    /// `∂f/∂x` over the free state (non-zero entries written).
+    fn linear_a(&self, _t: f64, _x: &[f64], _out: &mut Matrix) {}
+    /// `∂f/∂(p, u)`: the params' direct partials, then the inputs'.
+    fn linear_b(&self, _t: f64, _x: &[f64], _out: &mut Matrix) {}
+    /// `∂p_k/∂p_l` of each param's expression in the params before it.
+    fn linear_chain(&self, _t: f64, _x: &[f64], _out: &mut Matrix) {}
+}
+
+/// A request, names resolved to indices.
+pub struct Request {
+    /// `(state index, value)`.
+    pub at: Vec<(usize, f64)>,
+    /// Every param's value, and whether it was given (not recomputed from
+    /// the params before it).
+    pub params: Vec<f64>,
+    pub overridden: Vec<bool>,
+    /// Every input's value at the point.
+    pub inputs: Vec<f64>,
+    pub t: Option<f64>,
+}
+
+/// The linearization at a point, as `lagc linearize --format json` has it.
+pub struct Linearization {
+    pub t: f64,
+    pub state: Vec<usize>,
+    pub point: Vec<f64>,
+    pub ignorable: Vec<(usize, f64)>,
+    pub fixed: Vec<(usize, f64)>,
+    pub a: Vec<Vec<f64>>,
+    pub b_params: Vec<Vec<f64>>,
+    pub b_inputs: Vec<Vec<f64>>,
+    pub eigenvalues: Vec<(f64, f64)>,
+    pub residual: Vec<f64>,
+    pub equilibrium: bool,
+}
+
+/// A residual smaller than this fraction of its scale is zero.
+const ZERO: f64 = 1e-9;
+
+/// The linearization of model `M` with these params at the request's
+/// point; `Err` is the message of a `ValueError`.
+pub fn linearize<M: Model + Linear>(
+    request: &Request,
+    names: &[&str],
+) -> Result<Linearization, String> {
+    let layout = M::LAYOUT;
+    if let Some(why) = layout.unavailable {
+        return Err(format!(
+            "this module carries no linearization: {why}; `lagc linearize FILE` gives it"
+        ));
+    }
+    let mut model = M::new(&request.params);
+    model.set_inputs(&Inputs::held(&request.inputs));
+    let t = request.t.unwrap_or_else(|| model.time_span().0);
+    let nf = layout.free.len();
+    let dim = M::STATE.len();
+    let mut x = vec![f64::NAN; dim];
+    let mut stated = vec![f64::NAN; nf];
+    model.linear_stated(t, &x, &mut stated);
+    for (i, &k) in layout.free.iter().enumerate() {
+        let given = request.at.iter().find(|&&(j, _)| j == k).map(|&(_, v)| v);
+        let v = given.unwrap_or(stated[i]);
+        if !v.is_finite() {
+            return Err(format!(
+                "the model's initial `{}` is {v} with these params: give it in `at`",
+                names[k]
+            ));
+        }
+        x[k] = v;
+    }
+    let mut fixed = vec![f64::NAN; layout.fixed.len()];
+    model.linear_fixed(t, &x, &mut fixed);
+    for (&k, &v) in layout.fixed.iter().zip(&fixed) {
+        if !v.is_finite() {
+            return Err(format!(
+                "the constraint's value of `{}` is {v} at this point: choose another point",
+                names[k]
+            ));
+        }
+        if let Some(&(_, g)) = request.at.iter().find(|&&(j, _)| j == k) {
+            if (g - v).abs() > 1e-9 * (1.0 + v.abs()) {
+                return Err(format!(
+                    "`{}={g}` in `at` violates the constraints, which fix it at {v} here: \
+                     leave it out",
+                    names[k]
+                ));
+            }
+        }
+    }
+    // The fixed components as the constraints give them: every function
+    // reads the free ones only, but the state is whole.
+    for (&k, &v) in layout.fixed.iter().zip(&fixed) {
+        x[k] = v;
+    }
+
+    let mut a_free = Matrix::zeros(nf, nf);
+    model.linear_a(t, &x, &mut a_free);
+    let kept = layout.kept;
+    let a: Vec<Vec<f64>> = kept
+        .iter()
+        .map(|&i| kept.iter().map(|&c| a_free[(i, c)]).collect())
+        .collect();
+    for (r, row) in a.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(format!(
+                    "A is not defined at this point: ∂(rate of {})/∂{} is {v}",
+                    names[layout.free[kept[r]]], names[layout.free[kept[c]]]
+                ));
+            }
+        }
+    }
+
+    let np = request.params.len();
+    let mut b_partial = Matrix::zeros(nf, np + request.inputs.len());
+    model.linear_b(t, &x, &mut b_partial);
+    let chain = param_chain(&model, t, &x, &request.overridden);
+    let b_params: Vec<Vec<f64>> = kept
+        .iter()
+        .map(|&i| {
+            (0..np)
+                .map(|j| {
+                    (0..np)
+                        .map(|k| b_partial[(i, k)] * chain[k][j])
+                        .filter(|v| *v != 0.0)
+                        .sum()
+                })
+                .collect()
+        })
+        .collect();
+    let b_inputs: Vec<Vec<f64>> = kept
+        .iter()
+        .map(|&i| {
+            (np..np + request.inputs.len())
+                .map(|c| b_partial[(i, c)])
+                .collect()
+        })
+        .collect();
+
+    let mut rates = vec![f64::NAN; nf];
+    model.linear_rates(t, &x, &mut rates);
+    let mut residual = Vec::with_capacity(kept.len());
+    let mut equilibrium = true;
+    for (r, &i) in kept.iter().enumerate() {
+        let value = rates[i];
+        if !value.is_finite() {
+            return Err(format!(
+                "the right side is not defined at this point: the rate of {} is {value}",
+                names[layout.free[i]]
+            ));
+        }
+        // The scale of the rate's terms near the point, first order:
+        // `Σ |∂f/∂x_j x_j| + Σ |∂f/∂p_k p_k|` (the command line scales
+        // the rate's expression itself; the two agree on whether a rate
+        // is zero wherever it is zero or not small).
+        let scale: f64 = (0..nf)
+            .map(|c| (a_free[(i, c)] * x[layout.free[c]]).abs())
+            .chain((0..np).map(|k| (b_params[r][k] * request.params[k]).abs()))
+            .filter(|v| v.is_finite())
+            .sum();
+        if !(value == 0.0 || value.abs() <= ZERO * scale) {
+            equilibrium = false;
+        }
+        residual.push(value);
+    }
+    Ok(Linearization {
+        t,
+        state: kept.iter().map(|&i| layout.free[i]).collect(),
+        point: kept.iter().map(|&i| x[layout.free[i]]).collect(),
+        ignorable: layout
+            .ignorable
+            .iter()
+            .map(|&i| (layout.free[i], x[layout.free[i]]))
+            .collect(),
+        fixed: layout.fixed.iter().copied().zip(fixed).collect(),
+        eigenvalues: eigenvalues(&a),
+        a,
+        b_params,
+        b_inputs,
+        residual,
+        equilibrium,
+    })
+}
+
+/// `T[k][j] = dp_k/dp_j` with the params after `p_j` recomputed from it
+/// (an overridden one is not recomputed), as `lagc linearize` chains them.
+fn param_chain<M: Linear>(model: &M, t: f64, x: &[f64], overridden: &[bool]) -> Vec<Vec<f64>> {
+    let np = overridden.len();
+    let mut slopes = Matrix::zeros(np, np);
+    model.linear_chain(t, x, &mut slopes);
+    let mut chain = vec![vec![0.0; np]; np];
+    for k in 0..np {
+        chain[k][k] = 1.0;
+        if overridden[k] {
+            continue;
+        }
+        for l in 0..k {
+            let slope = slopes[(k, l)];
+            if slope == 0.0 {
+                continue;
+            }
+            let (done, rest) = chain.split_at_mut(k);
+            for (sum, &through) in rest[0].iter_mut().zip(&done[l]).take(l + 1) {
+                *sum += slope * through;
+            }
+        }
+    }
+    chain
+}
+
+/// The eigenvalues of `A`, largest real part first (pairs: positive
+/// imaginary part first), by nalgebra's real Schur form as `lagc
+/// linearize` takes them (`src/linearize/eigen.rs`); all NaN when the
+/// iteration does not converge.
+fn eigenvalues(a: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    let n = a.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let m = nalgebra::DMatrix::from_fn(n, n, |r, c| a[r][c]);
+    let Some(schur) = nalgebra::linalg::Schur::try_new(m, f64::EPSILON, 10_000) else {
+        return vec![(f64::NAN, f64::NAN); n];
+    };
+    let mut out: Vec<(f64, f64)> = schur
+        .complex_eigenvalues()
+        .iter()
+        .map(|c| (c.re, c.im))
+        .collect();
+    out.sort_by(|x, y| y.0.total_cmp(&x.0).then_with(|| y.1.total_cmp(&x.1)));
+    out
+}

@@ -1,0 +1,207 @@
+//! The linearization's symbolic half, for a model's Python module
+//! (`m.linearize(at=…)`, issue 27): everything `lagc linearize` derives
+//! before it evaluates — the free state, the ignorable coordinates, the
+//! rates with the constraints' fixed components substituted, their exact
+//! partials in the free state, the params and the inputs, the params'
+//! slopes in the params before them and the model's stated initial
+//! values — as expressions, so that emission only prints them and the
+//! module evaluates them at a point as `system.rs` does.
+//!
+//! Taken as `system.rs` takes them (the same substitutions, the same
+//! `Partials`, the same `ignorable`), so the module's `A`, `∂f/∂p` and
+//! `∂f/∂u` are the command line's to rounding. The ignorable coordinates
+//! are found once, at the model's stated initial point (they are a
+//! symbolic property: a rate's partial that vanishes identically).
+//!
+//! Not carried (the module says so and names `lagc linearize`): implicit
+//! highest derivatives (a mass matrix solved at run time), holonomic
+//! constraints, several candidate modes, and the derivatives of order
+//! 2..k−1 the consistency of (4) fixes (k ≥ 3).
+
+use super::ignorable::ignorable;
+use super::point;
+use super::system::{Partials, Rate};
+use crate::check::model::Model;
+use crate::ir::{lower, Arena, ExprId, Symbol};
+use crate::mechanics::{Derivation, Highest};
+use std::collections::HashMap;
+
+/// The symbolic linearization of a model, in its own arena. Indices into
+/// the state are the generated crate's; "free position" `i` is
+/// `free[i]`.
+#[derive(Debug, Clone)]
+pub struct LinearParts {
+    pub arena: Arena,
+    /// The state (6), as the generated crate holds it.
+    pub state: Vec<Symbol>,
+    /// The state components that are not fixed by the constraints.
+    pub free: Vec<usize>,
+    /// Free positions of `A`'s state (the free state without the
+    /// ignorable coordinates).
+    pub kept: Vec<usize>,
+    /// Free positions of the ignorable coordinates.
+    pub ignorable: Vec<usize>,
+    /// `(state index, value)` of every component the constraints fix.
+    pub fixed: Vec<(usize, ExprId)>,
+    /// `(free position, value)`: the model's stated initial values, as
+    /// expressions of the params.
+    pub stated: Vec<(usize, ExprId)>,
+    /// `(free position, rate)`.
+    pub rates: Vec<(usize, ExprId)>,
+    /// `(free row, free column, ∂rate/∂x)`, non-zero entries.
+    pub a: Vec<(usize, usize, ExprId)>,
+    /// `(free row, column, ∂rate/∂v)`: columns `0..np` the params,
+    /// `np + i` input `i` (held at its value: its rate is zero).
+    pub b: Vec<(usize, usize, ExprId)>,
+    /// `(k, l, ∂p_k/∂p_l)`: param `k`'s expression in the params before it.
+    pub chain: Vec<(usize, usize, ExprId)>,
+}
+
+/// The parts, or why the module cannot carry them.
+pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, String> {
+    let reduced = &derivation.reduced;
+    if model.mode_count() > 1 {
+        return Err("its implicit constraints have several candidates".to_string());
+    }
+    if reduced.closure.is_some() {
+        return Err("it has holonomic constraints".to_string());
+    }
+    let Highest::Explicit(rhs) = &reduced.highest else {
+        return Err("its highest derivatives are solved at run time".to_string());
+    };
+    let mut arena = derivation.arena.clone();
+    let state = reduced.state.clone();
+    let n = derivation.coordinates;
+    let u = reduced.order as usize;
+    let np = model.params.len();
+
+    let mut subst: HashMap<Symbol, ExprId> = HashMap::new();
+    for i in 0..model.inputs.len() {
+        let zero = arena.zero();
+        subst.insert(Symbol::InputRate(i as u32), zero);
+    }
+    for (i, m) in model.masses.iter().enumerate() {
+        let law = lower(&mut arena, &m.law, model);
+        subst.insert(Symbol::Mass(i as u32), law);
+    }
+    let mut fixed: Vec<(usize, ExprId)> = Vec::new();
+    for &(i, phi) in &reduced.fixed {
+        let phi = arena.subst(phi, &subst);
+        fixed.push((i, phi));
+    }
+    for &(i, phi) in &fixed {
+        subst.insert(state[i], phi);
+    }
+    let free: Vec<usize> = (0..state.len())
+        .filter(|&k| !fixed.iter().any(|&(i, _)| i == k))
+        .collect();
+    let mut rates = Vec::with_capacity(free.len());
+    for &k in &free {
+        let (order, coord) = (k / n, k % n);
+        let e = if order + 1 < u {
+            arena.symbol(state[k + n])
+        } else {
+            rhs[coord]
+        };
+        rates.push(Rate::Expr(arena.subst(e, &subst)));
+    }
+
+    // The stated point, at the model's params, for the ignorable test.
+    let exprs: Vec<ExprId> = model
+        .params
+        .iter()
+        .map(|p| lower(&mut arena, &p.value, model))
+        .collect();
+    let params = point::params(&mut arena, model, &[]).map_err(|e| e.message)?;
+    let t0 = point::time(&mut arena, model, None, &params.values).map_err(|e| e.message)?;
+    let mut stated = Vec::new();
+    let mut values: HashMap<Symbol, f64> = HashMap::new();
+    for (i, &k) in free.iter().enumerate() {
+        let Symbol::Jet { coord, order } = state[k] else {
+            continue;
+        };
+        let Some(init) = model
+            .initial
+            .iter()
+            .find(|v| v.coord as u32 == coord && v.order == order)
+        else {
+            return Err(format!(
+                "the model states no initial `{}` (k ≥ 3: (4) fixes it)",
+                arena.symbol_name(state[k])
+            ));
+        };
+        let e = lower(&mut arena, &init.value, model);
+        let v = point::stated(&mut arena, model, state[k], &params.values).unwrap_or(f64::NAN);
+        values.insert(state[k], v);
+        stated.push((i, e));
+    }
+    let inputs: Vec<f64> = model.inputs.iter().map(|i| i.default).collect();
+    let env = |s: Symbol| match s {
+        Symbol::Time => t0,
+        Symbol::Param(j) => params.values.get(j as usize).copied().unwrap_or(f64::NAN),
+        Symbol::Input(j) => inputs.get(j as usize).copied().unwrap_or(f64::NAN),
+        other => values.get(&other).copied().unwrap_or(f64::NAN),
+    };
+
+    let columns: Vec<Symbol> = free.iter().map(|&k| state[k]).collect();
+    let partials = Partials::new(&mut arena, &rates, None, &columns);
+    let through_closure = vec![false; free.len()];
+    let ignorable = ignorable(
+        &arena,
+        &free,
+        &rates,
+        &partials,
+        n,
+        &env,
+        None,
+        &through_closure,
+    );
+    let kept: Vec<usize> = (0..free.len()).filter(|c| !ignorable.contains(c)).collect();
+
+    let mut vars: Vec<Symbol> = (0..np as u32).map(Symbol::Param).collect();
+    vars.extend((0..model.inputs.len() as u32).map(Symbol::Input));
+    let param_partials = Partials::new(&mut arena, &rates, None, &vars);
+    let cells = |m: &[Vec<ExprId>], arena: &Arena| -> Vec<(usize, usize, ExprId)> {
+        m.iter()
+            .enumerate()
+            .flat_map(|(r, row)| {
+                row.iter()
+                    .enumerate()
+                    .filter(|&(_, &e)| !arena.is_zero(e))
+                    .map(move |(c, &e)| (r, c, e))
+            })
+            .collect()
+    };
+    let a = cells(&partials.state, &arena);
+    let b = cells(&param_partials.state, &arena);
+    let mut chain = Vec::new();
+    for (k, &e) in exprs.iter().enumerate() {
+        for l in 0..k {
+            let d = arena.diff(e, Symbol::Param(l as u32));
+            if !arena.is_zero(d) {
+                chain.push((k, l, d));
+            }
+        }
+    }
+    let rates = rates
+        .iter()
+        .enumerate()
+        .map(|(i, r)| match *r {
+            Rate::Expr(e) | Rate::Dependent(e) => (i, e),
+            Rate::Unknown(_) => (i, arena.constant(f64::NAN)),
+        })
+        .collect::<Vec<_>>();
+    Ok(LinearParts {
+        arena,
+        state,
+        free,
+        kept,
+        ignorable,
+        fixed,
+        stated,
+        rates,
+        a,
+        b,
+        chain,
+    })
+}
