@@ -23,25 +23,41 @@ pub struct LinearLayout {
     pub ignorable: &'static [usize],
     /// The state components the constraints fix, in `linear_fixed`'s order.
     pub fixed: &'static [usize],
+    /// The number of unknowns `z` of the implicit system of the highest
+    /// derivatives, `G(t, x, z) = 0` (0: explicit).
+    pub unknowns: usize,
+    /// `(free position, j)`: the rates that are `z_j`.
+    pub unknown_rows: &'static [(usize, usize)],
+    /// `G` is affine in `z` (one linear solve; else Newton from `z = 0`).
+    pub implicit_linear: bool,
 }
 
 /// The linearization's symbolic half, printed by lagc for one model. Every
 /// function reads the params from the model, the inputs from the values it
-/// holds (`set_inputs`), the state from `x` (free components only).
+/// holds (`set_inputs`), the state from `x` (free components only) and the
+/// implicit system's unknowns from `z`; matrices get their non-zero
+/// entries written.
 pub trait Linear {
     const LAYOUT: LinearLayout;
     /// Per free position: the model's stated initial value.
-    fn linear_stated(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
+    fn linear_stated(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
     /// Per fixed component: the value the constraints give it.
-    fn linear_fixed(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
-    /// Per free position: its rate `f`.
-    fn linear_rates(&self, _t: f64, _x: &[f64], _out: &mut [f64]) {}
-    /// `∂f/∂x` over the free state (non-zero entries written).
-    fn linear_a(&self, _t: f64, _x: &[f64], _out: &mut Matrix) {}
+    fn linear_fixed(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    /// Per free position (not an unknown's): its rate `f`.
+    fn linear_rates(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    /// `∂f/∂x` over the free state (rows not an unknown's).
+    fn linear_a(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
     /// `∂f/∂(p, u)`: the params' direct partials, then the inputs'.
-    fn linear_b(&self, _t: f64, _x: &[f64], _out: &mut Matrix) {}
+    fn linear_b(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
     /// `∂p_k/∂p_l` of each param's expression in the params before it.
-    fn linear_chain(&self, _t: f64, _x: &[f64], _out: &mut Matrix) {}
+    fn linear_chain(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    /// `G`, `∂G/∂z`, `∂G/∂x` (free columns), `∂G/∂(p, u)`.
+    fn linear_g(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    fn linear_g_z(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_g_x(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_g_p(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    /// `∂D/∂z` of the dependent highest derivatives' rates (free rows).
+    fn linear_d_z(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
 }
 
 /// A request, names resolved to indices.
@@ -94,7 +110,7 @@ pub fn linearize<M: Model + Linear>(
     let dim = M::STATE.len();
     let mut x = vec![f64::NAN; dim];
     let mut stated = vec![f64::NAN; nf];
-    model.linear_stated(t, &x, &mut stated);
+    model.linear_stated(t, &x, &[], &mut stated);
     for (i, &k) in layout.free.iter().enumerate() {
         let given = request.at.iter().find(|&&(j, _)| j == k).map(|&(_, v)| v);
         let v = given.unwrap_or(stated[i]);
@@ -107,7 +123,7 @@ pub fn linearize<M: Model + Linear>(
         x[k] = v;
     }
     let mut fixed = vec![f64::NAN; layout.fixed.len()];
-    model.linear_fixed(t, &x, &mut fixed);
+    model.linear_fixed(t, &x, &[], &mut fixed);
     for (&k, &v) in layout.fixed.iter().zip(&fixed) {
         if !v.is_finite() {
             return Err(format!(
@@ -131,12 +147,13 @@ pub fn linearize<M: Model + Linear>(
         x[k] = v;
     }
 
-    let mut a_free = Matrix::zeros(nf, nf);
-    model.linear_a(t, &x, &mut a_free);
+    let z = solve_highest(&model, &layout, t, &x)?;
+    let g_z = factored(&model, &layout, t, &x, &z);
+    let a_free = rows(&model, &layout, t, &x, &z, g_z.as_ref(), nf, Columns::State)?;
     let kept = layout.kept;
     let a: Vec<Vec<f64>> = kept
         .iter()
-        .map(|&i| kept.iter().map(|&c| a_free[(i, c)]).collect())
+        .map(|&i| kept.iter().map(|&c| a_free[i][c]).collect())
         .collect();
     for (r, row) in a.iter().enumerate() {
         for (c, v) in row.iter().enumerate() {
@@ -150,8 +167,17 @@ pub fn linearize<M: Model + Linear>(
     }
 
     let np = request.params.len();
-    let mut b_partial = Matrix::zeros(nf, np + request.inputs.len());
-    model.linear_b(t, &x, &mut b_partial);
+    let columns = np + request.inputs.len();
+    let b_partial = rows(
+        &model,
+        &layout,
+        t,
+        &x,
+        &z,
+        g_z.as_ref(),
+        columns,
+        Columns::Params,
+    )?;
     let chain = param_chain(&model, t, &x, &request.overridden);
     let b_params: Vec<Vec<f64>> = kept
         .iter()
@@ -159,7 +185,7 @@ pub fn linearize<M: Model + Linear>(
             (0..np)
                 .map(|j| {
                     (0..np)
-                        .map(|k| b_partial[(i, k)] * chain[k][j])
+                        .map(|k| b_partial[i][k] * chain[k][j])
                         .filter(|v| *v != 0.0)
                         .sum()
                 })
@@ -170,13 +196,16 @@ pub fn linearize<M: Model + Linear>(
         .iter()
         .map(|&i| {
             (np..np + request.inputs.len())
-                .map(|c| b_partial[(i, c)])
+                .map(|c| b_partial[i][c])
                 .collect()
         })
         .collect();
 
     let mut rates = vec![f64::NAN; nf];
-    model.linear_rates(t, &x, &mut rates);
+    model.linear_rates(t, &x, &z, &mut rates);
+    for &(i, j) in layout.unknown_rows {
+        rates[i] = z[j];
+    }
     let mut residual = Vec::with_capacity(kept.len());
     let mut equilibrium = true;
     for (r, &i) in kept.iter().enumerate() {
@@ -192,7 +221,7 @@ pub fn linearize<M: Model + Linear>(
         // the rate's expression itself; the two agree on whether a rate
         // is zero wherever it is zero or not small).
         let scale: f64 = (0..nf)
-            .map(|c| (a_free[(i, c)] * x[layout.free[c]]).abs())
+            .map(|c| (a_free[i][c] * x[layout.free[c]]).abs())
             .chain((0..np).map(|k| (b_params[r][k] * request.params[k]).abs()))
             .filter(|v| v.is_finite())
             .sum();
@@ -220,12 +249,140 @@ pub fn linearize<M: Model + Linear>(
     })
 }
 
+/// `G(t, x, z) = 0` solved for `z`: one linear solve, or Newton from
+/// `z = 0` with the exact `G_z` (as `lagc linearize`, nalgebra's LU).
+fn solve_highest<M: Linear>(
+    model: &M,
+    layout: &LinearLayout,
+    t: f64,
+    x: &[f64],
+) -> Result<Vec<f64>, String> {
+    let m = layout.unknowns;
+    let mut z = vec![0.0; m];
+    if m == 0 {
+        return Ok(z);
+    }
+    let iterations = if layout.implicit_linear { 1 } else { 50 };
+    for _ in 0..iterations {
+        let mut g = vec![0.0; m];
+        model.linear_g(t, x, &z, &mut g);
+        let jz = dense(&{
+            let mut jz = Matrix::zeros(m, m);
+            model.linear_g_z(t, x, &z, &mut jz);
+            jz
+        });
+        let rhs = -nalgebra::DVector::from_vec(g);
+        let step = jz
+            .lu()
+            .solve(&rhs)
+            .filter(|s| s.iter().all(|v| v.is_finite()))
+            .ok_or_else(|| {
+                "the highest derivatives are not defined at this point: the matrix of their \
+                 coefficients is singular (a singular mass matrix or a vanishing pivot of the \
+                 constraints): choose another point"
+                    .to_string()
+            })?;
+        let size = step.amax();
+        for (zk, dk) in z.iter_mut().zip(step.iter()) {
+            *zk += dk;
+        }
+        if size <= 1e-14 * (1.0 + z.iter().fold(0.0_f64, |a, v| a.max(v.abs()))) {
+            break;
+        }
+    }
+    Ok(z)
+}
+
+fn dense(m: &Matrix) -> nalgebra::DMatrix<f64> {
+    nalgebra::DMatrix::from_fn(m.rows(), m.cols(), |r, c| m[(r, c)])
+}
+
+/// `G_z` at the point (`None` for an explicit system).
+fn factored<M: Linear>(
+    model: &M,
+    layout: &LinearLayout,
+    t: f64,
+    x: &[f64],
+    z: &[f64],
+) -> Option<nalgebra::DMatrix<f64>> {
+    let m = layout.unknowns;
+    (m > 0).then(|| {
+        let mut jz = Matrix::zeros(m, m);
+        model.linear_g_z(t, x, z, &mut jz);
+        dense(&jz)
+    })
+}
+
+/// Which variables a row of partials is taken in.
+#[derive(Clone, Copy)]
+enum Columns {
+    State,
+    Params,
+}
+
+/// `∂rate_i/∂v_c` evaluated, one row per free position: a rate's own
+/// partials; an unknown's row `−G_z⁻¹ G_v`; a dependent highest
+/// derivative's `D_v + D_z z_v` (`evaluate_rows` in
+/// `src/linearize/system.rs`).
+#[allow(clippy::too_many_arguments)]
+fn rows<M: Linear>(
+    model: &M,
+    layout: &LinearLayout,
+    t: f64,
+    x: &[f64],
+    z: &[f64],
+    g_z: Option<&nalgebra::DMatrix<f64>>,
+    columns: usize,
+    of: Columns,
+) -> Result<Vec<Vec<f64>>, String> {
+    let nf = layout.free.len();
+    let mut direct = Matrix::zeros(nf, columns);
+    match of {
+        Columns::State => model.linear_a(t, x, z, &mut direct),
+        Columns::Params => model.linear_b(t, x, z, &mut direct),
+    }
+    let mut out: Vec<Vec<f64>> = (0..nf)
+        .map(|i| (0..columns).map(|c| direct[(i, c)]).collect())
+        .collect();
+    let Some(jz) = g_z else {
+        return Ok(out);
+    };
+    let m = layout.unknowns;
+    let mut g_v = Matrix::zeros(m, columns);
+    match of {
+        Columns::State => model.linear_g_x(t, x, z, &mut g_v),
+        Columns::Params => model.linear_g_p(t, x, z, &mut g_v),
+    }
+    let z_v = jz.clone().lu().solve(&(-dense(&g_v))).ok_or_else(|| {
+        "the highest derivatives' coefficients are singular at this point: choose another point"
+            .to_string()
+    })?;
+    let mut d_z = Matrix::zeros(nf, m);
+    model.linear_d_z(t, x, z, &mut d_z);
+    for (i, row) in out.iter_mut().enumerate() {
+        if let Some(&(_, j)) = layout.unknown_rows.iter().find(|&&(r, _)| r == i) {
+            for (c, cell) in row.iter_mut().enumerate() {
+                *cell = z_v[(j, c)];
+            }
+            continue;
+        }
+        for (c, cell) in row.iter_mut().enumerate() {
+            let through: f64 = (0..m)
+                .filter(|&k| d_z[(i, k)] != 0.0)
+                .map(|k| d_z[(i, k)] * z_v[(k, c)])
+                .sum();
+            *cell += through;
+        }
+    }
+    Ok(out)
+}
+
 /// `T[k][j] = dp_k/dp_j` with the params after `p_j` recomputed from it
 /// (an overridden one is not recomputed), as `lagc linearize` chains them.
 fn param_chain<M: Linear>(model: &M, t: f64, x: &[f64], overridden: &[bool]) -> Vec<Vec<f64>> {
     let np = overridden.len();
     let mut slopes = Matrix::zeros(np, np);
-    model.linear_chain(t, x, &mut slopes);
+    model.linear_chain(t, x, &[], &mut slopes);
     let mut chain = vec![vec![0.0; np]; np];
     for k in 0..np {
         chain[k][k] = 1.0;

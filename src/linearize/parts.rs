@@ -13,14 +13,18 @@
 //! are found once, at the model's stated initial point (they are a
 //! symbolic property: a rate's partial that vanishes identically).
 //!
-//! Not carried (the module says so and names `lagc linearize`): implicit
-//! highest derivatives (a mass matrix solved at run time), holonomic
+//! An implicit system of the highest derivatives (a mass matrix solved at
+//! run time, `G(t, x, z) = 0`) is carried as `G` and its exact partials;
+//! the module solves it and differentiates through it as `system.rs`
+//! does (`∂z/∂x = −G_z⁻¹ G_x`).
+//!
+//! Not carried (the module says so and names `lagc linearize`): holonomic
 //! constraints, several candidate modes, and the derivatives of order
 //! 2..k−1 the consistency of (4) fixes (k ≥ 3).
 
 use super::ignorable::ignorable;
 use super::point;
-use super::system::{Partials, Rate};
+use super::system::{solve_highest, Implicit, Partials, Rate};
 use crate::check::model::Model;
 use crate::ir::{lower, Arena, ExprId, Symbol};
 use crate::mechanics::{Derivation, Highest};
@@ -55,6 +59,32 @@ pub struct LinearParts {
     pub b: Vec<(usize, usize, ExprId)>,
     /// `(k, l, ∂p_k/∂p_l)`: param `k`'s expression in the params before it.
     pub chain: Vec<(usize, usize, ExprId)>,
+    /// `(free position, j)`: the rates that are the implicit system's
+    /// unknown `z_j` (their rows of `A` and `B` are `−G_z⁻¹ G_x`, `−G_z⁻¹
+    /// G_p`); `rates`, `a` and `b` hold the other rows only.
+    pub unknown_rows: Vec<(usize, usize)>,
+    /// The implicit system `G(t, x, z) = 0` of the highest derivatives.
+    pub implicit: Option<LinearImplicit>,
+}
+
+/// `G(t, x, z) = 0` for the independent highest derivatives `z`, and the
+/// partials the linearization takes through it. Expressions of `t`, the
+/// params, the inputs, the free state and `z`.
+#[derive(Debug, Clone)]
+pub struct LinearImplicit {
+    pub unknowns: Vec<Symbol>,
+    /// Affine in `z`: one linear solve; else Newton from `z = 0`.
+    pub linear: bool,
+    /// `(r, G_r)`.
+    pub residual: Vec<(usize, ExprId)>,
+    /// `(r, k, ∂G_r/∂z_k)`.
+    pub g_z: Vec<(usize, usize, ExprId)>,
+    /// `(r, free column, ∂G_r/∂x)`.
+    pub g_x: Vec<(usize, usize, ExprId)>,
+    /// `(r, column, ∂G_r/∂v)`, columns as `LinearParts::b`'s.
+    pub g_p: Vec<(usize, usize, ExprId)>,
+    /// `(free row, k, ∂D/∂z_k)` of the dependent highest derivatives' rates.
+    pub d_z: Vec<(usize, usize, ExprId)>,
 }
 
 /// The parts, or why the module cannot carry them.
@@ -66,9 +96,6 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
     if reduced.closure.is_some() {
         return Err("it has holonomic constraints".to_string());
     }
-    let Highest::Explicit(rhs) = &reduced.highest else {
-        return Err("its highest derivatives are solved at run time".to_string());
-    };
     let mut arena = derivation.arena.clone();
     let state = reduced.state.clone();
     let n = derivation.coordinates;
@@ -95,15 +122,56 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
     let free: Vec<usize> = (0..state.len())
         .filter(|&k| !fixed.iter().any(|&(i, _)| i == k))
         .collect();
+    let implicit = match &reduced.highest {
+        Highest::Implicit {
+            unknowns,
+            residual,
+            jacobian,
+            linear,
+            ..
+        } => Some(Implicit {
+            unknowns: unknowns.clone(),
+            residual: residual.iter().map(|&g| arena.subst(g, &subst)).collect(),
+            jacobian: jacobian
+                .iter()
+                .map(|row| row.iter().map(|&e| arena.subst(e, &subst)).collect())
+                .collect(),
+            linear: *linear,
+        }),
+        Highest::Explicit(_) => None,
+    };
     let mut rates = Vec::with_capacity(free.len());
     for &k in &free {
         let (order, coord) = (k / n, k % n);
-        let e = if order + 1 < u {
-            arena.symbol(state[k + n])
+        let rate = if order + 1 < u {
+            let next = arena.symbol(state[k + n]);
+            Rate::Expr(arena.subst(next, &subst))
         } else {
-            rhs[coord]
+            match &reduced.highest {
+                Highest::Explicit(rhs) => Rate::Expr(arena.subst(rhs[coord], &subst)),
+                Highest::Implicit {
+                    unknowns,
+                    dependent,
+                    ..
+                } => {
+                    let z = Symbol::Jet {
+                        coord: coord as u32,
+                        order: u as u32,
+                    };
+                    match unknowns.iter().position(|&s| s == z) {
+                        Some(j) => Rate::Unknown(j),
+                        None => {
+                            let d = dependent
+                                .iter()
+                                .find(|&&(c, _)| c as usize == coord)
+                                .map_or_else(|| arena.constant(f64::NAN), |&(_, e)| e);
+                            Rate::Dependent(arena.subst(d, &subst))
+                        }
+                    }
+                }
+            }
         };
-        rates.push(Rate::Expr(arena.subst(e, &subst)));
+        rates.push(rate);
     }
 
     // The stated point, at the model's params, for the ignorable test.
@@ -136,15 +204,28 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
         stated.push((i, e));
     }
     let inputs: Vec<f64> = model.inputs.iter().map(|i| i.default).collect();
-    let env = |s: Symbol| match s {
-        Symbol::Time => t0,
-        Symbol::Param(j) => params.values.get(j as usize).copied().unwrap_or(f64::NAN),
-        Symbol::Input(j) => inputs.get(j as usize).copied().unwrap_or(f64::NAN),
-        other => values.get(&other).copied().unwrap_or(f64::NAN),
+    let env_of = |values: &HashMap<Symbol, f64>| {
+        let values = values.clone();
+        let (pv, inputs) = (params.values.clone(), inputs.clone());
+        move |s: Symbol| match s {
+            Symbol::Time => t0,
+            Symbol::Param(j) => pv.get(j as usize).copied().unwrap_or(f64::NAN),
+            Symbol::Input(j) => inputs.get(j as usize).copied().unwrap_or(f64::NAN),
+            other => values.get(&other).copied().unwrap_or(f64::NAN),
+        }
     };
+    // The highest derivatives at the stated point (the ignorable test
+    // samples near them).
+    if let Some(imp) = &implicit {
+        let z = solve_highest(&arena, imp, &env_of(&values)).map_err(|e| e.message)?;
+        for (&s, &v) in imp.unknowns.iter().zip(&z) {
+            values.insert(s, v);
+        }
+    }
+    let env = env_of(&values);
 
     let columns: Vec<Symbol> = free.iter().map(|&k| state[k]).collect();
-    let partials = Partials::new(&mut arena, &rates, None, &columns);
+    let partials = Partials::new(&mut arena, &rates, implicit.as_ref(), &columns);
     let through_closure = vec![false; free.len()];
     let ignorable = ignorable(
         &arena,
@@ -153,14 +234,14 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
         &partials,
         n,
         &env,
-        None,
+        implicit.as_ref(),
         &through_closure,
     );
     let kept: Vec<usize> = (0..free.len()).filter(|c| !ignorable.contains(c)).collect();
 
     let mut vars: Vec<Symbol> = (0..np as u32).map(Symbol::Param).collect();
     vars.extend((0..model.inputs.len() as u32).map(Symbol::Input));
-    let param_partials = Partials::new(&mut arena, &rates, None, &vars);
+    let param_partials = Partials::new(&mut arena, &rates, implicit.as_ref(), &vars);
     let cells = |m: &[Vec<ExprId>], arena: &Arena| -> Vec<(usize, usize, ExprId)> {
         m.iter()
             .enumerate()
@@ -183,12 +264,32 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
             }
         }
     }
+    let unknown_rows: Vec<(usize, usize)> = rates
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| match *r {
+            Rate::Unknown(j) => Some((i, j)),
+            _ => None,
+        })
+        .collect();
+    let highest = implicit.as_ref().map(|imp| {
+        let square: Vec<Vec<ExprId>> = imp.jacobian.clone();
+        LinearImplicit {
+            unknowns: imp.unknowns.clone(),
+            linear: imp.linear,
+            residual: imp.residual.iter().copied().enumerate().collect(),
+            g_z: cells(&square, &arena),
+            g_x: cells(&partials.g_state, &arena),
+            g_p: cells(&param_partials.g_state, &arena),
+            d_z: cells(&partials.d_z, &arena),
+        }
+    });
     let rates = rates
         .iter()
         .enumerate()
-        .map(|(i, r)| match *r {
-            Rate::Expr(e) | Rate::Dependent(e) => (i, e),
-            Rate::Unknown(_) => (i, arena.constant(f64::NAN)),
+        .filter_map(|(i, r)| match *r {
+            Rate::Expr(e) | Rate::Dependent(e) => Some((i, e)),
+            Rate::Unknown(_) => None,
         })
         .collect::<Vec<_>>();
     Ok(LinearParts {
@@ -203,5 +304,7 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
         a,
         b,
         chain,
+        unknown_rows,
+        implicit: highest,
     })
 }

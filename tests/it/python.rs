@@ -33,6 +33,7 @@ const MODELS: &[(&str, &str)] = &[
     ("examples/knife_edge.lag", "knife_edge"),
     ("tests/data/steered_spring.lag", "steered_spring"),
     ("examples/rolling_disk_3d.lag", "rolling_disk_3d"),
+    ("examples/cartesian_pendulum.lag", "cartesian_pendulum"),
 ];
 
 fn base() -> PathBuf {

@@ -2,13 +2,14 @@
 `lagc linearize FILE --format json` (issue 27): the same state, ignorable
 coordinates, A, B_params, B_inputs, eigenvalues, residual, point and fixed
 components to 1e-12, on every example `tests/it/linearize.rs` linearizes
-whose module carries the linearization (explicit highest derivatives, one
-mode, no holonomic constraint): constrained ones with ignorable
-coordinates (paper, rolling_disk, knife_edge, steered_spring, the last
-with an input), and unconstrained ones (spherical and double pendulum,
-driven_oscillator). Unknown names raise KeyError; a model whose module
-carries none (rolling_disk_3d: its highest derivatives are solved at run
-time) raises ValueError naming `lagc linearize`."""
+whose module carries the linearization (one mode, no holonomic
+constraint): constrained ones with ignorable coordinates (paper,
+rolling_disk, knife_edge, steered_spring, the last with an input;
+rolling_disk_3d, whose highest derivatives are an implicit system solved
+at the point, across its critical spin), and unconstrained ones (spherical
+and double pendulum, driven_oscillator). Unknown names raise KeyError; a
+model whose module carries none (cartesian_pendulum: holonomic, two
+candidate modes) raises ValueError naming `lagc linearize`."""
 
 import importlib
 import json
@@ -48,6 +49,12 @@ CASES = [
         ({}, {}, {}, None),
         ({"theta": 0.3, "x'": 0.7, "theta'": 0.2}, {}, {}, None),
         ({}, {"theta0": 0.7, "v0": 2.0}, {}, None),
+    ]),
+    ("rolling_disk_3d", "examples/rolling_disk_3d.lag", [
+        ({}, {}, {}, None),
+        ({"th": 0.0, "th'": 0.0, "phi'": 0.0, "psi'": -4.0}, {}, {}, None),
+        ({"th": 0.0, "th'": 0.0, "phi'": 0.0, "psi'": -1.0}, {"R": 0.5}, {}, None),
+        ({"th": 0.2, "th'": 0.3, "phi'": 0.4, "psi'": -2.0}, {"m": 2.0}, {}, None),
     ]),
     ("driven_oscillator", "tests/data/driven_oscillator.lag", [
         ({}, {}, {}, None),
@@ -148,7 +155,7 @@ def test_a_fixed_component_off_its_constraint_is_a_value_error():
 
 
 def test_a_module_without_the_linearization_says_so():
-    import rolling_disk_3d
+    import cartesian_pendulum
 
     with pytest.raises(ValueError, match="lagc linearize"):
-        rolling_disk_3d.Model().linearize()
+        cartesian_pendulum.Model().linearize()
