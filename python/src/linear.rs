@@ -13,8 +13,6 @@ use lagc_runtime::model::{Inputs, Model};
 /// Which state components the linearization holds. Indices into the state
 /// are the model's; "free position" `i` is `free[i]`.
 pub struct LinearLayout {
-    /// Why the module carries no linearization (`None`: it does).
-    pub unavailable: Option<&'static str>,
     /// The state components the constraints do not fix.
     pub free: &'static [usize],
     /// Free positions of `A`'s state (no ignorable coordinates).
@@ -38,26 +36,30 @@ pub struct LinearLayout {
 /// implicit system's unknowns from `z`; matrices get their non-zero
 /// entries written.
 pub trait Linear {
-    const LAYOUT: LinearLayout;
+    /// Why the module carries no linearization (`None`: it does).
+    const UNAVAILABLE: Option<&'static str>;
+    /// Per mode (the candidates' choice of dependents; one for most
+    /// models), its layout. Every function takes the mode first.
+    const LAYOUTS: &'static [LinearLayout];
     /// Per free position: the model's stated initial value.
-    fn linear_stated(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    fn linear_stated(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
     /// Per fixed component: the value the constraints give it.
-    fn linear_fixed(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    fn linear_fixed(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
     /// Per free position (not an unknown's): its rate `f`.
-    fn linear_rates(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    fn linear_rates(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
     /// `∂f/∂x` over the free state (rows not an unknown's).
-    fn linear_a(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_a(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
     /// `∂f/∂(p, u)`: the params' direct partials, then the inputs'.
-    fn linear_b(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_b(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
     /// `∂p_k/∂p_l` of each param's expression in the params before it.
-    fn linear_chain(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_chain(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
     /// `G`, `∂G/∂z`, `∂G/∂x` (free columns), `∂G/∂(p, u)`.
-    fn linear_g(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
-    fn linear_g_z(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
-    fn linear_g_x(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
-    fn linear_g_p(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_g(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    fn linear_g_z(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_g_x(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_g_p(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
     /// `∂D/∂z` of the dependent highest derivatives' rates (free rows).
-    fn linear_d_z(&self, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_d_z(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
 }
 
 /// A request, names resolved to indices.
@@ -92,17 +94,44 @@ pub struct Linearization {
 const ZERO: f64 = 1e-9;
 
 /// The linearization of model `M` with these params at the request's
-/// point; `Err` is the message of a `ValueError`.
+/// point; `Err` is the message of a `ValueError`. A model of several modes
+/// is linearized in the first whose fixed components the request does not
+/// give and that is defined there (mode 1 if none is), as `lagc
+/// linearize` chooses.
 pub fn linearize<M: Model + Linear>(
     request: &Request,
     names: &[&str],
 ) -> Result<Linearization, String> {
-    let layout = M::LAYOUT;
-    if let Some(why) = layout.unavailable {
+    if let Some(why) = M::UNAVAILABLE {
         return Err(format!(
             "this module carries no linearization: {why}; `lagc linearize FILE` gives it"
         ));
     }
+    let layouts = M::LAYOUTS;
+    if layouts.len() > 1 {
+        for (mode, layout) in layouts.iter().enumerate() {
+            let fixes_given = layout
+                .fixed
+                .iter()
+                .any(|&k| request.at.iter().any(|&(j, _)| j == k));
+            if fixes_given {
+                continue;
+            }
+            if let Ok(l) = linearize_in::<M>(request, names, mode) {
+                return Ok(l);
+            }
+        }
+    }
+    linearize_in::<M>(request, names, 0)
+}
+
+/// The linearization in one mode.
+fn linearize_in<M: Model + Linear>(
+    request: &Request,
+    names: &[&str],
+    mode: usize,
+) -> Result<Linearization, String> {
+    let layout = &M::LAYOUTS[mode];
     let mut model = M::new(&request.params);
     model.set_inputs(&Inputs::held(&request.inputs));
     let t = request.t.unwrap_or_else(|| model.time_span().0);
@@ -110,20 +139,21 @@ pub fn linearize<M: Model + Linear>(
     let dim = M::STATE.len();
     let mut x = vec![f64::NAN; dim];
     let mut stated = vec![f64::NAN; nf];
-    model.linear_stated(t, &x, &[], &mut stated);
+    model.linear_stated(mode, t, &x, &[], &mut stated);
     for (i, &k) in layout.free.iter().enumerate() {
         let given = request.at.iter().find(|&&(j, _)| j == k).map(|&(_, v)| v);
         let v = given.unwrap_or(stated[i]);
         if !v.is_finite() {
             return Err(format!(
-                "the model's initial `{}` is {v} with these params: give it in `at`",
+                "the model states no value of `{}` (or it is {v} with these params): give it \
+                 in `at`",
                 names[k]
             ));
         }
         x[k] = v;
     }
     let mut fixed = vec![f64::NAN; layout.fixed.len()];
-    model.linear_fixed(t, &x, &[], &mut fixed);
+    model.linear_fixed(mode, t, &x, &[], &mut fixed);
     for (&k, &v) in layout.fixed.iter().zip(&fixed) {
         if !v.is_finite() {
             return Err(format!(
@@ -147,9 +177,19 @@ pub fn linearize<M: Model + Linear>(
         x[k] = v;
     }
 
-    let z = solve_highest(&model, &layout, t, &x)?;
-    let g_z = factored(&model, &layout, t, &x, &z);
-    let a_free = rows(&model, &layout, t, &x, &z, g_z.as_ref(), nf, Columns::State)?;
+    let z = solve_highest(&model, mode, layout, t, &x)?;
+    let g_z = factored(&model, mode, layout, t, &x, &z);
+    let a_free = rows(
+        &model,
+        mode,
+        layout,
+        t,
+        &x,
+        &z,
+        g_z.as_ref(),
+        nf,
+        Columns::State,
+    )?;
     let kept = layout.kept;
     let a: Vec<Vec<f64>> = kept
         .iter()
@@ -170,7 +210,8 @@ pub fn linearize<M: Model + Linear>(
     let columns = np + request.inputs.len();
     let b_partial = rows(
         &model,
-        &layout,
+        mode,
+        layout,
         t,
         &x,
         &z,
@@ -178,7 +219,7 @@ pub fn linearize<M: Model + Linear>(
         columns,
         Columns::Params,
     )?;
-    let chain = param_chain(&model, t, &x, &request.overridden);
+    let chain = param_chain(&model, mode, t, &x, &request.overridden);
     let b_params: Vec<Vec<f64>> = kept
         .iter()
         .map(|&i| {
@@ -202,7 +243,7 @@ pub fn linearize<M: Model + Linear>(
         .collect();
 
     let mut rates = vec![f64::NAN; nf];
-    model.linear_rates(t, &x, &z, &mut rates);
+    model.linear_rates(mode, t, &x, &z, &mut rates);
     for &(i, j) in layout.unknown_rows {
         rates[i] = z[j];
     }
@@ -253,6 +294,7 @@ pub fn linearize<M: Model + Linear>(
 /// `z = 0` with the exact `G_z` (as `lagc linearize`, nalgebra's LU).
 fn solve_highest<M: Linear>(
     model: &M,
+    mode: usize,
     layout: &LinearLayout,
     t: f64,
     x: &[f64],
@@ -265,10 +307,10 @@ fn solve_highest<M: Linear>(
     let iterations = if layout.implicit_linear { 1 } else { 50 };
     for _ in 0..iterations {
         let mut g = vec![0.0; m];
-        model.linear_g(t, x, &z, &mut g);
+        model.linear_g(mode, t, x, &z, &mut g);
         let jz = dense(&{
             let mut jz = Matrix::zeros(m, m);
-            model.linear_g_z(t, x, &z, &mut jz);
+            model.linear_g_z(mode, t, x, &z, &mut jz);
             jz
         });
         let rhs = -nalgebra::DVector::from_vec(g);
@@ -300,6 +342,7 @@ fn dense(m: &Matrix) -> nalgebra::DMatrix<f64> {
 /// `G_z` at the point (`None` for an explicit system).
 fn factored<M: Linear>(
     model: &M,
+    mode: usize,
     layout: &LinearLayout,
     t: f64,
     x: &[f64],
@@ -308,7 +351,7 @@ fn factored<M: Linear>(
     let m = layout.unknowns;
     (m > 0).then(|| {
         let mut jz = Matrix::zeros(m, m);
-        model.linear_g_z(t, x, z, &mut jz);
+        model.linear_g_z(mode, t, x, z, &mut jz);
         dense(&jz)
     })
 }
@@ -327,6 +370,7 @@ enum Columns {
 #[allow(clippy::too_many_arguments)]
 fn rows<M: Linear>(
     model: &M,
+    mode: usize,
     layout: &LinearLayout,
     t: f64,
     x: &[f64],
@@ -338,8 +382,8 @@ fn rows<M: Linear>(
     let nf = layout.free.len();
     let mut direct = Matrix::zeros(nf, columns);
     match of {
-        Columns::State => model.linear_a(t, x, z, &mut direct),
-        Columns::Params => model.linear_b(t, x, z, &mut direct),
+        Columns::State => model.linear_a(mode, t, x, z, &mut direct),
+        Columns::Params => model.linear_b(mode, t, x, z, &mut direct),
     }
     let mut out: Vec<Vec<f64>> = (0..nf)
         .map(|i| (0..columns).map(|c| direct[(i, c)]).collect())
@@ -350,15 +394,15 @@ fn rows<M: Linear>(
     let m = layout.unknowns;
     let mut g_v = Matrix::zeros(m, columns);
     match of {
-        Columns::State => model.linear_g_x(t, x, z, &mut g_v),
-        Columns::Params => model.linear_g_p(t, x, z, &mut g_v),
+        Columns::State => model.linear_g_x(mode, t, x, z, &mut g_v),
+        Columns::Params => model.linear_g_p(mode, t, x, z, &mut g_v),
     }
     let z_v = jz.clone().lu().solve(&(-dense(&g_v))).ok_or_else(|| {
         "the highest derivatives' coefficients are singular at this point: choose another point"
             .to_string()
     })?;
     let mut d_z = Matrix::zeros(nf, m);
-    model.linear_d_z(t, x, z, &mut d_z);
+    model.linear_d_z(mode, t, x, z, &mut d_z);
     for (i, row) in out.iter_mut().enumerate() {
         if let Some(&(_, j)) = layout.unknown_rows.iter().find(|&&(r, _)| r == i) {
             for (c, cell) in row.iter_mut().enumerate() {
@@ -379,10 +423,16 @@ fn rows<M: Linear>(
 
 /// `T[k][j] = dp_k/dp_j` with the params after `p_j` recomputed from it
 /// (an overridden one is not recomputed), as `lagc linearize` chains them.
-fn param_chain<M: Linear>(model: &M, t: f64, x: &[f64], overridden: &[bool]) -> Vec<Vec<f64>> {
+fn param_chain<M: Linear>(
+    model: &M,
+    mode: usize,
+    t: f64,
+    x: &[f64],
+    overridden: &[bool],
+) -> Vec<Vec<f64>> {
     let np = overridden.len();
     let mut slopes = Matrix::zeros(np, np);
-    model.linear_chain(t, x, &[], &mut slopes);
+    model.linear_chain(mode, t, x, &[], &mut slopes);
     let mut chain = vec![vec![0.0; np]; np];
     for k in 0..np {
         chain[k][k] = 1.0;

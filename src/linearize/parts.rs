@@ -18,9 +18,14 @@
 //! the module solves it and differentiates through it as `system.rs`
 //! does (`∂z/∂x = −G_z⁻¹ G_x`).
 //!
+//! A model whose implicit constraints have several candidates has the
+//! parts of every mode; the module picks the mode as `lagc linearize` does
+//! (the first whose fixed components the request does not give and that
+//! linearizes there).
+//!
 //! Not carried (the module says so and names `lagc linearize`): holonomic
-//! constraints, several candidate modes, and the derivatives of order
-//! 2..k−1 the consistency of (4) fixes (k ≥ 3).
+//! constraints and the derivatives of order 2..k−1 the consistency of (4)
+//! fixes (k ≥ 3).
 
 use super::ignorable::ignorable;
 use super::point;
@@ -87,12 +92,23 @@ pub struct LinearImplicit {
     pub d_z: Vec<(usize, usize, ExprId)>,
 }
 
-/// The parts, or why the module cannot carry them.
-pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, String> {
-    let reduced = &derivation.reduced;
-    if model.mode_count() > 1 {
-        return Err("its implicit constraints have several candidates".to_string());
+/// The parts of every mode (the candidates' choices of dependents, in
+/// order: `lagc linearize` tries them so), or why the module cannot carry
+/// them.
+pub fn parts(model: &Model, derivation: &Derivation) -> Result<Vec<LinearParts>, String> {
+    let mut all = vec![parts_in(model, derivation)?];
+    for mode in 1..model.mode_count() {
+        let other = model.in_mode(mode);
+        let d = crate::mechanics::derive_mode_checked(&other)
+            .map_err(|_| format!("its reduced system of mode {} does not derive", mode + 1))?;
+        all.push(parts_in(&other, &d)?);
     }
+    Ok(all)
+}
+
+/// The parts in one mode.
+fn parts_in(model: &Model, derivation: &Derivation) -> Result<LinearParts, String> {
+    let reduced = &derivation.reduced;
     if reduced.closure.is_some() {
         return Err("it has holonomic constraints".to_string());
     }
@@ -193,10 +209,15 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
             .iter()
             .find(|v| v.coord as u32 == coord && v.order == order)
         else {
-            return Err(format!(
-                "the model states no initial `{}` (k ≥ 3: (4) fixes it)",
-                arena.symbol_name(state[k])
-            ));
+            // Unstated: another mode's dependent (the request must give
+            // it), or (k ≥ 3) a derivative the consistency of (4) fixes.
+            if order >= 2 {
+                return Err(format!(
+                    "the model states no initial `{}` (k ≥ 3: (4) fixes it)",
+                    arena.symbol_name(state[k])
+                ));
+            }
+            continue;
         };
         let e = lower(&mut arena, &init.value, model);
         let v = point::stated(&mut arena, model, state[k], &params.values).unwrap_or(f64::NAN);
@@ -216,10 +237,12 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<LinearParts, Stri
     };
     // The highest derivatives at the stated point (the ignorable test
     // samples near them).
+    // (Where they are not defined there, the test samples near zero.)
     if let Some(imp) = &implicit {
-        let z = solve_highest(&arena, imp, &env_of(&values)).map_err(|e| e.message)?;
-        for (&s, &v) in imp.unknowns.iter().zip(&z) {
-            values.insert(s, v);
+        if let Ok(z) = solve_highest(&arena, imp, &env_of(&values)) {
+            for (&s, &v) in imp.unknowns.iter().zip(&z) {
+                values.insert(s, v);
+            }
         }
     }
     let env = env_of(&values);

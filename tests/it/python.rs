@@ -34,6 +34,7 @@ const MODELS: &[(&str, &str)] = &[
     ("tests/data/steered_spring.lag", "steered_spring"),
     ("examples/rolling_disk_3d.lag", "rolling_disk_3d"),
     ("examples/cartesian_pendulum.lag", "cartesian_pendulum"),
+    ("examples/chaplygin_sleigh.lag", "chaplygin_sleigh"),
 ];
 
 fn base() -> PathBuf {

@@ -4,8 +4,8 @@ They run against the *installed* modules `paper` (examples/paper.lag),
 `rocket_outputs` (tests/data/rocket_outputs.lag) and `driven_oscillator`
 (tests/data/driven_oscillator.lag, an input), and for `Model.linearize`
 (test_linearize.py) `spherical_pendulum`, `double_pendulum_energy`,
-`rolling_disk`, `knife_edge`, `rolling_disk_3d`, `cartesian_pendulum`
-(examples/) and
+`rolling_disk`, `knife_edge`, `rolling_disk_3d`, `cartesian_pendulum`,
+`chaplygin_sleigh` (examples/) and
 `steered_spring` (tests/data/), built by
 `lagc build --python` and pip-installed into a virtual environment of their
 own. The environment gives:

@@ -2,12 +2,13 @@
 `lagc linearize FILE --format json` (issue 27): the same state, ignorable
 coordinates, A, B_params, B_inputs, eigenvalues, residual, point and fixed
 components to 1e-12, on every example `tests/it/linearize.rs` linearizes
-whose module carries the linearization (one mode, no holonomic
-constraint): constrained ones with ignorable coordinates (paper,
-rolling_disk, knife_edge, steered_spring, the last with an input;
-rolling_disk_3d, whose highest derivatives are an implicit system solved
-at the point, across its critical spin), and unconstrained ones (spherical
-and double pendulum, driven_oscillator). Unknown names raise KeyError; a
+whose module carries the linearization (no holonomic constraint):
+constrained ones with ignorable coordinates (paper, rolling_disk,
+knife_edge, steered_spring, the last with an input; rolling_disk_3d, whose
+highest derivatives are an implicit system solved at the point, across its
+critical spin; chaplygin_sleigh, two candidate modes, the one chosen as
+the command line chooses it), and unconstrained ones (spherical and double
+pendulum, driven_oscillator). Unknown names raise KeyError; a
 model whose module carries none (cartesian_pendulum: holonomic, two
 candidate modes) raises ValueError naming `lagc linearize`."""
 
@@ -55,6 +56,14 @@ CASES = [
         ({"th": 0.0, "th'": 0.0, "phi'": 0.0, "psi'": -4.0}, {}, {}, None),
         ({"th": 0.0, "th'": 0.0, "phi'": 0.0, "psi'": -1.0}, {"R": 0.5}, {}, None),
         ({"th": 0.2, "th'": 0.3, "phi'": 0.4, "psi'": -2.0}, {"m": 2.0}, {}, None),
+    ]),
+    ("chaplygin_sleigh", "examples/chaplygin_sleigh.lag", [
+        ({}, {}, {}, None),
+        ({"th": 0.0, "x'": 1.0, "th'": 0.0}, {}, {}, None),
+        ({"th": 0.0, "x'": -2.0, "th'": 0.0}, {"a": 0.05}, {}, None),
+        # y' given: the mode that has x' dependent.
+        ({"th": 1.5707963267948966, "y'": 1.0, "th'": 0.0}, {}, {}, None),
+        ({"th": 0.3, "y'": 0.5}, {}, {}, None),
     ]),
     ("driven_oscillator", "tests/data/driven_oscillator.lag", [
         ({}, {}, {}, None),
