@@ -21,6 +21,9 @@ pub struct LinearLayout {
     pub ignorable: &'static [usize],
     /// The state components the constraints fix, in `linear_fixed`'s order.
     pub fixed: &'static [usize],
+    /// The dependent positions of holonomic constraints `f(t, q) = 0`
+    /// (columns `free.len() + d` of `linear_a` and `linear_g_x`).
+    pub bound: &'static [usize],
     /// The number of unknowns `z` of the implicit system of the highest
     /// derivatives, `G(t, x, z) = 0` (0: explicit).
     pub unknowns: usize,
@@ -60,6 +63,12 @@ pub trait Linear {
     fn linear_g_p(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
     /// `∂D/∂z` of the dependent highest derivatives' rates (free rows).
     fn linear_d_z(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    /// The holonomic constraints `f`, `∂f/∂z` (the bound positions),
+    /// `∂f/∂x` (free columns), `∂f/∂(p, u)`.
+    fn linear_f(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut [f64]) {}
+    fn linear_f_z(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_f_x(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
+    fn linear_f_p(&self, _mode: usize, _t: f64, _x: &[f64], _z: &[f64], _out: &mut Matrix) {}
 }
 
 /// A request, names resolved to indices.
@@ -138,7 +147,8 @@ fn linearize_in<M: Model + Linear>(
     let nf = layout.free.len();
     let dim = M::STATE.len();
     let mut x = vec![f64::NAN; dim];
-    let mut stated = vec![f64::NAN; nf];
+    let nb = layout.bound.len();
+    let mut stated = vec![f64::NAN; nf + nb];
     model.linear_stated(mode, t, &x, &[], &mut stated);
     for (i, &k) in layout.free.iter().enumerate() {
         let given = request.at.iter().find(|&&(j, _)| j == k).map(|&(_, v)| v);
@@ -152,6 +162,18 @@ fn linearize_in<M: Model + Linear>(
         }
         x[k] = v;
     }
+    for (d, &k) in layout.bound.iter().enumerate() {
+        let given = request.at.iter().find(|&&(j, _)| j == k).map(|&(_, v)| v);
+        let v = given.unwrap_or(stated[nf + d]);
+        if !v.is_finite() {
+            return Err(format!(
+                "the model states no value of `{}`: give it in `at`",
+                names[k]
+            ));
+        }
+        x[k] = v;
+    }
+    close(&model, mode, layout, request, names, t, &mut x)?;
     let mut fixed = vec![f64::NAN; layout.fixed.len()];
     model.linear_fixed(mode, t, &x, &[], &mut fixed);
     for (&k, &v) in layout.fixed.iter().zip(&fixed) {
@@ -179,7 +201,7 @@ fn linearize_in<M: Model + Linear>(
 
     let z = solve_highest(&model, mode, layout, t, &x)?;
     let g_z = factored(&model, mode, layout, t, &x, &z);
-    let a_free = rows(
+    let mut a_free = rows(
         &model,
         mode,
         layout,
@@ -187,9 +209,11 @@ fn linearize_in<M: Model + Linear>(
         &x,
         &z,
         g_z.as_ref(),
-        nf,
+        nf + nb,
         Columns::State,
     )?;
+    let dz_x = closure_slopes(&model, mode, layout, t, &x, nf, Columns::State)?;
+    chain_through(&mut a_free, &dz_x, nf);
     let kept = layout.kept;
     let a: Vec<Vec<f64>> = kept
         .iter()
@@ -219,6 +243,19 @@ fn linearize_in<M: Model + Linear>(
         columns,
         Columns::Params,
     )?;
+    // The dependent positions move with the params too.
+    let dz_p = closure_slopes(&model, mode, layout, t, &x, columns, Columns::Params)?;
+    let mut b_partial = b_partial;
+    for (row, a_row) in b_partial.iter_mut().zip(&a_free) {
+        let through = &a_row[nf..];
+        for (p, cell) in row.iter_mut().enumerate() {
+            *cell += through
+                .iter()
+                .zip(&dz_p)
+                .map(|(a, dzd)| a * dzd[p])
+                .sum::<f64>();
+        }
+    }
     let chain = param_chain(&model, mode, t, &x, &request.overridden);
     let b_params: Vec<Vec<f64>> = kept
         .iter()
@@ -354,6 +391,123 @@ fn factored<M: Linear>(
         model.linear_g_z(mode, t, x, z, &mut jz);
         dense(&jz)
     })
+}
+
+/// The dependent positions put on `f(t, q) = 0` by Newton over them alone
+/// from the values given (or the model's), as `lagc linearize` does
+/// (`src/linearize/closure.rs`; it stops at a residual within rounding of
+/// its terms, this at a step within rounding of the positions); a value
+/// given that is not on the constraints is an error.
+fn close<M: Linear>(
+    model: &M,
+    mode: usize,
+    layout: &LinearLayout,
+    request: &Request,
+    names: &[&str],
+    t: f64,
+    x: &mut [f64],
+) -> Result<(), String> {
+    let m = layout.bound.len();
+    if m == 0 {
+        return Ok(());
+    }
+    let guess: Vec<f64> = layout.bound.iter().map(|&k| x[k]).collect();
+    for _ in 0..50 {
+        let mut f = vec![0.0; m];
+        model.linear_f(mode, t, x, &[], &mut f);
+        if f.iter().all(|&v| v == 0.0) {
+            break;
+        }
+        let mut fz = Matrix::zeros(m, m);
+        model.linear_f_z(mode, t, x, &[], &mut fz);
+        let step = dense(&fz)
+            .lu()
+            .solve(&(-nalgebra::DVector::from_vec(f)))
+            .filter(|s| s.iter().all(|v| v.is_finite()))
+            .ok_or_else(|| {
+                "the holonomic constraints cannot be solved for their dependent positions \
+                 here (their Jacobian is singular): choose another point"
+                    .to_string()
+            })?;
+        let mut largest = 0.0_f64;
+        for (&k, d) in layout.bound.iter().zip(step.iter()) {
+            x[k] += d;
+            largest = largest.max(d.abs() / (1.0 + x[k].abs()));
+        }
+        if largest <= 1e-16 {
+            break;
+        }
+    }
+    let mut f = vec![0.0; m];
+    model.linear_f(mode, t, x, &[], &mut f);
+    for (d, &k) in layout.bound.iter().enumerate() {
+        let v = x[k];
+        if f.iter()
+            .any(|r| !r.is_finite() || r.abs() > 1e-8 * (1.0 + v.abs()))
+        {
+            return Err(
+                "no configuration on the holonomic constraints near this point: choose \
+                 positions on (or near) them"
+                    .to_string(),
+            );
+        }
+        let given = request.at.iter().any(|&(j, _)| j == k);
+        if given && (v - guess[d]).abs() > 1e-9 * (1.0 + v.abs()) {
+            return Err(format!(
+                "`{}={}` in `at` is off the holonomic constraints, which put it at {v} here: \
+                 leave it out",
+                names[k], guess[d]
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `∂z/∂v = −f_z⁻¹ ∂f/∂v` for the dependent positions, one row per
+/// position (empty without holonomic constraints).
+fn closure_slopes<M: Linear>(
+    model: &M,
+    mode: usize,
+    layout: &LinearLayout,
+    t: f64,
+    x: &[f64],
+    columns: usize,
+    of: Columns,
+) -> Result<Vec<Vec<f64>>, String> {
+    let m = layout.bound.len();
+    if m == 0 {
+        return Ok(Vec::new());
+    }
+    let mut fz = Matrix::zeros(m, m);
+    model.linear_f_z(mode, t, x, &[], &mut fz);
+    let mut fv = Matrix::zeros(m, columns);
+    match of {
+        Columns::State => model.linear_f_x(mode, t, x, &[], &mut fv),
+        Columns::Params => model.linear_f_p(mode, t, x, &[], &mut fv),
+    }
+    let slopes = dense(&fz).lu().solve(&(-dense(&fv))).ok_or_else(|| {
+        "the holonomic constraints are singular here: choose another point".to_string()
+    })?;
+    Ok((0..m)
+        .map(|r| slopes.row(r).iter().copied().collect())
+        .collect())
+}
+
+/// `A[r][c] += Σ_d A[r][free + d] ∂z_d/∂x_c` for the free columns.
+fn chain_through(a: &mut [Vec<f64>], dz: &[Vec<f64>], free: usize) {
+    if dz.is_empty() {
+        return;
+    }
+    for row in a.iter_mut() {
+        let through: Vec<f64> = row[free..].to_vec();
+        for (c, cell) in row.iter_mut().take(free).enumerate() {
+            *cell += through
+                .iter()
+                .zip(dz)
+                .map(|(a, dzd)| a * dzd[c])
+                .sum::<f64>();
+        }
+    }
 }
 
 /// Which variables a row of partials is taken in.

@@ -55,6 +55,7 @@ fn available(modes: &[LinearParts]) -> TokenStream {
         })
     };
     let implicit = |m: usize| modes[m].implicit.as_ref();
+    let closure = |m: usize| modes[m].closure.as_ref();
     let items = vec![
         vector("linear_stated", &|m| modes[m].stated.clone()),
         vector("linear_fixed", &|m| fixed_cells[m].clone()),
@@ -77,6 +78,18 @@ fn available(modes: &[LinearParts]) -> TokenStream {
         matrix("linear_d_z", &|m| {
             implicit(m).map_or_else(Vec::new, |i| i.d_z.clone())
         }),
+        vector("linear_f", &|m| {
+            closure(m).map_or_else(Vec::new, |c| c.residual.clone())
+        }),
+        matrix("linear_f_z", &|m| {
+            closure(m).map_or_else(Vec::new, |c| c.f_z.clone())
+        }),
+        matrix("linear_f_x", &|m| {
+            closure(m).map_or_else(Vec::new, |c| c.f_x.clone())
+        }),
+        matrix("linear_f_p", &|m| {
+            closure(m).map_or_else(Vec::new, |c| c.f_p.clone())
+        }),
     ];
     quote! {
         impl lagc_python::Linear for Model {
@@ -95,6 +108,7 @@ fn layout(p: &LinearParts) -> TokenStream {
     let (free, kept, ignorable) = (list(&p.free), list(&p.kept), list(&p.ignorable));
     let fixed_indices: Vec<usize> = p.fixed.iter().map(|&(k, _)| k).collect();
     let fixed = list(&fixed_indices);
+    let bound = list(p.closure.as_ref().map_or(&[][..], |c| &c.bound[..]));
     let pairs = p.unknown_rows.iter().map(|&(i, j)| {
         let (i, j) = (index(i), index(j));
         quote! { (#i, #j) }
@@ -107,6 +121,7 @@ fn layout(p: &LinearParts) -> TokenStream {
             kept: #kept,
             ignorable: #ignorable,
             fixed: #fixed,
+            bound: #bound,
             unknowns: #count,
             unknown_rows: &[#(#pairs),*],
             implicit_linear: #linear,

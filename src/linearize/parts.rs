@@ -23,11 +23,14 @@
 //! (the first whose fixed components the request does not give and that
 //! linearizes there).
 //!
-//! Not carried (the module says so and names `lagc linearize`): holonomic
-//! constraints and the derivatives of order 2..k−1 the consistency of (4)
-//! fixes (k ≥ 3).
+//! Holonomic constraints `f(t, q) = 0` are carried as `f` and its exact
+//! partials: the module puts the dependent positions on them by Newton and
+//! carries `A` and `B` through `∂z/∂v = −f_z⁻¹ f_v` (`closure.rs`).
+//!
+//! Not carried (the module says so and names `lagc linearize`): the
+//! derivatives of order 2..k−1 the consistency of (4) fixes (k ≥ 3).
 
-use super::ignorable::ignorable;
+use super::ignorable::{ignorable, vanishes};
 use super::point;
 use super::system::{solve_highest, Implicit, Partials, Rate};
 use crate::check::model::Model;
@@ -70,6 +73,26 @@ pub struct LinearParts {
     pub unknown_rows: Vec<(usize, usize)>,
     /// The implicit system `G(t, x, z) = 0` of the highest derivatives.
     pub implicit: Option<LinearImplicit>,
+    /// The holonomic constraints `f(t, q) = 0` (their dependent positions
+    /// are columns `free.len() + d` of `a` and of `g_x`, and positions
+    /// `free.len() + d` of `stated`).
+    pub closure: Option<LinearClosure>,
+}
+
+/// Holonomic constraints `f(t, q) = 0` over their dependent positions.
+#[derive(Debug, Clone)]
+pub struct LinearClosure {
+    pub unknowns: Vec<Symbol>,
+    /// The dependent positions' state indices.
+    pub bound: Vec<usize>,
+    /// `(r, f_r)`.
+    pub residual: Vec<(usize, ExprId)>,
+    /// `(r, d, ∂f_r/∂z_d)`.
+    pub f_z: Vec<(usize, usize, ExprId)>,
+    /// `(r, free column, ∂f_r/∂x)`.
+    pub f_x: Vec<(usize, usize, ExprId)>,
+    /// `(r, column, ∂f_r/∂v)`, columns as `LinearParts::b`'s.
+    pub f_p: Vec<(usize, usize, ExprId)>,
 }
 
 /// `G(t, x, z) = 0` for the independent highest derivatives `z`, and the
@@ -109,9 +132,6 @@ pub fn parts(model: &Model, derivation: &Derivation) -> Result<Vec<LinearParts>,
 /// The parts in one mode.
 fn parts_in(model: &Model, derivation: &Derivation) -> Result<LinearParts, String> {
     let reduced = &derivation.reduced;
-    if reduced.closure.is_some() {
-        return Err("it has holonomic constraints".to_string());
-    }
     let mut arena = derivation.arena.clone();
     let state = reduced.state.clone();
     let n = derivation.coordinates;
@@ -135,8 +155,25 @@ fn parts_in(model: &Model, derivation: &Derivation) -> Result<LinearParts, Strin
     for &(i, phi) in &fixed {
         subst.insert(state[i], phi);
     }
+    // Holonomic constraints f(t, q) = 0: their dependent positions
+    // (`bound`) follow the free ones through `∂z/∂q = −f_z⁻¹ f_q`.
+    let closure = reduced.closure.as_ref().map(|c| {
+        let residual: Vec<ExprId> = c.residual.iter().map(|&f| arena.subst(f, &subst)).collect();
+        let jacobian: Vec<Vec<ExprId>> = c
+            .jacobian
+            .iter()
+            .map(|row| row.iter().map(|&e| arena.subst(e, &subst)).collect())
+            .collect();
+        (c.unknowns.clone(), residual, jacobian)
+    });
+    let bound: Vec<usize> = closure.as_ref().map_or_else(Vec::new, |(unknowns, _, _)| {
+        unknowns
+            .iter()
+            .filter_map(|u| state.iter().position(|s| s == u))
+            .collect()
+    });
     let free: Vec<usize> = (0..state.len())
-        .filter(|&k| !fixed.iter().any(|&(i, _)| i == k))
+        .filter(|&k| !fixed.iter().any(|&(i, _)| i == k) && !bound.contains(&k))
         .collect();
     let implicit = match &reduced.highest {
         Highest::Implicit {
@@ -200,7 +237,7 @@ fn parts_in(model: &Model, derivation: &Derivation) -> Result<LinearParts, Strin
     let t0 = point::time(&mut arena, model, None, &params.values).map_err(|e| e.message)?;
     let mut stated = Vec::new();
     let mut values: HashMap<Symbol, f64> = HashMap::new();
-    for (i, &k) in free.iter().enumerate() {
+    for (i, &k) in free.iter().chain(&bound).enumerate() {
         let Symbol::Jet { coord, order } = state[k] else {
             continue;
         };
@@ -247,9 +284,20 @@ fn parts_in(model: &Model, derivation: &Derivation) -> Result<LinearParts, Strin
     }
     let env = env_of(&values);
 
-    let columns: Vec<Symbol> = free.iter().map(|&k| state[k]).collect();
+    let columns: Vec<Symbol> = free.iter().chain(&bound).map(|&k| state[k]).collect();
     let partials = Partials::new(&mut arena, &rates, implicit.as_ref(), &columns);
-    let through_closure = vec![false; free.len()];
+    let through_closure: Vec<bool> = match &closure {
+        Some((_, residual, _)) => free
+            .iter()
+            .map(|&k| {
+                residual.iter().any(|&f| {
+                    let d = arena.diff(f, state[k]);
+                    !vanishes(&arena, d, &env, None)
+                })
+            })
+            .collect(),
+        None => vec![false; free.len()],
+    };
     let ignorable = ignorable(
         &arena,
         &free,
@@ -287,6 +335,24 @@ fn parts_in(model: &Model, derivation: &Derivation) -> Result<LinearParts, Strin
             }
         }
     }
+    let holonomic = closure.map(|(unknowns, residual, jacobian)| {
+        let mut slopes = |vars: &[Symbol]| -> Vec<Vec<ExprId>> {
+            residual
+                .iter()
+                .map(|&f| vars.iter().map(|&v| arena.diff(f, v)).collect())
+                .collect()
+        };
+        let f_x = slopes(&columns[..free.len()]);
+        let f_p = slopes(&vars);
+        LinearClosure {
+            bound: bound.clone(),
+            residual: residual.iter().copied().enumerate().collect(),
+            f_z: cells(&jacobian, &arena),
+            f_x: cells(&f_x, &arena),
+            f_p: cells(&f_p, &arena),
+            unknowns,
+        }
+    });
     let unknown_rows: Vec<(usize, usize)> = rates
         .iter()
         .enumerate()
@@ -329,5 +395,6 @@ fn parts_in(model: &Model, derivation: &Derivation) -> Result<LinearParts, Strin
         chain,
         unknown_rows,
         implicit: highest,
+        closure: holonomic,
     })
 }

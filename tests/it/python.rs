@@ -35,6 +35,16 @@ const MODELS: &[(&str, &str)] = &[
     ("examples/rolling_disk_3d.lag", "rolling_disk_3d"),
     ("examples/cartesian_pendulum.lag", "cartesian_pendulum"),
     ("examples/chaplygin_sleigh.lag", "chaplygin_sleigh"),
+    ("examples/particle_on_circle.lag", "particle_on_circle"),
+    ("examples/four_bar_closure.lag", "four_bar_closure"),
+    (
+        "tests/data/v2/spherical_pendulum_cartesian.lag",
+        "spherical_pendulum_cartesian",
+    ),
+    (
+        "examples/third_order_constraint.lag",
+        "third_order_constraint",
+    ),
 ];
 
 fn base() -> PathBuf {
