@@ -51,7 +51,11 @@ pub fn python_linear(source: &str) -> Result<String, Vec<Diagnostic>> {
     let model = crate::frontend::frontend(source)?;
     let (derivation, _) = crate::mechanics::derive_checked(&model)?;
     let parts = crate::linearize::parts(&model, &derivation);
-    crate::emit::linear::linear_code(&parts).map_err(|d| vec![d])
+    // A module without `linearize` is better than no module: a failure to
+    // print it (lagc's own) becomes the reason `linearize` gives.
+    crate::emit::linear::linear_code(&parts)
+        .or_else(|d| crate::emit::linear::linear_code(&Err(format!("lagc: {}", d.message))))
+        .map_err(|d| vec![d])
 }
 
 /// Every stage after the derivation that can reject a model, short of
