@@ -44,6 +44,20 @@ pub fn generate_crate(
     Ok((generated, notes))
 }
 
+/// The Python module's `impl lagc_python::Linear` for `source`'s model:
+/// the linearization's symbolic half (`linearize::parts`), printed, or the
+/// impl saying why the module has none. Only `lagc build --python` asks.
+pub fn python_linear(source: &str) -> Result<String, Vec<Diagnostic>> {
+    let model = crate::frontend::frontend(source)?;
+    let (derivation, _) = crate::mechanics::derive_checked(&model)?;
+    let parts = crate::linearize::parts(&model, &derivation);
+    // A module without `linearize` is better than no module: a failure to
+    // print it (lagc's own) becomes the reason `linearize` gives.
+    crate::emit::linear::linear_code(&parts)
+        .or_else(|d| crate::emit::linear::linear_code(&Err(format!("lagc: {}", d.message))))
+        .map_err(|d| vec![d])
+}
+
 /// Every stage after the derivation that can reject a model, short of
 /// printing: the field system, the kernel (initial values, outputs, stop)
 /// and the other modes' kernels. `lagc check` runs it too, so that check

@@ -12,6 +12,7 @@
 //! | `integration` | `Integration` (`Model.integration`): `advance_to(t)`, `.t`, `.state`, `restart` |
 //! | `errors` | `IntegrationError` (shared by every model: `lagc.IntegrationError`), `KeyError`s naming the known names |
 //! | `request` | Python arguments → a `lagc_runtime::table::Request` |
+//! | `linear` | `Model.linearize`: the compiler's symbolic linearization (`Linear`, printed into the module) evaluated at a point |
 //!
 //! The runs are the runtime's (`lagc_runtime::table`): a solve's rows are
 //! those `lagc run` prints, bit for bit. The GIL is released while they run.
@@ -26,10 +27,12 @@ use std::sync::OnceLock;
 
 mod errors;
 mod integration;
+mod linear;
 mod model;
 mod request;
 mod solution;
 
+pub use linear::{Linear, LinearLayout};
 pub use pyo3;
 
 /// The model of this extension module, as the Python classes need it.
@@ -38,6 +41,8 @@ pub(crate) struct Kind {
     pub module: String,
     /// The model with these param values.
     pub make: fn(&[f64]) -> Box<dyn DynModel>,
+    /// The linearization at a point (`Model.linearize`).
+    pub linearize: fn(&linear::Request, &[&str]) -> Result<linear::Linearization, String>,
     /// The model with the file's param values (the prototype of a run).
     pub defaults: Vec<f64>,
     pub param_names: &'static [&'static str],
@@ -70,13 +75,17 @@ fn make<M: Model + 'static>(params: &[f64]) -> Box<dyn DynModel> {
 /// `Model`, `Solution`, `Integration`, `IntegrationError`. Called from the generated
 /// `#[pymodule]` function; `name` is the name users import (`paper`: maturin
 /// installs the extension as `paper.paper` inside the package `paper`).
-pub fn register<M: Model + 'static>(module: &Bound<'_, PyModule>, name: &str) -> PyResult<()> {
+pub fn register<M: Model + Linear + 'static>(
+    module: &Bound<'_, PyModule>,
+    name: &str,
+) -> PyResult<()> {
     let py = module.py();
     let name = name.to_string();
     let error = errors::integration_error(py)?;
     let kind = Kind {
         module: name.clone(),
         make: make::<M>,
+        linearize: linear::linearize::<M>,
         defaults: M::parameters(&vec![None; M::PARAMS.len()]),
         param_names: M::PARAMS,
         state_names: M::STATE,

@@ -368,6 +368,90 @@ impl PyModel {
         }
     }
 
+    /// The linearization at a point, as `lagc linearize FILE --at … --format
+    /// json` gives it: a dict with `"state"` (A's state: the state without
+    /// the components the constraints fix and the ignorable coordinates),
+    /// `"ignorable"`, `"A"` (∂f/∂x, exact), `"eigenvalues"` (complex, largest
+    /// real part first), `"residual"` (f at the point), `"equilibrium"`,
+    /// `"t"`, `"point"`, `"ignorable_values"`, `"fixed"` (the constrained
+    /// components' values), `"params"` and `"B_params"` (∂f/∂p, the total
+    /// derivative: params computed from a param follow it unless given),
+    /// and for a model with inputs `"inputs"` and `"B_inputs"` (∂f/∂u, the
+    /// inputs held). `at` gives state components by name (the rest: the
+    /// model's initial values), `params` overrides params on top of the
+    /// model's, `inputs` the inputs' values (default: their defaults), `t`
+    /// the time (default: the start of the span). An unknown name raises
+    /// KeyError; a point where A is not defined, or a fixed component given
+    /// off its constraint, ValueError.
+    #[pyo3(signature = (at=None, params=None, inputs=None, t=None))]
+    fn linearize<'py>(
+        &self,
+        py: Python<'py>,
+        at: Option<&Bound<'_, PyDict>>,
+        params: Option<&Bound<'_, PyDict>>,
+        inputs: Option<&Bound<'_, PyDict>>,
+        t: Option<f64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let kind = kind();
+        let at = request::initial(kind, at)?;
+        let more = request::params(kind, params)?;
+        let given_inputs = request::by_name("input", inputs, kind.input_names)?;
+        let mut given = vec![None; kind.param_names.len()];
+        for &(i, v) in self.overrides.iter().chain(&more) {
+            given[i] = Some(v);
+        }
+        let overridden = given.iter().map(Option::is_some).collect();
+        let values = kind.prototype().parameters(&given);
+        let mut input_values = kind.prototype().input_defaults().to_vec();
+        for &(i, v) in &given_inputs {
+            input_values[i] = v;
+        }
+        let request = crate::linear::Request {
+            at,
+            params: values,
+            overridden,
+            inputs: input_values,
+            t,
+        };
+        let names = kind.state_names;
+        let l = (kind.linearize)(&request, names).map_err(PyValueError::new_err)?;
+        let matrix = |rows: &[Vec<f64>], cols: usize| -> PyResult<Bound<'py, PyArray2<f64>>> {
+            let flat: Vec<f64> = rows.iter().flatten().copied().collect();
+            flat.into_pyarray(py).reshape([rows.len(), cols])
+        };
+        let n = l.state.len();
+        let out = PyDict::new(py);
+        let named = |ks: &[usize]| ks.iter().map(|&k| names[k]).collect::<Vec<_>>();
+        out.set_item("state", named(&l.state))?;
+        let ignorable: Vec<usize> = l.ignorable.iter().map(|&(k, _)| k).collect();
+        out.set_item("ignorable", named(&ignorable))?;
+        out.set_item("A", matrix(&l.a, n)?)?;
+        let eigenvalues: Vec<numpy::Complex64> = l
+            .eigenvalues
+            .iter()
+            .map(|&(re, im)| numpy::Complex64::new(re, im))
+            .collect();
+        out.set_item("eigenvalues", eigenvalues.into_pyarray(py))?;
+        out.set_item("residual", l.residual.into_pyarray(py))?;
+        out.set_item("equilibrium", l.equilibrium)?;
+        out.set_item("t", l.t)?;
+        out.set_item("point", l.point.into_pyarray(py))?;
+        let values: Vec<f64> = l.ignorable.iter().map(|&(_, v)| v).collect();
+        out.set_item("ignorable_values", values.into_pyarray(py))?;
+        let fixed = PyDict::new(py);
+        for &(k, v) in &l.fixed {
+            fixed.set_item(names[k], v)?;
+        }
+        out.set_item("fixed", fixed)?;
+        out.set_item("params", kind.param_names.to_vec())?;
+        out.set_item("B_params", matrix(&l.b_params, kind.param_names.len())?)?;
+        if !kind.input_names.is_empty() {
+            out.set_item("inputs", kind.input_names.to_vec())?;
+            out.set_item("B_inputs", matrix(&l.b_inputs, kind.input_names.len())?)?;
+        }
+        Ok(out)
+    }
+
     /// Pickling (Dask ships models to its workers): the class and the
     /// overrides as given, so that params computed from them follow again.
     fn __reduce__<'py>(

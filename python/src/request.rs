@@ -58,7 +58,7 @@ impl RunOptions<'_> {
 }
 
 /// `{name: value}` → `(index, value)` among `names`.
-fn by_name(
+pub(crate) fn by_name(
     what: &str,
     dict: Option<&Bound<'_, PyDict>>,
     names: &[&str],

@@ -21,6 +21,7 @@
 //! | `coefficients.rs` | the coefficient system |
 //! | `files.rs` | Cargo.toml, Cargo.lock, main.rs, the runtime's sources |
 //! | `fmu.rs` | the FMU's crate (a `cdylib` over lagc-fmu) and modelDescription.xml |
+//! | `linear.rs` | `impl lagc_python::Linear` (the Python module's `linearize`), printed from `linearize::LinearParts` |
 //! | `python.rs` | the Python project (`--python`): pyproject.toml, Cargo.toml, the `#[pymodule]`, the `lagc-python` crate's sources |
 
 mod bodies;
@@ -30,6 +31,7 @@ mod expr;
 mod files;
 mod fmu;
 mod initial;
+pub mod linear;
 mod model;
 pub mod modes;
 mod motion;

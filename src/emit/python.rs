@@ -19,6 +19,7 @@ const PYTHON: &[(&str, &str)] = &[
         include_str!("../../python/src/integration.rs"),
     ),
     ("src/lib.rs", include_str!("../../python/src/lib.rs")),
+    ("src/linear.rs", include_str!("../../python/src/linear.rs")),
     ("src/model.rs", include_str!("../../python/src/model.rs")),
     (
         "src/request.rs",
@@ -180,16 +181,18 @@ pub struct PythonPaths {
 
 /// The Python project of the model whose crate is `generated`: its files
 /// `(path relative to the project's root, contents)`, the module named
-/// `module`.
+/// `module`; `linear` is the model's `impl lagc_python::Linear`
+/// ([`super::linear::linear_code`]).
 pub fn python_project(
     generated: &GeneratedCrate,
+    linear: &str,
     module: &str,
     paths: &PythonPaths,
 ) -> Vec<(String, String)> {
     let package = format!("{}-py", generated.package);
     let model = generated.file("src/lib.rs").unwrap_or_default();
     let lib = format!(
-        "{model}\n\
+        "{model}\n{linear}\n\
          /// The Python module `{module}`: `Model`, `Solution` and `IntegrationError`\n\
          /// (the `lagc-python` crate).\n\
          #[lagc_python::pyo3::pymodule]\n\

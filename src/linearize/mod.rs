@@ -26,17 +26,20 @@
 //! | `ignorable.rs` | the ignorable coordinates |
 //! | `symbolic.rs` | `--symbolic`: A's entries as expressions |
 //! | `eigen.rs` | eigenvalues of a real matrix, frequency and damping |
+//! | `parts.rs` | the symbolic half as expressions, for a Python module's `linearize` |
 //! | `text.rs` | text, JSON and LaTeX |
 
 mod closure;
 mod eigen;
 mod ignorable;
+mod parts;
 mod point;
 mod symbolic;
 mod system;
 mod text;
 
-pub use eigen::Eigenvalue;
+pub use eigen::{eigenvalues, Eigenvalue};
+pub use parts::{parts, LinearParts};
 
 use crate::check::model::Model;
 use crate::mechanics::Derivation;

@@ -34,7 +34,7 @@ pub(super) struct Implicit {
     pub(super) unknowns: Vec<Symbol>,
     pub(super) residual: Vec<ExprId>,
     pub(super) jacobian: Vec<Vec<ExprId>>,
-    linear: bool,
+    pub(super) linear: bool,
 }
 
 /// A residual smaller than this fraction of its rounding scale is zero.
@@ -444,7 +444,10 @@ pub(super) fn linearize_in(
                 "the right side divides by zero or leaves a function's domain here: choose another point",
             ));
         }
-        if value.abs() > ZERO * scale {
+        // Written so that a scale that is not a number (a part the
+        // evaluation could not scale) cannot call a non-zero rate zero.
+        let zero = value == 0.0 || value.abs() <= ZERO * scale;
+        if !zero {
             equilibrium = false;
         }
         residual.push(value);
@@ -571,7 +574,7 @@ pub(super) fn matrix(
 
 /// `G(t, x, z) = 0` solved for `z` at the point: one linear solve, or
 /// Newton from `z = 0` with the exact `G_z`.
-fn solve_highest(
+pub(super) fn solve_highest(
     arena: &Arena,
     imp: &Implicit,
     env: &dyn Fn(Symbol) -> f64,

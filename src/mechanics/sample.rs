@@ -194,9 +194,18 @@ pub fn eval_scaled_in(
             Node::Pow(a, b) => {
                 let (a, b) = (get(&memo, a), get(&memo, b));
                 let value = pow_value(a.value, b.value);
-                // d(a^b) = b a^(b-1) da + a^b ln|a| db
-                let through_base = (b.value * pow_value(a.value, b.value - 1.0)).abs() * a.scale;
-                let through_exp = if b.scale == 0.0 {
+                // d(a^b) = b a^(b-1) da + a^b ln|a| db. A part with no
+                // scale adds nothing (not `0·∞ = NaN`): at `a = 0` the base's
+                // `ln|a|` is infinite, but `a^b ln|a| → 0` (`b > 0`). A NaN
+                // scale once made every `|f| > tol·scale` false, and
+                // `lagc linearize` called a hanging double pendulum held
+                // horizontal at rest an equilibrium (its `a'^2` at `a' = 0`).
+                let through_base = if a.scale == 0.0 {
+                    0.0
+                } else {
+                    (b.value * pow_value(a.value, b.value - 1.0)).abs() * a.scale
+                };
+                let through_exp = if b.scale == 0.0 || value == 0.0 {
                     0.0
                 } else {
                     (value * a.value.abs().ln()).abs() * b.scale

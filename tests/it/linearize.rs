@@ -629,3 +629,39 @@ fn every_model_linearizes_or_says_why() {
         "{answered} models linearized at their initial state"
     );
 }
+
+/// Points at rest where gravity still pulls are not equilibria: the
+/// residual's rounding scale once was NaN wherever a squared velocity is
+/// zero (`0 · ln 0` in the scale of `a'^2`), and every such point passed as
+/// "an equilibrium": the double pendulum held horizontal, a Cartesian
+/// pendulum at rest off the bottom, the paper's model at its start
+/// (`q1'' = 0.5`, the scale of `t^2` at `t = 0`). Their true equilibria
+/// still are.
+#[test]
+fn a_point_at_rest_off_equilibrium_is_not_called_one() {
+    let cases = [
+        (
+            "examples/double_pendulum_energy.lag",
+            "a=1.5707963267948966",
+        ),
+        ("examples/cartesian_pendulum.lag", "x=0.6,x'=0"),
+        ("examples/paper.lag", "q1'=1"),
+        ("examples/spherical_pendulum.lag", "a=0.2,b=0,a'=0,b'=0"),
+    ];
+    for (file, at) in cases {
+        let lin = ok(file, at, "");
+        let largest = lin.residual.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(largest > 0.1, "{file} at {at}: {lin}");
+        assert!(!lin.equilibrium, "{file} at {at}: {lin}");
+        assert!(lin.to_string().contains("not an equilibrium"), "{lin}");
+    }
+    let at_rest = [
+        ("examples/double_pendulum_energy.lag", "a=0,b=0,a'=0,b'=0"),
+        ("examples/cartesian_pendulum.lag", "x=0,x'=0"),
+        ("examples/paper.lag", "q1'=0"),
+    ];
+    for (file, at) in at_rest {
+        let lin = ok(file, at, "");
+        assert!(lin.equilibrium, "{file} at {at}: {lin}");
+    }
+}

@@ -23,6 +23,28 @@ const MODELS: &[(&str, &str)] = &[
     ("examples/paper.lag", "paper"),
     ("tests/data/rocket_outputs.lag", "rocket_outputs"),
     ("tests/data/driven_oscillator.lag", "driven_oscillator"),
+    // `Model.linearize` against `lagc linearize` (test_linearize.py).
+    ("examples/spherical_pendulum.lag", "spherical_pendulum"),
+    (
+        "examples/double_pendulum_energy.lag",
+        "double_pendulum_energy",
+    ),
+    ("examples/rolling_disk.lag", "rolling_disk"),
+    ("examples/knife_edge.lag", "knife_edge"),
+    ("tests/data/steered_spring.lag", "steered_spring"),
+    ("examples/rolling_disk_3d.lag", "rolling_disk_3d"),
+    ("examples/cartesian_pendulum.lag", "cartesian_pendulum"),
+    ("examples/chaplygin_sleigh.lag", "chaplygin_sleigh"),
+    ("examples/particle_on_circle.lag", "particle_on_circle"),
+    ("examples/four_bar_closure.lag", "four_bar_closure"),
+    (
+        "tests/data/v2/spherical_pendulum_cartesian.lag",
+        "spherical_pendulum_cartesian",
+    ),
+    (
+        "examples/third_order_constraint.lag",
+        "third_order_constraint",
+    ),
 ];
 
 fn base() -> PathBuf {

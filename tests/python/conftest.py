@@ -2,7 +2,13 @@
 
 They run against the *installed* modules `paper` (examples/paper.lag),
 `rocket_outputs` (tests/data/rocket_outputs.lag) and `driven_oscillator`
-(tests/data/driven_oscillator.lag, an input), built by
+(tests/data/driven_oscillator.lag, an input), and for `Model.linearize`
+(test_linearize.py) `spherical_pendulum`, `double_pendulum_energy`,
+`rolling_disk`, `knife_edge`, `rolling_disk_3d`, `cartesian_pendulum`,
+`chaplygin_sleigh`, `particle_on_circle`, `four_bar_closure`,
+`third_order_constraint` (examples/), `spherical_pendulum_cartesian`
+(tests/data/v2/) and
+`steered_spring` (tests/data/), built by
 `lagc build --python` and pip-installed into a virtual environment of their
 own. The environment gives:
 

@@ -97,7 +97,8 @@ fn build_checked(args: &BuildArgs) -> Result<ExitCode, ExitCode> {
             runtime: runtime_path,
             python: python_path,
         };
-        write_python(args, &generated, &runtime_dir, &python_dir, &paths)
+        let linear = python_linear(&args.file)?;
+        write_python(args, &generated, &linear, &runtime_dir, &python_dir, &paths)
     } else {
         crate::cli::write_crate(&generated, &args.output).map(|()| {
             format!(
@@ -130,9 +131,25 @@ fn build_checked(args: &BuildArgs) -> Result<ExitCode, ExitCode> {
 
 /// The Python project into `args.output` and the `lagc-python` library
 /// (default: inside it); the message to print.
+/// The model's `impl lagc_python::Linear` (its linearization for
+/// `m.linearize`); the model compiled already, so a failure here is lagc's.
+fn python_linear(file: &Path) -> Result<String, ExitCode> {
+    let source = std::fs::read_to_string(file).unwrap_or_default();
+    match lagc::on_big_stack(move || lagc::pipeline::python_linear(&source)) {
+        Ok(code) => Ok(code),
+        Err(diagnostics) => {
+            for d in diagnostics {
+                eprintln!("error: {}", d.message);
+            }
+            Err(ExitCode::from(EXIT_USAGE))
+        }
+    }
+}
+
 fn write_python(
     args: &BuildArgs,
     generated: &lagc::emit::GeneratedCrate,
+    linear: &str,
     runtime_dir: &Path,
     python_dir: &Path,
     paths: &lagc::emit::python::PythonPaths,
@@ -145,7 +162,7 @@ fn write_python(
         .file_stem()
         .map_or_else(|| "model".to_string(), |s| s.to_string_lossy().into_owned());
     let module = python_module_name(&model_name);
-    for (path, contents) in python_project(generated, &module, paths) {
+    for (path, contents) in python_project(generated, linear, &module, paths) {
         crate::cli::cache::write_if_changed(&args.output.join(path), contents.as_bytes())?;
     }
     let runtime_from_python = crate::cli::relative_path(python_dir, runtime_dir);
