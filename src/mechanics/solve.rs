@@ -33,17 +33,15 @@ impl System {
         param_defaults: &[f64],
         masses: usize,
     ) -> System {
-        let jacobian: Vec<Vec<ExprId>> = rows
-            .iter()
-            .map(|&r| {
-                unknowns
-                    .iter()
-                    .map(|&z| {
-                        // The mass matrix: sin² + cos² = 1 where the
-                        // derivative brought the squares together.
-                        let d = arena.diff(r, z);
-                        arena.pythagoras(d)
-                    })
+        // All partials in one pass over the DAG (`Arena::jacobian`).
+        let jacobian: Vec<Vec<ExprId>> = arena
+            .jacobian(&rows, &unknowns)
+            .into_iter()
+            .map(|row| {
+                row.into_iter()
+                    // The mass matrix: sin² + cos² = 1 where the
+                    // derivative brought the squares together.
+                    .map(|d| arena.pythagoras(d))
                     .collect()
             })
             .collect();
