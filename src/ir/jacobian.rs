@@ -71,9 +71,12 @@ impl Arena {
             }
         }
         let mut partials: Vec<Partials> = Vec::with_capacity(order.len());
-        let mut buckets: Buckets = Buckets::new(wrt.len());
+        let mut work = Work {
+            buckets: Buckets::new(wrt.len()),
+            products: FxMap::default(),
+        };
         for &e in &order {
-            let p = self.partials_of(e, &column_of, &index, &partials, &mut buckets);
+            let p = self.partials_of(e, &column_of, &index, &partials, &mut work);
             partials.push(p);
         }
         let mut rows = Vec::with_capacity(roots.len());
@@ -106,8 +109,9 @@ impl Arena {
         column_of: &FxMap<u32, u32>,
         index: &FxMap<ExprId, usize>,
         partials: &[Partials],
-        buckets: &mut Buckets,
+        work: &mut Work,
     ) -> Partials {
+        let Work { buckets, products } = work;
         let of = |c: ExprId| -> &[(u32, ExprId)] {
             match index.get(&c) {
                 Some(&i) => &partials[i],
@@ -146,7 +150,7 @@ impl Arena {
                 for (i, &f) in fs.iter().enumerate() {
                     for &(c, d) in of(f) {
                         factors[i] = d;
-                        let term = self.mul(&factors);
+                        let term = self.product(&factors, products);
                         buckets.push(c, term);
                     }
                     factors[i] = f;
@@ -215,13 +219,36 @@ impl Arena {
                 let outer = self.func_derivative(f, u);
                 pu.into_iter()
                     .filter_map(|(c, du)| {
-                        let d = self.mul(&[outer, du]);
+                        let d = self.product(&[outer, du], products);
                         (!self.is_zero(d)).then_some((c, d))
                     })
                     .collect()
             }
         }
     }
+}
+
+impl Arena {
+    /// `self.mul(factors)`, remembered for the Jacobian's pass: the same
+    /// product recurs for many nodes (`c·∂S_k/∂x` is one node for every
+    /// `k` where the partial of the inner sum `S_k` is), and a lookup costs
+    /// a fraction of canonicalising it again.
+    fn product(&mut self, factors: &[ExprId], products: &mut Products) -> ExprId {
+        if let Some(&p) = products.get(factors) {
+            return p;
+        }
+        let p = self.mul(factors);
+        products.insert(factors.into(), p);
+        p
+    }
+}
+
+type Products = FxMap<Box<[ExprId]>, ExprId>;
+
+/// The pass's scratch space.
+struct Work {
+    buckets: Buckets,
+    products: Products,
 }
 
 /// The terms of each column's partial, gathered child by child.
