@@ -107,7 +107,7 @@ pub fn motion(arena: &mut Arena, reduced: &ReducedSystem, time: &TimeDependence)
             let zero = arena.zero();
             let at_zero: HashMap<Symbol, ExprId> = unknowns.iter().map(|&z| (z, zero)).collect();
             let free = if *linear {
-                residual.iter().map(|&r| arena.subst(r, &at_zero)).collect()
+                arena.subst_all(residual, &at_zero)
             } else {
                 Vec::new()
             };

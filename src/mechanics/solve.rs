@@ -33,17 +33,13 @@ impl System {
         param_defaults: &[f64],
         masses: usize,
     ) -> System {
-        // All partials in one pass over the DAG (`Arena::jacobian`).
+        // All partials in one pass over the DAG (`Arena::jacobian`). The
+        // mass matrix: sin² + cos² = 1 where the derivative brought the
+        // squares together.
         let jacobian: Vec<Vec<ExprId>> = arena
             .jacobian(&rows, &unknowns)
             .into_iter()
-            .map(|row| {
-                row.into_iter()
-                    // The mass matrix: sin² + cos² = 1 where the
-                    // derivative brought the squares together.
-                    .map(|d| arena.pythagoras(d))
-                    .collect()
-            })
+            .map(|row| arena.pythagoras_all(&row))
             .collect();
         let linear = rows.iter().all(|&r| arena.is_affine_in(r, &unknowns))
             || affine_numerically(arena, &jacobian, &unknowns, param_defaults, masses);
