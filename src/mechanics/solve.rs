@@ -36,10 +36,10 @@ impl System {
         // All partials in one pass over the DAG (`Arena::jacobian`). The
         // mass matrix: sin² + cos² = 1 where the derivative brought the
         // squares together.
-        let jacobian: Vec<Vec<ExprId>> = arena
-            .jacobian(&rows, &unknowns)
-            .into_iter()
-            .map(|row| arena.pythagoras_all(&row))
+        let cells: Vec<ExprId> = arena.jacobian(&rows, &unknowns).concat();
+        let paired = arena.pythagoras_all(&cells);
+        let jacobian: Vec<Vec<ExprId>> = (0..rows.len())
+            .map(|r| paired[r * unknowns.len()..(r + 1) * unknowns.len()].to_vec())
             .collect();
         let linear = rows.iter().all(|&r| arena.is_affine_in(r, &unknowns))
             || affine_numerically(arena, &jacobian, &unknowns, param_defaults, masses);
