@@ -61,6 +61,16 @@ pub fn check_and_derive(source: &str) -> Checked {
     Ok((model, derivation))
 }
 
+/// [`check_and_derive`] for a caller that needs only the checked model
+/// (`lagc check`): the derivation goes on into the kernel without the
+/// copy that returning it takes.
+pub fn check_through_kernel(source: &str) -> Result<Model, Vec<Diagnostic>> {
+    let model = frontend(source)?;
+    let (derivation, _) = crate::mechanics::derive_checked(&model)?;
+    crate::pipeline::kernel_of(&model, derivation)?;
+    Ok(model)
+}
+
 /// Warnings about the text that do not stop a model: a number literal
 /// such as `1e-400`, non-zero as written but below the smallest positive
 /// f64, which is read as 0 (W0001). A lexical scan with the grammar's

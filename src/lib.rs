@@ -28,7 +28,7 @@ mod suggest;
 pub mod syntax;
 
 pub use frontend::{
-    check_and_derive, check_and_derive_bytes, decode_then, frontend, frontend_bytes,
-    literal_warnings, on_big_stack,
+    check_and_derive, check_and_derive_bytes, check_through_kernel, decode_then, frontend,
+    frontend_bytes, literal_warnings, on_big_stack,
 };
 pub use pipeline::{compile, compile_fmu};

@@ -70,7 +70,7 @@ pub fn kernel_of(
     let field = field_system(&mut derivation.arena, &reduced);
     let mut notes: Vec<Diagnostic> = derivation.notes.clone();
     notes.extend(local_field_note(&field, model.lagrangian.span));
-    let mut kernel = crate::kernel::build(model, &derivation, &field)?;
+    let mut kernel = crate::kernel::build_owned(model, derivation, &field, true)?;
     for mode in 1..model.mode_count() {
         let other = mode_kernel(&model.in_mode(mode))?;
         // Every mode reads the first mode's branches; a switch only another
@@ -95,5 +95,5 @@ fn mode_kernel(model: &Model) -> Result<crate::kernel::Kernel, Vec<Diagnostic>> 
     let mut derivation = crate::mechanics::derive_mode_checked(model)?;
     let reduced = derivation.reduced.clone();
     let field = field_system(&mut derivation.arena, &reduced);
-    crate::kernel::build_mode(model, &derivation, &field)
+    crate::kernel::build_owned(model, derivation, &field, false)
 }

@@ -82,8 +82,15 @@ impl Arena {
             }
         }
         self.distribute_collecting(&mut flat);
+        // A term repeated next to itself (a Jacobian's sum of many equal
+        // partials) is split once: splitting `c·a·b` interns `a·b`.
+        let mut last: Option<(ExprId, (f64, ExprId))> = None;
         for t in flat {
-            let (c, rest) = self.split_coefficient(t);
+            let (c, rest) = match last {
+                Some((u, split)) if u == t => split,
+                _ => self.split_coefficient(t),
+            };
+            last = Some((t, (c, rest)));
             match index.get(&rest) {
                 Some(&i) if (entries[i].1 + c).is_finite() => entries[i].1 += c,
                 _ => {

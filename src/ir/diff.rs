@@ -85,6 +85,19 @@ impl Arena {
     fn derive_pow(&mut self, e: ExprId, a: ExprId, b: ExprId, d: Derivation) -> ExprId {
         let da = self.derive(a, d);
         let db = self.derive(b, d);
+        self.power_rule(e, a, b, da, db)
+    }
+
+    /// The derivative of `e = a^b` from those of its base and exponent
+    /// (also `jacobian.rs`'s rule, so both build the same node).
+    pub(super) fn power_rule(
+        &mut self,
+        e: ExprId,
+        a: ExprId,
+        b: ExprId,
+        da: ExprId,
+        db: ExprId,
+    ) -> ExprId {
         let mut terms = Vec::with_capacity(2);
         if !self.is_zero(da) {
             let minus_one = self.constant(-1.0);
@@ -100,7 +113,7 @@ impl Arena {
     }
 
     /// `f'(u)`.
-    fn func_derivative(&mut self, f: Func, u: ExprId) -> ExprId {
+    pub(super) fn func_derivative(&mut self, f: Func, u: ExprId) -> ExprId {
         match f {
             Func::Sin => self.func(Func::Cos, u),
             Func::Cos => {

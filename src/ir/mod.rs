@@ -12,6 +12,7 @@
 //! | `expr.rs` | ids, symbols, nodes, the arena, free-symbol facts, sizes |
 //! | `canon.rs` | canonicalising constructors and the canonical order |
 //! | `diff.rs` | `∂/∂symbol` (and the walk shared with `D`) |
+//! | `jacobian.rs` | many expressions' partials in many symbols, one pass |
 //! | `jet.rs` | the total time derivative `D` |
 //! | `subst.rs` | simultaneous substitution |
 //! | `eval.rs` | numbers |
@@ -24,6 +25,7 @@ mod diff;
 mod display;
 mod eval;
 mod expr;
+mod jacobian;
 mod jet;
 mod lower;
 mod shared;

@@ -17,6 +17,20 @@ impl Arena {
         self.subst_rec(e, map, &slots, &mut memo)
     }
 
+    /// [`Arena::subst`] of each of `es` with one `map`, the nodes they
+    /// share rebuilt once.
+    pub fn subst_all(&mut self, es: &[ExprId], map: &HashMap<Symbol, ExprId>) -> Vec<ExprId> {
+        let mut slots: Vec<u32> = map.keys().filter_map(|&s| self.symbol_slot(s)).collect();
+        if slots.is_empty() {
+            return es.to_vec();
+        }
+        slots.sort_unstable();
+        let mut memo = FxMap::default();
+        es.iter()
+            .map(|&e| self.subst_rec(e, map, &slots, &mut memo))
+            .collect()
+    }
+
     fn touches(&self, e: ExprId, slots: &[u32]) -> bool {
         let free = &self.meta[e.index()].free;
         if free.len() < slots.len() {

@@ -14,6 +14,15 @@ impl Arena {
         self.pythagoras_rec(e, &mut memo)
     }
 
+    /// [`Arena::pythagoras`] of each of `es`, the nodes they share
+    /// rewritten once (a mass matrix's entries share most of theirs).
+    pub fn pythagoras_all(&mut self, es: &[ExprId]) -> Vec<ExprId> {
+        let mut memo = FxMap::default();
+        es.iter()
+            .map(|&e| self.pythagoras_rec(e, &mut memo))
+            .collect()
+    }
+
     fn pythagoras_rec(&mut self, e: ExprId, memo: &mut FxMap<ExprId, ExprId>) -> ExprId {
         if let Some(&r) = memo.get(&e) {
             return r;

@@ -115,27 +115,32 @@ pub fn build(
     derivation: &Derivation,
     field: &FieldSystem,
 ) -> Result<Kernel, Vec<Diagnostic>> {
-    build_with(model, derivation, field, true)
+    build_with(model, derivation, derivation.arena.clone(), field, true)
 }
 
-/// The kernel of one more mode of a model with implicit constraints (its
-/// motion; the initial state, exact solution, outputs, stop and impacts
-/// are mode 0's).
-pub fn build_mode(
+/// [`build`] from a derivation that is not needed afterwards: its arena is
+/// built on instead of copied (a copy of a large model's arena costs about
+/// as much as some stages). Not `first_mode`: the kernel of one more mode
+/// of a model with implicit constraints (its motion; the initial state,
+/// exact solution, outputs, stop and impacts are mode 0's).
+pub fn build_owned(
     model: &Model,
-    derivation: &Derivation,
-    field: &FieldSystem,
-) -> Result<Kernel, Vec<Diagnostic>> {
-    build_with(model, derivation, field, false)
-}
-
-fn build_with(
-    model: &Model,
-    derivation: &Derivation,
+    mut derivation: Derivation,
     field: &FieldSystem,
     first_mode: bool,
 ) -> Result<Kernel, Vec<Diagnostic>> {
-    let mut arena = derivation.arena.clone();
+    let arena = std::mem::replace(&mut derivation.arena, Arena::new(Default::default()));
+    build_with(model, &derivation, arena, field, first_mode)
+}
+
+/// The kernel built on `arena`, `derivation.arena` or a copy of it.
+fn build_with(
+    model: &Model,
+    derivation: &Derivation,
+    mut arena: Arena,
+    field: &FieldSystem,
+    first_mode: bool,
+) -> Result<Kernel, Vec<Diagnostic>> {
     let reduced = &derivation.reduced;
     let time = TimeDependence::new(&mut arena, &reduced.mass_laws);
     let params = items::params(&mut arena, model);

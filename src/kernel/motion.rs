@@ -79,10 +79,11 @@ pub fn motion(arena: &mut Arena, reduced: &ReducedSystem, time: &TimeDependence)
         Highest::Explicit(rhs) => {
             let mut jacobian = Vec::new();
             let mut time_partial = Vec::new();
-            for (j, &h) in rhs.iter().enumerate() {
+            // All partials in one pass over the DAG (`Arena::jacobian`).
+            let partials = arena.jacobian(rhs, &reduced.state);
+            for (j, (&h, cells)) in rhs.iter().zip(partials).enumerate() {
                 let row = highest_row(j as u32);
-                for (k, &s) in reduced.state.iter().enumerate() {
-                    let d = arena.diff(h, s);
+                for (k, d) in cells.into_iter().enumerate() {
                     jacobian.push((row, k, d));
                 }
                 let d = time.partial(arena, h);
@@ -106,7 +107,7 @@ pub fn motion(arena: &mut Arena, reduced: &ReducedSystem, time: &TimeDependence)
             let zero = arena.zero();
             let at_zero: HashMap<Symbol, ExprId> = unknowns.iter().map(|&z| (z, zero)).collect();
             let free = if *linear {
-                residual.iter().map(|&r| arena.subst(r, &at_zero)).collect()
+                arena.subst_all(residual, &at_zero)
             } else {
                 Vec::new()
             };
@@ -120,9 +121,10 @@ pub fn motion(arena: &mut Arena, reduced: &ReducedSystem, time: &TimeDependence)
             );
             let mut g_x = Vec::new();
             let mut g_t = Vec::new();
-            for (r, &g) in residual.iter().enumerate() {
-                for (k, &s) in reduced.state.iter().enumerate() {
-                    g_x.push((r, k, arena.diff(g, s)));
+            let partials = arena.jacobian(residual, &reduced.state);
+            for (r, (&g, cells)) in residual.iter().zip(partials).enumerate() {
+                for (k, d) in cells.into_iter().enumerate() {
+                    g_x.push((r, k, d));
                 }
                 let d = time.partial(arena, g);
                 if !arena.is_zero(d) {

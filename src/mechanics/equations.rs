@@ -10,7 +10,7 @@
 
 use super::star::{jet, project, star_k, star_k1, Elimination};
 use super::symbols::Symbolic;
-use crate::ir::{Arena, ExprId};
+use crate::ir::{Arena, ExprId, Symbol};
 
 /// Equation (4) for independent coordinate `coord`: `lhs = rhs`, both free
 /// of dependent derivatives of order ≥ k.
@@ -43,12 +43,16 @@ pub fn equations(
     let lk1_star = star_k1(arena, lk1, k, &model.constraints);
     let upper = arena.constant(f64::from(k + 1));
     let lower = arena.constant(-f64::from(k + 2));
+    // Each gradient in one pass over its DAG (`Arena::jacobian`).
+    let of_order =
+        |order: u32| -> Vec<Symbol> { model.independent.iter().map(|&i| jet(i, order)).collect() };
+    let highs = arena.jacobian(&[lk1_star], &of_order(k + 1)).remove(0);
+    let lows = arena.jacobian(&[lk_star], &of_order(k)).remove(0);
     model
         .independent
         .iter()
-        .map(|&i| {
-            let high = arena.diff(lk1_star, jet(i, k + 1));
-            let low = arena.diff(lk_star, jet(i, k));
+        .zip(highs.into_iter().zip(lows))
+        .map(|(&i, (high, low))| {
             let high = arena.mul(&[upper, high]);
             let low = arena.mul(&[lower, low]);
             let lhs = arena.add(&[high, low]);

@@ -162,9 +162,12 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     };
     let mut equations = equations::equations(&mut arena, &symbolic, &mut elimination, &forces);
     // sin² + cos² = 1 again: differentiation brings squares of sums apart.
-    for e in &mut equations {
-        e.lhs = arena.pythagoras(e.lhs);
-        e.rhs = arena.pythagoras(e.rhs);
+    // One memo for all sides: the equations share most of their nodes.
+    let sides: Vec<ExprId> = equations.iter().flat_map(|e| [e.lhs, e.rhs]).collect();
+    let paired = arena.pythagoras_all(&sides);
+    for (e, sides) in equations.iter_mut().zip(paired.chunks(2)) {
+        e.lhs = sides[0];
+        e.rhs = sides[1];
     }
     let rows: Vec<ExprId> = equations.iter().map(|e| arena.sub(e.lhs, e.rhs)).collect();
     let divided =

@@ -12,7 +12,7 @@
 //! divided out and the laws put in for (7).
 
 use super::reduced::Highest;
-use super::sample::{eval_scaled_in, Rng, SamplePoint};
+use super::sample::{Rng, SamplePoint, Tape};
 use super::star::{jet, project, Elimination};
 use super::Derivation;
 use crate::diagnostic::{codes, Diagnostic};
@@ -135,11 +135,19 @@ impl CrossCheckFailure {
 fn euler_lagrange(derivation: &mut Derivation) -> Vec<ExprId> {
     let arena = &mut derivation.arena;
     let l = derivation.lagrangian;
-    (0..derivation.coordinates as u32)
-        .map(|j| {
-            let momentum = arena.diff(l, jet(j, 1));
+    let n = derivation.coordinates as u32;
+    // `∂L/∂q_j'` and `∂L/∂q_j` for every j in one pass (`Arena::jacobian`).
+    let wrt: Vec<Symbol> = (0..n)
+        .map(|j| jet(j, 1))
+        .chain((0..n).map(|j| jet(j, 0)))
+        .collect();
+    let gradient = arena.jacobian(&[l], &wrt).remove(0);
+    let (momenta, forces) = gradient.split_at(n as usize);
+    momenta
+        .iter()
+        .zip(forces)
+        .map(|(&momentum, &force)| {
             let rate = arena.total_derivative(momentum);
-            let force = arena.diff(l, jet(j, 0));
             arena.sub(rate, force)
         })
         .collect()
@@ -305,7 +313,7 @@ pub fn cross_check(derivation: &mut Derivation) -> Result<CrossCheck, CrossCheck
     roots.extend(&written);
     let rows = derivation.equations.len();
     let masses = arena.names().masses.len();
-    let reachable = arena.reachable(&roots);
+    let tape = Tape::new(arena, &roots);
     let mut rng = Rng::new(0x6d75_6c74);
     let mut points = 0;
     let mut worst: f64 = 0.0;
@@ -323,7 +331,7 @@ pub fn cross_check(derivation: &mut Derivation) -> Result<CrossCheck, CrossCheck
                 }
             }
         }
-        let values = eval_scaled_in(arena, &reachable, &roots, &|s| point.value(s));
+        let values = tape.eval_scaled(&|s| point.value(s));
         if !values.iter().all(|v| v.is_finite()) {
             continue;
         }

@@ -138,102 +138,137 @@ impl Scaled {
 /// Evaluates `roots` with their rounding scales (first-order propagation:
 /// `|f'(a)| · scale(a)` through functions and powers).
 pub fn eval_scaled(arena: &Arena, roots: &[ExprId], env: &dyn Fn(Symbol) -> f64) -> Vec<Scaled> {
-    eval_scaled_in(arena, &arena.reachable(roots), roots, env)
+    Tape::new(arena, roots).eval_scaled(env)
 }
 
-/// [`eval_scaled`] with the nodes reachable from `roots` given, children
-/// first (`Arena::reachable`): a check at many points walks the DAG once.
-pub fn eval_scaled_in(
-    arena: &Arena,
-    reachable: &[ExprId],
-    roots: &[ExprId],
-    env: &dyn Fn(Symbol) -> f64,
-) -> Vec<Scaled> {
-    let mut memo: FxMap<ExprId, Scaled> = FxMap::default();
-    memo.reserve(reachable.len());
-    for &e in reachable {
-        let get = |memo: &FxMap<ExprId, Scaled>, c: &ExprId| memo[c];
-        let s = match arena.node(e) {
-            Node::Const(v) => Scaled {
-                value: *v,
-                scale: v.abs(),
-            },
-            Node::Sym(s) => {
-                let v = env(*s);
-                Scaled {
-                    value: v,
-                    scale: v.abs(),
-                }
-            }
-            Node::Add(ts) => ts.iter().fold(
-                Scaled {
-                    value: 0.0,
-                    scale: 0.0,
-                },
-                |acc, t| {
-                    let x = get(&memo, t);
-                    Scaled {
-                        value: acc.value + x.value,
-                        scale: acc.scale + x.scale,
-                    }
-                },
-            ),
-            Node::Mul(fs) => fs.iter().fold(
-                Scaled {
-                    value: 1.0,
-                    scale: 1.0,
-                },
-                |acc, f| {
-                    let x = get(&memo, f);
-                    Scaled {
-                        value: acc.value * x.value,
-                        scale: acc.scale * x.scale,
-                    }
-                },
-            ),
-            Node::Pow(a, b) => {
-                let (a, b) = (get(&memo, a), get(&memo, b));
-                let value = pow_value(a.value, b.value);
-                // d(a^b) = b a^(b-1) da + a^b ln|a| db. A part with no
-                // scale adds nothing (not `0·∞ = NaN`): at `a = 0` the base's
-                // `ln|a|` is infinite, but `a^b ln|a| → 0` (`b > 0`). A NaN
-                // scale once made every `|f| > tol·scale` false, and
-                // `lagc linearize` called a hanging double pendulum held
-                // horizontal at rest an equilibrium (its `a'^2` at `a' = 0`).
-                let through_base = if a.scale == 0.0 {
-                    0.0
-                } else {
-                    (b.value * pow_value(a.value, b.value - 1.0)).abs() * a.scale
-                };
-                let through_exp = if b.scale == 0.0 || value == 0.0 {
-                    0.0
-                } else {
-                    (value * a.value.abs().ln()).abs() * b.scale
-                };
-                Scaled {
-                    value,
-                    scale: value.abs() + through_base + through_exp,
-                }
-            }
-            Node::Select(g, a, b) => {
-                if get(&memo, g).value < 0.0 {
-                    get(&memo, a)
-                } else {
-                    get(&memo, b)
-                }
-            }
-            Node::Func(f, a) => {
-                let a = get(&memo, a);
-                let value = apply_func(*f, a.value);
-                Scaled {
-                    value,
-                    scale: value.abs() + slope(*f, a.value).abs() * a.scale,
-                }
-            }
-        };
-        memo.insert(e, s);
+/// The nodes reachable from some roots, children first, each with its
+/// children's positions: a check at many points walks the DAG once and
+/// evaluates it by position (a hash lookup per child and point cost more
+/// than the arithmetic on the 100-link pendulum's cross-check).
+pub struct Tape<'a> {
+    arena: &'a Arena,
+    nodes: Vec<ExprId>,
+    /// Node `p`'s children are `children[first[p]..first[p + 1]]`.
+    children: Vec<u32>,
+    first: Vec<u32>,
+    roots: Vec<u32>,
+}
+
+impl<'a> Tape<'a> {
+    pub fn new(arena: &'a Arena, roots: &[ExprId]) -> Tape<'a> {
+        let nodes = arena.reachable(roots);
+        let position: FxMap<ExprId, u32> = nodes
+            .iter()
+            .enumerate()
+            .map(|(p, &e)| (e, p as u32))
+            .collect();
+        let mut children = Vec::new();
+        let mut first = Vec::with_capacity(nodes.len() + 1);
+        for &e in &nodes {
+            first.push(children.len() as u32);
+            children.extend(arena.children(e).iter().map(|c| position[c]));
+        }
+        first.push(children.len() as u32);
+        let roots = roots.iter().map(|r| position[r]).collect();
+        Tape {
+            arena,
+            nodes,
+            children,
+            first,
+            roots,
+        }
     }
-    roots.iter().map(|r| memo[r]).collect()
+
+    /// The roots' values and rounding scales at `env` (first-order
+    /// propagation: `|f'(a)| · scale(a)` through functions and powers).
+    pub fn eval_scaled(&self, env: &dyn Fn(Symbol) -> f64) -> Vec<Scaled> {
+        let mut values: Vec<Scaled> = Vec::with_capacity(self.nodes.len());
+        for (p, &e) in self.nodes.iter().enumerate() {
+            let kids = &self.children[self.first[p] as usize..self.first[p + 1] as usize];
+            let get = |values: &[Scaled], k: usize| values[kids[k] as usize];
+            let s = match self.arena.node(e) {
+                Node::Const(v) => Scaled {
+                    value: *v,
+                    scale: v.abs(),
+                },
+                Node::Sym(s) => {
+                    let v = env(*s);
+                    Scaled {
+                        value: v,
+                        scale: v.abs(),
+                    }
+                }
+                Node::Add(_) => kids.iter().fold(
+                    Scaled {
+                        value: 0.0,
+                        scale: 0.0,
+                    },
+                    |acc, &k| {
+                        let x = values[k as usize];
+                        Scaled {
+                            value: acc.value + x.value,
+                            scale: acc.scale + x.scale,
+                        }
+                    },
+                ),
+                Node::Mul(_) => kids.iter().fold(
+                    Scaled {
+                        value: 1.0,
+                        scale: 1.0,
+                    },
+                    |acc, &k| {
+                        let x = values[k as usize];
+                        Scaled {
+                            value: acc.value * x.value,
+                            scale: acc.scale * x.scale,
+                        }
+                    },
+                ),
+                Node::Pow(..) => {
+                    let (a, b) = (get(&values, 0), get(&values, 1));
+                    let value = pow_value(a.value, b.value);
+                    // d(a^b) = b a^(b-1) da + a^b ln|a| db. A part with no
+                    // scale adds nothing (not `0·∞ = NaN`): at `a = 0` the
+                    // base's `ln|a|` is infinite, but `a^b ln|a| → 0`
+                    // (`b > 0`). A NaN scale once made every `|f| > tol·scale`
+                    // false, and `lagc linearize` called a hanging double
+                    // pendulum held horizontal at rest an equilibrium (its
+                    // `a'^2` at `a' = 0`).
+                    let through_base = if a.scale == 0.0 {
+                        0.0
+                    } else {
+                        (b.value * pow_value(a.value, b.value - 1.0)).abs() * a.scale
+                    };
+                    let through_exp = if b.scale == 0.0 || value == 0.0 {
+                        0.0
+                    } else {
+                        (value * a.value.abs().ln()).abs() * b.scale
+                    };
+                    Scaled {
+                        value,
+                        scale: value.abs() + through_base + through_exp,
+                    }
+                }
+                Node::Select(..) => {
+                    if get(&values, 0).value < 0.0 {
+                        get(&values, 1)
+                    } else {
+                        get(&values, 2)
+                    }
+                }
+                Node::Func(f, _) => {
+                    let a = get(&values, 0);
+                    let value = apply_func(*f, a.value);
+                    Scaled {
+                        value,
+                        scale: value.abs() + slope(*f, a.value).abs() * a.scale,
+                    }
+                }
+            };
+            values.push(s);
+        }
+        self.roots.iter().map(|&r| values[r as usize]).collect()
+    }
 }
 
 /// `f'(x)`.

@@ -33,19 +33,13 @@ impl System {
         param_defaults: &[f64],
         masses: usize,
     ) -> System {
-        let jacobian: Vec<Vec<ExprId>> = rows
-            .iter()
-            .map(|&r| {
-                unknowns
-                    .iter()
-                    .map(|&z| {
-                        // The mass matrix: sin² + cos² = 1 where the
-                        // derivative brought the squares together.
-                        let d = arena.diff(r, z);
-                        arena.pythagoras(d)
-                    })
-                    .collect()
-            })
+        // All partials in one pass over the DAG (`Arena::jacobian`). The
+        // mass matrix: sin² + cos² = 1 where the derivative brought the
+        // squares together.
+        let cells: Vec<ExprId> = arena.jacobian(&rows, &unknowns).concat();
+        let paired = arena.pythagoras_all(&cells);
+        let jacobian: Vec<Vec<ExprId>> = (0..rows.len())
+            .map(|r| paired[r * unknowns.len()..(r + 1) * unknowns.len()].to_vec())
             .collect();
         let linear = rows.iter().all(|&r| arena.is_affine_in(r, &unknowns))
             || affine_numerically(arena, &jacobian, &unknowns, param_defaults, masses);

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 pub(crate) fn check(args: &CheckArgs) -> ExitCode {
     let file_name = args.file.display().to_string();
-    let stage = |source: &str| lagc::check_and_derive(source).map(|(model, _)| (model, Vec::new()));
+    let stage = |source: &str| lagc::check_through_kernel(source).map(|model| (model, Vec::new()));
     status(compile(&args.file, stage, |model| {
         let constraints = match model.constraint_order {
             Some(k) => format!(

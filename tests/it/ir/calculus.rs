@@ -1,7 +1,7 @@
 //! Derivatives, the total derivative, substitution and evaluation.
 
-use super::{arena, env_at, num, q, sym, Rng, ALPHA, M};
-use lagc::ir::{Arena, ExprId, Func, Symbol};
+use super::{arena, env_at, num, q, sym, Rng, ALPHA, M, M0};
+use lagc::ir::{Arena, ExprId, Func, Node, Symbol};
 use std::collections::{BTreeSet, HashMap};
 
 /// A random expression of `q1`, `q1'`, `t`, `alpha` and `M`.
@@ -362,4 +362,77 @@ fn affine_parts_and_affinity() {
     let switched_in_time = a.add(&[e, burnout]);
     assert!(!a.switches_on(switched_in_time, q(0, 0)));
     assert!(a.is_affine_in(switched_in_time, &vars));
+}
+
+/// `Arena::jacobian` (one forward pass for every symbol) builds the very
+/// node `diff` builds, entry by entry: random expressions sharing
+/// subexpressions, sums with terms that do not move, selections, symbolic
+/// exponents, a symbol given twice and symbols the arena never saw.
+/// `diff` runs first; the pass does not read its memo, so every entry is
+/// built again and compared by id (ids are equal iff the canonical
+/// expressions are).
+#[test]
+fn jacobian_is_diff_entry_by_entry() {
+    let mut rng = Rng::new(29);
+    let mut a = arena();
+    let mut funcs = BTreeSet::new();
+    let mut roots = Vec::new();
+    for _ in 0..80 {
+        let x = random_expr(&mut a, &mut rng, 4, &mut funcs);
+        let y = random_expr(&mut a, &mut rng, 3, &mut funcs);
+        let g = random_expr(&mut a, &mut rng, 2, &mut funcs);
+        roots.push(x);
+        roots.push(a.add(&[x, y]));
+        roots.push(a.mul(&[x, y]));
+        roots.push(a.select(g, x, y));
+    }
+    // `alpha + 2(1 + q1)q1'`: in `q1'` the sum's partial is `add` of
+    // `2(1 + q1)` and a 0 for `alpha`, and the 0 makes `add` distribute
+    // (`2 + 2q1`); without it the partial would stay `2(1 + q1)`.
+    let (one, two) = (a.one(), a.constant(2.0));
+    let (x, v, alpha) = (a.symbol(q(0, 0)), a.symbol(q(0, 1)), a.symbol(ALPHA));
+    let inner = a.add(&[one, x]);
+    let term = a.mul(&[two, inner, v]);
+    roots.push(a.add(&[alpha, term]));
+    let wrt = [
+        q(0, 1),
+        q(0, 0),
+        Symbol::Time,
+        ALPHA,
+        M,
+        q(1, 0),
+        q(0, 0),
+        M0,
+    ];
+    let expected: Vec<Vec<ExprId>> = roots
+        .iter()
+        .map(|&r| wrt.iter().map(|&s| a.diff(r, s)).collect())
+        .collect();
+    let got = a.jacobian(&roots, &wrt);
+    for (r, (g, e)) in got.iter().zip(&expected).enumerate() {
+        for (c, (&g, &e)) in g.iter().zip(e).enumerate() {
+            assert_eq!(
+                g,
+                e,
+                "∂/∂{:?} of {}: {} by the pass, {} by diff",
+                wrt[c],
+                a.display(roots[r]),
+                a.display(g),
+                a.display(e)
+            );
+        }
+    }
+    assert_eq!(got.len(), roots.len());
+    let last = got.last().expect("a row");
+    assert!(
+        matches!(a.node(last[0]), Node::Add(_)),
+        "{}",
+        a.display(last[0])
+    );
+    let moving = expected
+        .iter()
+        .flatten()
+        .filter(|&&e| !a.is_zero(e))
+        .count();
+    assert!(moving > 400, "only {moving} non-zero entries");
 }
