@@ -4,10 +4,11 @@
 //! only reports the detection; `Stiff` is RODAS4 throughout.
 
 use crate::budget::Budget;
+use crate::dop853::global_error::GlobalError;
 use crate::failure::Failure;
 use crate::method::{AnyStepper, Integrator, IntegratorChoice};
 use crate::model::DynModel;
-use crate::solver::{Report, Solver};
+use crate::solver::{GlobalErrorEstimate, Report, Solver};
 use crate::stepper::{Clocked, Stepper};
 use crate::system::ModelSystem;
 use crate::tolerance::{Stats, Tolerance};
@@ -29,6 +30,9 @@ pub struct Direct {
     stiff_distance: f64,
     /// Switched back to DOP853: RODAS4 was not cheaper.
     switched_back_at: Option<f64>,
+    /// The global error estimate carried along, with a buffer for each
+    /// step's local error.
+    global: (GlobalError, Vec<f64>),
 }
 
 impl Direct {
@@ -58,6 +62,7 @@ impl Direct {
             stiff_steps: 0,
             stiff_distance: 0.0,
             switched_back_at: None,
+            global: (GlobalError::new(), vec![0.0; x0.len()]),
         })
     }
 
@@ -108,6 +113,7 @@ impl Solver for Direct {
         let system = ModelSystem(model);
         let before = self.stepper.time();
         self.stepper.step(&system, t_limit, budget)?;
+        self.carry_global_error();
         if self.switched_at.is_some() && self.switched_back_at.is_none() {
             self.judge_the_switch(model, before)?;
         }
@@ -173,12 +179,31 @@ impl Solver for Direct {
             method: self.method_name(),
             stats: self.done + self.stepper.stats(),
             notes,
+            global_error: Some(GlobalErrorEstimate {
+                largest: self.global.0.estimate(),
+                rtol: self.tol.rtol,
+                complete: self.global.0.complete(),
+            }),
             ..Report::default()
         }
     }
 }
 
 impl Direct {
+    /// Adds the step just taken to the global error estimate: DOP853's
+    /// local error estimate. RODAS4's steps are not accounted for (the
+    /// estimate then says it is partial).
+    fn carry_global_error(&mut self) {
+        let (global, local) = &mut self.global;
+        match &self.stepper {
+            AnyStepper::Explicit(dop) => {
+                dop.local_error(local);
+                global.add(local, dop.state());
+            }
+            AnyStepper::Stiff(_) => global.skip(),
+        }
+    }
+
     /// After switching to RODAS4 on detected stiffness, whether it pays: a
     /// RODAS4 step costs about as much as a DOP853 step (six evaluations,
     /// a Jacobian and an LU against twelve evaluations), so unless its

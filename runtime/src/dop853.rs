@@ -15,6 +15,7 @@ use crate::stepper::{stalled, Clock, Clocked, ErrorMeasure, StepOutcome, Stepper
 use crate::system::System;
 use crate::tolerance::{first_non_finite, Tolerance};
 
+pub mod global_error;
 pub(crate) mod tableau;
 use tableau::*;
 
@@ -112,6 +113,10 @@ pub struct Dop853 {
     stiff_tests: usize,
     non_stiff_tests: usize,
     stiffness_detected: Option<f64>,
+    /// The last attempt's `√(ε₅² / (ε₅² + 0.01 ε₃²))`: Hairer's error is
+    /// `|h|` times this times the scaled norm of the 5th-order estimate
+    /// ([`Dop853::local_error`]).
+    hairer_factor: f64,
 }
 
 impl Dop853 {
@@ -140,6 +145,7 @@ impl Dop853 {
             stiff_tests: 0,
             non_stiff_tests: 0,
             stiffness_detected: None,
+            hairer_factor: 0.0,
         })
     }
 
@@ -230,6 +236,20 @@ impl Dop853 {
                 self.clock.reject(h, err);
                 last_non_finite = false;
             }
+        }
+    }
+
+    /// The last accepted step's local error as Hairer's estimate sees it:
+    /// the vector `h ε₅ √(ε₅² / (ε₅² + 0.01 ε₃²))` whose scaled RMS norm is
+    /// the error the step was accepted with (valid right after a step
+    /// under [`HairerMeasure`], the error blocks being the accepted
+    /// attempt's).
+    pub fn local_error(&self, out: &mut [f64]) {
+        let n = self.y.len();
+        let e5 = &self.k[ERROR5 * n..(ERROR5 + 1) * n];
+        let factor = self.clock.h_old * self.hairer_factor;
+        for (o, e) in out[..n].iter_mut().zip(e5) {
+            *o = factor * e;
         }
     }
 
@@ -371,6 +391,12 @@ impl Dop853 {
             }
         }
         let err = if hairer.is_some() {
+            let denominator = err5 + 0.01 * err3;
+            self.hairer_factor = if denominator > 0.0 {
+                (err5 / denominator).sqrt()
+            } else {
+                0.0
+            };
             hairer_combine(h, n, err3, err5)
         } else {
             0.0

@@ -38,6 +38,10 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/domain.rs", include_str!("../../runtime/src/domain.rs")),
     ("src/dop853.rs", include_str!("../../runtime/src/dop853.rs")),
     (
+        "src/dop853/global_error.rs",
+        include_str!("../../runtime/src/dop853/global_error.rs"),
+    ),
+    (
         "src/dop853/tableau.rs",
         include_str!("../../runtime/src/dop853/tableau.rs"),
     ),
