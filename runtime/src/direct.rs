@@ -4,7 +4,7 @@
 //! only reports the detection; `Stiff` is RODAS4 throughout.
 
 use crate::budget::Budget;
-use crate::dop853::global_error::GlobalError;
+use crate::dop853::global_error::{relative, GlobalError};
 use crate::failure::Failure;
 use crate::method::{AnyStepper, Integrator, IntegratorChoice};
 use crate::model::DynModel;
@@ -113,7 +113,7 @@ impl Solver for Direct {
         let system = ModelSystem(model);
         let before = self.stepper.time();
         self.stepper.step(&system, t_limit, budget)?;
-        self.carry_global_error();
+        self.carry_global_error(model);
         if self.switched_at.is_some() && self.switched_back_at.is_none() {
             self.judge_the_switch(model, before)?;
         }
@@ -190,18 +190,29 @@ impl Solver for Direct {
 }
 
 impl Direct {
-    /// Adds the step just taken to the global error estimate: DOP853's
-    /// local error estimate. RODAS4's steps are not accounted for (the
+    /// Adds the step just taken to the global error estimate (see
+    /// `dop853::global_error`): DOP853's local error estimate, scaled by
+    /// the ratio a Richardson measure of the local error gives where the
+    /// sum grows past `rtol`. RODAS4's steps are not accounted for (the
     /// estimate then says it is partial).
-    fn carry_global_error(&mut self) {
+    fn carry_global_error(&mut self, model: &dyn DynModel) {
         let (global, local) = &mut self.global;
-        match &self.stepper {
-            AnyStepper::Explicit(dop) => {
-                dop.local_error(local);
-                global.add(local, dop.state());
+        let AnyStepper::Explicit(dop) = &mut self.stepper else {
+            global.skip();
+            return;
+        };
+        dop.local_error(local);
+        let estimated = relative(local, dop.state());
+        let (_, _, h) = dop.clock().last_step();
+        if global.wants_measure(self.tol.rtol) {
+            // A measure that fails (a stage not finite) leaves the estimate
+            // unscaled: it never fails the run.
+            if let Ok(true) = dop.local_error_by_halves(&ModelSystem(model), local) {
+                global.add_measured(estimated, relative(local, dop.state()), h);
+                return;
             }
-            AnyStepper::Stiff(_) => global.skip(),
         }
+        global.add(estimated, h);
     }
 
     /// After switching to RODAS4 on detected stiffness, whether it pays: a

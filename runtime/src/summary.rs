@@ -174,7 +174,7 @@ impl Summary {
 
 /// The bound the summary holds a run's estimated global error to, in
 /// units of its relative tolerance.
-pub const GLOBAL_ERROR_BOUND: f64 = 10.0;
+pub use crate::dop853::global_error::BOUND as GLOBAL_ERROR_BOUND;
 
 /// The summary's line on the global error direct integration carried:
 /// within `10·rtol`, or a warning past it (see `dop853::global_error`:
