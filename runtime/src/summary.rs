@@ -177,8 +177,7 @@ impl Summary {
 pub use crate::dop853::global_error::BOUND as GLOBAL_ERROR_BOUND;
 
 /// The summary's line on the global error direct integration carried:
-/// within `10·rtol`, or a warning past it (see `dop853::global_error`:
-/// an over-estimate).
+/// within `10·rtol`, or a warning past it (see `dop853::global_error`).
 fn global_error_line(g: &GlobalErrorEstimate) -> String {
     let bound = GLOBAL_ERROR_BOUND * g.rtol;
     let partial = if g.complete {
@@ -189,15 +188,15 @@ fn global_error_line(g: &GlobalErrorEstimate) -> String {
     if g.largest <= bound {
         format!(
             "global error: within 10·rtol = {bound:.1e} (estimated {:.1e}{partial}: the \
-             sum of the steps' local error estimates)",
+             steps' local errors summed)",
             g.largest
         )
     } else {
         format!(
             "warning: estimated global error {:.1e} passes 10·rtol = {bound:.1e}{partial}: \
-             the steps' local errors add up over the run (the sum of their estimates, an \
-             upper estimate where the motion does not amplify errors); a tighter --rtol \
-             brings it down, --estimate-error measures it",
+             the steps' local errors add up over the run (their sum, for a motion that does \
+             not amplify errors; not counting where events were located, nor the output \
+             between steps); a tighter --rtol brings it down, --estimate-error measures it",
             g.largest
         )
     }
