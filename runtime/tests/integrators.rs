@@ -247,3 +247,60 @@ fn output_times_never_change_the_steps() {
     }
     output_never_changes_the_steps::<Oscillator>(Method::Field, Magnus);
 }
+
+/// Direct integration carries its global error estimate into the report
+/// (the sum of the steps' local errors, Hairer's estimates scaled by a
+/// Richardson measure once the sum passes rtol): over one period of the
+/// oscillator the run stays within 10·rtol and so does the estimate; over
+/// 320 periods the local errors add up past 10·rtol, and the estimate says
+/// so, within a factor 2 of the error at the end (a step end: the error
+/// of the continuous extension between steps is not the steps').
+#[test]
+fn direct_integration_estimates_its_global_error() {
+    let rtol = 1e-10;
+    for (span, within) in [(3.0, true), (1000.0, false)] {
+        let params = Oscillator::parameters(&[None, Some(span)]);
+        let mut model = Oscillator::new(&params);
+        let x0 = model.initial_state(&[None, None]).unwrap();
+        let options = Options {
+            method: Method::Direct,
+            integrator: Some(IntegratorChoice::Explicit),
+            tol: Tolerance {
+                rtol,
+                atol: rtol / 100.0,
+            },
+            ..Options::default()
+        };
+        let mut error = 0.0_f64;
+        let outcome = run(
+            &mut model,
+            &options,
+            0.0,
+            span,
+            &x0,
+            &sample_times(0.0, span, 2),
+            |m, t, x| {
+                let mut exact = [None, None];
+                m.exact(t, &mut exact);
+                for (v, e) in x.iter().zip(exact) {
+                    let e = e.unwrap();
+                    error = error.max((v - e).abs() / e.abs().max(1.0));
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+        let estimate = outcome.report.global_error.expect("direct estimates");
+        eprintln!(
+            "oscillator over {span}: error {error:.2e}, estimate {:.2e}",
+            estimate.largest
+        );
+        assert!(estimate.complete);
+        assert_eq!(error <= 10.0 * rtol, within, "error {error}");
+        assert_eq!(estimate.largest <= 10.0 * rtol, within);
+        if !within {
+            let ratio = estimate.largest / error;
+            assert!((0.5..2.0).contains(&ratio), "estimate / error = {ratio}");
+        }
+    }
+}

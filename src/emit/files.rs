@@ -128,6 +128,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/ode/dop853.rs"),
     ),
     (
+        "src/ode/dop853/global_error.rs",
+        include_str!("../../runtime/src/ode/dop853/global_error.rs"),
+    ),
+    (
         "src/ode/dop853/tableau.rs",
         include_str!("../../runtime/src/ode/dop853/tableau.rs"),
     ),

@@ -2,6 +2,7 @@
 //! field method can read (see the README for what each figure means), or
 //! as one JSON object line (`--summary json`) for scripts.
 
+use crate::method::solver::GlobalErrorEstimate;
 use crate::run::options::{Ending, Outcome};
 use std::fmt::Write as _;
 use std::time::Duration;
@@ -101,6 +102,10 @@ impl Summary {
         if let Some(error) = self.exact_error {
             let _ = write!(s, "\nlargest error against the exact solution: {error:.3e}");
         }
+        if let Some(estimate) = &r.global_error {
+            s.push('\n');
+            s.push_str(&global_error_line(estimate));
+        }
         if let Some(error) = self.estimated_error {
             let _ = write!(
                 s,
@@ -109,6 +114,14 @@ impl Summary {
             );
         }
         s
+    }
+
+    /// The warning the text form holds when the estimated global error
+    /// passes 10·rtol, for the JSON form's stderr (on a line of its own
+    /// before the object).
+    pub fn global_error_warning(&self) -> Option<String> {
+        let g = self.outcome.report.global_error.as_ref()?;
+        (g.largest > GLOBAL_ERROR_BOUND * g.rtol).then(|| global_error_line(g))
     }
 
     /// One JSON object (written by hand: the runtime has no dependencies).
@@ -127,7 +140,8 @@ impl Summary {
              \"predictor_steps\":{},\"largest_condition\":{},\"reanchorings\":{},\
              \"events\":{},\"stopped_at\":{},\"impacts_accumulate_at\":{},\"budget_used\":{},\"wall_time_s\":{},\
              \"runs\":{},\"exact_error\":{},\"estimated_error\":{},\
-             \"constraint_residual\":{},\"projections\":{}}}",
+             \"constraint_residual\":{},\"projections\":{},\"global_error_estimate\":{},\
+             \"global_error_partial\":{}}}",
             json_string(&r.method),
             r.stats.accepted_steps,
             r.stats.rejected_steps,
@@ -151,6 +165,39 @@ impl Summary {
             self.outcome
                 .kept
                 .map_or("null".to_string(), |k| k.projections.to_string()),
+            json_number(r.global_error.map(|g| g.largest)),
+            r.global_error
+                .map_or("null".to_string(), |g| (!g.complete).to_string()),
+        )
+    }
+}
+
+/// The bound the summary holds a run's estimated global error to, in
+/// units of its relative tolerance.
+pub use crate::ode::dop853::global_error::BOUND as GLOBAL_ERROR_BOUND;
+
+/// The summary's line on the global error direct integration carried:
+/// within `10·rtol`, or a warning past it (see `dop853::global_error`).
+fn global_error_line(g: &GlobalErrorEstimate) -> String {
+    let bound = GLOBAL_ERROR_BOUND * g.rtol;
+    let partial = if g.complete {
+        ""
+    } else {
+        " (DOP853's steps only: RODAS4's are not accounted for)"
+    };
+    if g.largest <= bound {
+        format!(
+            "global error: within 10·rtol = {bound:.1e} (estimated {:.1e}{partial}: the \
+             steps' local errors summed)",
+            g.largest
+        )
+    } else {
+        format!(
+            "warning: estimated global error {:.1e} passes 10·rtol = {bound:.1e}{partial}: \
+             the steps' local errors add up over the run (their sum, for a motion that does \
+             not amplify errors; not counting where events were located, nor the output \
+             between steps); a tighter --rtol brings it down, --estimate-error measures it",
+            g.largest
         )
     }
 }

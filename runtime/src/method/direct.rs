@@ -5,10 +5,12 @@
 
 use crate::choice::IntegratorChoice;
 use crate::failure::Failure;
-use crate::method::solver::{Report, Solver};
+use crate::method::solver::{GlobalErrorEstimate, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
-use crate::ode::stepper::{OfModel, StepperOf};
+use crate::ode::dop853::global_error::{relative, GlobalError};
+use crate::ode::dop853::Dop853;
+use crate::ode::stepper::{Clocked, OfModel, StepperOf};
 use crate::ode::system::ModelSystem;
 use crate::ode::tolerance::{Stats, Tolerance};
 use crate::ode::Integrator;
@@ -34,6 +36,9 @@ pub struct Direct {
     stiff_distance: f64,
     /// Switched back to DOP853: RODAS4 was not cheaper.
     switched_back_at: Option<f64>,
+    /// The global error estimate carried along, with a buffer for each
+    /// step's local error.
+    global: (GlobalError, Vec<f64>),
 }
 
 impl Direct {
@@ -64,6 +69,7 @@ impl Direct {
             stiff_steps: 0,
             stiff_distance: 0.0,
             switched_back_at: None,
+            global: (GlobalError::new(), vec![0.0; x0.len()]),
         })
     }
 
@@ -114,6 +120,7 @@ impl Solver for Direct {
         let system = ModelSystem(model);
         let before = self.stepper.time();
         self.stepper.step(&system, t_limit, budget)?;
+        self.carry_global_error(model);
         if self.switched_at.is_some() && self.switched_back_at.is_none() {
             self.judge_the_switch(model, before)?;
         }
@@ -184,12 +191,42 @@ impl Solver for Direct {
             method: self.method_name(),
             stats: self.done + self.stepper.stats(),
             notes,
+            global_error: Some(GlobalErrorEstimate {
+                largest: self.global.0.estimate(),
+                rtol: self.tol.rtol,
+                complete: self.global.0.complete(),
+            }),
             ..Report::default()
         }
     }
 }
 
 impl Direct {
+    /// Adds the step just taken to the global error estimate (see
+    /// `dop853::global_error`): DOP853's local error estimate, scaled by
+    /// the ratio a Richardson measure of the local error gives where the
+    /// sum grows past `rtol`. RODAS4's steps are not accounted for (the
+    /// estimate then says it is partial).
+    fn carry_global_error(&mut self, model: &dyn DynModel) {
+        let (global, local) = &mut self.global;
+        let Some(dop) = self.stepper.as_any_mut().downcast_mut::<Dop853>() else {
+            global.skip();
+            return;
+        };
+        dop.local_error(local);
+        let estimated = relative(local, dop.current_state());
+        let (_, _, h) = dop.clock().last_step();
+        if global.wants_measure(self.tol.rtol) {
+            // A measure that fails (a stage not finite) leaves the estimate
+            // unscaled: it never fails the run.
+            if let Ok(true) = dop.local_error_by_halves(&ModelSystem(model), local) {
+                global.add_measured(estimated, relative(local, dop.current_state()), h);
+                return;
+            }
+        }
+        global.add(estimated, h);
+    }
+
     /// After switching to RODAS4 on detected stiffness, whether it pays: a
     /// RODAS4 step costs about as much as a DOP853 step (six evaluations,
     /// a Jacobian and an LU against twelve evaluations), so unless its

@@ -28,6 +28,39 @@ pub struct Report {
     pub linearizations: usize,
     /// Lines for the summary (a switch of integrator, a stiffness note).
     pub notes: Vec<String>,
+    /// Direct integration: the global error estimate it carried.
+    pub global_error: Option<GlobalErrorEstimate>,
+}
+
+/// The global error a direct integration estimated along its run
+/// (`dop853::global_error`), for the summary.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GlobalErrorEstimate {
+    /// The estimated error at the run's end, relative to `max(|x|, 1)`
+    /// component by component (the measure of the error against an exact
+    /// solution; a sum of the steps' local estimates, so also the largest
+    /// over the run).
+    pub largest: f64,
+    /// The run's relative tolerance.
+    pub rtol: f64,
+    /// False when part of the run was not accounted for (RODAS4's steps).
+    pub complete: bool,
+}
+
+impl GlobalErrorEstimate {
+    /// The estimate of a run in two parts (restarted from a state given
+    /// from outside): the errors carried into the restart stay, so the
+    /// sums add.
+    pub fn sum(a: Option<Self>, b: Option<Self>) -> Option<Self> {
+        match (a, b) {
+            (Some(a), Some(b)) => Some(GlobalErrorEstimate {
+                largest: a.largest + b.largest,
+                rtol: b.rtol,
+                complete: a.complete && b.complete,
+            }),
+            (a, b) => a.or(b),
+        }
+    }
 }
 
 /// A method advancing a model's motion step by step.

@@ -15,6 +15,7 @@ use crate::ode::stepper::{stalled, Clock, Clocked, ErrorMeasure, Start, StepOutc
 use crate::ode::system::System;
 use crate::ode::tolerance::{first_non_finite, Tolerance};
 
+pub mod global_error;
 pub(crate) mod tableau;
 use tableau::*;
 
@@ -112,6 +113,10 @@ pub struct Dop853 {
     stiff_tests: usize,
     non_stiff_tests: usize,
     stiffness_detected: Option<f64>,
+    /// The last attempt's scaled sums of squares `(ε₃², ε₅²)` of Hairer's
+    /// norm, for [`Dop853::local_error`] (its square root taken there, not
+    /// in every attempt).
+    hairer_sums: (f64, f64),
 }
 
 impl Dop853 {
@@ -140,7 +145,14 @@ impl Dop853 {
             stiff_tests: 0,
             non_stiff_tests: 0,
             stiffness_detected: None,
+            hairer_sums: (0.0, 0.0),
         })
+    }
+
+    /// The current state (also [`Stepper::state`], which needs its system
+    /// named where the stepper's type is known).
+    pub fn current_state(&self) -> &[f64] {
+        &self.y
     }
 
     /// The slope `X(t, y)` at the current state.
@@ -231,6 +243,72 @@ impl Dop853 {
                 last_non_finite = false;
             }
         }
+    }
+
+    /// The last accepted step's local error as Hairer's estimate sees it:
+    /// the vector `h ε₅ √(ε₅² / (ε₅² + 0.01 ε₃²))` whose scaled RMS norm is
+    /// the error the step was accepted with (valid right after a step
+    /// under [`HairerMeasure`], the error blocks being the accepted
+    /// attempt's).
+    pub fn local_error(&self, out: &mut [f64]) {
+        let n = self.y.len();
+        let e5 = &self.k[ERROR5 * n..(ERROR5 + 1) * n];
+        let (err3, err5) = self.hairer_sums;
+        let denominator = err5 + 0.01 * err3;
+        let share = if denominator > 0.0 {
+            (err5 / denominator).sqrt()
+        } else {
+            0.0
+        };
+        let factor = self.clock.h_old * share;
+        for (o, e) in out[..n].iter_mut().zip(e5) {
+            *o = factor * e;
+        }
+    }
+
+    /// The last accepted step's local error by Richardson extrapolation:
+    /// the step taken again from its start as two steps of half its
+    /// length, whose end is off by `2 (h/2)⁹ C = 1/256` of the step's own
+    /// error, so `ℓ = (y − y_halves) · 256/255` (order 9, the error of the
+    /// solution DOP853 carries, where Hairer's estimate is of order 8).
+    /// 23 evaluations; `Ok(false)` when a stage was not finite (no value).
+    pub fn local_error_by_halves<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        out: &mut [f64],
+    ) -> Result<bool, Failure> {
+        let n = self.y.len();
+        let (t_old, _, h) = self.clock.last_step();
+        let half = 0.5 * h;
+        let mut k = vec![0.0; STAGES * n];
+        let mut stage_state = vec![0.0; n];
+        let mut mid = vec![0.0; n];
+        // The first stage of the first half is the step's start rate, k[12].
+        k[..n].copy_from_slice(&self.k[12 * n..13 * n]);
+        plain_step(
+            system,
+            t_old,
+            &self.y_old,
+            half,
+            &mut k,
+            &mut stage_state,
+            &mut mid,
+        )?;
+        system.rhs(t_old + half, &mid, &mut k[..n])?;
+        plain_step(
+            system,
+            t_old + half,
+            &mid,
+            half,
+            &mut k,
+            &mut stage_state,
+            out,
+        )?;
+        self.clock.stats.rhs_evaluations += 2 * (STAGES - 1) + 1;
+        for (o, y) in out[..n].iter_mut().zip(&self.y) {
+            *o = (y - *o) * (256.0 / 255.0);
+        }
+        Ok(first_non_finite(&out[..n]).is_none())
     }
 
     /// Hairer's test after an accepted step of length `h`: `y` is the new
@@ -376,6 +454,7 @@ impl Dop853 {
             }
         }
         let err = if hairer.is_some() {
+            self.hairer_sums = (err3, err5);
             hairer_combine(h, n, err3, err5)
         } else {
             0.0
@@ -509,6 +588,10 @@ impl<S: System + ?Sized> Stepper<S> for Dop853 {
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
         self
     }
 }
@@ -771,6 +854,33 @@ impl RawStep {
         )?;
         Ok(DenseStep::dop853(self.t_old, self.t_new, self.h, cont))
     }
+}
+
+/// One DOP853 step of length `h` from `(t, y)` into `out`, without error
+/// control: `k[..n]` holds `X(t, y)` on entry, the other stages are
+/// computed into `k`.
+fn plain_step<S: System + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+    h: f64,
+    k: &mut [f64],
+    stage_state: &mut [f64],
+    out: &mut [f64],
+) -> Result<(), Failure> {
+    let n = y.len();
+    for s in 1..STAGES {
+        stage_state.copy_from_slice(y);
+        for &(j, a) in A[s] {
+            axpy(h * a, &k[j * n..(j + 1) * n], stage_state);
+        }
+        system.rhs(t + C[s] * h, stage_state, &mut k[s * n..(s + 1) * n])?;
+    }
+    out[..n].copy_from_slice(y);
+    for &(j, w) in &B {
+        axpy(h * w, &k[j * n..(j + 1) * n], &mut out[..n]);
+    }
+    Ok(())
 }
 
 /// `dst = base + h Σ_m a_m k_m` component by component; `R` is a

@@ -241,4 +241,8 @@ impl<G: LinearGenerator + ?Sized> Stepper<G> for Magnus {
     fn as_any(&self) -> &dyn std::any::Any {
         self
     }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
 }

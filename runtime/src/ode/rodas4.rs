@@ -274,6 +274,10 @@ impl<S: System + ?Sized> Stepper<S> for Rodas4 {
     fn as_any(&self) -> &dyn std::any::Any {
         self
     }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
 }
 
 /// RODAS4's continuous extension of order 3, detached.

@@ -241,6 +241,9 @@ pub trait Stepper<S: ?Sized>: Clocked {
     /// stages and builds the extension only for the steps output asks
     /// for).
     fn as_any(&self) -> &dyn std::any::Any;
+    /// The same, to change it (direct integration measures DOP853's local
+    /// error by halves for its global error estimate).
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }
 
 /// How an integrator of the registry (`crate::ode::Integrator`) starts.

@@ -6,8 +6,9 @@ use crate::ode::system::System;
 
 /// Mixed error tolerance: component `i` of a local error is acceptable
 /// when it is below `atol + rtol·|x_i|`. A per-step tolerance: the global
-/// error of a run is usually a modest multiple of it (`--estimate-error`
-/// measures it).
+/// error of a run is usually a modest multiple of it, more over long
+/// horizons (direct integration's summary estimates it,
+/// `dop853::global_error`; `--estimate-error` measures it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {
     pub rtol: f64,

@@ -948,6 +948,10 @@ fn merged(earlier: &Report, later: Report) -> Report {
         },
         linearizations: earlier.linearizations + later.linearizations,
         notes,
+        global_error: crate::method::solver::GlobalErrorEstimate::sum(
+            earlier.global_error,
+            later.global_error,
+        ),
     }
 }
 

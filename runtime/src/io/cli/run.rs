@@ -316,6 +316,9 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
         estimated_error,
     };
     if inv.json {
+        if let Some(warning) = summary.global_error_warning() {
+            eprintln!("{warning}");
+        }
         eprintln!("{}", summary.json());
     } else {
         eprintln!("{}", summary.text());

@@ -739,6 +739,7 @@ impl Solver for QuasilinearField {
             passes: Some(self.passes),
             predictor: Some(self.predictor_stats),
             linearizations: self.linearizations,
+            global_error: None,
             notes: self
                 .members
                 .iter()
