@@ -117,12 +117,13 @@ impl Solver for Direct {
         // used that step's (DOP853) dense output by the time it asks for
         // the next step.
         self.switch_if_stiff(model)?;
+        self.switch_back_if_decided(model)?;
         let system = ModelSystem(model);
         let before = self.stepper.time();
         self.stepper.step(&system, t_limit, budget)?;
         self.carry_global_error(model);
         if self.switched_at.is_some() && self.switched_back_at.is_none() {
-            self.judge_the_switch(model, before)?;
+            self.judge_the_switch(before);
         }
         if self.stiffness_detected_at.is_none() {
             self.stiffness_detected_at = self.stepper.stiffness_detected();
@@ -233,11 +234,19 @@ impl Direct {
     /// steps are clearly longer than DOP853's stability-limited ones, go
     /// back (the mass-loss spring at loose tolerances: stiff by Hairer's
     /// test, yet RODAS4 took ten times the work).
-    fn judge_the_switch(&mut self, model: &dyn DynModel, before: f64) -> Result<(), Failure> {
+    ///
+    /// The switch back is decided here and made at the next step
+    /// ([`Direct::switch_back_if_decided`]), as the switch to RODAS4 is:
+    /// the driver reads the dense output of the step just taken after this
+    /// returns, and a fresh DOP853 has none. Made at once, every sample
+    /// inside that RODAS4 step came from the new stepper (the stiff
+    /// accretion example at rtol 1e-11: 3.1e-3 off at its samples, exit 0,
+    /// where its steps were right to 1e-13).
+    fn judge_the_switch(&mut self, before: f64) {
         const TRIAL_STEPS: usize = 20;
         const REQUIRED_GAIN: f64 = 2.0;
         if self.integrator != Integrator::Stiff {
-            return Ok(());
+            return;
         }
         self.stiff_steps += 1;
         self.stiff_distance += self.stepper.time() - before;
@@ -245,8 +254,14 @@ impl Direct {
             let mean = self.stiff_distance / TRIAL_STEPS as f64;
             if mean < REQUIRED_GAIN * self.explicit_step {
                 self.switched_back_at = Some(self.stepper.time());
-                self.restart_with(model, Integrator::Explicit, self.explicit_step)?;
             }
+        }
+    }
+
+    /// Performs a decided switch back to DOP853.
+    fn switch_back_if_decided(&mut self, model: &dyn DynModel) -> Result<(), Failure> {
+        if self.switched_back_at.is_some() && self.integrator == Integrator::Stiff {
+            self.restart_with(model, Integrator::Explicit, self.explicit_step)?;
         }
         Ok(())
     }
