@@ -157,59 +157,11 @@ impl Arena {
                 }
                 buckets.build(self, |arena, terms| arena.add(terms))
             }
-            Node::Pow(a, b) => {
-                let (pa, pb) = (of(a), of(b));
-                let mut out = Vec::new();
-                let (mut i, mut j) = (0, 0);
-                while i < pa.len() || j < pb.len() {
-                    let ca = pa.get(i).map_or(u32::MAX, |p| p.0);
-                    let cb = pb.get(j).map_or(u32::MAX, |p| p.0);
-                    let c = ca.min(cb);
-                    let da = if ca == c {
-                        i += 1;
-                        pa[i - 1].1
-                    } else {
-                        zero
-                    };
-                    let db = if cb == c {
-                        j += 1;
-                        pb[j - 1].1
-                    } else {
-                        zero
-                    };
-                    let d = self.power_rule(e, a, b, da, db);
-                    if !self.is_zero(d) {
-                        out.push((c, d));
-                    }
-                }
-                out.into_boxed_slice()
-            }
+            Node::Pow(a, b) => self.merge_partials(of(a), of(b), |arena, da, db| {
+                arena.power_rule(e, a, b, da, db)
+            }),
             Node::Select(g, a, b) => {
-                let (pa, pb) = (of(a), of(b));
-                let mut out = Vec::new();
-                let (mut i, mut j) = (0, 0);
-                while i < pa.len() || j < pb.len() {
-                    let ca = pa.get(i).map_or(u32::MAX, |p| p.0);
-                    let cb = pb.get(j).map_or(u32::MAX, |p| p.0);
-                    let c = ca.min(cb);
-                    let da = if ca == c {
-                        i += 1;
-                        pa[i - 1].1
-                    } else {
-                        zero
-                    };
-                    let db = if cb == c {
-                        j += 1;
-                        pb[j - 1].1
-                    } else {
-                        zero
-                    };
-                    let d = self.select(g, da, db);
-                    if !self.is_zero(d) {
-                        out.push((c, d));
-                    }
-                }
-                out.into_boxed_slice()
+                self.merge_partials(of(a), of(b), |arena, da, db| arena.select(g, da, db))
             }
             Node::Func(f, u) => {
                 let pu = of(u).to_vec();
@@ -229,6 +181,42 @@ impl Arena {
 }
 
 impl Arena {
+    /// The partials of a node of two children `a`, `b`, column by column:
+    /// `rule(∂a, ∂b)` wherever either moves (the other's partial 0 there),
+    /// the zero results left out.
+    fn merge_partials(
+        &mut self,
+        pa: &[(u32, ExprId)],
+        pb: &[(u32, ExprId)],
+        mut rule: impl FnMut(&mut Arena, ExprId, ExprId) -> ExprId,
+    ) -> Partials {
+        let zero = self.zero();
+        let mut out = Vec::new();
+        let (mut i, mut j) = (0, 0);
+        while i < pa.len() || j < pb.len() {
+            let ca = pa.get(i).map_or(u32::MAX, |p| p.0);
+            let cb = pb.get(j).map_or(u32::MAX, |p| p.0);
+            let c = ca.min(cb);
+            let da = if ca == c {
+                i += 1;
+                pa[i - 1].1
+            } else {
+                zero
+            };
+            let db = if cb == c {
+                j += 1;
+                pb[j - 1].1
+            } else {
+                zero
+            };
+            let d = rule(self, da, db);
+            if !self.is_zero(d) {
+                out.push((c, d));
+            }
+        }
+        out.into_boxed_slice()
+    }
+
     /// `self.mul(factors)`, remembered for the Jacobian's pass: the same
     /// product recurs for many nodes (`c·∂S_k/∂x` is one node for every
     /// `k` where the partial of the inner sum `S_k` is), and a lookup costs
