@@ -169,18 +169,42 @@ fn the_ensembles_states_are_written_with_o() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `-o` belongs to an ensemble: alone it is refused with a message.
+/// `-o FILE` on a single run writes the CSV that stdout would carry
+/// (a new user's first guess at saving a run), and nothing to stdout; a
+/// file that cannot be created is an error, not an empty run.
 #[test]
-fn o_without_an_ensemble_is_refused() {
+fn o_writes_a_single_runs_csv_to_the_file() {
     let binary = build("spherical_pendulum");
-    let output = Command::new(&binary)
-        .args(["-o", "x.csv"])
+    let dir = std::env::temp_dir().join(format!("lagc-o-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("run.csv");
+    let args = ["--samples", "11", "--rtol", "1e-8", "--atol", "1e-10"];
+    let written = Command::new(&binary)
+        .args(args)
+        .arg("-o")
+        .arg(&file)
         .output()
         .unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(
-        stderr.contains("`-o FILE` writes an ensemble's states: it needs `--ensemble K`"),
+        written.status.success(),
+        "{}",
+        String::from_utf8_lossy(&written.stderr)
+    );
+    assert!(written.stdout.is_empty());
+    let (ok, own, stderr) = run(&binary, &args);
+    assert!(ok, "{stderr}");
+    let in_file = std::fs::read_to_string(&file).unwrap();
+    assert_eq!(in_file.lines().count(), 12);
+    assert_eq!(in_file, own);
+    let missing = Command::new(&binary)
+        .args(["-o", "/nonexistent-dir/run.csv"])
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    let stderr = String::from_utf8_lossy(&missing.stderr);
+    assert!(
+        stderr.contains("cannot create `/nonexistent-dir/run.csv`"),
         "{stderr}"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -66,9 +66,10 @@ usage: MODEL [OPTIONS]
                          equations integrated with the motion by the direct
                          method, inside its error control, with their jumps
                          at events; refused for run-time candidates)
-  -o FILE                with --ensemble: write the members' states to FILE
-                         as CSV (member,t,<state...>, member by member)
-                         instead of timing them against direct integrations
+  -o FILE                write the CSV to FILE instead of stdout; with
+                         --ensemble, the members' states (member,t,<state...>,
+                         member by member) instead of timing them against
+                         direct integrations
   --repeat N             solve N times (after a warm-up) and report the
                          smallest wall time
   --quiet                no CSV on stdout
@@ -104,7 +105,8 @@ pub struct Invocation {
     pub spread: f64,
     /// `--sensitivity`: the forward sensitivities as extra columns.
     pub sensitivity: bool,
-    /// `-o FILE`: the ensemble's states are written there.
+    /// `-o FILE`: the CSV (a run's samples, or the ensemble's states) is
+    /// written there instead of stdout.
     pub output: Option<String>,
     /// Warnings to print before running (e.g. a tolerance below rounding).
     pub warnings: Vec<String>,
@@ -320,13 +322,6 @@ pub fn parse(
             }
             other => return Err(format!("unknown argument `{other}`")),
         }
-    }
-    if inv.output.is_some() && inv.ensemble.is_none() {
-        return Err(
-            "`-o FILE` writes an ensemble's states: it needs `--ensemble K` (a single run's \
-             CSV goes to stdout)"
-                .to_string(),
-        );
     }
     if let Some(phase) = phase {
         let plot = inv

@@ -181,11 +181,22 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     } else {
         None
     };
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
+    // `-o FILE` takes the CSV that otherwise goes to stdout.
+    let sink: Box<dyn Write> = match &inv.output {
+        Some(path) => match std::fs::File::create(path) {
+            Ok(file) => Box::new(file),
+            Err(error) => {
+                eprintln!("error: cannot create `{path}`: {error}");
+                return ExitCode::FAILURE;
+            }
+        },
+        None => Box::new(std::io::stdout().lock()),
+    };
+    let writes_csv = !inv.quiet || inv.output.is_some();
+    let mut out = std::io::BufWriter::new(sink);
     let columns = model.dim() + model.output_names().len();
     let mut written: Result<(), std::io::Error> = Ok(());
-    if !inv.quiet {
+    if writes_csv {
         let mut extra: Vec<String> = model.output_names().iter().map(|s| s.to_string()).collect();
         if found.is_some() {
             extra.extend(crate::run::sensitivity::headers(&*model));
@@ -222,7 +233,7 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
         &times,
         |model: &dyn DynModel, t, x| {
             model.outputs(t, x, &mut outputs);
-            if written.is_ok() && !inv.quiet {
+            if written.is_ok() && writes_csv {
                 extra.clear();
                 extra.extend_from_slice(&outputs);
                 if let Some((rows, _)) = &found {
