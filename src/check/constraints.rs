@@ -22,6 +22,21 @@ impl Checker<'_> {
         // coordinates themselves for a holonomic one).
         let mut held: Vec<Vec<usize>> = Vec::new();
         let mut right_sides = Vec::new();
+        // The coordinates explicit constraints (`constraint y' = …;`) make
+        // dependent: an implicit constraint written without `for` is not
+        // solved for them.
+        let explicit_dependents: Vec<&str> = self
+            .items()
+            .filter_map(|(item, _)| match item {
+                ItemKind::Constraint {
+                    lhs, candidates, ..
+                } if candidates.is_empty() => match &lhs.kind {
+                    ExprKind::Var { name, primes } if *primes > 0 => Some(name.name.as_str()),
+                    _ => None,
+                },
+                _ => None,
+            })
+            .collect();
         for (item, span) in self.items() {
             let ItemKind::Constraint {
                 lhs,
@@ -40,7 +55,20 @@ impl Checker<'_> {
                 held.push(coords);
                 continue;
             }
-            let (coord, order, implicit) = if candidates.is_empty() {
+            let automatic = if candidates.is_empty() {
+                self.automatic_candidates(lhs, rhs, &explicit_dependents)
+            } else {
+                None
+            };
+            let (coord, order, implicit) = if let Some((order, owned)) = automatic {
+                let implicit = Implicit {
+                    lhs: lhs.clone(),
+                    candidates: owned,
+                    holonomic: false,
+                    raised: false,
+                };
+                (implicit.candidates[0], order, Some(implicit))
+            } else if candidates.is_empty() {
                 let Some((coord, order)) = self.constraint_lhs(lhs) else {
                     self.constraints_incomplete = true;
                     right_sides.push((rhs, span, None));
@@ -387,7 +415,11 @@ fn bad_lhs(span: Span, label: &str) -> Diagnostic {
         "a constraint's left side must be a derivative of a coordinate",
     )
     .with_primary(span, label.to_string())
-    .with_help("write it as `constraint q2' = …;`: the coordinate it makes dependent, with primes")
+    .with_help(
+        "write it as `constraint q2' = …;` (the coordinate it makes dependent, with primes), \
+         or name the derivative it is solved for: `… for q2'`; written without either, a \
+         constraint is solved for the highest derivatives it holds that no other constraint fixes",
+    )
 }
 
 /// At most this many constraints are solved together: the dependents of
@@ -399,6 +431,81 @@ pub const MAX_COUPLED: usize = 4;
 pub const MAX_MODES: usize = 64;
 
 impl Checker<'_> {
+    /// The candidates of a constraint that holds derivatives, written
+    /// without `for` and whose left side is an expression, not the
+    /// derivative it fixes (`constraint x'^2 + y'^2 = v^2;`): as for a
+    /// holonomic constraint, every coordinate whose derivative of the
+    /// constraint's highest order it holds, the last declared first, but
+    /// an explicit constraint's dependent. `None` where the left side is a
+    /// single name (an explicit constraint, checked as such) or nothing is
+    /// left to solve for (the left side's error then says what to write).
+    fn automatic_candidates(
+        &self,
+        lhs: &Expr,
+        rhs: &Expr,
+        explicit_dependents: &[&str],
+    ) -> Option<(u32, Vec<usize>)> {
+        if matches!(lhs.kind, ExprKind::Var { .. }) {
+            return None;
+        }
+        let mut held = Vec::new();
+        self.derivatives_held(lhs, &mut held);
+        self.derivatives_held(rhs, &mut held);
+        let order = held.iter().map(|&(_, order)| order).max()?;
+        if order == 0 || order > MAX_DERIVATIVE_ORDER {
+            return None;
+        }
+        let mut owned: Vec<usize> = held
+            .iter()
+            .filter(|&&(coord, o)| {
+                o == order && !explicit_dependents.contains(&self.coords[coord].name.as_str())
+            })
+            .map(|&(coord, _)| coord)
+            .collect();
+        owned.sort_unstable_by(|a, b| b.cmp(a));
+        owned.dedup();
+        (!owned.is_empty()).then_some((order, owned))
+    }
+
+    /// Every coordinate's derivative `expr` holds, through lets, as
+    /// `(coordinate, order)` (positions included, with order 0).
+    fn derivatives_held(&self, expr: &Expr, out: &mut Vec<(usize, u32)>) {
+        match &expr.kind {
+            ExprKind::Number(_) => {}
+            ExprKind::Var { name, primes } => match self.names.get(&name.name).map(|d| d.name) {
+                Some(Name::Coord(coord)) => out.push((coord, *primes)),
+                Some(Name::Let(i)) => {
+                    if let Some(l) = self.lets.get(i) {
+                        out.extend(l.uses.coords.iter().map(|u| (u.coord, u.order + primes)));
+                    }
+                }
+                _ => {}
+            },
+            ExprKind::Neg(e) | ExprKind::Not(e) => self.derivatives_held(e, out),
+            ExprKind::Component { base, .. } => self.derivatives_held(base, out),
+            ExprKind::Binary { lhs, rhs, .. }
+            | ExprKind::Compare { lhs, rhs, .. }
+            | ExprKind::Logic { lhs, rhs, .. } => {
+                self.derivatives_held(lhs, out);
+                self.derivatives_held(rhs, out);
+            }
+            ExprKind::Call { args, .. } | ExprKind::Vector(args) => {
+                for a in args {
+                    self.derivatives_held(a, out);
+                }
+            }
+            ExprKind::If {
+                cond,
+                then,
+                otherwise,
+            } => {
+                self.derivatives_held(cond, out);
+                self.derivatives_held(then, out);
+                self.derivatives_held(otherwise, out);
+            }
+        }
+    }
+
     /// A constraint without any derivative on either side, whose left side
     /// is not one (`constraint x^2 + y^2 = l^2;`, `constraint y = x^2;`).
     fn is_holonomic(&self, lhs: &Expr, rhs: &Expr) -> bool {

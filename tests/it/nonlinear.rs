@@ -4,7 +4,7 @@
 //! reference lagc has no part in (`scripts/check_constant_speed.py`: SciPy
 //! DOP853 at rtol 1e-13 on the hand-derived x'' = -A x/r, y'' = -A y/r).
 
-use crate::generated::build;
+use crate::generated::{build, build_file};
 use crate::rolling_bodies::run;
 
 const METHODS: [&str; 2] = ["field", "direct"];
@@ -155,4 +155,88 @@ fn an_eccentric_constant_acceleration_orbit_matches_its_scipy_reference() {
             "{method}: residual {relative} of the tolerance"
         );
     }
+}
+
+/// A constraint written as a new user first writes it, without `for`
+/// and with an expression on the left (`x'^2 + y'^2 = v^2`), is solved
+/// for the highest derivatives it holds, the last declared first, as a
+/// holonomic constraint is: the generated crate is byte for byte the one
+/// of the same constraint with those candidates named, but for the
+/// constraint's quoted text. (Until 2026-11-26 it was E0006, "a
+/// constraint's left side must be a derivative of a coordinate".)
+#[test]
+fn a_constraint_without_for_is_solved_for_its_highest_derivatives() {
+    let model = |constraint: &str| {
+        format!(
+            "param v = 1; param k = 1; coord x, y;\n\
+             lagrangian = (x'^2 + y'^2) / 2 - k / 2 * (x^2 + y^2);\n\
+             {constraint}\n\
+             initial x = 1, y = 0, x' = 0, y' = 1;\ntime 0 .. 1;\n"
+        )
+    };
+    let options = lagc::emit::EmitOptions {
+        model_name: "written".to_string(),
+        source_hash: "test".to_string(),
+        runtime_path: "../runtime".to_string(),
+        package_key: None,
+    };
+    let lib = |source: String| {
+        let (generated, _) = lagc::on_big_stack(|| lagc::pipeline::compile(&source, &options))
+            .unwrap_or_else(|d| {
+                panic!("{}", lagc::diagnostic::render(&d, "x.lag", &source, false))
+            });
+        generated.file("src/lib.rs").unwrap().to_string()
+    };
+    // Non-linear, and linear with a sum on the left.
+    for (written, named) in [
+        (
+            "constraint x'^2 + y'^2 = v^2;",
+            "constraint x'^2 + y'^2 = v^2 for y' or x';",
+        ),
+        (
+            "constraint y' + x' = v;",
+            "constraint y' + x' = v for y' or x';",
+        ),
+    ] {
+        // The generated crate quotes each constraint as written (in its
+        // run-time messages); nothing else may differ.
+        let named_lib = lib(model(named)).replace(" for y' or x'", "");
+        assert_eq!(lib(model(written)), named_lib, "{written}");
+    }
+}
+
+/// The constant-speed particle on a spring as first written (no `for`):
+/// its exact motion is the unit circle, x = cos t, y = sin t.
+#[test]
+fn the_constant_speed_particle_written_without_for_runs_its_circle() {
+    let dir = std::env::temp_dir().join(format!("lagc-speed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("constant_speed_first_try.lag");
+    std::fs::write(
+        &file,
+        "param v = 1; param k = 1;\ncoord x, y;\n\
+         lagrangian = (x'^2 + y'^2) / 2 - k / 2 * (x^2 + y^2);\n\
+         constraint x'^2 + y'^2 = v^2;\n\
+         initial x = 1, y = 0, x' = 0, y' = 1;\ntime 0 .. 20;\n\
+         exact x = cos(t);\nexact y = sin(t);\n",
+    )
+    .unwrap();
+    let binary = build_file(&file);
+    for method in METHODS {
+        let (_, stderr) = run(
+            &binary,
+            &[
+                "--method", method, "--rtol", "1e-10", "--atol", "1e-12", "--quiet",
+            ],
+        );
+        let error: f64 = stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
+            .unwrap_or_else(|| panic!("{method}: no error line in {stderr}"))
+            .trim()
+            .parse()
+            .unwrap();
+        assert!(error < 1e-9, "{method}: {error:e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
