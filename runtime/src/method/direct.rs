@@ -5,10 +5,10 @@
 
 use crate::choice::IntegratorChoice;
 use crate::failure::Failure;
-use crate::method::solver::{GlobalErrorEstimate, Report, Solver};
+use crate::method::solver::{GlobalErrorEstimate, KeptPart, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
-use crate::ode::dop853::global_error::{relative, GlobalError};
+use crate::ode::dop853::global_error::{relative, GlobalError, BOUND};
 use crate::ode::dop853::Dop853;
 use crate::ode::stepper::{Clocked, OfModel, StepperOf};
 use crate::ode::system::ModelSystem;
@@ -36,9 +36,52 @@ pub struct Direct {
     stiff_distance: f64,
     /// Switched back to DOP853: RODAS4 was not cheaper.
     switched_back_at: Option<f64>,
-    /// The global error estimate carried along, with a buffer for each
-    /// step's local error.
-    global: (GlobalError, Vec<f64>),
+    /// The global error estimate carried along, and the last step's
+    /// local error.
+    global: GlobalError,
+    step_error: StepError,
+    /// The run keeps holonomic constraints: a step's local error waits for
+    /// [`Solver::keep_on_constraints`] to remove its part off them.
+    keeps: bool,
+    /// The last probe's ratio of the part of a step's error that the
+    /// holonomic constraints keep to the whole, and the steps since.
+    kept_ratio: Option<(f64, usize)>,
+}
+
+/// Steps between two probes of the part of the error that the holonomic
+/// constraints keep ([`Solver::keep_on_constraints`]).
+const KEPT_STRIDE: usize = 8;
+
+/// One accepted DOP853 step's local error: Hairer's estimate and, when
+/// taken, the Richardson measure, with the state they are relative to.
+#[derive(Clone, Default)]
+struct StepError {
+    estimated: Vec<f64>,
+    measured: Option<Vec<f64>>,
+    x: Vec<f64>,
+    h: f64,
+    /// Not yet added to the global estimate.
+    waiting: bool,
+}
+
+impl StepError {
+    fn scale(&mut self, ratio: f64) {
+        self.estimated.iter_mut().for_each(|v| *v *= ratio);
+        if let Some(measured) = self.measured.as_mut() {
+            measured.iter_mut().for_each(|v| *v *= ratio);
+        }
+    }
+
+    fn add_to(&mut self, global: &mut GlobalError) {
+        if !std::mem::take(&mut self.waiting) {
+            return;
+        }
+        let estimated = relative(&self.estimated, &self.x);
+        match &self.measured {
+            Some(measured) => global.add_measured(estimated, relative(measured, &self.x), self.h),
+            None => global.add(estimated, self.h),
+        }
+    }
 }
 
 impl Direct {
@@ -69,7 +112,13 @@ impl Direct {
             stiff_steps: 0,
             stiff_distance: 0.0,
             switched_back_at: None,
-            global: (GlobalError::new(), vec![0.0; x0.len()]),
+            global: GlobalError::new(),
+            step_error: StepError {
+                estimated: vec![0.0; x0.len()],
+                ..StepError::default()
+            },
+            keeps: model.keeps_positions(),
+            kept_ratio: None,
         })
     }
 
@@ -145,6 +194,8 @@ impl Solver for Direct {
     }
 
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        self.step_error.add_to(&mut self.global);
+        self.kept_ratio = None;
         let h = self.stepper.proposed_step();
         let integrator = self.integrator;
         self.done += self.stepper.stats();
@@ -159,6 +210,14 @@ impl Solver for Direct {
         Ok(())
     }
 
+    fn project(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        // A projection moves the state, not the directions of the errors.
+        let kept_ratio = self.kept_ratio;
+        self.restart(model, t, x)?;
+        self.kept_ratio = kept_ratio;
+        Ok(())
+    }
+
     fn segments(
         &mut self,
         model: &dyn DynModel,
@@ -170,7 +229,44 @@ impl Solver for Direct {
             .collect())
     }
 
+    fn keep_on_constraints(&mut self, kept_part: &mut KeptPart<'_>) {
+        let e = &mut self.step_error;
+        // While the sum with this step's whole error stays within the
+        // bound, the run is within without the projection. Past it, the
+        // part kept is probed every [`KEPT_STRIDE`] steps (two
+        // projections cost about a step: one at every step made the
+        // Cartesian pendulum's run 1.9× the instructions) and its ratio
+        // to the whole scales the steps between; a restart (an event, a
+        // change of pivot) probes afresh.
+        let within = self.global.estimate() + relative(&e.estimated, &e.x) <= BOUND * self.tol.rtol;
+        if e.waiting && !within {
+            match &mut self.kept_ratio {
+                Some((ratio, since)) if *since < KEPT_STRIDE => {
+                    *since += 1;
+                    e.scale(*ratio);
+                }
+                _ => {
+                    // A projection that fails leaves the error as
+                    // estimated: the estimate never fails the run (the
+                    // keeper's own projection after the step reports a
+                    // state it cannot keep).
+                    let whole = relative(&e.estimated, &e.x);
+                    let probed = kept_part(&e.x, &mut e.estimated).is_ok() && whole > 0.0;
+                    let ratio = relative(&e.estimated, &e.x) / whole;
+                    if let Some(measured) = e.measured.as_mut() {
+                        let _ = kept_part(&e.x, measured);
+                    }
+                    self.kept_ratio = (probed && ratio.is_finite()).then_some((ratio, 1));
+                }
+            }
+        }
+        e.add_to(&mut self.global);
+    }
+
     fn report(&self) -> Report {
+        let mut global = self.global.clone();
+        // The last step's error, should no projection have come for it.
+        self.step_error.clone().add_to(&mut global);
         let mut notes = Vec::new();
         if let Some(t) = self.switched_back_at {
             notes.push(format!(
@@ -193,9 +289,9 @@ impl Solver for Direct {
             stats: self.done + self.stepper.stats(),
             notes,
             global_error: Some(GlobalErrorEstimate {
-                largest: self.global.0.estimate(),
+                largest: global.estimate(),
                 rtol: self.tol.rtol,
-                complete: self.global.0.complete(),
+                complete: global.complete(),
             }),
             ..Report::default()
         }
@@ -207,25 +303,33 @@ impl Direct {
     /// `dop853::global_error`): DOP853's local error estimate, scaled by
     /// the ratio a Richardson measure of the local error gives where the
     /// sum grows past `rtol`. RODAS4's steps are not accounted for (the
-    /// estimate then says it is partial).
+    /// estimate then says it is partial). In a run that keeps
+    /// constraints the step's error waits for the part of it the
+    /// constraints keep ([`Solver::keep_on_constraints`]).
     fn carry_global_error(&mut self, model: &dyn DynModel) {
-        let (global, local) = &mut self.global;
+        let (global, e) = (&mut self.global, &mut self.step_error);
+        e.add_to(global);
         let Some(dop) = self.stepper.as_any_mut().downcast_mut::<Dop853>() else {
             global.skip();
             return;
         };
-        dop.local_error(local);
-        let estimated = relative(local, dop.current_state());
-        let (_, _, h) = dop.clock().last_step();
+        dop.local_error(&mut e.estimated);
+        e.x.clear();
+        e.x.extend_from_slice(dop.current_state());
+        e.h = dop.clock().last_step().2;
+        let mut measured = e.measured.take().unwrap_or_default();
         if global.wants_measure(self.tol.rtol) {
             // A measure that fails (a stage not finite) leaves the estimate
             // unscaled: it never fails the run.
-            if let Ok(true) = dop.local_error_by_halves(&ModelSystem(model), local) {
-                global.add_measured(estimated, relative(local, dop.current_state()), h);
-                return;
+            measured.resize(e.x.len(), 0.0);
+            if let Ok(true) = dop.local_error_by_halves(&ModelSystem(model), &mut measured) {
+                e.measured = Some(measured);
             }
         }
-        global.add(estimated, h);
+        e.waiting = true;
+        if !self.keeps {
+            e.add_to(global);
+        }
     }
 
     /// After switching to RODAS4 on detected stiffness, whether it pays: a

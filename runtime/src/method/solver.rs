@@ -63,6 +63,11 @@ impl GlobalErrorEstimate {
     }
 }
 
+/// The linearised projection onto the constraints, as
+/// [`Solver::keep_on_constraints`] is given it: `(x, d)`, with `d`
+/// replaced in place (left as it is on failure, which is reported).
+pub type KeptPart<'a> = dyn FnMut(&[f64], &mut [f64]) -> Result<(), Failure> + 'a;
+
 /// A method advancing a model's motion step by step.
 pub trait Solver {
     /// The time of the last accepted step's end.
@@ -99,6 +104,14 @@ pub trait Solver {
     fn project(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         self.restart(model, t, x)
     }
+    /// Takes the run's projection onto the constraints into account for
+    /// the last advance: `kept_part(x, d)` replaces a small change `d` of
+    /// the state `x` by the part of it that the constraints keep (the
+    /// part a projection does not remove). Called after every advance of
+    /// a run that keeps constraints; direct integration passes its steps'
+    /// local errors through it, for a drift off the constraints is
+    /// projected away, not carried to the run's end.
+    fn keep_on_constraints(&mut self, _kept_part: &mut KeptPart<'_>) {}
     /// The work so far.
     fn report(&self) -> Report;
 

@@ -634,6 +634,9 @@ impl<'m> Integration<'m> {
         }
         self.progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
+        if let Some(keeper) = self.keeper.as_mut() {
+            solver.keep_on_constraints(&mut |x, d| keeper.kept_part(model, tb, x, d));
+        }
         if let Some(pieces) = self.pieces.as_mut() {
             for segment in solver.segments(model)? {
                 pieces.push(Piece {
