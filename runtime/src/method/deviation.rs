@@ -37,7 +37,6 @@ use crate::model::DynModel;
 use crate::ode::dop853::hairer_error;
 use crate::ode::dop853::tableau::{A, A_EXTRA, B, BHH, C, C_EXTRA, D, ER, STAGES};
 use crate::ode::tolerance::Tolerance;
-use crate::run::solution::Solution;
 
 /// A member leaves the shared steps when its error is this many times the
 /// error of the member at the 90th percentile (and above 1): it would need
@@ -52,22 +51,13 @@ const SHORTEST: f64 = 1e-12;
 /// How many of last step's worst members are stepped first.
 const FIRST: usize = 8;
 
-/// The base's continuous extension at any time of its span.
-struct Base<'a> {
-    solution: &'a Solution,
-}
-
-impl Base<'_> {
-    fn at(&self, t: f64, out: &mut [f64]) {
-        let s = self.solution;
-        if t <= s.t0 || s.pieces.is_empty() {
-            out.copy_from_slice(&s.x0);
-            return;
-        }
-        let i = s.pieces.partition_point(|p| p.until < t);
-        let piece = &s.pieces[i.min(s.pieces.len() - 1)];
-        piece.segment.eval(t, out);
-    }
+/// The base's motion: its continuous extension at any time of its span
+/// (the run's [`crate::run::solution::Solution`]; this module sits below
+/// the run).
+pub trait Base {
+    fn at(&self, t: f64, out: &mut [f64]);
+    /// Its first step's length: the shared steps' first try.
+    fn first_step(&self) -> Option<f64>;
 }
 
 /// The base at a stage time: `x_b(t)` and `X(t, x_b(t))`.
@@ -87,7 +77,7 @@ impl Point {
         }
     }
 
-    fn set(&mut self, model: &dyn DynModel, base: &Base, t: f64) -> Result<(), Failure> {
+    fn set(&mut self, model: &dyn DynModel, base: &dyn Base, t: f64) -> Result<(), Failure> {
         self.t = t;
         base.at(t, &mut self.x);
         model.rhs(t, &self.x, &mut self.rate)
@@ -138,14 +128,13 @@ pub struct Followed {
 /// `t0` are the caller's).
 pub fn follow(
     model: &dyn DynModel,
-    base: &Solution,
+    base: &dyn Base,
     tol: Tolerance,
     members: &States,
     (t0, t1): (f64, f64),
     times: &[f64],
     samples: &mut Vec<(f64, States)>,
 ) -> Result<Followed, Failure> {
-    let base = Base { solution: base };
     let n = members.n;
     let count = members.len();
     let mut estimates = vec![0.0; count];
@@ -154,7 +143,7 @@ pub fn follow(
     // Points of the base: the step's start, its stages, its end (the
     // last stage is at `t + h`), and the continuous extension's three.
     let mut start = Point::new(n);
-    start.set(model, &base, t0)?;
+    start.set(model, base, t0)?;
     let mut stages: Vec<Point> = (0..STAGES).map(|_| Point::new(n)).collect();
     let mut extra: Vec<Point> = (0..3).map(|_| Point::new(n)).collect();
     let mut x = vec![0.0; n];
@@ -188,12 +177,7 @@ pub fn follow(
     let span = t1 - t0;
     // The base's first step, lengthened as the members' tolerance allows
     // (the controller takes it from there).
-    let mut h = base
-        .solution
-        .pieces
-        .first()
-        .map_or(span, |p| p.until - t0)
-        .min(span);
+    let mut h = base.first_step().unwrap_or(span).min(span);
     let mut next = times.partition_point(|&s| s <= t0);
     let mut t = t0;
     while t < t1 {
@@ -206,7 +190,7 @@ pub fn follow(
             } else {
                 t + C[s] * h_try
             };
-            point.set(model, &base, ts)?;
+            point.set(model, base, ts)?;
         }
         errs.fill(0.0);
         let mut early = false;
@@ -297,7 +281,7 @@ pub fn follow(
             if ts < t_new && !extended {
                 extended = true;
                 for (e, point) in extra.iter_mut().enumerate() {
-                    point.set(model, &base, t + C_EXTRA[e] * h_try)?;
+                    point.set(model, base, t + C_EXTRA[e] * h_try)?;
                 }
                 for m in 0..count {
                     if !estimates[m].is_finite() {

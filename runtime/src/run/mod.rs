@@ -137,6 +137,10 @@ pub fn run_ensemble(
     if model.switches() > 0 || !model.constraints().is_empty() {
         return Err(Failure::new(t0, FailureKind::NotAffine));
     }
+    // A non-affine motion's members as deviations from the first (exact
+    // at any spread, and cheaper than the field's frames were: issue 27,
+    // BENCHMARKS §4a). The field's own non-affine members (field/members.rs)
+    // are no longer reached from here.
     if !model.affine() {
         return deviations(model, options, t0, t1, members, times, sample);
     }
@@ -308,6 +312,23 @@ fn deviations(
         on_their_own,
         largest_estimate: Some(largest),
     })
+}
+
+/// The base of a non-affine ensemble: its solution's continuous extension.
+impl crate::method::deviation::Base for Solution {
+    fn at(&self, t: f64, out: &mut [f64]) {
+        if t <= self.t0 || self.pieces.is_empty() {
+            out.copy_from_slice(&self.x0);
+            return;
+        }
+        let i = self.pieces.partition_point(|p| p.until < t);
+        let piece = &self.pieces[i.min(self.pieces.len() - 1)];
+        piece.segment.eval(t, out);
+    }
+
+    fn first_step(&self) -> Option<f64> {
+        self.pieces.first().map(|p| p.until - self.t0)
+    }
 }
 
 /// Each member beyond the tolerance by its estimate (or dropped: infinite,
