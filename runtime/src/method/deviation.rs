@@ -56,8 +56,9 @@ const FIRST: usize = 8;
 /// the run).
 pub trait Base {
     fn at(&self, t: f64, out: &mut [f64]);
-    /// Its first step's length: the shared steps' first try.
-    fn first_step(&self) -> Option<f64>;
+    /// Its steps' median length: the shared steps' first try (the base's
+    /// first step is DOP853's cautious start, at a tighter tolerance).
+    fn typical_step(&self) -> Option<f64>;
 }
 
 /// The base at a stage time: `x_b(t)` and `X(t, x_b(t))`.
@@ -175,9 +176,9 @@ pub fn follow(
     let mut cont = vec![0.0; count * 8 * n];
     let mut ks = vec![0.0; 3 * n];
     let span = t1 - t0;
-    // The base's first step, lengthened as the members' tolerance allows
-    // (the controller takes it from there).
-    let mut h = base.first_step().unwrap_or(span).min(span);
+    // The base's typical step (the controller takes it from there; a
+    // first try too long is rejected after the first few members).
+    let mut h = base.typical_step().unwrap_or(span).min(span);
     let mut next = times.partition_point(|&s| s <= t0);
     let mut t = t0;
     while t < t1 {
@@ -407,38 +408,36 @@ fn member_step(
     (x, stage): (&mut [f64], &mut [f64]),
 ) -> Result<(), Failure> {
     let n = d0.len();
+    // Component by component, each sum in registers (as DOP853's own
+    // stages): a member's state is a few numbers, and whole-vector passes
+    // cost more than the sums.
     for s in 1..STAGES {
-        stage.copy_from_slice(d0);
-        for &(l, a) in A[s] {
-            let c = h * a;
-            for (v, kl) in stage.iter_mut().zip(&k[l * n..(l + 1) * n]) {
-                *v += c * kl;
+        for i in 0..n {
+            let mut acc = 0.0;
+            for &(l, a) in A[s] {
+                acc += a * k[l * n + i];
             }
+            stage[i] = d0[i] + h * acc;
         }
         let (_, rest) = k.split_at_mut(s * n);
         stages[s].rate(model, stage, x, &mut rest[..n])?;
     }
-    // b = Σ B k, then the end and the estimates.
-    stage.fill(0.0);
-    e5.fill(0.0);
-    for &(l, c) in &B {
-        for (v, kl) in stage.iter_mut().zip(&k[l * n..(l + 1) * n]) {
-            *v += c * kl;
+    // The end and the 3rd- and 5th-order estimates.
+    for i in 0..n {
+        let (mut b, mut e) = (0.0, 0.0);
+        for &(l, c) in &B {
+            b += c * k[l * n + i];
         }
-    }
-    for &(l, c) in &ER {
-        for (v, kl) in e5.iter_mut().zip(&k[l * n..(l + 1) * n]) {
-            *v += c * kl;
+        for &(l, c) in &ER {
+            e += c * k[l * n + i];
         }
-    }
-    e3.copy_from_slice(stage);
-    for &(l, c) in &BHH {
-        for (v, kl) in e3.iter_mut().zip(&k[l * n..(l + 1) * n]) {
-            *v -= c * kl;
+        let mut b3 = b;
+        for &(l, c) in &BHH {
+            b3 -= c * k[l * n + i];
         }
-    }
-    for j in 0..n {
-        d1[j] = d0[j] + h * stage[j];
+        e3[i] = b3;
+        e5[i] = e;
+        d1[i] = d0[i] + h * b;
     }
     let (_, end) = k.split_at_mut(STAGES * n);
     stages[STAGES - 1].rate(model, d1, x, &mut end[..n])

@@ -326,8 +326,19 @@ impl crate::method::deviation::Base for Solution {
         piece.segment.eval(t, out);
     }
 
-    fn first_step(&self) -> Option<f64> {
-        self.pieces.first().map(|p| p.until - self.t0)
+    fn typical_step(&self) -> Option<f64> {
+        let mut lengths: Vec<f64> = (0..self.pieces.len())
+            .map(|i| {
+                let from = if i == 0 {
+                    self.t0
+                } else {
+                    self.pieces[i - 1].until
+                };
+                self.pieces[i].until - from
+            })
+            .collect();
+        let middle = lengths.len() / 2;
+        (!lengths.is_empty()).then(|| *lengths.select_nth_unstable_by(middle, f64::total_cmp).1)
     }
 }
 
