@@ -67,6 +67,10 @@ const RUNTIME: &[(&str, &str)] = &[
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
     ("src/math.rs", include_str!("../../runtime/src/math.rs")),
     (
+        "src/method/deviation.rs",
+        include_str!("../../runtime/src/method/deviation.rs"),
+    ),
+    (
         "src/method/direct.rs",
         include_str!("../../runtime/src/method/direct.rs"),
     ),

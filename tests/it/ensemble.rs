@@ -52,7 +52,7 @@ fn a_far_spread_double_pendulum_ensemble_is_right_or_refused() {
 
 /// A non-affine ensemble at spread 1e-2 agrees with the members' direct
 /// integrations to 10·rtol (first order it was 1e-4 away), its members
-/// followed along the field.
+/// followed on the shared steps.
 #[test]
 fn a_spread_1e_2_non_affine_ensemble_is_within_ten_rtol_of_direct() {
     for (name, rtol) in [("spherical_pendulum", "1e-8"), ("knife_edge", "1e-9")] {
@@ -137,7 +137,7 @@ fn the_ensembles_states_are_written_with_o() {
     assert!(ok, "{stderr}");
     assert!(stdout.is_empty());
     assert!(
-        stderr.contains("5 members corrected along the field"),
+        stderr.contains("5 members corrected on shared steps"),
         "{stderr}"
     );
     let csv = std::fs::read_to_string(&file).unwrap();

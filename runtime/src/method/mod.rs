@@ -3,6 +3,7 @@
 //! (`direct`) and Vujanović's field method (`field/`); `segment`, a step's
 //! motion kept as a value for a solution.
 
+pub mod deviation;
 pub mod direct;
 pub mod field;
 pub mod segment;

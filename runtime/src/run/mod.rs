@@ -137,6 +137,13 @@ pub fn run_ensemble(
     if model.switches() > 0 || !model.constraints().is_empty() {
         return Err(Failure::new(t0, FailureKind::NotAffine));
     }
+    // A non-affine motion's members as deviations from the first (exact
+    // at any spread, and cheaper than the field's frames were: issue 27,
+    // BENCHMARKS §4a). The field's own non-affine members (field/members.rs)
+    // are no longer reached from here.
+    if !model.affine() {
+        return deviations(model, options, t0, t1, members, times, sample);
+    }
     let budget = Budget::new(options.max_steps);
     budget.accepted_to(t0);
     let h_max = (t1 - t0).max(f64::MIN_POSITIVE);
@@ -168,7 +175,6 @@ pub fn run_ensemble(
     // and its initial states for those integrations.
     let buffered = !model.affine();
     let initial = buffered.then(|| members.clone());
-    let n = members.n;
     let mut samples: Vec<(f64, States)> = Vec::new();
     let mut next = 0;
     while next < times.len() && times[next] <= t0 {
@@ -220,8 +226,136 @@ pub fn run_ensemble(
         // motions on a non-affine model would answer to first order.
         _ => return Err(Failure::new(t0, FailureKind::NotAffine)),
     };
-    // A member beyond the tolerance by its estimate (or dropped: infinite,
-    // or NaN) is integrated on its own, over the same samples.
+    let (on_their_own, largest) = integrate_on_their_own(
+        model,
+        options,
+        (t0, t1),
+        (&initial, &[]),
+        &estimates,
+        &mut samples,
+    )?;
+    for (t, states) in &samples {
+        sample(*t, states);
+    }
+    Ok(EnsembleOutcome {
+        outcome,
+        along_field: count - on_their_own,
+        on_their_own,
+        largest_estimate: Some(largest),
+    })
+}
+
+/// The base's tolerance over the members' on a non-affine ensemble: a
+/// member's error is the base's defect carried along its own motion.
+const BASE_MARGIN: f64 = 0.01;
+
+/// A non-affine ensemble: every member as its deviation from the first,
+/// integrated on shared steps ([`crate::method::deviation`]) around the
+/// first's own tight integration; members that leave the shared steps are
+/// integrated on their own.
+fn deviations(
+    model: &mut dyn DynModel,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    members: crate::ensemble::States,
+    times: &[f64],
+    mut sample: impl FnMut(f64, &crate::ensemble::States),
+) -> Result<EnsembleOutcome, Failure> {
+    assert!(!members.is_empty(), "an ensemble has a reference member");
+    let count = members.len();
+    let base_tol = options.tol.scaled(BASE_MARGIN);
+    let base_options = Options {
+        method: Method::Direct,
+        progress: false,
+        tol: Tolerance {
+            rtol: base_tol.rtol.max(MIN_FIELD_RTOL),
+            atol: base_tol.atol,
+        },
+        ..options.clone()
+    };
+    let base = solve(model, &base_options, t0, t1, members.row(0))?;
+    let mut samples: Vec<(f64, crate::ensemble::States)> = times
+        .iter()
+        .take_while(|&&t| t <= t0)
+        .map(|&t| (t, members.clone()))
+        .collect();
+    let followed = crate::method::deviation::follow(
+        model,
+        &base,
+        options.tol,
+        &members,
+        (t0, t1),
+        times,
+        &mut samples,
+    )?;
+    let mut outcome = base.outcome;
+    outcome.report.method = format!("deviations around {}", outcome.report.method);
+    outcome.report.notes.push(format!(
+        "ensemble members: {} shared steps, {} rejected",
+        followed.steps, followed.rejected
+    ));
+    let (on_their_own, largest) = integrate_on_their_own(
+        model,
+        options,
+        (t0, t1),
+        (&members, &followed.left),
+        &followed.estimates,
+        &mut samples,
+    )?;
+    for (t, states) in &samples {
+        sample(*t, states);
+    }
+    Ok(EnsembleOutcome {
+        outcome,
+        along_field: count - on_their_own,
+        on_their_own,
+        largest_estimate: Some(largest),
+    })
+}
+
+/// The base of a non-affine ensemble: its solution's continuous extension.
+impl crate::method::deviation::Base for Solution {
+    fn at(&self, t: f64, out: &mut [f64]) {
+        if t <= self.t0 || self.pieces.is_empty() {
+            out.copy_from_slice(&self.x0);
+            return;
+        }
+        let i = self.pieces.partition_point(|p| p.until < t);
+        let piece = &self.pieces[i.min(self.pieces.len() - 1)];
+        piece.segment.eval(t, out);
+    }
+
+    fn typical_step(&self) -> Option<f64> {
+        let mut lengths: Vec<f64> = (0..self.pieces.len())
+            .map(|i| {
+                let from = if i == 0 {
+                    self.t0
+                } else {
+                    self.pieces[i - 1].until
+                };
+                self.pieces[i].until - from
+            })
+            .collect();
+        let middle = lengths.len() / 2;
+        (!lengths.is_empty()).then(|| *lengths.select_nth_unstable_by(middle, f64::total_cmp).1)
+    }
+}
+
+/// Each member beyond the tolerance by its estimate (or dropped: infinite,
+/// or NaN) integrated on its own (direct, the same tolerance) from where
+/// it left the others (`left`; from its initial state where not given),
+/// over the samples' times from there, into the samples. Returns how many,
+/// and the largest estimate of the others.
+fn integrate_on_their_own(
+    model: &mut dyn DynModel,
+    options: &Options,
+    (t0, t1): (f64, f64),
+    (initial, left): (&crate::ensemble::States, &[crate::method::deviation::Left]),
+    estimates: &[f64],
+    samples: &mut [(f64, crate::ensemble::States)],
+) -> Result<(usize, f64), Failure> {
+    let n = initial.n;
     let direct = Options {
         method: Method::Direct,
         progress: false,
@@ -236,30 +370,23 @@ pub fn run_ensemble(
             continue;
         }
         on_their_own += 1;
-        let mut i = 0;
-        run(
-            model,
-            &direct,
-            t0,
-            t1,
-            initial.row(m),
-            &sampled,
-            |_, _, x| {
-                if let Some((_, states)) = samples.get_mut(i) {
-                    states.data[m * n..(m + 1) * n].copy_from_slice(x);
-                }
-                i += 1;
-                Ok(())
-            },
-        )?;
+        let (from, x) = match left.get(m) {
+            Some(Some((t, x))) => (*t, x.as_slice()),
+            _ => (t0, initial.row(m)),
+        };
+        // The samples up to where it left are the shared steps'.
+        let mut i = if from > t0 {
+            sampled.partition_point(|&t| t <= from)
+        } else {
+            0
+        };
+        run(model, &direct, from, t1, x, &sampled[i..], |_, _, x| {
+            if let Some((_, states)) = samples.get_mut(i) {
+                states.data[m * n..(m + 1) * n].copy_from_slice(x);
+            }
+            i += 1;
+            Ok(())
+        })?;
     }
-    for (t, states) in &samples {
-        sample(*t, states);
-    }
-    Ok(EnsembleOutcome {
-        outcome,
-        along_field: count - on_their_own,
-        on_their_own,
-        largest_estimate: Some(largest),
-    })
+    Ok((on_their_own, largest))
 }

@@ -153,7 +153,7 @@ pub(crate) fn ensemble(
         );
     } else {
         eprintln!(
-            "ensemble of {count} initial states (spread {}), {} samples: one field ({method}) \
+            "ensemble of {count} initial states (spread {}), {} samples: the ensemble ({method}) \
              for all: {:.3} ms; the field for one: {:.3} ms; {count} direct integrations: \
              {:.3} ms; largest difference: {difference:.3e}; {}",
             inv.spread,
@@ -172,7 +172,7 @@ fn members_line(along: usize, own: usize, estimate: Option<f64>) -> String {
     match estimate {
         None => format!("{along} members exact through the field (an affine motion)"),
         Some(e) => format!(
-            "{along} members corrected along the field (largest local error {e:.2} of the \
+            "{along} members corrected on shared steps (largest local error {e:.2} of the \
              tolerance), {own} integrated on their own"
         ),
     }
