@@ -54,11 +54,13 @@ usage: MODEL [OPTIONS]
   --plot FILE.svg        draw the columns against time into FILE.svg
   --phase X,Y            with --plot: draw column Y against column X
   --ensemble K           K initial states around the model's (spread by
-                         --spread, default 0.1 of each value) through one
-                         field, against K direct integrations: times and
-                         the largest difference (exact for affine motions;
-                         otherwise each member corrected to the tolerance,
-                         or integrated on its own where the field cannot)
+                         --spread, default 0.1 of each value), against K
+                         direct integrations: times and the largest
+                         difference (an affine motion: all through one
+                         field, exactly; otherwise each member's deviation
+                         from the first on steps shared by all, to the
+                         tolerance, or on its own where it needs far
+                         shorter steps)
   --spread S             the ensemble's relative spread
   --sensitivity          also write dX(t)/dY0 for every initial value the
                          model states and dX(t)/dP for every param, as the

@@ -1,6 +1,7 @@
-//! `--ensemble K`: one field for K initial states. With `-o FILE` the
-//! members' states are written there as CSV (`member,t,<state…>`, member
-//! by member); without it, the field is timed against K direct
+//! `--ensemble K`: K initial states at once (through one field for an
+//! affine motion, as deviations on shared steps otherwise). With `-o FILE`
+//! the members' states are written there as CSV (`member,t,<state…>`,
+//! member by member); without it, the ensemble is timed against K direct
 //! integrations (a benchmark harness) and their largest difference shown.
 
 use super::args::Invocation;
@@ -33,7 +34,7 @@ pub fn ensemble_member(x0: &[f64], k: usize, spread: f64) -> Vec<f64> {
         .collect()
 }
 
-/// `--ensemble K`: one field for K initial states against K direct
+/// `--ensemble K`: K initial states at once against K direct
 /// integrations, each timed as the smallest of `--repeat` runs.
 pub(crate) fn ensemble(
     model: &mut dyn DynModel,
@@ -154,7 +155,7 @@ pub(crate) fn ensemble(
     } else {
         eprintln!(
             "ensemble of {count} initial states (spread {}), {} samples: the ensemble ({method}) \
-             for all: {:.3} ms; the field for one: {:.3} ms; {count} direct integrations: \
+             for all: {:.3} ms; one field run, for scale: {:.3} ms; {count} direct integrations: \
              {:.3} ms; largest difference: {difference:.3e}; {}",
             inv.spread,
             times.len(),
