@@ -98,6 +98,12 @@ pub trait Solver {
     }
     /// Starts afresh from `(t, x)` (after an event changed the regime).
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
+    /// [`Solver::restart`] after an event that left the state where it was
+    /// and the rate's scale (its Jacobian's norm) within twice the old: a
+    /// method may keep the step sizes it had learnt.
+    fn restart_smooth(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        self.restart(model, t, x)
+    }
     /// Goes on from `x`, the state at [`Solver::time`] projected onto the
     /// constraints: no discontinuity, so a method may keep what it has
     /// learnt of the step sizes.

@@ -26,6 +26,7 @@
 
 use crate::choice::{IntegratorChoice, Method};
 use crate::failure::{Failure, FailureKind};
+use crate::linalg::Matrix;
 use crate::method::direct::Direct;
 use crate::method::field::affine::AffineField;
 use crate::method::field::quasilinear::QuasilinearField;
@@ -825,6 +826,7 @@ impl<'m> Integration<'m> {
                 // What a system carrying more than the motion needs at the
                 // event (`DynModel::event_jump`).
                 let x_before = x_event.clone();
+                let scale_before = rate_scale(model, t_event, &x_before);
                 for &k in &switches {
                     regime.branches[k] = !regime.branches[k];
                 }
@@ -867,7 +869,20 @@ impl<'m> Integration<'m> {
                     self.done = Some(Ok(ending));
                     return Ok(());
                 }
-                s.solver.restart(model, t_event, x_event)
+                // Where the state did not jump and the new regime's rate
+                // varies on no shorter scale than the old one's (its
+                // Jacobian's norm at most twice the old), the step sizes
+                // learnt go on (`Solver::restart_smooth`).
+                let smooth = x_before == *x_event
+                    && scale_before.is_some_and(|before| {
+                        rate_scale(model, t_event, x_event)
+                            .is_some_and(|after| after <= 2.0 * before)
+                    });
+                if smooth {
+                    s.solver.restart_smooth(model, t_event, x_event)
+                } else {
+                    s.solver.restart(model, t_event, x_event)
+                }
             }
             Then::Step => {
                 let tb = pending.tb;
@@ -1030,6 +1045,16 @@ fn probe_pace(model: &dyn DynModel, t: f64, x: &[f64], span: f64, pace: &mut Swi
         probe.observe(h, [&g[0], &g[1], &g[2], &g[3], &g[4]]);
         pace.at_least(&probe);
     }
+}
+
+/// The scale on which the rate varies with the state at `(t, x)` in the
+/// model's current regime: the 1-norm of its Jacobian (None where it is not
+/// finite or cannot be evaluated).
+fn rate_scale(model: &dyn DynModel, t: f64, x: &[f64]) -> Option<f64> {
+    let mut jac = Matrix::zeros(x.len(), x.len());
+    model.jacobian(t, x, &mut jac).ok()?;
+    let norm = jac.one_norm();
+    norm.is_finite().then_some(norm)
 }
 
 /// The pace where an event at `t_event` restarts the solution, learnt
