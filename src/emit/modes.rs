@@ -10,7 +10,7 @@ use quote::quote;
 use std::collections::HashMap;
 
 /// The motion's methods (trait items and their inherent helpers).
-const METHODS: [&str; 11] = [
+const METHODS: [&str; 12] = [
     "rhs",
     "constrained",
     "kept_gradient",
@@ -22,16 +22,18 @@ const METHODS: [&str; 11] = [
     "highest",
     "highest_factored",
     "residual",
+    "param_jacobian",
 ];
 
 /// The trait methods a mode implements, with their argument lists.
-const DISPATCHED: [(&str, &[&str]); 6] = [
+const DISPATCHED: [(&str, &[&str]); 7] = [
     ("rhs", &["t", "x", "dx"]),
     ("constrained", &["t", "x", "kept"]),
     ("kept_gradient", &["t", "x", "jac"]),
     ("jacobian", &["t", "x", "jac"]),
     ("time_partial", &["t", "x", "dxdt"]),
     ("linearize", &["t", "x", "dx", "jac"]),
+    ("param_jacobian", &["t", "x", "jac"]),
 ];
 
 /// Mode `mode`'s items as inherent methods: every definition and every
@@ -113,7 +115,9 @@ pub fn dispatch(trait_items: &TokenStream, modes: usize) -> TokenStream {
         let signature = match name {
             "rhs" => quote! { t: f64, x: &[f64], dx: &mut [f64] },
             "constrained" => quote! { t: f64, x: &[f64], kept: &mut [f64] },
-            "jacobian" | "kept_gradient" => quote! { t: f64, x: &[f64], jac: &mut Matrix },
+            "jacobian" | "kept_gradient" | "param_jacobian" => {
+                quote! { t: f64, x: &[f64], jac: &mut Matrix }
+            }
             "time_partial" => quote! { t: f64, x: &[f64], dxdt: &mut [f64] },
             _ => quote! { t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix },
         };

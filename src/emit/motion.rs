@@ -41,15 +41,38 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
         return (quote! { #trait_items #condition #events #params }, inherent);
     }
     // Several modes: each mode's motion as inherent methods `…_modeM`,
-    // the trait's methods dispatching on the current mode.
-    let mut all_inherent = super::modes::renamed(&trait_items, &inherent, 0);
-    for (m, mode) in kernel.modes.iter().enumerate() {
+    // the trait's methods dispatching on the current mode. `∂X/∂p` too,
+    // when every mode has it (the sensitivities follow the run's changes
+    // of candidates: the state is the same in every mode).
+    let mut modes = vec![(
+        trait_items,
+        inherent,
+        super::sensitivity::param_jacobian_method(kernel, names, &from_x),
+    )];
+    for mode in &kernel.modes {
         let mut mode_names = SymbolNames::new(&mode.arena, &mode.state);
         mode_names.branches = super::modes::shared_branches(kernel, mode);
         let (items, helpers) = motion_of(mode, &mut mode_names, &from_x);
-        all_inherent.extend(super::modes::renamed(&items, &helpers, m + 1));
+        let params = super::sensitivity::param_jacobian_method(mode, &mut mode_names, &from_x);
+        modes.push((items, helpers, params));
     }
-    let dispatch = super::modes::dispatch(&trait_items, kernel.modes.len() + 1);
+    let every_mode_params = modes.iter().all(|(_, _, p)| p.is_some());
+    let mut all_inherent = TokenStream::new();
+    let mut first_items = TokenStream::new();
+    for (m, (items, helpers, params)) in modes.into_iter().enumerate() {
+        let items = match params {
+            Some(params) if every_mode_params => quote! { #items #params },
+            _ => items,
+        };
+        all_inherent.extend(super::modes::renamed(&items, &helpers, m));
+        if m == 0 {
+            first_items = items;
+        }
+    }
+    let mut dispatch = super::modes::dispatch(&first_items, kernel.modes.len() + 1);
+    if every_mode_params {
+        dispatch.extend(quote! { const PARAM_JACOBIAN: bool = true; });
+    }
     // The mass matrix is the current mode's too (mode 0's alone named
     // `mass_system`, which the modes rename: rustc E0599).
     let mut conditions = vec![condition];

@@ -11,19 +11,35 @@ use crate::kernel::{Kernel, Motion};
 use proc_macro2::{Literal, TokenStream};
 use quote::quote;
 
-/// The `PARAM_JACOBIAN` const and `param_jacobian` (nothing for a model
-/// without the partials or with several modes: sensitivities are then not
+/// The `PARAM_JACOBIAN` const and `param_jacobian` of a model of one mode
+/// (nothing for a model without the partials: sensitivities are then not
 /// available, and the runtime says so).
 pub fn param_jacobian_code(
     kernel: &Kernel,
     names: &mut SymbolNames,
     from_x: Source,
 ) -> TokenStream {
-    let Some(partials) = &kernel.param_partials else {
-        return TokenStream::new();
-    };
-    if !kernel.modes.is_empty() || kernel.params.is_empty() {
-        return TokenStream::new();
+    match param_jacobian_method(kernel, names, from_x) {
+        Some(method) => quote! {
+            const PARAM_JACOBIAN: bool = true;
+            #method
+        },
+        None => TokenStream::new(),
+    }
+}
+
+/// `fn param_jacobian` of one mode's motion (`kernel` itself, its `modes`
+/// not read: a model of several modes prints each mode's, renamed, and
+/// dispatches on the mode as for `jacobian`, `emit/motion.rs`); `None`
+/// without the partials or without params.
+pub fn param_jacobian_method(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    from_x: Source,
+) -> Option<TokenStream> {
+    let partials = kernel.param_partials.as_ref()?;
+    if kernel.params.is_empty() {
+        return None;
     }
     let arena = &kernel.arena;
     let body = match &kernel.motion {
@@ -121,8 +137,5 @@ pub fn param_jacobian_code(
             }
         }
     };
-    quote! {
-        const PARAM_JACOBIAN: bool = true;
-        #body
-    }
+    Some(body)
 }

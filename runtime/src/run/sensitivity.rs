@@ -28,20 +28,13 @@
 use crate::choice::{IntegratorChoice, Method};
 use crate::failure::Failure;
 use crate::linalg::Matrix;
-use crate::model::{Domain, DynModel, Initial, Inputs, Regime};
+use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
 use crate::run::options::{Ending, Options};
 use crate::run::regime::{best_mode, initial_branches};
 use crate::run::run;
 
 /// Why `--sensitivity` is refused for this model, or `None`.
 pub fn unsupported(model: &dyn DynModel) -> Option<String> {
-    if !model.constraints().is_empty() {
-        return Some(format!(
-            "`--sensitivity`: the model `{}` chooses its constraints' dependents at run time \
-             (`for y' or x'`); sensitivities across a change of candidates are not computed",
-            model.name()
-        ));
-    }
     if !model.param_names().is_empty() && !model.has_param_jacobian() {
         return Some(format!(
             "`--sensitivity`: the model `{}` was built without `∂X/∂p` (a mass law that \
@@ -618,6 +611,15 @@ impl DynModel for Augmented {
     }
     fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]) {
         self.inner.switching_functions(t, &x[..self.n], g);
+    }
+    fn constraints(&self) -> &'static [Candidates] {
+        // The run chooses and changes the candidates on the motion's
+        // pivots, as for the model alone; `S` goes on unchanged (see the
+        // module's comment).
+        self.inner.constraints()
+    }
+    fn pivots(&self, t: f64, x: &[f64], out: &mut [f64]) {
+        self.inner.pivots(t, &x[..self.n], out);
     }
     fn stop(&self, branches: &[bool]) -> bool {
         self.inner.stop(branches)
