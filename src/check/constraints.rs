@@ -55,12 +55,18 @@ impl Checker<'_> {
                 held.push(coords);
                 continue;
             }
-            let automatic = if candidates.is_empty() {
+            // Named after `for`, or (written without `for`, an expression on
+            // the left) the highest derivatives the constraint holds.
+            let solved_for = if candidates.is_empty() {
                 self.automatic_candidates(lhs, rhs, &explicit_dependents)
             } else {
-                None
+                let Some(named) = self.candidates(candidates) else {
+                    self.constraints_incomplete = true;
+                    continue;
+                };
+                Some(named)
             };
-            let (coord, order, implicit) = if let Some((order, owned)) = automatic {
+            let (coord, order, implicit) = if let Some((order, owned)) = solved_for {
                 let implicit = Implicit {
                     lhs: lhs.clone(),
                     candidates: owned,
@@ -68,7 +74,7 @@ impl Checker<'_> {
                     raised: false,
                 };
                 (implicit.candidates[0], order, Some(implicit))
-            } else if candidates.is_empty() {
+            } else {
                 let Some((coord, order)) = self.constraint_lhs(lhs) else {
                     self.constraints_incomplete = true;
                     right_sides.push((rhs, span, None));
@@ -76,18 +82,6 @@ impl Checker<'_> {
                 };
                 right_sides.push((rhs, span, Some(order)));
                 (coord, order, None)
-            } else {
-                let Some((order, owned)) = self.candidates(candidates) else {
-                    self.constraints_incomplete = true;
-                    continue;
-                };
-                let implicit = Implicit {
-                    lhs: lhs.clone(),
-                    candidates: owned,
-                    holonomic: false,
-                    raised: false,
-                };
-                (implicit.candidates[0], order, Some(implicit))
             };
             if !self.constrained_once(coord, implicit.as_ref(), lhs.span, &constraints) {
                 continue;
