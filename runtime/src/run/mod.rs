@@ -94,10 +94,9 @@ pub fn solve(
     })
 }
 
-/// The field's tolerance over the members' on a non-affine ensemble.
-const FIELD_MARGIN: f64 = 0.01;
-/// The field's relative tolerance at the least (rounding).
-const MIN_FIELD_RTOL: f64 = 1e-14;
+/// An ensemble's field's or base's relative tolerance at the least
+/// (rounding).
+const MIN_RTOL: f64 = 1e-14;
 
 /// What an ensemble run did, beyond the reference's [`Outcome`].
 #[derive(Clone, Debug)]
@@ -114,16 +113,15 @@ pub struct EnsembleOutcome {
     pub largest_estimate: Option<f64>,
 }
 
-/// Integrates `members` (at least one; the first is the reference)
-/// through one field: `sample(t, states)` at every time of `times`. Exact
-/// for affine models. For the others each member is corrected in each
-/// window's frame to the tolerance ([`crate::method::field::members`]), and a
-/// member the field cannot follow within it is integrated on its own:
-/// never first order in the spread. The members are taken, not copied,
-/// and an affine motion's samples are written into one buffer as they
-/// come: with ten thousand members, copies and fresh allocations would
-/// cost more than the field. A non-affine motion's samples are kept until
-/// the end, when it is known which members need their own integration.
+/// Integrates `members` (at least one; the first is the reference):
+/// `sample(t, states)` at every time of `times`. An affine motion's
+/// members go through one field, exactly; the members are taken, not
+/// copied, and their samples are written into one buffer as they come:
+/// with ten thousand members, copies and fresh allocations would cost
+/// more than the field. A non-affine motion's members are deviations from
+/// the first on shared steps ([`crate::method::deviation`]), and a member
+/// that leaves them is integrated on its own: never first order in the
+/// spread.
 pub fn run_ensemble(
     model: &mut dyn DynModel,
     options: &Options,
@@ -147,42 +145,20 @@ pub fn run_ensemble(
     let budget = Budget::new(options.max_steps);
     budget.accepted_to(t0);
     let h_max = (t1 - t0).max(f64::MIN_POSITIVE);
-    // A non-affine motion's members are carried by the field's propagator
-    // Φ, whose error the field does not control (only the reference's
-    // state's): at the requested tolerance, members 0.1 away on a double
-    // pendulum (rtol 1e-8) came out 2.6e-7 from their motions where direct
-    // integration is 9.2e-8 off; run 100× tighter, 1.0e-7. At spread 0.5
-    // the field at the tolerance left them 12× further off than direct,
-    // at 1/100 of it 0.4×. The field is cheap next to the members.
-    let field_tol = if model.affine() {
-        options.tol
-    } else {
-        options.tol.scaled(FIELD_MARGIN)
-    };
     let field = Options {
         method: Method::Field,
         tol: Tolerance {
-            rtol: field_tol.rtol.max(MIN_FIELD_RTOL),
-            atol: field_tol.atol,
+            rtol: options.tol.rtol.max(MIN_RTOL),
+            atol: options.tol.atol,
         },
         ..options.clone()
     };
     assert!(!members.is_empty(), "an ensemble has a reference member");
     let count = members.len();
     let mut solver = make_solver(model, &field, t0, members.row(0), h_max)?;
-    // A non-affine motion's members are corrected, and some may need
-    // their own integration: its samples are kept until that is known,
-    // and its initial states for those integrations.
-    let buffered = !model.affine();
-    let initial = buffered.then(|| members.clone());
-    let mut samples: Vec<(f64, States)> = Vec::new();
     let mut next = 0;
     while next < times.len() && times[next] <= t0 {
-        if buffered {
-            samples.push((times[next], members.clone()));
-        } else {
-            sample(times[next], &members);
-        }
+        sample(times[next], &members);
         next += 1;
     }
     let mut states = States::default();
@@ -194,54 +170,26 @@ pub fn run_ensemble(
         budget.accepted_to(solver.time());
         while next < times.len() && times[next] <= solver.time() {
             solver.members_at(model, times[next], &mut states)?;
-            if buffered {
-                samples.push((times[next], states.clone()));
-            } else {
-                sample(times[next], &states);
-            }
+            sample(times[next], &states);
             next += 1;
         }
     }
-    let report = solver.report();
-    let estimates = solver.member_estimates();
-    drop(solver);
-    let outcome = Outcome {
-        report,
-        ending: Ending::End,
-        events: 0,
-        budget_used: budget.used(),
-        kept: None,
-    };
-    let (estimates, initial) = match (estimates, initial) {
-        (None, None) => {
-            return Ok(EnsembleOutcome {
-                outcome,
-                along_field: count,
-                on_their_own: 0,
-                largest_estimate: None,
-            })
-        }
-        (Some(estimates), Some(initial)) => (estimates, initial),
-        // A method that cannot say how far its members are from their
-        // motions on a non-affine model would answer to first order.
-        _ => return Err(Failure::new(t0, FailureKind::NotAffine)),
-    };
-    let (on_their_own, largest) = integrate_on_their_own(
-        model,
-        options,
-        (t0, t1),
-        (&initial, &[]),
-        &estimates,
-        &mut samples,
-    )?;
-    for (t, states) in &samples {
-        sample(*t, states);
+    // A method that estimates its members' errors is not exact on them:
+    // an affine field's members are (`Solver::member_estimates`).
+    if solver.member_estimates().is_some() {
+        return Err(Failure::new(t0, FailureKind::NotAffine));
     }
     Ok(EnsembleOutcome {
-        outcome,
-        along_field: count - on_their_own,
-        on_their_own,
-        largest_estimate: Some(largest),
+        outcome: Outcome {
+            report: solver.report(),
+            ending: Ending::End,
+            events: 0,
+            budget_used: budget.used(),
+            kept: None,
+        },
+        along_field: count,
+        on_their_own: 0,
+        largest_estimate: None,
     })
 }
 
@@ -269,7 +217,7 @@ fn deviations(
         method: Method::Direct,
         progress: false,
         tol: Tolerance {
-            rtol: base_tol.rtol.max(MIN_FIELD_RTOL),
+            rtol: base_tol.rtol.max(MIN_RTOL),
             atol: base_tol.atol,
         },
         ..options.clone()
