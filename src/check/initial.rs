@@ -171,6 +171,41 @@ impl Checker<'_> {
                     ));
                 }
             }
+            // A constraint's dependent given in its place: the user took
+            // the constraint the other way round (`s' = r*phi'` with `s'`
+            // given and `phi'` not).
+            let given_in_its_place = constraints.iter().find(|c| {
+                c.coord != coord
+                    && c.order >= 1
+                    && missing.contains(&format!(
+                        "`{}{}`",
+                        coordinate.name,
+                        "'".repeat(c.order as usize)
+                    ))
+                    && initial
+                        .iter()
+                        .any(|i| (i.coord, i.order) == (c.coord, c.order))
+            });
+            if let (Some(c), None) = (given_in_its_place, later_candidate) {
+                let primes = "'".repeat(c.order as usize);
+                let (this, dependent) = (
+                    format!("{}{primes}", coordinate.name),
+                    format!("{}{primes}", self.coords[c.coord].name),
+                );
+                diagnostic = diagnostic
+                    .with_secondary(
+                        c.span,
+                        format!("this constraint fixes `{dependent}` from the others"),
+                    )
+                    .with_note(format!(
+                        "`{dependent}` is given, but the constraint fixes it: a given \
+                         value of it is only checked against the constraint"
+                    ))
+                    .with_help(format!(
+                        "give `{this} = …` instead, or make the constraint fix `{this}` \
+                         by naming it: `constraint … for {this};`"
+                    ));
+            }
             if let Some((first, order)) = later_candidate {
                 let primes = "'".repeat(order as usize);
                 let (this, other) = (
