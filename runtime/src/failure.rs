@@ -310,14 +310,24 @@ impl fmt::Display for Failure {
                 candidate,
                 better,
                 ratio,
-            } => write!(
-                f,
-                "at t = {t:e}: the initial state hardly determines `{candidate}` through \
-                 the constraint `{constraint}` (its pivot is {ratio:.1e} of `{better}`'s), \
-                 and the initial values take `{candidate}`, its first candidate, as the \
-                 one it fixes. Start where `{candidate}` is determined, or name `{better}` \
-                 first in the model (`for {better} or …`) and give `{candidate}`"
-            ),
+            } => {
+                // A holonomic constraint's candidates are coordinates: the
+                // value to give instead is the velocity its position's
+                // Newton start does not fix.
+                let given = if candidate.ends_with('\'') {
+                    candidate.clone()
+                } else {
+                    format!("{candidate}'")
+                };
+                write!(
+                    f,
+                    "at t = {t:e}: the initial state hardly determines `{candidate}` through \
+                     the constraint `{constraint}` (its pivot is {ratio:.1e} of `{better}`'s), \
+                     and the initial values take `{candidate}`, its first candidate, as the \
+                     one it fixes. Start where `{candidate}` is determined, or name `{better}` \
+                     first in the model (`for {better} or {candidate}`) and give `{given}`"
+                )
+            }
             FailureKind::InitialPositionsOffConstraint {
                 constraint,
                 residual,

@@ -205,6 +205,19 @@ pub fn initial_values(
     for (&symbol, value) in state.iter().zip(&initial) {
         if let InitialValue::Constraint(fixed) = value {
             let required = arena.eval(*fixed, &|s| at(symbolic, t0, &laws_at_t0, &env_values, s));
+            // The first such value only: the ones after it are usually
+            // not finite through it (a helix's `z'` through `y'`).
+            if !required.is_finite() {
+                errors.push(undetermined(
+                    arena,
+                    model,
+                    symbol,
+                    required,
+                    t0,
+                    given.get(&symbol),
+                ));
+                break;
+            }
             if let Some(&(_, user)) = given.get(&symbol) {
                 let got = values[&symbol];
                 if !close(got, required) {
@@ -444,6 +457,80 @@ fn closure_newton(
         "no convergence in {NEWTON_STEPS} steps (residual {:.3e})",
         norm(&r)
     ))
+}
+
+/// A value a constraint fixes that is not finite at the start: the
+/// constraint cannot be solved for its dependent there (a pendulum in
+/// Cartesian coordinates released level with its pivot, `y' = -x x'/y` at
+/// y = 0), and the run would stop at once on `NaN`.
+fn undetermined(
+    arena: &Arena,
+    model: &Model,
+    symbol: Symbol,
+    required: f64,
+    t0: f64,
+    user: Option<&(ExprId, &crate::check::model::Initial)>,
+) -> Diagnostic {
+    let name = arena.symbol_name(symbol);
+    let Symbol::Jet { coord, .. } = symbol else {
+        unreachable!("a constraint fixes a coordinate's derivative")
+    };
+    let constraint = model.constraints.iter().find(|c| c.coord == coord as usize);
+    let mut diagnostic = Diagnostic::error(
+        codes::INCONSISTENT_INITIAL,
+        format!("the constraint does not determine `{name}` at the start"),
+    );
+    diagnostic = match user {
+        Some((_, user)) => diagnostic.with_primary(user.span, format!("`{name}` is given here")),
+        None => diagnostic.with_primary(model.time.span, "the motion starts here"),
+    };
+    if let Some(c) = constraint {
+        diagnostic = diagnostic.with_secondary(c.span, format!("this constraint fixes `{name}`"));
+    }
+    diagnostic = diagnostic.with_note(format!(
+        "at t = {t0} solving the constraint for `{name}` gives {required} (params at their \
+         defaults): its coefficient of `{name}` vanishes at this state, or it has no real \
+         solution there"
+    ));
+    let others: Vec<&str> = constraint
+        .and_then(|c| c.implicit.as_ref())
+        .map(|implicit| {
+            implicit
+                .candidates
+                .iter()
+                .filter(|&&q| q != coord as usize)
+                .map(|&q| model.coords[q].name.as_str())
+                .collect()
+        })
+        .unwrap_or_default();
+    let Some(c) = constraint else {
+        return diagnostic;
+    };
+    let holonomic = c.implicit.as_ref().is_some_and(|i| i.holonomic);
+    let primes = |order: u32| "'".repeat(order as usize);
+    let (this, level) = (&model.coords[coord as usize].name, c.order);
+    // A holonomic constraint's candidates are coordinates; the user gives
+    // derivatives of the order the constraint fixes.
+    let candidate = |q: &str| {
+        if holonomic {
+            q.to_string()
+        } else {
+            format!("{q}{}", primes(level))
+        }
+    };
+    match others.first() {
+        Some(other) => diagnostic.with_help(format!(
+            "start where it does, or let the constraint fix `{}` here: write it `… for {} or \
+             {}` and give `{this}{}`",
+            format!("{other}{}", primes(level)),
+            candidate(other),
+            candidate(this),
+            primes(level)
+        )),
+        None => diagnostic.with_help(format!(
+            "start where the constraint can be solved for `{name}`"
+        )),
+    }
 }
 
 fn close(a: f64, b: f64) -> bool {

@@ -629,6 +629,24 @@ fn output_conditions_are_no_events() {
     }
 }
 
+/// `--init` values that start a Cartesian pendulum level with its pivot,
+/// where its holonomic constraint's first candidate `y` gives y' = 0/0:
+/// refused with exit 2 naming the candidate, the better one and the
+/// velocity to give, not "the initial value of `y'` is not finite".
+#[test]
+fn a_cartesian_pendulum_started_level_by_init_names_the_candidate_to_swap() {
+    let binary = build_file(&crate::root().join("examples/cartesian_pendulum.lag"));
+    let refused = run(&binary, &["--init", "x=1", "--init", "y=0"]);
+    assert_eq!(refused.code, 2, "{}", refused.stderr);
+    assert!(
+        refused.stderr.contains("hardly determines `y`")
+            && refused.stderr.contains("(`for x or y`) and give `y'`")
+            && !refused.stderr.contains("not finite"),
+        "{}",
+        refused.stderr
+    );
+}
+
 /// `--init` values where a constraint hardly determines its first
 /// candidate: refused with exit 2, naming the candidate and the better one
 /// (a knife edge at heading π/2 with x' given computed y' = 1.6e16 and

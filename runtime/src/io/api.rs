@@ -214,6 +214,15 @@ fn initial(model: &dyn DynModel, given: &[Option<f64>]) -> Result<(f64, f64, Vec
         .map(|(g, kind)| if *kind == Initial::Given { *g } else { None })
         .collect();
     let x0 = model.initial_state(&stated)?;
+    if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
+        crate::run::regime::check_first_candidates(model, t0, &x0)?;
+        return Err(Failure::new(
+            t0,
+            FailureKind::NonFiniteInitialValue {
+                component: model.state_names()[i].to_string(),
+            },
+        ));
+    }
     for (i, (g, kind)) in given.iter().zip(model.initial_kinds()).enumerate() {
         if let (Some(stated), false) = (g, *kind == Initial::Given) {
             if (stated - x0[i]).abs() > 1e-9 * x0[i].abs().max(1.0) {

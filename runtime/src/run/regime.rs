@@ -80,6 +80,15 @@ const INITIAL_PIVOT_RATIO: f64 = 1e-8;
 /// pivot).
 pub fn check_initial_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
     crate::run::keep::check_given_fixed(model, t0, x0)?;
+    check_first_candidates(model, t0, x0)
+}
+
+/// The pivot part of [`check_initial_candidates`]: also the cause to name
+/// first when an initial value the constraints fix is not finite (a
+/// Cartesian pendulum started level with its pivot by `--init`, where
+/// `y' = -x x'/y` is 0/0), since the pivots of a holonomic constraint
+/// need only the positions.
+pub fn check_first_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
     let constraints = model.constraints();
     if constraints.is_empty() {
         return Ok(());

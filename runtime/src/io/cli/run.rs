@@ -62,6 +62,7 @@ pub fn prepare_driven(
     let x0 = model.initial_state(&given)?;
     for (i, v) in x0.iter().enumerate() {
         if !v.is_finite() {
+            crate::run::regime::check_first_candidates(&*model, t0, &x0)?;
             return Err(Failure::new(
                 t0,
                 FailureKind::NonFiniteInitialValue {
