@@ -519,14 +519,15 @@ fn undetermined(
         }
     };
     match others.first() {
-        Some(other) => diagnostic.with_help(format!(
-            "start where it does, or let the constraint fix `{}` here: write it `… for {} or \
-             {}` and give `{this}{}`",
-            format!("{other}{}", primes(level)),
-            candidate(other),
-            candidate(this),
-            primes(level)
-        )),
+        Some(other) => {
+            let primes = primes(level);
+            diagnostic.with_help(format!(
+                "start where it does, or let the constraint fix `{other}{primes}` here: write \
+                 it `… for {} or {}` and give `{this}{primes}`",
+                candidate(other),
+                candidate(this),
+            ))
+        }
         None => diagnostic.with_help(format!(
             "start where the constraint can be solved for `{name}`"
         )),
