@@ -333,6 +333,7 @@ pub mod codes {
     // Warnings (a model that still compiles) get their own series.
     /// A number literal too small for f64: it is read as 0.
     pub const LITERAL_UNDERFLOWS: &str = "W0001";
+    pub const ATAN2_IN_POSITION_CONSTRAINT: &str = "W0002";
     /// An internal error of the code generator (a bug, never the model's).
     pub const CODE_GENERATION: &str = "E0900";
 }

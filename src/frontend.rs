@@ -71,11 +71,23 @@ pub fn check_through_kernel(source: &str) -> Result<Model, Vec<Diagnostic>> {
     Ok(model)
 }
 
-/// Warnings about the text that do not stop a model: a number literal
-/// such as `1e-400`, non-zero as written but below the smallest positive
-/// f64, which is read as 0 (W0001). A lexical scan with the grammar's
-/// `number` rule (comments and names skipped), independent of the parse,
-/// so that every command reports the same warnings.
+/// Warnings about the text that do not stop a model, reported by every
+/// command alike: literals that underflow ([`literal_warnings`], W0001),
+/// and `atan2` in a position constraint (W0002,
+/// [`check::atan2_cut`]), on a model that parses.
+pub fn source_warnings(source: &str) -> Vec<Diagnostic> {
+    let mut warnings = literal_warnings(source);
+    if let Ok(ast) = syntax::parse(source) {
+        warnings.extend(check::atan2_cut::atan2_cut_warnings(&ast));
+    }
+    crate::diagnostic::sort(&mut warnings);
+    warnings
+}
+
+/// A number literal such as `1e-400`, non-zero as written but below the
+/// smallest positive f64, which is read as 0 (W0001). A lexical scan with
+/// the grammar's `number` rule (comments and names skipped), independent
+/// of the parse.
 pub fn literal_warnings(source: &str) -> Vec<Diagnostic> {
     let bytes = source.as_bytes();
     let digits = |mut i: usize| {

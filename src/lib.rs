@@ -29,6 +29,6 @@ pub mod syntax;
 
 pub use frontend::{
     check_and_derive, check_and_derive_bytes, check_through_kernel, decode_then, frontend,
-    frontend_bytes, literal_warnings, on_big_stack,
+    frontend_bytes, literal_warnings, on_big_stack, source_warnings,
 };
 pub use pipeline::{compile, compile_fmu};

@@ -5,6 +5,7 @@
 //! adds its diagnostics, and they come back sorted by position. The checked
 //! [`model::Model`] is returned only when there are none.
 
+pub mod atan2_cut;
 mod constraints;
 mod declarations;
 mod eval;

@@ -258,6 +258,17 @@ fn bad_tolerances_are_refused_in_lagcs_words() {
 /// Issue 15, item 10: a literal that underflows to 0 is a warning (the
 /// model still checks, exit 0) located at the literal, on every command;
 /// beside an error it is reported in source order.
+/// `atan2` in a position constraint (a helix written in Cartesian
+/// coordinates): warned at check time, once, and the check succeeds.
+#[test]
+fn atan2_in_a_position_constraint_is_warned_about() {
+    let out = lagc(&["check", "tests/data/warnings/atan2_helix.lag"]);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    assert_eq!(stderr.matches("warning[W0002]").count(), 1, "{stderr}");
+    insta::assert_snapshot!(stderr);
+}
+
 #[test]
 fn a_literal_that_underflows_is_warned_about() {
     let file = "tests/data/warnings/literal_underflows.lag";

@@ -31,7 +31,7 @@ fn every_accepted_model_checks_clean_with_the_stated_warnings_and_notes() {
                     crate::check_bytes(&bytes, &name).unwrap_err()
                 ),
             };
-            let mut diagnostics = lagc::literal_warnings(&source);
+            let mut diagnostics = lagc::source_warnings(&source);
             let options = EmitOptions {
                 model_name: "notes".to_string(),
                 source_hash: "test".to_string(),

@@ -490,13 +490,13 @@ fn the_header_format_parses_and_refuses() {
 
 /// What `lagc check` reports on a file's bytes, as the CLI does: the
 /// decoded text, and the model or every diagnostic (the text's warnings
-/// included, sorted); on success the warnings are [`lagc::literal_warnings`].
+/// included, sorted); on success the warnings are [`lagc::source_warnings`].
 pub fn check_diagnostics(
     bytes: &[u8],
 ) -> (String, Result<lagc::check::model::Model, Vec<Diagnostic>>) {
     lagc::on_big_stack(|| {
         let (source, checked) = lagc::check_and_derive_bytes(bytes);
-        let warnings = lagc::literal_warnings(&source);
+        let warnings = lagc::source_warnings(&source);
         let result = match checked {
             Ok((model, _)) => Ok(model),
             Err(mut diagnostics) => {

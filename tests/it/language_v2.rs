@@ -930,3 +930,61 @@ fn a_four_bar_closed_by_atan2_agrees_with_its_acos_form() {
         }
     }
 }
+
+/// A helix written with atan2 (W0002, tests/data/warnings/atan2_helix.lag):
+/// right up to the cut against the closed form s = a t²/2, a = −g c/(R²+c²),
+/// and stopped with exit 3 where the bead reaches it (s = −π), not run on
+/// past it on the other curve.
+#[test]
+fn a_helix_written_with_atan2_is_right_to_its_cut_and_stops_there() {
+    let binary = build_file(&crate::root().join("tests/data/warnings/atan2_helix.lag"));
+    let (r, c, g) = (1.0_f64, 0.2_f64, 9.81_f64);
+    let a = -g * c / (r * r + c * c);
+    let cut = (2.0 * std::f64::consts::PI / -a).sqrt();
+    for method in METHODS {
+        let ran = run(
+            &binary,
+            &[
+                "--method",
+                method,
+                "--rtol",
+                "1e-10",
+                "--atol",
+                "1e-12",
+                "--times",
+                "1,1.5,2.5",
+            ],
+        );
+        assert_eq!(ran.code, 3, "{method}: {}", ran.stderr);
+        assert!(
+            ran.stderr.contains("left the constraint"),
+            "{method}: {}",
+            ran.stderr
+        );
+        let stopped: f64 = ran
+            .stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("error: at t = "))
+            .and_then(|l| l.split(':').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("{method}: {}", ran.stderr));
+        assert!(
+            (stopped - cut).abs() <= 1e-3,
+            "{method}: stopped at {stopped}, cut at {cut}"
+        );
+        // The samples before the cut, on the helix.
+        assert_eq!(ran.rows.len(), 2, "{method}: {:?}", ran.rows);
+        for row in &ran.rows {
+            let s = a * row[0] * row[0] / 2.0;
+            let expected = [r * s.cos(), r * s.sin(), c * s];
+            for (k, e) in expected.iter().enumerate() {
+                assert!(
+                    (row[1 + k] - e).abs() <= 1e-8,
+                    "{method} at t = {}: {} against {e}",
+                    row[0],
+                    row[1 + k]
+                );
+            }
+        }
+    }
+}

@@ -67,7 +67,7 @@ fn compile_with<T, R: Send>(
     let color = std::io::stderr().is_terminal();
     lagc::on_big_stack(|| {
         let (source, result) = lagc::decode_then(&bytes, stage);
-        let warnings = lagc::literal_warnings(&source);
+        let warnings = lagc::source_warnings(&source);
         match result {
             Ok((value, notes)) => {
                 eprint!("{}", render(&warnings, &file_name, &source, color));
