@@ -797,7 +797,12 @@ impl Checker<'_> {
                     "constraints that share candidates (or hold each other's) are solved \
                      together, symbolically",
                 )
-                .with_help("name fewer candidates after `for`, or choose coordinates that decouple the constraints");
+                .with_help(
+                    "choose coordinates that decouple the constraints (a chain or a linkage: \
+                     each link's angle as a coordinate, its points written from the angles, \
+                     needs no constraint for the links' lengths), or name fewer candidates \
+                     after `for`",
+                );
                 self.report(diagnostic);
                 continue;
             }
