@@ -254,7 +254,11 @@ impl Keeper {
         if model.keeps_positions() {
             model.project_closure(t, &mut self.projected)?;
             let mut worst = 0;
-            for (i, (&before, &after)) in x.iter().zip(&self.projected).enumerate() {
+            // The motion's components: what a system carries beside it
+            // (the sensitivities) is moved by the projection's derivative,
+            // whose size is no distance from the constraints.
+            let motion = x.iter().zip(&self.projected).take(model.motion_dim());
+            for (i, (&before, &after)) in motion.enumerate() {
                 let delta = (after - before).abs();
                 let scale = self.tol.atol + self.tol.rtol * before.abs().max(after.abs());
                 if delta / scale > closure.0 {

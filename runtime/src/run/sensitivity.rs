@@ -42,22 +42,6 @@ use crate::run::run;
 
 /// Why `--sensitivity` is refused for this model, or `None`.
 pub fn unsupported(model: &dyn DynModel) -> Option<String> {
-    // A holonomic constraint's candidates are positions (no prime): its
-    // dependents' initial positions come from Newton on the closure, whose
-    // derivative the sensitivities' start has not been checked against
-    // runs (velocity constraints' candidates are checked: tests/it/
-    // sensitivity.rs).
-    if model
-        .constraints()
-        .iter()
-        .any(|c| c.names.iter().any(|n| !n.contains('\'')))
-    {
-        return Some(format!(
-            "`--sensitivity`: the model `{}` keeps holonomic constraints whose dependents are \
-             chosen at run time; their sensitivities are not computed yet",
-            model.name()
-        ));
-    }
     if !model.param_names().is_empty() && !model.has_param_jacobian() {
         return Some(format!(
             "`--sensitivity`: the model `{}` was built without `∂X/∂p` (a mass law that \
@@ -283,6 +267,10 @@ pub struct Augmented {
     /// `dp_k/dp_j`, row-major `np × np`.
     chain: Vec<f64>,
     names: &'static [&'static str],
+    /// No component of the augmented state is fixed by a velocity
+    /// constraint in any mode (one empty slice per mode of the model): the
+    /// holonomic constraints are kept by [`Augmented::project`] alone.
+    unfixed: &'static [&'static [usize]],
 }
 
 impl Augmented {
@@ -297,6 +285,8 @@ impl Augmented {
         for h in headers(&*inner) {
             names.push(Box::leak(h.into_boxed_str()));
         }
+        let modes = inner.fixed_components().len().max(1);
+        let unfixed: Vec<&'static [usize]> = vec![&[]; modes];
         Augmented {
             inner,
             n,
@@ -304,6 +294,7 @@ impl Augmented {
             given,
             chain,
             names: Box::leak(names.into_boxed_slice()),
+            unfixed: Box::leak(unfixed.into_boxed_slice()),
         }
     }
 
@@ -320,6 +311,7 @@ impl Augmented {
             given: self.given,
             chain: self.chain.clone(),
             names: self.names,
+            unfixed: self.unfixed,
         }
     }
 
@@ -494,6 +486,58 @@ impl Augmented {
         Ok(())
     }
 
+    /// The run's projection onto the holonomic constraints
+    /// (`project_closure`, positions and their derivatives along the
+    /// normals) and its derivative: `x ← P(x)`, and every column of `S`
+    /// by the chain rule through it, `S ← P_x S + P_p dp/dp`. `P_x S` is
+    /// a directional derivative of `P` along the column and `P_p` one
+    /// over the model with the param moved, each a refined central
+    /// difference (`P` is Gauss–Newton to rounding, smooth near the
+    /// constraints). The columns that start tangent stay tangent to
+    /// rounding while `P` only removes the integration's drift; the
+    /// projection is what the motion's own run does, so the columns are
+    /// the derivatives of that run.
+    fn project(&self, t: f64, z: &mut [f64]) -> Result<(), Failure> {
+        let n = self.n;
+        let (x, s) = z.split_at_mut(n);
+        let before = x.to_vec();
+        let size = before.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let mut moved = vec![0.0; n];
+        for c in 0..self.columns {
+            let column = &mut s[c * n..(c + 1) * n];
+            let length = column.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let mut projected = vec![0.0; n];
+            if length > 0.0 && length.is_finite() {
+                // Along `x + σ v`, `σ` scaled so that `σ v` moves `x` by
+                // about 1e-3 of its size (as `derivative` moves a value).
+                let v = column.to_vec();
+                let unit = size / length;
+                projected = derivative(0.0, unit, &mut |sigma| {
+                    for ((m, b), v) in moved.iter_mut().zip(&before).zip(&v) {
+                        *m = b + sigma * v;
+                    }
+                    self.inner.project_closure(t, &mut moved)?;
+                    Ok(moved.clone())
+                })?;
+            }
+            column.copy_from_slice(&projected);
+        }
+        if self.columns > self.given {
+            let slopes = self.param_slopes(&|model| {
+                let mut y = before.clone();
+                model.project_closure(t, &mut y)?;
+                Ok(y)
+            })?;
+            for (c, slope) in slopes.iter().enumerate() {
+                let column = &mut s[(self.given + c) * n..(self.given + c + 1) * n];
+                for (v, d) in column.iter_mut().zip(slope) {
+                    *v += d;
+                }
+            }
+        }
+        self.inner.project_closure(t, x)
+    }
+
     /// `J S + ∂X/∂p` at `(t, x)` for the sensitivities `s`, into `out`.
     fn variational(&self, t: f64, x: &[f64], s: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         let n = self.n;
@@ -531,6 +575,9 @@ impl DynModel for Augmented {
     }
     fn state_names(&self) -> &'static [&'static str] {
         self.names
+    }
+    fn motion_dim(&self) -> usize {
+        self.n
     }
     fn coordinates(&self) -> usize {
         // No `x_i' = x_{i+n}` structure is promised for the whole system.
@@ -634,6 +681,19 @@ impl DynModel for Augmented {
     }
     fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]) {
         self.inner.switching_functions(t, &x[..self.n], g);
+    }
+    fn keeps_positions(&self) -> bool {
+        self.inner.keeps_positions()
+    }
+    fn fixed_components(&self) -> &'static [&'static [usize]] {
+        self.unfixed
+    }
+    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        if self.inner.keeps_positions() {
+            self.project(t, x)
+        } else {
+            Ok(())
+        }
     }
     fn constraints(&self) -> &'static [Candidates] {
         // The run chooses and changes the candidates on the motion's
