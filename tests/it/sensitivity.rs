@@ -496,3 +496,53 @@ fn a_four_bar_closure_agrees_with_differences() {
     );
     assert!(worst < 1e-6, "{worst:e}");
 }
+
+/// A rheonomic holonomic constraint (the tube turns at `w`): the bead's
+/// `x0` cannot move alone in a run (the model states `y' = r0 w`, the
+/// tube's speed where the bead starts at `x0 = r0`), so its column, the
+/// tangent with `x'0` held and `y0, y'0` following the constraint, is
+/// checked against the closed form of the motion from `(x0, x'0)` at
+/// rest across the tube: `r = x0 cosh(w t) + x'0 sinh(w t)/w` along it,
+/// `x = r cos(w t)`, `y = r sin(w t)`. The params against differences of
+/// runs (`r0` moves `x0` and `y'0` together).
+#[test]
+fn a_bead_in_a_spinning_tube_agrees_with_its_closed_form_and_differences() {
+    let binary = build("bead_in_spinning_tube");
+    let times = "0,0.5,1.5,3";
+    let worst = disagreement_of(
+        &binary,
+        "bead_in_spinning_tube",
+        times,
+        0,
+        &["x0", "x'0"],
+        &[
+            ("--init", "y", 0.0, "y0"),
+            ("--param", "w", 2.0, "w"),
+            ("--param", "r0", 0.5, "r0"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+    let mut args: Vec<&str> = TIGHT.to_vec();
+    args.extend(["--times", times, "--sensitivity"]);
+    let out = run(&binary, &args);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let w = 2.0_f64;
+    let mut worst = 0.0_f64;
+    for row in &out.rows {
+        let t = row[0];
+        let (s, c) = (w * t).sin_cos();
+        let (ch, sh) = ((w * t).cosh(), (w * t).sinh());
+        // ∂r/∂x0 = cosh, ∂r/∂x'0 = sinh/w; r' likewise; x = r cos, y = r sin,
+        // x' = r' cos − w r sin, y' = r' sin + w r cos.
+        for (column, r, rd) in [("x0", ch, w * sh), ("x'0", sh / w, ch)] {
+            let exact = [r * c, r * s, rd * c - w * r * s, rd * s + w * r * c];
+            for (x, e) in ["x", "y", "x'", "y'"].iter().zip(exact) {
+                let title = format!("d({x})/d({column})");
+                let i = out.header.iter().position(|h| *h == title).unwrap();
+                worst = worst.max((row[i] - e).abs() / ch.max(1.0));
+            }
+        }
+    }
+    eprintln!("bead_in_spinning_tube: x0, x'0 against the closed form: {worst:.2e}");
+    assert!(worst < 1e-6, "{worst:e}");
+}

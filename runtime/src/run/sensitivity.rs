@@ -148,18 +148,41 @@ pub fn initial(
         .map(|i| given.contains(&i).then_some(x0[i]))
         .collect();
     let all_given = given.len() == n;
-    for &j in &given {
-        if all_given {
-            let mut unit = vec![0.0; n];
-            unit[j] = 1.0;
-            s0.extend(unit);
-            continue;
-        }
-        let mut moved = held.clone();
-        let column = derivative(x0[j], 0.0, &mut |v| {
-            moved[j] = Some(v);
-            model.initial_state(&moved)
-        })?;
+    // Each column through the model's own completion of the start (Newton
+    // on the closure, the constraints' derivatives): the implicit function
+    // theorem, differentiated as the runs see it. A completion can refuse
+    // a moved value ([`tangent`]).
+    let completed: Vec<Result<Vec<f64>, Failure>> = given
+        .iter()
+        .map(|&j| {
+            if all_given {
+                let mut unit = vec![0.0; n];
+                unit[j] = 1.0;
+                return Ok(unit);
+            }
+            let mut moved = held.clone();
+            derivative(x0[j], 0.0, &mut |v| {
+                moved[j] = Some(v);
+                model.initial_state(&moved)
+            })
+        })
+        .collect();
+    // The components the completion holds (a value it overwrites, a
+    // position Newton puts on the closure, has a zero column).
+    let free: Vec<usize> = given
+        .iter()
+        .zip(&completed)
+        .filter(|(&j, c)| c.as_ref().map_or(true, |c| (c[j] - 1.0).abs() < 1e-6))
+        .map(|(&j, _)| j)
+        .collect();
+    for (&j, column) in given.iter().zip(completed) {
+        let column = match column {
+            Ok(column) => column,
+            Err(failure) if refused_move(&failure) && model.keeps_positions() => {
+                tangent(model, t0, x0, &free, j)?
+            }
+            Err(failure) => return Err(failure),
+        };
         s0.extend(column);
     }
     // A param moves the params computed from it, the initial values that
@@ -195,6 +218,69 @@ pub fn initial(
         s0.extend(column[np + 1..].iter().zip(&f0).map(|(dx, f)| dx - f * dt0));
     }
     Ok((chain, s0))
+}
+
+/// A completion that refuses a moved value: a value the model states
+/// for a component the constraints fix no longer agrees (the bead in a
+/// spinning tube states `y' = r0 w`, the tube's speed at `x0 = r0`).
+fn refused_move(failure: &Failure) -> bool {
+    matches!(
+        failure.kind,
+        crate::failure::FailureKind::InconsistentInitialValue { .. }
+    )
+}
+
+/// The tangent to the holonomic constraints at the start `x0` whose free
+/// components (`free`, those the start's completion holds) are the unit
+/// vector `e_j`: the column of a given value that no run can move alone
+/// (its move contradicts a value the model states). The derivative `B`
+/// of the run's projection (`project_closure`) at a point on the
+/// constraints is idempotent with the tangent space as its range, so the
+/// tangent is `B c` over the free columns with `(B c)_free = e_j`, the
+/// implicit function theorem with the dependents solved by the
+/// projection instead of the completion.
+fn tangent(
+    model: &dyn DynModel,
+    t0: f64,
+    x0: &[f64],
+    free: &[usize],
+    j: usize,
+) -> Result<Vec<f64>, Failure> {
+    let n = x0.len();
+    let k = free.len();
+    let mut columns = Vec::with_capacity(k);
+    let mut moved = x0.to_vec();
+    for &f in free {
+        columns.push(derivative(x0[f], 1.0, &mut |v| {
+            moved.copy_from_slice(x0);
+            moved[f] = v;
+            model.project_closure(t0, &mut moved)?;
+            Ok(moved.clone())
+        })?);
+    }
+    let mut block = Matrix::zeros(k, k);
+    for (b, column) in columns.iter().enumerate() {
+        for (a, &f) in free.iter().enumerate() {
+            block[(a, b)] = column[f];
+        }
+    }
+    let mut c: Vec<f64> = free.iter().map(|&f| f64::from(u8::from(f == j))).collect();
+    let lu = crate::linalg::Lu::new(&block);
+    if lu.is_singular() || !lu.solve_in_place(&mut c) {
+        return Err(Failure::new(
+            t0,
+            crate::failure::FailureKind::Unsupported {
+                message: format!(
+                    "`--sensitivity`: the start's given values do not determine a tangent \
+                     to the constraints along `{}`",
+                    model.state_names()[j]
+                ),
+            },
+        ));
+    }
+    Ok((0..n)
+        .map(|i| columns.iter().zip(&c).map(|(col, c)| col[i] * c).sum())
+        .collect())
 }
 
 /// Values computed from a model (a switching function, a reset).
