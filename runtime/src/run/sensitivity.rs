@@ -25,12 +25,22 @@
 //! goes on unchanged across it (checked against differences of runs on
 //! knife_edge_turning and chaplygin_sleigh).
 //!
-//! What is not covered is refused ([`unsupported`]): holonomic constraints
-//! with run-time candidates, inputs following a schedule, and models
-//! without `param_jacobian`. The constraints a run keeps by projection are not
-//! kept on the augmented system: its motion is the reduced system's own
-//! (on which they are invariant), and the command line prints the state
-//! from the ordinary run beside it.
+//! Holonomic constraints (positions kept on `f(t, q, p) = 0` by the
+//! run's projection, `project_closure`): the start's columns come from
+//! the model's completion of the start (Newton on the closure), moved
+//! value by value, or, where a move contradicts a value the model states,
+//! from the tangent through the projection's derivative ([`tangent`]);
+//! the augmented run projects as the run does, `x ← P(x)` and
+//! `S ← P_x S + P_p dp/dp` (`Augmented::project`). Without that, the
+//! columns' part across the constraints grows as the motion's drift does
+//! (the four-bar's augmented run failed at t = 47 with nothing projected,
+//! at t = 76 with `x` alone projected; docs/SENSITIVITY.md).
+//!
+//! What is not covered is refused ([`unsupported`]): inputs following a
+//! schedule, and models without `param_jacobian`. Velocity constraints
+//! the run keeps by projection are not kept on the augmented system: its
+//! motion is the reduced system's own (on which they are invariant), and
+//! the command line prints the state from the ordinary run beside it.
 
 use crate::choice::{IntegratorChoice, Method};
 use crate::failure::Failure;
@@ -147,7 +157,9 @@ pub fn initial(
     let held: Vec<Option<f64>> = (0..n)
         .map(|i| given.contains(&i).then_some(x0[i]))
         .collect();
-    let all_given = given.len() == n;
+    // (Newton on a closure may overwrite a given position: never unit
+    // columns where positions are kept.)
+    let all_given = given.len() == n && !model.keeps_positions();
     // Each column through the model's own completion of the start (Newton
     // on the closure, the constraints' derivatives): the implicit function
     // theorem, differentiated as the runs see it. A completion can refuse
