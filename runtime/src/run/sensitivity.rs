@@ -787,6 +787,10 @@ impl DynModel for Augmented {
         self.unfixed
     }
     fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        if x.len() == self.n {
+            // The motion alone (the keeper's share of a step's error).
+            return self.inner.project_closure(t, x);
+        }
         if self.inner.keeps_positions() {
             self.project(t, x)
         } else {
