@@ -641,3 +641,27 @@ fn a_particle_on_a_circle_changing_its_dependent_agrees_with_differences() {
     );
     assert!(worst < 1e-6, "{worst:e}");
 }
+
+/// A holonomic constraint beside a second-order one (`z'' = x''`), no
+/// params: the holonomic one kept by the projection and its derivative,
+/// the other invariant under the reduced system's flow.
+#[test]
+fn a_holonomic_constraint_beside_a_second_order_one_agrees_with_differences() {
+    let path = crate::root().join("tests/data/v2/holonomic_second_order.lag");
+    let binary = crate::generated::build_file(&path);
+    let worst = disagreement_of(
+        &binary,
+        "holonomic_second_order",
+        "1,3,5",
+        0,
+        &[],
+        &[
+            ("--init", "x", 0.6, "x0"),
+            ("--init", "y", -0.8, "y0"),
+            ("--init", "z", 0.0, "z0"),
+            ("--init", "x'", 0.0, "x'0"),
+            ("--init", "z'", 0.0, "z'0"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+}
