@@ -29,7 +29,7 @@
 //! run's projection, `project_closure`): the start's columns come from
 //! the model's completion of the start (Newton on the closure), moved
 //! value by value, or, where a move contradicts a value the model states,
-//! from the tangent through the projection's derivative ([`tangent`]);
+//! from the tangent through the projection's derivative (`tangent`);
 //! the augmented run projects as the run does, `x ← P(x)` and
 //! `S ← P_x S + P_p dp/dp` (`Augmented::project`). Without that, the
 //! columns' part across the constraints grows as the motion's drift does
@@ -367,7 +367,7 @@ pub struct Augmented {
     names: &'static [&'static str],
     /// No component of the augmented state is fixed by a velocity
     /// constraint in any mode (one empty slice per mode of the model): the
-    /// holonomic constraints are kept by [`Augmented::project`] alone.
+    /// holonomic constraints are kept by `Augmented::project` alone.
     unfixed: &'static [&'static [usize]],
 }
 
