@@ -379,6 +379,13 @@ pub trait DynModel {
     fn dim(&self) -> usize {
         self.state_names().len()
     }
+    /// The components that are the motion's own, on which the
+    /// constraints are kept and their distance judged: all `N` of a
+    /// model; a system that carries more beside the motion (the
+    /// sensitivities, `crate::run::sensitivity`) says how many come first.
+    fn motion_dim(&self) -> usize {
+        self.dim()
+    }
     /// [`Model::COORDINATES`].
     fn coordinates(&self) -> usize;
     /// [`Model::INITIAL`].

@@ -157,6 +157,44 @@ fn disagreement_of(
     worst
 }
 
+/// With `--method field` the state columns come from the field method and
+/// the sensitivities from the same augmented direct run: the largest
+/// difference between the field's and the direct run's sensitivity
+/// columns (relative to the largest value), the state columns checked to
+/// agree to 1e-8 (both runs at rtol 1e-12).
+fn field_disagreement(binary: &Path, model: &str, times: &str) -> f64 {
+    let at = |method: &str| {
+        let mut args: Vec<&str> = TIGHT.to_vec();
+        args[1] = method;
+        args.extend(["--times", times, "--sensitivity"]);
+        let out = run(binary, &args);
+        assert_eq!(out.code, 0, "{model} {method}: {}", out.stderr);
+        out
+    };
+    let (direct, field) = (at("direct"), at("field"));
+    assert_eq!(direct.header, field.header, "{model}");
+    let first = direct
+        .header
+        .iter()
+        .position(|h| h.starts_with("d("))
+        .unwrap();
+    let (mut scale, mut difference) = (0.0_f64, 0.0_f64);
+    for (d, f) in direct.rows.iter().zip(&field.rows) {
+        for (a, b) in d[1..first].iter().zip(&f[1..first]) {
+            assert!(
+                (a - b).abs() < 1e-8 * a.abs().max(1.0),
+                "{model}: {d:?} {f:?}"
+            );
+        }
+        for (a, b) in d[first..].iter().zip(&f[first..]) {
+            scale = scale.max(a.abs());
+            difference = difference.max((a - b).abs());
+        }
+    }
+    assert_eq!(direct.rows.len(), field.rows.len(), "{model}");
+    difference / scale.max(1e-300)
+}
+
 #[test]
 fn a_variable_mass_agrees_with_differences_of_runs() {
     // The raindrop: the param t0 moves the start, so x(t) moves by
@@ -443,4 +481,187 @@ fn an_undriven_input_holds_its_default_and_a_driven_run_is_refused() {
         out.stderr
     );
     assert!(out.rows.is_empty(), "no CSV");
+}
+
+/// Holonomic constraints (positions completed by Newton on the closure,
+/// velocities by the constraint's derivative, candidates chosen at run
+/// time): the Cartesian pendulum. `y0` only picks the root of the closure
+/// (its column is zero); `l` moves the start through Newton. (Its bob
+/// stays below 45°, so `y` is the dependent throughout; the particle on a
+/// circle below changes it.) Refused until 2026-11-26.
+#[test]
+fn a_cartesian_pendulum_kept_on_its_circle_agrees_with_differences() {
+    let binary = build("cartesian_pendulum");
+    assert!(field_disagreement(&binary, "cartesian_pendulum", "0.5,3") < 1e-9);
+    let worst = disagreement_of(
+        &binary,
+        "cartesian_pendulum",
+        "0.5,1.5,3",
+        2,
+        &[],
+        &[
+            ("--init", "x", 0.6, "x0"),
+            ("--init", "y", -0.8, "y0"),
+            ("--init", "x'", 0.0, "x'0"),
+            ("--param", "g", 9.81, "g"),
+            ("--param", "l", 1.0, "l"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+}
+
+/// Two coupled holonomic constraints (a closed loop): the crank turns, so
+/// the pair of dependents changes; `b0` and `c0` only pick the loop's
+/// branch (their columns are zero).
+#[test]
+fn a_four_bar_closure_agrees_with_differences() {
+    let binary = build("four_bar_closure");
+    assert!(field_disagreement(&binary, "four_bar_closure", "0.5,3") < 1e-9);
+    let worst = disagreement_of(
+        &binary,
+        "four_bar_closure",
+        "0.5,1.5,3",
+        1,
+        &[],
+        &[
+            ("--init", "a", 1.0, "a0"),
+            ("--init", "b", 0.4, "b0"),
+            ("--init", "c", 1.4, "c0"),
+            ("--init", "a'", 3.0, "a'0"),
+            ("--param", "l1", 1.0, "l1"),
+            ("--param", "l2", 3.0, "l2"),
+            ("--param", "l3", 2.5, "l3"),
+            ("--param", "d", 3.0, "d"),
+            ("--param", "m1", 1.0, "m1"),
+            ("--param", "m3", 1.5, "m3"),
+            ("--param", "g", 9.81, "g"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+}
+
+/// A rheonomic holonomic constraint (the tube turns at `w`): the bead's
+/// `x0` cannot move alone in a run (the model states `y' = r0 w`, the
+/// tube's speed where the bead starts at `x0 = r0`), so its column, the
+/// tangent with `x'0` held and `y0, y'0` following the constraint, is
+/// checked against the closed form of the motion from `(x0, x'0)` at
+/// rest across the tube: `r = x0 cosh(w t) + x'0 sinh(w t)/w` along it,
+/// `x = r cos(w t)`, `y = r sin(w t)`. The params against differences of
+/// runs (`r0` moves `x0` and `y'0` together).
+#[test]
+fn a_bead_in_a_spinning_tube_agrees_with_its_closed_form_and_differences() {
+    let binary = build("bead_in_spinning_tube");
+    let times = "0,0.5,1.5,3";
+    assert!(field_disagreement(&binary, "bead_in_spinning_tube", times) < 1e-9);
+    let worst = disagreement_of(
+        &binary,
+        "bead_in_spinning_tube",
+        times,
+        0,
+        &["x0", "x'0"],
+        &[
+            ("--init", "y", 0.0, "y0"),
+            ("--param", "w", 2.0, "w"),
+            ("--param", "r0", 0.5, "r0"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+    let mut args: Vec<&str> = TIGHT.to_vec();
+    args.extend(["--times", times, "--sensitivity"]);
+    let out = run(&binary, &args);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    let w = 2.0_f64;
+    let mut worst = 0.0_f64;
+    for row in &out.rows {
+        let t = row[0];
+        let (s, c) = (w * t).sin_cos();
+        let (ch, sh) = ((w * t).cosh(), (w * t).sinh());
+        // ∂r/∂x0 = cosh, ∂r/∂x'0 = sinh/w; r' likewise; x = r cos, y = r sin,
+        // x' = r' cos − w r sin, y' = r' sin + w r cos.
+        for (column, r, rd) in [("x0", ch, w * sh), ("x'0", sh / w, ch)] {
+            let exact = [r * c, r * s, rd * c - w * r * s, rd * s + w * r * c];
+            for (x, e) in ["x", "y", "x'", "y'"].iter().zip(exact) {
+                let title = format!("d({x})/d({column})");
+                let i = out.header.iter().position(|h| *h == title).unwrap();
+                worst = worst.max((row[i] - e).abs() / ch.max(1.0));
+            }
+        }
+    }
+    eprintln!("bead_in_spinning_tube: x0, x'0 against the closed form: {worst:.2e}");
+    assert!(worst < 1e-6, "{worst:e}");
+}
+
+/// A bead on a cycloid: two holonomic constraints with one candidate
+/// each (`x`, `y` follow the rolling angle `th`), started from rest at
+/// `th0` (a param: it moves the start through the closure). `x0` and `y0`
+/// only seed Newton (zero columns).
+#[test]
+fn a_bead_on_a_cycloid_agrees_with_differences() {
+    let binary = build("bead_on_cycloid");
+    assert!(field_disagreement(&binary, "bead_on_cycloid", "0.5,3") < 1e-9);
+    let worst = disagreement_of(
+        &binary,
+        "bead_on_cycloid",
+        "0.5,1.5,3",
+        0,
+        &[],
+        &[
+            ("--init", "th", 2.0, "th(t0)"),
+            ("--init", "x", 0.0, "x0"),
+            ("--init", "y", 0.0, "y0"),
+            ("--init", "th'", 0.0, "th'0"),
+            ("--param", "r", 0.5, "r"),
+            ("--param", "g", 9.81, "g"),
+            ("--param", "th0", 2.0, "th0"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+}
+
+/// Uniform motion on a circle: the dependent changes between `y` and `x`
+/// every eighth of a turn (the larger pivot), four times a turn; by t = 6
+/// the particle has turned almost twice.
+#[test]
+fn a_particle_on_a_circle_changing_its_dependent_agrees_with_differences() {
+    let binary = build("particle_on_circle");
+    assert!(field_disagreement(&binary, "particle_on_circle", "1,6") < 1e-9);
+    let worst = disagreement_of(
+        &binary,
+        "particle_on_circle",
+        "1,3.5,6",
+        0,
+        &[],
+        &[
+            ("--init", "x", 0.0, "x0"),
+            ("--init", "y", -1.0, "y0"),
+            ("--init", "x'", 2.0, "x'0"),
+            ("--param", "l", 1.0, "l"),
+            ("--param", "w", 2.0, "w"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
+}
+
+/// A holonomic constraint beside a second-order one (`z'' = x''`), no
+/// params: the holonomic one kept by the projection and its derivative,
+/// the other invariant under the reduced system's flow.
+#[test]
+fn a_holonomic_constraint_beside_a_second_order_one_agrees_with_differences() {
+    let path = crate::root().join("tests/data/v2/holonomic_second_order.lag");
+    let binary = crate::generated::build_file(&path);
+    let worst = disagreement_of(
+        &binary,
+        "holonomic_second_order",
+        "1,3,5",
+        0,
+        &[],
+        &[
+            ("--init", "x", 0.6, "x0"),
+            ("--init", "y", -0.8, "y0"),
+            ("--init", "z", 0.0, "z0"),
+            ("--init", "x'", 0.0, "x'0"),
+            ("--init", "z'", 0.0, "z'0"),
+        ],
+    );
+    assert!(worst < 1e-6, "{worst:e}");
 }

@@ -195,6 +195,13 @@ impl Keeper {
         if !model.keeps_positions() {
             return Ok(());
         }
+        // The motion's components alone: what a system carries beside it
+        // (the sensitivities) keeps its whole error, a bound on the part
+        // its own projection keeps, for a fraction of the cost (the
+        // projection's derivative for every column at every step was
+        // most of a holonomic model's sensitivity run).
+        let motion = model.motion_dim();
+        let (x, d) = (&x[..motion], &mut d[..motion]);
         let size = crate::ode::dop853::global_error::relative(d, x);
         if !(size > 0.0 && size.is_finite()) {
             return Ok(());
@@ -252,9 +259,14 @@ impl Keeper {
         // along the constraints' normals (the same in every mode).
         let mut closure = (0.0_f64, 0.0_f64);
         if model.keeps_positions() {
-            model.project_closure(t, &mut self.projected)?;
+            // The distance is the motion's: what a system carries beside
+            // it (the sensitivities) is moved by the projection's
+            // derivative, whose size is no distance from the constraints,
+            // and which is worth its cost only where the state is moved.
+            let motion = model.motion_dim();
+            model.project_closure(t, &mut self.projected[..motion])?;
             let mut worst = 0;
-            for (i, (&before, &after)) in x.iter().zip(&self.projected).enumerate() {
+            for (i, (&before, &after)) in x.iter().zip(&self.projected).take(motion).enumerate() {
                 let delta = (after - before).abs();
                 let scale = self.tol.atol + self.tol.rtol * before.abs().max(after.abs());
                 if delta / scale > closure.0 {
@@ -271,6 +283,10 @@ impl Keeper {
                         residual: closure.1,
                     },
                 ));
+            }
+            if motion < x.len() && !(bounded && closure.0 <= PROJECT_ABOVE) {
+                self.projected.copy_from_slice(x);
+                model.project_closure(t, &mut self.projected)?;
             }
         }
         let m = self.fixed.len();

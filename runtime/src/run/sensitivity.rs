@@ -25,12 +25,22 @@
 //! goes on unchanged across it (checked against differences of runs on
 //! knife_edge_turning and chaplygin_sleigh).
 //!
-//! What is not covered is refused ([`unsupported`]): holonomic constraints
-//! with run-time candidates, inputs following a schedule, and models
-//! without `param_jacobian`. The constraints a run keeps by projection are not
-//! kept on the augmented system: its motion is the reduced system's own
-//! (on which they are invariant), and the command line prints the state
-//! from the ordinary run beside it.
+//! Holonomic constraints (positions kept on `f(t, q, p) = 0` by the
+//! run's projection, `project_closure`): the start's columns come from
+//! the model's completion of the start (Newton on the closure), moved
+//! value by value, or, where a move contradicts a value the model states,
+//! from the tangent through the projection's derivative (`tangent`);
+//! the augmented run projects as the run does, `x ← P(x)` and
+//! `S ← P_x S + P_p dp/dp` (`Augmented::project`). Without that, the
+//! columns' part across the constraints grows as the motion's drift does
+//! (the four-bar's augmented run failed at t = 47 with nothing projected,
+//! at t = 76 with `x` alone projected; docs/SENSITIVITY.md).
+//!
+//! What is not covered is refused ([`unsupported`]): inputs following a
+//! schedule, and models without `param_jacobian`. Velocity constraints
+//! the run keeps by projection are not kept on the augmented system: its
+//! motion is the reduced system's own (on which they are invariant), and
+//! the command line prints the state from the ordinary run beside it.
 
 use crate::choice::{IntegratorChoice, Method};
 use crate::failure::Failure;
@@ -42,22 +52,6 @@ use crate::run::run;
 
 /// Why `--sensitivity` is refused for this model, or `None`.
 pub fn unsupported(model: &dyn DynModel) -> Option<String> {
-    // A holonomic constraint's candidates are positions (no prime): its
-    // dependents' initial positions come from Newton on the closure, whose
-    // derivative the sensitivities' start has not been checked against
-    // runs (velocity constraints' candidates are checked: tests/it/
-    // sensitivity.rs).
-    if model
-        .constraints()
-        .iter()
-        .any(|c| c.names.iter().any(|n| !n.contains('\'')))
-    {
-        return Some(format!(
-            "`--sensitivity`: the model `{}` keeps holonomic constraints whose dependents are \
-             chosen at run time; their sensitivities are not computed yet",
-            model.name()
-        ));
-    }
     if !model.param_names().is_empty() && !model.has_param_jacobian() {
         return Some(format!(
             "`--sensitivity`: the model `{}` was built without `∂X/∂p` (a mass law that \
@@ -163,19 +157,44 @@ pub fn initial(
     let held: Vec<Option<f64>> = (0..n)
         .map(|i| given.contains(&i).then_some(x0[i]))
         .collect();
-    let all_given = given.len() == n;
-    for &j in &given {
-        if all_given {
-            let mut unit = vec![0.0; n];
-            unit[j] = 1.0;
-            s0.extend(unit);
-            continue;
-        }
-        let mut moved = held.clone();
-        let column = derivative(x0[j], 0.0, &mut |v| {
-            moved[j] = Some(v);
-            model.initial_state(&moved)
-        })?;
+    // (Newton on a closure may overwrite a given position: never unit
+    // columns where positions are kept.)
+    let all_given = given.len() == n && !model.keeps_positions();
+    // Each column through the model's own completion of the start (Newton
+    // on the closure, the constraints' derivatives): the implicit function
+    // theorem, differentiated as the runs see it. A completion can refuse
+    // a moved value ([`tangent`]).
+    let completed: Vec<Result<Vec<f64>, Failure>> = given
+        .iter()
+        .map(|&j| {
+            if all_given {
+                let mut unit = vec![0.0; n];
+                unit[j] = 1.0;
+                return Ok(unit);
+            }
+            let mut moved = held.clone();
+            derivative(x0[j], 0.0, &mut |v| {
+                moved[j] = Some(v);
+                model.initial_state(&moved)
+            })
+        })
+        .collect();
+    // The components the completion holds (a value it overwrites, a
+    // position Newton puts on the closure, has a zero column).
+    let free: Vec<usize> = given
+        .iter()
+        .zip(&completed)
+        .filter(|(&j, c)| c.as_ref().map_or(true, |c| (c[j] - 1.0).abs() < 1e-6))
+        .map(|(&j, _)| j)
+        .collect();
+    for (&j, column) in given.iter().zip(completed) {
+        let column = match column {
+            Ok(column) => column,
+            Err(failure) if refused_move(&failure) && model.keeps_positions() => {
+                tangent(model, t0, x0, &free, j)?
+            }
+            Err(failure) => return Err(failure),
+        };
         s0.extend(column);
     }
     // A param moves the params computed from it, the initial values that
@@ -211,6 +230,69 @@ pub fn initial(
         s0.extend(column[np + 1..].iter().zip(&f0).map(|(dx, f)| dx - f * dt0));
     }
     Ok((chain, s0))
+}
+
+/// A completion that refuses a moved value: a value the model states
+/// for a component the constraints fix no longer agrees (the bead in a
+/// spinning tube states `y' = r0 w`, the tube's speed at `x0 = r0`).
+fn refused_move(failure: &Failure) -> bool {
+    matches!(
+        failure.kind,
+        crate::failure::FailureKind::InconsistentInitialValue { .. }
+    )
+}
+
+/// The tangent to the holonomic constraints at the start `x0` whose free
+/// components (`free`, those the start's completion holds) are the unit
+/// vector `e_j`: the column of a given value that no run can move alone
+/// (its move contradicts a value the model states). The derivative `B`
+/// of the run's projection (`project_closure`) at a point on the
+/// constraints is idempotent with the tangent space as its range, so the
+/// tangent is `B c` over the free columns with `(B c)_free = e_j`, the
+/// implicit function theorem with the dependents solved by the
+/// projection instead of the completion.
+fn tangent(
+    model: &dyn DynModel,
+    t0: f64,
+    x0: &[f64],
+    free: &[usize],
+    j: usize,
+) -> Result<Vec<f64>, Failure> {
+    let n = x0.len();
+    let k = free.len();
+    let mut columns = Vec::with_capacity(k);
+    let mut moved = x0.to_vec();
+    for &f in free {
+        columns.push(derivative(x0[f], 1.0, &mut |v| {
+            moved.copy_from_slice(x0);
+            moved[f] = v;
+            model.project_closure(t0, &mut moved)?;
+            Ok(moved.clone())
+        })?);
+    }
+    let mut block = Matrix::zeros(k, k);
+    for (b, column) in columns.iter().enumerate() {
+        for (a, &f) in free.iter().enumerate() {
+            block[(a, b)] = column[f];
+        }
+    }
+    let mut c: Vec<f64> = free.iter().map(|&f| f64::from(u8::from(f == j))).collect();
+    let lu = crate::linalg::Lu::new(&block);
+    if lu.is_singular() || !lu.solve_in_place(&mut c) {
+        return Err(Failure::new(
+            t0,
+            crate::failure::FailureKind::Unsupported {
+                message: format!(
+                    "`--sensitivity`: the start's given values do not determine a tangent \
+                     to the constraints along `{}`",
+                    model.state_names()[j]
+                ),
+            },
+        ));
+    }
+    Ok((0..n)
+        .map(|i| columns.iter().zip(&c).map(|(col, c)| col[i] * c).sum())
+        .collect())
 }
 
 /// Values computed from a model (a switching function, a reset).
@@ -283,6 +365,10 @@ pub struct Augmented {
     /// `dp_k/dp_j`, row-major `np × np`.
     chain: Vec<f64>,
     names: &'static [&'static str],
+    /// No component of the augmented state is fixed by a velocity
+    /// constraint in any mode (one empty slice per mode of the model): the
+    /// holonomic constraints are kept by `Augmented::project` alone.
+    unfixed: &'static [&'static [usize]],
 }
 
 impl Augmented {
@@ -297,6 +383,8 @@ impl Augmented {
         for h in headers(&*inner) {
             names.push(Box::leak(h.into_boxed_str()));
         }
+        let modes = inner.fixed_components().len().max(1);
+        let unfixed: Vec<&'static [usize]> = vec![&[]; modes];
         Augmented {
             inner,
             n,
@@ -304,6 +392,7 @@ impl Augmented {
             given,
             chain,
             names: Box::leak(names.into_boxed_slice()),
+            unfixed: Box::leak(unfixed.into_boxed_slice()),
         }
     }
 
@@ -320,6 +409,7 @@ impl Augmented {
             given: self.given,
             chain: self.chain.clone(),
             names: self.names,
+            unfixed: self.unfixed,
         }
     }
 
@@ -494,6 +584,58 @@ impl Augmented {
         Ok(())
     }
 
+    /// The run's projection onto the holonomic constraints
+    /// (`project_closure`, positions and their derivatives along the
+    /// normals) and its derivative: `x ← P(x)`, and every column of `S`
+    /// by the chain rule through it, `S ← P_x S + P_p dp/dp`. `P_x S` is
+    /// a directional derivative of `P` along the column and `P_p` one
+    /// over the model with the param moved, each a refined central
+    /// difference (`P` is Gauss–Newton to rounding, smooth near the
+    /// constraints). The columns that start tangent stay tangent to
+    /// rounding while `P` only removes the integration's drift; the
+    /// projection is what the motion's own run does, so the columns are
+    /// the derivatives of that run.
+    fn project(&self, t: f64, z: &mut [f64]) -> Result<(), Failure> {
+        let n = self.n;
+        let (x, s) = z.split_at_mut(n);
+        let before = x.to_vec();
+        let size = before.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        let mut moved = vec![0.0; n];
+        for c in 0..self.columns {
+            let column = &mut s[c * n..(c + 1) * n];
+            let length = column.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let mut projected = vec![0.0; n];
+            if length > 0.0 && length.is_finite() {
+                // Along `x + σ v`, `σ` scaled so that `σ v` moves `x` by
+                // about 1e-3 of its size (as `derivative` moves a value).
+                let v = column.to_vec();
+                let unit = size / length;
+                projected = derivative(0.0, unit, &mut |sigma| {
+                    for ((m, b), v) in moved.iter_mut().zip(&before).zip(&v) {
+                        *m = b + sigma * v;
+                    }
+                    self.inner.project_closure(t, &mut moved)?;
+                    Ok(moved.clone())
+                })?;
+            }
+            column.copy_from_slice(&projected);
+        }
+        if self.columns > self.given {
+            let slopes = self.param_slopes(&|model| {
+                let mut y = before.clone();
+                model.project_closure(t, &mut y)?;
+                Ok(y)
+            })?;
+            for (c, slope) in slopes.iter().enumerate() {
+                let column = &mut s[(self.given + c) * n..(self.given + c + 1) * n];
+                for (v, d) in column.iter_mut().zip(slope) {
+                    *v += d;
+                }
+            }
+        }
+        self.inner.project_closure(t, x)
+    }
+
     /// `J S + ∂X/∂p` at `(t, x)` for the sensitivities `s`, into `out`.
     fn variational(&self, t: f64, x: &[f64], s: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         let n = self.n;
@@ -531,6 +673,9 @@ impl DynModel for Augmented {
     }
     fn state_names(&self) -> &'static [&'static str] {
         self.names
+    }
+    fn motion_dim(&self) -> usize {
+        self.n
     }
     fn coordinates(&self) -> usize {
         // No `x_i' = x_{i+n}` structure is promised for the whole system.
@@ -634,6 +779,23 @@ impl DynModel for Augmented {
     }
     fn switching_functions(&self, t: f64, x: &[f64], g: &mut [f64]) {
         self.inner.switching_functions(t, &x[..self.n], g);
+    }
+    fn keeps_positions(&self) -> bool {
+        self.inner.keeps_positions()
+    }
+    fn fixed_components(&self) -> &'static [&'static [usize]] {
+        self.unfixed
+    }
+    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        if x.len() == self.n {
+            // The motion alone (the keeper's share of a step's error).
+            return self.inner.project_closure(t, x);
+        }
+        if self.inner.keeps_positions() {
+            self.project(t, x)
+        } else {
+            Ok(())
+        }
     }
     fn constraints(&self) -> &'static [Candidates] {
         // The run chooses and changes the candidates on the motion's
