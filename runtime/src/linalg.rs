@@ -188,10 +188,48 @@ impl Lu {
     }
 
     /// Factors `a`, reusing its storage.
-    pub fn in_place(mut a: Matrix) -> Lu {
+    pub fn in_place(a: Matrix) -> Lu {
+        let n = a.rows;
+        let mut lu = Lu {
+            factors: a,
+            pivots: Vec::with_capacity(n),
+            sign: 1.0,
+            singular: false,
+        };
+        lu.factor();
+        lu
+    }
+
+    /// An empty factorisation, whose storage [`Lu::refactor`] reuses.
+    pub fn empty() -> Lu {
+        Lu {
+            factors: Matrix::zeros(0, 0),
+            pivots: Vec::new(),
+            sign: 1.0,
+            singular: false,
+        }
+    }
+
+    /// Factors the `n × n` matrix that `fill` writes (into zeros), in this
+    /// factorisation's storage: no allocation once it has held one of that
+    /// size (the field method factors its conditions at every step).
+    pub fn refactor(&mut self, n: usize, fill: impl FnOnce(&mut Matrix)) {
+        let a = &mut self.factors;
+        a.rows = n;
+        a.cols = n;
+        a.data.clear();
+        a.data.resize(n * n, 0.0);
+        fill(a);
+        self.factor();
+    }
+
+    /// Factors `self.factors` in place.
+    fn factor(&mut self) {
+        let a = &mut self.factors;
         let n = a.rows;
         debug_assert_eq!(n, a.cols);
-        let mut pivots = Vec::with_capacity(n);
+        let pivots = &mut self.pivots;
+        pivots.clear();
         let mut sign = 1.0;
         let mut singular = false;
         for k in 0..n {
@@ -224,12 +262,8 @@ impl Lu {
                 }
             }
         }
-        Lu {
-            factors: a,
-            pivots,
-            sign,
-            singular,
-        }
+        self.sign = sign;
+        self.singular = singular;
     }
 
     pub fn dim(&self) -> usize {
@@ -329,6 +363,18 @@ impl Lu {
     /// Hager's (Higham's) estimate of `‖A⁻¹‖₁` from the factors: a few
     /// solves instead of an inverse. A lower bound, exact in most cases.
     pub fn inverse_one_norm_estimate(&self) -> f64 {
+        let n = self.dim();
+        if n <= 8 {
+            let mut scratch = [0.0; 24];
+            self.inverse_one_norm_estimate_in(&mut scratch[..3 * n])
+        } else {
+            self.inverse_one_norm_estimate_in(&mut vec![0.0; 3 * n])
+        }
+    }
+
+    /// [`Lu::inverse_one_norm_estimate`] in `3 n` numbers of scratch (on
+    /// the stack for small `n`: the estimate runs at every field step).
+    fn inverse_one_norm_estimate_in(&self, scratch: &mut [f64]) -> f64 {
         if self.singular {
             return f64::INFINITY;
         }
@@ -336,11 +382,13 @@ impl Lu {
         if n == 0 {
             return 0.0;
         }
-        let mut x = vec![1.0 / n as f64; n];
+        let (x, rest) = scratch.split_at_mut(n);
+        let (y, z) = rest.split_at_mut(n);
+        x.fill(1.0 / n as f64);
         let mut estimate = 0.0;
         for _ in 0..5 {
-            let mut y = x.clone();
-            self.solve_in_place(&mut y);
+            y.copy_from_slice(x);
+            self.solve_in_place(y);
             let norm: f64 = y.iter().map(|v| v.abs()).sum();
             if !norm.is_finite() {
                 return f64::INFINITY;
@@ -349,17 +397,16 @@ impl Lu {
                 break;
             }
             estimate = norm;
-            let mut z: Vec<f64> = y
-                .iter()
-                .map(|&v| if v >= 0.0 { 1.0 } else { -1.0 })
-                .collect();
-            self.solve_transpose_in_place(&mut z);
+            for (z, &v) in z.iter_mut().zip(y.iter()) {
+                *z = if v >= 0.0 { 1.0 } else { -1.0 };
+            }
+            self.solve_transpose_in_place(z);
             let (j, largest) = z
                 .iter()
                 .enumerate()
                 .map(|(j, v)| (j, v.abs()))
                 .fold((0, -1.0), |b, c| if c.1 > b.1 { c } else { b });
-            let zx: f64 = z.iter().zip(&x).map(|(a, b)| a * b).sum();
+            let zx: f64 = z.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
             if largest <= zx {
                 break;
             }

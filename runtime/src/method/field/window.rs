@@ -10,7 +10,7 @@
 //! the window ends and the caller re-anchors.
 
 use super::coefficients::FieldSystem;
-use super::conditions::{recover, recover_state, Recovered};
+use super::conditions::{recover, recover_into, recover_state, Recovered};
 use super::FieldOptions;
 use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
@@ -101,8 +101,10 @@ struct StateMeasure<'a, F: FieldSystem + ?Sized> {
     anchor_x: &'a [f64],
     /// The state at the start of the step being tried.
     start: &'a [f64],
-    /// The recovered state at the last trial's end.
-    trial: Option<Recovered>,
+    /// The recovered state at the last trial's end (storage reused from
+    /// step to step), and whether it holds one.
+    trial: &'a mut Recovered,
+    trial_ok: bool,
     /// Why the last trial was declined.
     declined: Option<Decline>,
     b: &'a mut Buffers,
@@ -129,16 +131,16 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
         e5: &[f64],
     ) -> Option<f64> {
         let b = &mut *self.b;
+        self.trial_ok = false;
         let Some(loss) = self.system.field(y1, &mut b.f, &mut b.s) else {
             self.declined = Some(Decline::Conditions);
-            self.trial = None;
             return None;
         };
-        let Some(rec) = recover(&b.f, &b.s, self.anchor_x) else {
+        if !recover_into(&b.f, &b.s, self.anchor_x, self.trial) {
             self.declined = Some(Decline::Conditions);
-            self.trial = None;
             return None;
-        };
+        }
+        let rec = &*self.trial;
         // Rounding in S, amplified by the conditions, must stay well below
         // the tolerance (a bound: the product of the worst cases).
         let rounding = loss * rec.formation * rec.condition * f64::EPSILON;
@@ -156,7 +158,6 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
             } else {
                 Decline::Conditions
             });
-            self.trial = None;
             return None;
         }
         self.system.field_change(y1, e3, &mut b.df, &mut b.ds);
@@ -164,7 +165,7 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
         self.system.field_change(y1, e5, &mut b.df, &mut b.ds);
         rec.map_error(&b.f, self.anchor_x, &b.df, &b.ds, &mut b.dx5);
         let err = hairer_error(self.tol, h, self.start, &rec.state, &b.dx3, &b.dx5);
-        self.trial = Some(rec);
+        self.trial_ok = true;
         Some(err)
     }
 }
@@ -290,6 +291,9 @@ pub struct Window {
     kind: StepperKind,
     /// The recovered state at the stepper's time, and its conditioning.
     current: Recovered,
+    /// Storage for the next step's trial, swapped with `current` when it
+    /// is accepted.
+    spare: Recovered,
     previous_state: Vec<f64>,
     steps: usize,
     buffers: Buffers,
@@ -379,6 +383,7 @@ impl Window {
             kind,
             previous_state: x.to_vec(),
             current,
+            spare: Recovered::empty(),
             steps: 0,
             buffers: Buffers::new(n),
             declined: None,
@@ -464,7 +469,8 @@ impl Window {
             options,
             anchor_x: &self.anchor_x,
             start: &self.current.state,
-            trial: None,
+            trial: &mut self.spare,
+            trial_ok: false,
             declined: None,
             b: &mut self.buffers,
         };
@@ -482,16 +488,23 @@ impl Window {
                 .step_measured(system, t_limit, budget, &mut measure)?;
         }
         self.declined = measure.declined;
+        let trial_ok = measure.trial_ok;
         match outcome {
             StepOutcome::Declined => Ok(WindowStep::Ended),
             StepOutcome::Accepted => {
-                let Some(rec) = measure.trial.take() else {
+                if !trial_ok {
                     return Ok(WindowStep::Ended);
-                };
-                if !options.reanchor {
-                    check_without_reanchoring(&rec, options, self.previous_time(), self.time())?;
                 }
-                self.previous_state = std::mem::replace(&mut self.current, rec).state;
+                if !options.reanchor {
+                    check_without_reanchoring(
+                        &self.spare,
+                        options,
+                        self.previous_time(),
+                        self.time(),
+                    )?;
+                }
+                self.previous_state.copy_from_slice(&self.current.state);
+                std::mem::swap(&mut self.current, &mut self.spare);
                 self.steps += 1;
                 Ok(WindowStep::Accepted)
             }
