@@ -364,6 +364,17 @@ impl Lu {
     /// solves instead of an inverse. A lower bound, exact in most cases.
     pub fn inverse_one_norm_estimate(&self) -> f64 {
         let n = self.dim();
+        if n == 1 && !self.singular {
+            // The iteration on a 1 × 1 matrix ends after its first solve
+            // with |1/a| (the field's conditions for one degree of freedom,
+            // at every step).
+            let norm = (1.0 / self.factors[(0, 0)]).abs();
+            return if norm.is_finite() {
+                norm
+            } else {
+                f64::INFINITY
+            };
+        }
         if n <= 8 {
             let mut scratch = [0.0; 24];
             self.inverse_one_norm_estimate_in(&mut scratch[..3 * n])
@@ -659,6 +670,35 @@ mod tests {
         assert!(condition_estimate(&b, &lu) > 1e11);
         let c = Matrix::from_rows(&[&[1.0, 2.0], &[2.0, 4.0]]);
         assert!(Lu::new(&c).is_singular() || condition_estimate(&c, &Lu::new(&c)) > 1e15);
+    }
+
+    /// The 1 × 1 shortcut and the stack's scratch give the iteration's
+    /// own estimate, to the bit; `refactor` the factors of `new`.
+    #[test]
+    fn inverse_norm_estimate_shortcuts_are_the_iteration() {
+        for a in [3.0, -0.7, 1e-300, -2.5e300, 1.0 / 3.0, 5e-324] {
+            let lu = Lu::new(&Matrix::from_rows(&[&[a]]));
+            let iteration = lu.inverse_one_norm_estimate_in(&mut [0.0; 3]);
+            assert_eq!(
+                lu.inverse_one_norm_estimate().to_bits(),
+                iteration.to_bits(),
+                "{a:e}"
+            );
+        }
+        let rows = [[3.0, 1.0, 0.5], [-1.0, 4.0, 1.0], [0.5, 1.0, 5.0]];
+        let a = Matrix::from_rows(&[&rows[0], &rows[1], &rows[2]]);
+        let fresh = Lu::new(&a);
+        let mut reused = Lu::new(&Matrix::from_rows(&[&[2.0, 1.0], &[1.0, 0.0]]));
+        reused.refactor(3, |m| m.as_mut_slice().copy_from_slice(a.as_slice()));
+        assert_eq!(
+            reused.determinant().to_bits(),
+            fresh.determinant().to_bits()
+        );
+        let iteration = fresh.inverse_one_norm_estimate_in(&mut [0.0; 9]);
+        assert_eq!(
+            reused.inverse_one_norm_estimate().to_bits(),
+            iteration.to_bits()
+        );
     }
 
     #[test]
