@@ -309,6 +309,12 @@ impl Lu {
         }
         let n = self.dim();
         let f = &self.factors;
+        if n == 1 {
+            // What the loops below do for one unknown (the conditions of
+            // one degree of freedom, three solves a field step).
+            b[0] /= f.data[0];
+            return true;
+        }
         for k in 0..n {
             b.swap(k, self.pivots[k]);
         }

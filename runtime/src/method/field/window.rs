@@ -342,14 +342,17 @@ impl Window {
                 },
             ));
         }
+        // Asked only for a Magnus window: it linearises (the same
+        // linearisation the integrator's first evaluation then reuses) and
+        // allocates, at every window.
         let magnus_possible =
-            FieldSystem::generator(system, t, &mut Matrix::zeros(n + 1, n + 1)).is_some();
+            || FieldSystem::generator(system, t, &mut Matrix::zeros(n + 1, n + 1)).is_some();
         let (stepper, kind): (StepperOf<OfField>, _) = match kind {
             StepperKind::Stiff => (
                 Integrator::Stiff.start::<OfField>(system, t, &y, options.tol, h_max, h0)?,
                 StepperKind::Stiff,
             ),
-            StepperKind::Magnus if magnus_possible => {
+            StepperKind::Magnus if magnus_possible() => {
                 let h = match h0 {
                     Some(h) => h,
                     None => {
