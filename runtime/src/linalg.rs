@@ -150,8 +150,12 @@ impl Matrix {
         self.data.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
     }
 
+    /// Every entry finite: `0·v` is ±0 for a finite `v` and NaN for an
+    /// infinite or NaN one, so the sum of them is 0 exactly when all are
+    /// (a loop without a branch per entry: the field method checks a
+    /// Jacobian at every stage).
     pub fn is_finite(&self) -> bool {
-        self.data.iter().all(|v| v.is_finite())
+        self.data.iter().fold(0.0, |sum, v| sum + 0.0 * v) == 0.0
     }
 }
 
@@ -676,6 +680,22 @@ mod tests {
         assert!(condition_estimate(&b, &lu) > 1e11);
         let c = Matrix::from_rows(&[&[1.0, 2.0], &[2.0, 4.0]]);
         assert!(Lu::new(&c).is_singular() || condition_estimate(&c, &Lu::new(&c)) > 1e15);
+    }
+
+    #[test]
+    fn is_finite_finds_every_infinity_and_nan() {
+        let finite = [0.0, -0.0, 1.0, -f64::MAX, f64::MAX, 5e-324, -1e-310];
+        assert!(Matrix::from_column_major(7, 1, finite.to_vec()).is_finite());
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN, -f64::NAN] {
+            for at in 0..7 {
+                let mut data = finite.to_vec();
+                data[at] = bad;
+                assert!(
+                    !Matrix::from_column_major(7, 1, data).is_finite(),
+                    "{bad} at {at}"
+                );
+            }
+        }
     }
 
     /// The 1 × 1 shortcut and the stack's scratch give the iteration's

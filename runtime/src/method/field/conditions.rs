@@ -183,6 +183,11 @@ pub fn recover_state(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Vec<f64>> {
     solve_conditions(f, s, x0, false, &mut out).then_some(out.state)
 }
 
+/// [`recover_state`] into `out`'s storage (its `state`; `condition` is 1).
+pub fn recover_state_into(f: &[f64], s: &[f64], x0: &[f64], out: &mut Recovered) -> bool {
+    solve_conditions(f, s, x0, false, out)
+}
+
 /// [`recover`] into `out`, with the condition estimate only when
 /// `estimate` (else `condition` is 1).
 fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool, out: &mut Recovered) -> bool {

@@ -10,7 +10,7 @@
 //! the window ends and the caller re-anchors.
 
 use super::coefficients::FieldSystem;
-use super::conditions::{recover, recover_into, recover_state, Recovered};
+use super::conditions::{recover, recover_into, recover_state_into, Recovered};
 use super::FieldOptions;
 use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
@@ -72,6 +72,10 @@ pub fn cancellation(f: &[f64], x: &[f64], tol: Tolerance) -> f64 {
 /// Scratch of the error measure, kept with the window (a step would
 /// otherwise allocate six vectors).
 struct Buffers {
+    /// Output between steps: the coefficients there, and the state's
+    /// recovery (storage reused from sample to sample).
+    y: Vec<f64>,
+    output: Recovered,
     dx3: Vec<f64>,
     dx5: Vec<f64>,
     f: Vec<f64>,
@@ -83,6 +87,8 @@ struct Buffers {
 impl Buffers {
     fn new(n: usize) -> Buffers {
         Buffers {
+            y: Vec::new(),
+            output: Recovered::empty(),
             dx3: vec![0.0; n],
             dx5: vec![0.0; n],
             f: vec![0.0; n],
@@ -530,8 +536,9 @@ impl Window {
             out.copy_from_slice(&self.previous_state);
             return Ok(());
         }
-        let mut y = vec![0.0; system.dim()];
-        self.stepper.dense(system, t, &mut y)?;
+        let b = &mut self.buffers;
+        b.y.resize(system.dim(), 0.0);
+        self.stepper.dense(system, t, &mut b.y)?;
         let singular = || {
             Failure::new(
                 t,
@@ -540,19 +547,13 @@ impl Window {
                 },
             )
         };
-        let b = &mut self.buffers;
-        if system.field(&y, &mut b.f, &mut b.s).is_none() {
+        if system.field(&b.y, &mut b.f, &mut b.s).is_none() {
             return Err(singular());
         }
-        let state = recover_state(&b.f, &b.s, &self.anchor_x).ok_or_else(|| {
-            Failure::new(
-                t,
-                FailureKind::SingularConditionMatrix {
-                    condition: f64::INFINITY,
-                },
-            )
-        })?;
-        out.copy_from_slice(&state);
+        if !recover_state_into(&b.f, &b.s, &self.anchor_x, &mut b.output) {
+            return Err(singular());
+        }
+        out.copy_from_slice(&b.output.state);
         Ok(())
     }
 
