@@ -15,6 +15,9 @@ Usage (from the repository root):
     python3 scripts/field_vs_direct.py [MODEL.lag ...] > target/field-vs-direct.md
 
 REUSE=1 re-reads the last reports' CSV instead of running them again.
+LAGC=<path> runs another lagc binary (an older runtime, side by side) and
+OUT=<dir> keeps its reports apart; RUNS=<k> times each run as the smallest
+of k solves (default 3; more on a loaded machine).
 
 Writes the reports' CSV and SVG into target/field-vs-direct/, and there
 field-vs-direct.svg: every model's field/direct time at equal error over
@@ -43,15 +46,16 @@ MODELS = [
     "examples/ball_on_turntable.lag",
 ]
 TOLERANCES = "1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9,1e-10,1e-11"
-OUT = "target/field-vs-direct"
+OUT = os.environ.get("OUT", "target/field-vs-direct")
+LAGC = os.environ.get("LAGC", "target/release/lagc")
 
 
 def rows(model):
     name = os.path.basename(model)[:-4]
     if os.environ.get("REUSE") != "1":
         subprocess.run(
-            ["target/release/lagc", "report", model, "--tolerances", TOLERANCES,
-             "--runs", "3", "--out", OUT],
+            [LAGC, "report", model, "--tolerances", TOLERANCES,
+             "--runs", os.environ.get("RUNS", "3"), "--out", OUT],
             check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(OUT, f"{name}.work-precision.csv")) as f:
         return name, [r for r in csv.DictReader(f) if r["status"] == "ok"]
@@ -99,7 +103,7 @@ def cost_at(points, target):
 
 def state_dimension(model):
     """N: the state columns of the model's CSV header (t excluded)."""
-    run = subprocess.run(["target/release/lagc", "run", model, "--", "--samples", "1"],
+    run = subprocess.run([LAGC, "run", model, "--", "--samples", "1"],
                          check=True, capture_output=True, text=True)
     return len(run.stdout.splitlines()[0].split(",")) - 1
 

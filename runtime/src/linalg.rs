@@ -150,8 +150,12 @@ impl Matrix {
         self.data.iter().fold(0.0_f64, |m, v| m.max(v.abs()))
     }
 
+    /// Every entry finite: `0·v` is ±0 for a finite `v` and NaN for an
+    /// infinite or NaN one, so the sum of them is 0 exactly when all are
+    /// (a loop without a branch per entry: the field method checks a
+    /// Jacobian at every stage).
     pub fn is_finite(&self) -> bool {
-        self.data.iter().all(|v| v.is_finite())
+        self.data.iter().fold(0.0, |sum, v| sum + 0.0 * v) == 0.0
     }
 }
 
@@ -188,10 +192,48 @@ impl Lu {
     }
 
     /// Factors `a`, reusing its storage.
-    pub fn in_place(mut a: Matrix) -> Lu {
+    pub fn in_place(a: Matrix) -> Lu {
+        let n = a.rows;
+        let mut lu = Lu {
+            factors: a,
+            pivots: Vec::with_capacity(n),
+            sign: 1.0,
+            singular: false,
+        };
+        lu.factor();
+        lu
+    }
+
+    /// An empty factorisation, whose storage [`Lu::refactor`] reuses.
+    pub fn empty() -> Lu {
+        Lu {
+            factors: Matrix::zeros(0, 0),
+            pivots: Vec::new(),
+            sign: 1.0,
+            singular: false,
+        }
+    }
+
+    /// Factors the `n × n` matrix that `fill` writes (into zeros), in this
+    /// factorisation's storage: no allocation once it has held one of that
+    /// size (the field method factors its conditions at every step).
+    pub fn refactor(&mut self, n: usize, fill: impl FnOnce(&mut Matrix)) {
+        let a = &mut self.factors;
+        a.rows = n;
+        a.cols = n;
+        a.data.clear();
+        a.data.resize(n * n, 0.0);
+        fill(a);
+        self.factor();
+    }
+
+    /// Factors `self.factors` in place.
+    fn factor(&mut self) {
+        let a = &mut self.factors;
         let n = a.rows;
         debug_assert_eq!(n, a.cols);
-        let mut pivots = Vec::with_capacity(n);
+        let pivots = &mut self.pivots;
+        pivots.clear();
         let mut sign = 1.0;
         let mut singular = false;
         for k in 0..n {
@@ -224,12 +266,8 @@ impl Lu {
                 }
             }
         }
-        Lu {
-            factors: a,
-            pivots,
-            sign,
-            singular,
-        }
+        self.sign = sign;
+        self.singular = singular;
     }
 
     pub fn dim(&self) -> usize {
@@ -275,6 +313,12 @@ impl Lu {
         }
         let n = self.dim();
         let f = &self.factors;
+        if n == 1 {
+            // What the loops below do for one unknown (the conditions of
+            // one degree of freedom, three solves a field step).
+            b[0] /= f.data[0];
+            return true;
+        }
         for k in 0..n {
             b.swap(k, self.pivots[k]);
         }
@@ -329,6 +373,29 @@ impl Lu {
     /// Hager's (Higham's) estimate of `‖A⁻¹‖₁` from the factors: a few
     /// solves instead of an inverse. A lower bound, exact in most cases.
     pub fn inverse_one_norm_estimate(&self) -> f64 {
+        let n = self.dim();
+        if n == 1 && !self.singular {
+            // The iteration on a 1 × 1 matrix ends after its first solve
+            // with |1/a| (the field's conditions for one degree of freedom,
+            // at every step).
+            let norm = (1.0 / self.factors[(0, 0)]).abs();
+            return if norm.is_finite() {
+                norm
+            } else {
+                f64::INFINITY
+            };
+        }
+        if n <= 8 {
+            let mut scratch = [0.0; 24];
+            self.inverse_one_norm_estimate_in(&mut scratch[..3 * n])
+        } else {
+            self.inverse_one_norm_estimate_in(&mut vec![0.0; 3 * n])
+        }
+    }
+
+    /// [`Lu::inverse_one_norm_estimate`] in `3 n` numbers of scratch (on
+    /// the stack for small `n`: the estimate runs at every field step).
+    fn inverse_one_norm_estimate_in(&self, scratch: &mut [f64]) -> f64 {
         if self.singular {
             return f64::INFINITY;
         }
@@ -336,11 +403,13 @@ impl Lu {
         if n == 0 {
             return 0.0;
         }
-        let mut x = vec![1.0 / n as f64; n];
+        let (x, rest) = scratch.split_at_mut(n);
+        let (y, z) = rest.split_at_mut(n);
+        x.fill(1.0 / n as f64);
         let mut estimate = 0.0;
         for _ in 0..5 {
-            let mut y = x.clone();
-            self.solve_in_place(&mut y);
+            y.copy_from_slice(x);
+            self.solve_in_place(y);
             let norm: f64 = y.iter().map(|v| v.abs()).sum();
             if !norm.is_finite() {
                 return f64::INFINITY;
@@ -349,17 +418,16 @@ impl Lu {
                 break;
             }
             estimate = norm;
-            let mut z: Vec<f64> = y
-                .iter()
-                .map(|&v| if v >= 0.0 { 1.0 } else { -1.0 })
-                .collect();
-            self.solve_transpose_in_place(&mut z);
+            for (z, &v) in z.iter_mut().zip(y.iter()) {
+                *z = if v >= 0.0 { 1.0 } else { -1.0 };
+            }
+            self.solve_transpose_in_place(z);
             let (j, largest) = z
                 .iter()
                 .enumerate()
                 .map(|(j, v)| (j, v.abs()))
                 .fold((0, -1.0), |b, c| if c.1 > b.1 { c } else { b });
-            let zx: f64 = z.iter().zip(&x).map(|(a, b)| a * b).sum();
+            let zx: f64 = z.iter().zip(x.iter()).map(|(a, b)| a * b).sum();
             if largest <= zx {
                 break;
             }
@@ -612,6 +680,51 @@ mod tests {
         assert!(condition_estimate(&b, &lu) > 1e11);
         let c = Matrix::from_rows(&[&[1.0, 2.0], &[2.0, 4.0]]);
         assert!(Lu::new(&c).is_singular() || condition_estimate(&c, &Lu::new(&c)) > 1e15);
+    }
+
+    #[test]
+    fn is_finite_finds_every_infinity_and_nan() {
+        let finite = [0.0, -0.0, 1.0, -f64::MAX, f64::MAX, 5e-324, -1e-310];
+        assert!(Matrix::from_column_major(7, 1, finite.to_vec()).is_finite());
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN, -f64::NAN] {
+            for at in 0..7 {
+                let mut data = finite.to_vec();
+                data[at] = bad;
+                assert!(
+                    !Matrix::from_column_major(7, 1, data).is_finite(),
+                    "{bad} at {at}"
+                );
+            }
+        }
+    }
+
+    /// The 1 × 1 shortcut and the stack's scratch give the iteration's
+    /// own estimate, to the bit; `refactor` the factors of `new`.
+    #[test]
+    fn inverse_norm_estimate_shortcuts_are_the_iteration() {
+        for a in [3.0, -0.7, 1e-300, -2.5e300, 1.0 / 3.0, 5e-324] {
+            let lu = Lu::new(&Matrix::from_rows(&[&[a]]));
+            let iteration = lu.inverse_one_norm_estimate_in(&mut [0.0; 3]);
+            assert_eq!(
+                lu.inverse_one_norm_estimate().to_bits(),
+                iteration.to_bits(),
+                "{a:e}"
+            );
+        }
+        let rows = [[3.0, 1.0, 0.5], [-1.0, 4.0, 1.0], [0.5, 1.0, 5.0]];
+        let a = Matrix::from_rows(&[&rows[0], &rows[1], &rows[2]]);
+        let fresh = Lu::new(&a);
+        let mut reused = Lu::new(&Matrix::from_rows(&[&[2.0, 1.0], &[1.0, 0.0]]));
+        reused.refactor(3, |m| m.as_mut_slice().copy_from_slice(a.as_slice()));
+        assert_eq!(
+            reused.determinant().to_bits(),
+            fresh.determinant().to_bits()
+        );
+        let iteration = fresh.inverse_one_norm_estimate_in(&mut [0.0; 9]);
+        assert_eq!(
+            reused.inverse_one_norm_estimate().to_bits(),
+            iteration.to_bits()
+        );
     }
 
     #[test]

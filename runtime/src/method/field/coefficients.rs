@@ -273,6 +273,9 @@ pub struct LinearizationScratch {
     /// state), and the iterate and the model give the same bits again.
     evaluated_at: Option<u64>,
     formed_at: Option<u64>,
+    /// `x` holds the origin, written by an iterate that is the origin at
+    /// every time (an affine motion's): not written again at every stage.
+    x_origin: bool,
 }
 
 impl LinearizationScratch {
@@ -287,6 +290,7 @@ impl LinearizationScratch {
             batch: vec![0.0; n * (n + 1)],
             evaluated_at: None,
             formed_at: None,
+            x_origin: false,
         })
     }
 }
@@ -339,7 +343,10 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
         }
         sc.evaluated_at = None;
         sc.formed_at = None;
-        self.iterate.eval(t, &mut sc.x)?;
+        if !(sc.x_origin && self.iterate.is_origin()) {
+            self.iterate.eval(t, &mut sc.x)?;
+            sc.x_origin = self.iterate.is_origin();
+        }
         sc.a.fill(0.0);
         self.model.linearize(t, &sc.x, &mut sc.rate, &mut sc.a)?;
         self.evaluations.set(self.evaluations.get() + 1);
@@ -542,12 +549,18 @@ impl<I: Iterate + ?Sized> System for LinearizedMotion<'_, I> {
 /// (`sensitivity`). `N(N + 1)` numbers are integrated, not `(N + 1)²`.
 pub struct ProjectiveCoefficients<'a, I: Iterate + ?Sized> {
     linear: LinearizedCoefficients<'a, I>,
+    /// The model's `N` and coordinates, asked once rather than at every
+    /// evaluation (two dynamic calls).
+    dim: usize,
+    shift: usize,
 }
 
 impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
     pub fn new(model: &'a dyn DynModel, iterate: &'a I) -> Self {
         ProjectiveCoefficients {
             linear: LinearizedCoefficients::new(model, iterate),
+            dim: model.dim(),
+            shift: model.coordinates(),
         }
     }
 
@@ -571,6 +584,8 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
                 scratch: Scratch::Lent(scratch),
                 evaluations: std::cell::Cell::new(0),
             },
+            dim: model.dim(),
+            shift: model.coordinates(),
         }
     }
 
@@ -596,6 +611,7 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
 /// vector `k`), so the innermost loop runs over the vectors, contiguous.
 /// Each sum is accumulated in the order of a dot product per vector (from
 /// −0.0, over `i` ascending): the same bits.
+#[inline]
 fn adjoint_rates(
     a: &Matrix,
     b: &[f64],
@@ -606,12 +622,33 @@ fn adjoint_rates(
     sums: &mut [f64],
 ) {
     let n = b.len();
-    let m = y.len() / (n + 1);
-    if m == n {
+    if y.len() == n * (n + 1) {
         match n {
-            2 => return adjoint_rates_fixed::<2>(a, b, shift, y, dy),
-            3 => return adjoint_rates_fixed::<3>(a, b, shift, y, dy),
-            4 => return adjoint_rates_fixed::<4>(a, b, shift, y, dy),
+            2 => return adjoint_rates_small::<2>(a.as_slice(), b, shift, y, dy),
+            3 => return adjoint_rates_small::<3>(a.as_slice(), b, shift, y, dy),
+            4 => return adjoint_rates_small::<4>(a.as_slice(), b, shift, y, dy),
+            _ => {}
+        }
+    }
+    adjoint_rates_large(a, b, shift, y, dy, rows, sums)
+}
+
+/// [`adjoint_rates`] for `N` > 4 or more vectors than coefficients: a
+/// function of its own, so that its frame (the unrolled variants' arrays)
+/// is not set up for the small systems' calls.
+#[inline(never)]
+fn adjoint_rates_large(
+    a: &Matrix,
+    b: &[f64],
+    shift: usize,
+    y: &[f64],
+    dy: &mut [f64],
+    rows: &mut [f64],
+    sums: &mut [f64],
+) {
+    let n = b.len();
+    if y.len() == n * (n + 1) {
+        match n {
             5 => return adjoint_rates_fixed::<5>(a, b, shift, y, dy),
             6 => return adjoint_rates_fixed::<6>(a, b, shift, y, dy),
             7 => return adjoint_rates_fixed::<7>(a, b, shift, y, dy),
@@ -621,6 +658,7 @@ fn adjoint_rates(
             _ => {}
         }
     }
+    let m = y.len() / (n + 1);
     let rows = &mut rows[..n * m];
     let sums = &mut sums[..m];
     for (k, v) in y.chunks_exact(n + 1).enumerate() {
@@ -655,6 +693,42 @@ fn adjoint_rates(
         }
         for (k, s) in sums.iter().enumerate() {
             dy[k * (n + 1) + 1 + col] = -*s;
+        }
+    }
+}
+
+/// [`adjoint_rates`] for `N` vectors of `N + 1`, `N` ≤ 4: one vector at a
+/// time, every slice's length known, so that nothing is checked or
+/// gathered at run time (one degree of freedom: 130 instructions a call
+/// before, the same sums in the same order).
+#[inline(never)]
+fn adjoint_rates_small<const N: usize>(
+    a: &[f64],
+    b: &[f64],
+    shift: usize,
+    y: &[f64],
+    dy: &mut [f64],
+) {
+    let (a, b) = (&a[..N * N], &b[..N]);
+    let (y, dy) = (&y[..N * (N + 1)], &mut dy[..N * (N + 1)]);
+    let shifted = N - shift;
+    for (v, d) in y.chunks_exact(N + 1).zip(dy.chunks_exact_mut(N + 1)) {
+        let w: &[f64; N] = v[1..].try_into().expect("N entries");
+        let mut sum = -0.0;
+        for i in 0..N {
+            sum += b[i] * w[i];
+        }
+        d[0] = -sum;
+        for col in 0..N {
+            let column = &a[col * N..col * N + N];
+            let mut sum = -0.0;
+            for i in shifted..N {
+                sum += column[i] * w[i];
+            }
+            if col >= shift {
+                sum += w[col - shift];
+            }
+            d[1 + col] = -sum;
         }
     }
 }
@@ -711,8 +785,7 @@ impl<I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, I> {
     }
 
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
-        let n = self.linear.model.dim();
-        let shift = self.linear.model.coordinates();
+        let (n, shift) = (self.dim, self.shift);
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
         self.linear.linearize(t, sc)?;

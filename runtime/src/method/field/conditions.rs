@@ -11,7 +11,7 @@
 //!
 //! Layout: `S` is column-major, `s[j·N + i] = S_ij = ∂f_i/∂c_j`.
 
-use crate::linalg::{condition_estimate, Lu, Matrix};
+use crate::linalg::{Lu, Matrix};
 
 /// The state recovered from a field, and how trustworthy it is.
 #[derive(Clone, Debug)]
@@ -49,37 +49,81 @@ struct EquilibratedLu {
     columns: Vec<f64>,
 }
 
-impl EquilibratedLu {
-    /// Factors `m` equilibrated; its condition number when `estimate`.
-    fn new(mut m: Matrix, estimate: bool) -> (EquilibratedLu, f64) {
-        let size = m.rows();
-        let power_of_two = |largest: f64| {
-            if largest > 0.0 && largest.is_finite() {
-                (-largest.log2().round()).exp2()
+/// `2^(−round(log2 largest))`, the power of two that brings `largest` near
+/// 1 (1 for zero or non-finite). From the exponent's bits where the
+/// mantissa is clear of √2 (where the rounding turns) and the result is
+/// normal, else by `log2` — the same number either way, at the cost of a
+/// few integer operations instead of `log2`, `round` and `exp2` per row
+/// and column at every step (3 % of an oscillator's field).
+fn power_of_two(largest: f64) -> f64 {
+    if !(largest > 0.0 && largest.is_finite()) {
+        return 1.0;
+    }
+    if largest.is_normal() {
+        let bits = largest.to_bits();
+        let exponent = ((bits >> 52) & 0x7ff) as i64 - 1023;
+        let mantissa = f64::from_bits((bits & ((1 << 52) - 1)) | (1023 << 52));
+        if (mantissa - std::f64::consts::SQRT_2).abs() > 1e-12 {
+            let k = if mantissa < std::f64::consts::SQRT_2 {
+                exponent
             } else {
-                1.0
-            }
-        };
-        let rows: Vec<f64> = (0..size)
-            .map(|r| power_of_two((0..size).fold(0.0_f64, |a, c| a.max(m[(r, c)].abs()))))
-            .collect();
-        let columns: Vec<f64> = (0..size)
-            .map(|c| {
-                power_of_two((0..size).fold(0.0_f64, |a, r| a.max((rows[r] * m[(r, c)]).abs())))
-            })
-            .collect();
-        for c in 0..size {
-            for r in 0..size {
-                m[(r, c)] *= rows[r] * columns[c];
+                exponent + 1
+            };
+            if (-1022..=1022).contains(&k) {
+                return f64::from_bits(((1023 - k) as u64) << 52);
             }
         }
-        let lu = Lu::new(&m);
-        let condition = if estimate && !lu.is_singular() {
-            condition_estimate(&m, &lu)
+    }
+    (-largest.log2().round()).exp2()
+}
+
+impl EquilibratedLu {
+    fn empty() -> EquilibratedLu {
+        EquilibratedLu {
+            lu: Lu::empty(),
+            rows: Vec::new(),
+            columns: Vec::new(),
+        }
+    }
+
+    /// Factors the condition matrix `M(S, x0)` equilibrated, in this
+    /// factorisation's storage (no allocation at every step); its
+    /// condition number when `estimate` (else 1).
+    fn refactor(&mut self, s: &[f64], n: usize, x0: &[f64], estimate: bool) -> f64 {
+        let size = n - 1;
+        let (rows, columns) = (&mut self.rows, &mut self.columns);
+        let mut norm = 0.0;
+        self.lu.refactor(size, |m| {
+            condition_matrix_into(s, n, x0, m);
+            rows.clear();
+            rows.extend(
+                (0..size)
+                    .map(|r| power_of_two((0..size).fold(0.0_f64, |a, c| a.max(m[(r, c)].abs())))),
+            );
+            columns.clear();
+            columns.extend((0..size).map(|c| {
+                power_of_two((0..size).fold(0.0_f64, |a, r| a.max((rows[r] * m[(r, c)]).abs())))
+            }));
+            for c in 0..size {
+                for r in 0..size {
+                    m[(r, c)] *= rows[r] * columns[c];
+                }
+            }
+            if estimate {
+                norm = m.one_norm();
+            }
+        });
+        if !estimate || self.lu.is_singular() {
+            return 1.0;
+        }
+        // `condition_estimate` of the equilibrated matrix, from its norm
+        // taken before the factors overwrote it.
+        let condition = norm * self.lu.inverse_one_norm_estimate();
+        if condition.is_finite() {
+            condition.max(1.0)
         } else {
-            1.0
-        };
-        (EquilibratedLu { lu, rows, columns }, condition)
+            f64::INFINITY
+        }
     }
 
     /// `det M`: `det(R M C)` over the scalings' (exact) product.
@@ -105,10 +149,9 @@ impl EquilibratedLu {
     }
 }
 
-/// The condition matrix `M` at `(S, x0)`.
-fn condition_matrix(s: &[f64], n: usize, x0: &[f64]) -> Matrix {
+/// The condition matrix `M` at `(S, x0)`, into `matrix` (`N − 1` square).
+fn condition_matrix_into(s: &[f64], n: usize, x0: &[f64], matrix: &mut Matrix) {
     let m = n - 1;
-    let mut matrix = Matrix::zeros(m, m);
     for col in 0..m {
         let b = col + 1;
         for row in 0..m {
@@ -117,55 +160,70 @@ fn condition_matrix(s: &[f64], n: usize, x0: &[f64]) -> Matrix {
             matrix[(row, col)] = s[a * n + b] - s[b] * x0[a];
         }
     }
-    matrix
 }
 
 /// Solves the conditions for the state; `None` when they are singular or
 /// the result is not finite.
 pub fn recover(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Recovered> {
-    solve_conditions(f, s, x0, true)
+    let mut out = Recovered::empty();
+    recover_into(f, s, x0, &mut out).then_some(out)
+}
+
+/// [`recover`] into `out`, reusing its storage (the field's windows
+/// recover a state at every step); `false` where `recover` gives `None`
+/// (`out` then holds nothing of use).
+pub fn recover_into(f: &[f64], s: &[f64], x0: &[f64], out: &mut Recovered) -> bool {
+    solve_conditions(f, s, x0, true, out)
 }
 
 /// The state alone, for output between steps whose conditions were
 /// checked: no condition estimate (about a third of the solve's cost).
 pub fn recover_state(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Vec<f64>> {
-    solve_conditions(f, s, x0, false).map(|recovered| recovered.state)
+    let mut out = Recovered::empty();
+    solve_conditions(f, s, x0, false, &mut out).then_some(out.state)
 }
 
-/// [`recover`], with the condition estimate only when `estimate` (else
-/// `condition` is 1).
-fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool) -> Option<Recovered> {
+/// [`recover_state`] into `out`'s storage (its `state`; `condition` is 1).
+pub fn recover_state_into(f: &[f64], s: &[f64], x0: &[f64], out: &mut Recovered) -> bool {
+    solve_conditions(f, s, x0, false, out)
+}
+
+/// [`recover`] into `out`, with the condition estimate only when
+/// `estimate` (else `condition` is 1).
+fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool, out: &mut Recovered) -> bool {
     let n = f.len();
     let growth = s.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     if !growth.is_finite() || f.iter().any(|v| !v.is_finite()) {
-        return None;
+        return false;
     }
+    out.growth = growth;
+    out.state.clear();
     if n == 1 {
-        return Some(Recovered {
-            state: vec![f[0]],
-            condition: 1.0,
-            determinant: 1.0,
-            growth,
-            formation: 1.0,
-            lu: None,
-        });
+        out.state.push(f[0]);
+        out.condition = 1.0;
+        out.determinant = 1.0;
+        out.formation = 1.0;
+        out.lu = None;
+        return true;
     }
     let m = n - 1;
-    let matrix = condition_matrix(s, n, x0);
-    let mut z: Vec<f64> = (0..m)
-        .map(|row| {
-            let a = row + 1;
-            -(s[a * n] - s[0] * x0[a])
-        })
-        .collect();
-    // Magnitudes of the terms of each entry against the entries.
+    // The state is (x_1, z): the right side z of the conditions first,
+    // solved in place.
+    out.state.resize(n, 0.0);
+    let z = &mut out.state[1..];
+    for (row, v) in z.iter_mut().enumerate() {
+        let a = row + 1;
+        *v = -(s[a * n] - s[0] * x0[a]);
+    }
+    // Magnitudes of the terms of each entry against the entries (the
+    // entries as `condition_matrix_into` forms them).
     let (mut terms, mut entries) = (0.0_f64, 0.0_f64);
     for col in 0..m {
         let b = col + 1;
         for row in 0..m {
             let a = row + 1;
             terms = terms.max(s[a * n + b].abs() + (s[b] * x0[a]).abs());
-            entries = entries.max(matrix[(row, col)].abs());
+            entries = entries.max((s[a * n + b] - s[b] * x0[a]).abs());
         }
     }
     for (row, &value) in z.iter().enumerate() {
@@ -173,34 +231,36 @@ fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool) -> Option<
         terms = terms.max(s[a * n].abs() + (s[0] * x0[a]).abs());
         entries = entries.max(value.abs());
     }
-    let formation = if entries > 0.0 {
+    out.formation = if entries > 0.0 {
         (terms / entries).max(1.0)
     } else {
         f64::INFINITY
     };
-    let (lu, condition) = EquilibratedLu::new(matrix, estimate);
+    let lu = out.lu.get_or_insert_with(EquilibratedLu::empty);
+    let condition = lu.refactor(s, n, x0, estimate);
     if lu.lu.is_singular() {
-        return None;
+        return false;
     }
-    let determinant = lu.determinant();
-    lu.solve_in_place(&mut z);
-    let mut state = Vec::with_capacity(n);
-    state.push(f[0] + (1..n).map(|a| f[a] * z[a - 1]).sum::<f64>());
-    state.extend_from_slice(&z);
-    if state.iter().any(|v| !v.is_finite()) || !condition.is_finite() {
-        return None;
-    }
-    Some(Recovered {
-        state,
-        condition,
-        determinant,
-        growth,
-        formation,
-        lu: Some(lu),
-    })
+    out.condition = condition;
+    out.determinant = lu.determinant();
+    lu.solve_in_place(z);
+    out.state[0] = f[0] + (1..n).map(|a| f[a] * out.state[a]).sum::<f64>();
+    out.state.iter().all(|v| v.is_finite()) && condition.is_finite()
 }
 
 impl Recovered {
+    /// Storage for [`recover_into`].
+    pub fn empty() -> Recovered {
+        Recovered {
+            state: Vec::new(),
+            condition: 1.0,
+            determinant: 1.0,
+            growth: 0.0,
+            formation: 1.0,
+            lu: None,
+        }
+    }
+
     /// The state of another initial state (an ensemble member) through the
     /// same field: its coefficients `f` and sensitivities `S` differ from
     /// these only in the free term's (its `c_1` differs), so the condition
@@ -229,28 +289,100 @@ impl Recovered {
         };
         let z = &self.state[1..];
         // δz = M⁻¹ (δr − δM z), δr_A = −(δS_1A − δS_11 x_A0),
-        // (δM z)_A = Σ_B (δS_BA − δS_B1 x_A0) z_B.
-        let mut dz: Vec<f64> = (1..n)
-            .map(|a| {
-                let dr = -(ds[a * n] - ds[0] * x0[a]);
-                let dm_z: f64 = (1..n)
-                    .map(|b| (ds[a * n + b] - ds[b] * x0[a]) * z[b - 1])
-                    .sum();
-                dr - dm_z
-            })
-            .collect();
-        lu.solve_in_place(&mut dz);
-        dx[0] = df[0]
+        // (δM z)_A = Σ_B (δS_BA − δS_B1 x_A0) z_B; into dx[1..].
+        let (dx0, dz) = dx.split_at_mut(1);
+        for (a, v) in (1..n).zip(dz.iter_mut()) {
+            let dr = -(ds[a * n] - ds[0] * x0[a]);
+            let dm_z: f64 = (1..n)
+                .map(|b| (ds[a * n + b] - ds[b] * x0[a]) * z[b - 1])
+                .sum();
+            *v = dr - dm_z;
+        }
+        lu.solve_in_place(dz);
+        dx0[0] = df[0]
             + (1..n)
                 .map(|a| df[a] * z[a - 1] + f[a] * dz[a - 1])
                 .sum::<f64>();
-        dx[1..n].copy_from_slice(&dz);
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The power of two from the exponent's bits is `2^(−round(log2 x))`
+    /// as `log2` computes it, bit for bit: over a sweep of magnitudes,
+    /// next to √2 (where the rounding turns), at the ends of the range.
+    #[test]
+    fn power_of_two_is_the_log2_formula() {
+        let reference = |x: f64| {
+            if x > 0.0 && x.is_finite() {
+                (-x.log2().round()).exp2()
+            } else {
+                1.0
+            }
+        };
+        let mut values = vec![
+            0.0,
+            -1.0,
+            f64::INFINITY,
+            f64::NAN,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+        ];
+        values.extend([5e-324, 1e-310, 1.0, 2.0, 0.75, 1.5]);
+        let mut x = 1e-300;
+        while x < 1e300 {
+            values.push(x);
+            x *= 1.37;
+        }
+        for k in -1030..=1030 {
+            let at = std::f64::consts::SQRT_2 * 2f64.powi(k);
+            let mut v = at;
+            for _ in 0..4 {
+                v = v.next_down();
+            }
+            for _ in 0..9 {
+                values.push(v);
+                v = v.next_up();
+            }
+            values.push(at * (1.0 + 2e-12));
+            values.push(at * (1.0 - 2e-12));
+        }
+        for v in values {
+            assert_eq!(power_of_two(v).to_bits(), reference(v).to_bits(), "{v:e}");
+        }
+    }
+
+    /// Storage reused across sizes and values recovers what a fresh solve
+    /// recovers, to the bit.
+    #[test]
+    fn recovery_into_reused_storage_is_a_fresh_recovery() {
+        let mut reused = Recovered::empty();
+        for (n, seed) in [(3, 0.3), (2, 0.7), (4, 1.1), (3, 1.9), (1, 0.2)] {
+            let f: Vec<f64> = (0..n).map(|i| (seed + i as f64).sin()).collect();
+            let mut s: Vec<f64> = (0..n * n)
+                .map(|k| 0.3 * (seed * 3.0 + k as f64).cos())
+                .collect();
+            for i in 0..n {
+                s[i * n + i] += 1.0;
+            }
+            let x0: Vec<f64> = (0..n).map(|i| (seed * 2.0 - i as f64).cos()).collect();
+            let fresh = recover(&f, &s, &x0).unwrap();
+            assert!(recover_into(&f, &s, &x0, &mut reused));
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&reused.state), bits(&fresh.state), "n = {n}");
+            assert_eq!(reused.condition.to_bits(), fresh.condition.to_bits());
+            assert_eq!(reused.determinant.to_bits(), fresh.determinant.to_bits());
+            assert_eq!(reused.formation.to_bits(), fresh.formation.to_bits());
+            let ds: Vec<f64> = s.iter().map(|v| 1e-7 * v).collect();
+            let df: Vec<f64> = f.iter().map(|v| -2e-7 * v).collect();
+            let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+            fresh.map_error(&f, &x0, &df, &ds, &mut a);
+            reused.map_error(&f, &x0, &df, &ds, &mut b);
+            assert_eq!(bits(&a), bits(&b));
+        }
+    }
 
     /// The field of `x' = a x` (constant a) from the anchor: the recovered
     /// state must be `exp(a t) x0` for every anchor, and the mapped error

@@ -10,7 +10,7 @@
 //! the window ends and the caller re-anchors.
 
 use super::coefficients::FieldSystem;
-use super::conditions::{recover, recover_state, Recovered};
+use super::conditions::{recover, recover_into, recover_state_into, Recovered};
 use super::FieldOptions;
 use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
@@ -72,6 +72,10 @@ pub fn cancellation(f: &[f64], x: &[f64], tol: Tolerance) -> f64 {
 /// Scratch of the error measure, kept with the window (a step would
 /// otherwise allocate six vectors).
 struct Buffers {
+    /// Output between steps: the coefficients there, and the state's
+    /// recovery (storage reused from sample to sample).
+    y: Vec<f64>,
+    output: Recovered,
     dx3: Vec<f64>,
     dx5: Vec<f64>,
     f: Vec<f64>,
@@ -83,6 +87,8 @@ struct Buffers {
 impl Buffers {
     fn new(n: usize) -> Buffers {
         Buffers {
+            y: Vec::new(),
+            output: Recovered::empty(),
             dx3: vec![0.0; n],
             dx5: vec![0.0; n],
             f: vec![0.0; n],
@@ -101,8 +107,10 @@ struct StateMeasure<'a, F: FieldSystem + ?Sized> {
     anchor_x: &'a [f64],
     /// The state at the start of the step being tried.
     start: &'a [f64],
-    /// The recovered state at the last trial's end.
-    trial: Option<Recovered>,
+    /// The recovered state at the last trial's end (storage reused from
+    /// step to step), and whether it holds one.
+    trial: &'a mut Recovered,
+    trial_ok: bool,
     /// Why the last trial was declined.
     declined: Option<Decline>,
     b: &'a mut Buffers,
@@ -129,16 +137,16 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
         e5: &[f64],
     ) -> Option<f64> {
         let b = &mut *self.b;
+        self.trial_ok = false;
         let Some(loss) = self.system.field(y1, &mut b.f, &mut b.s) else {
             self.declined = Some(Decline::Conditions);
-            self.trial = None;
             return None;
         };
-        let Some(rec) = recover(&b.f, &b.s, self.anchor_x) else {
+        if !recover_into(&b.f, &b.s, self.anchor_x, self.trial) {
             self.declined = Some(Decline::Conditions);
-            self.trial = None;
             return None;
-        };
+        }
+        let rec = &*self.trial;
         // Rounding in S, amplified by the conditions, must stay well below
         // the tolerance (a bound: the product of the worst cases).
         let rounding = loss * rec.formation * rec.condition * f64::EPSILON;
@@ -156,7 +164,6 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
             } else {
                 Decline::Conditions
             });
-            self.trial = None;
             return None;
         }
         self.system.field_change(y1, e3, &mut b.df, &mut b.ds);
@@ -164,7 +171,7 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
         self.system.field_change(y1, e5, &mut b.df, &mut b.ds);
         rec.map_error(&b.f, self.anchor_x, &b.df, &b.ds, &mut b.dx5);
         let err = hairer_error(self.tol, h, self.start, &rec.state, &b.dx3, &b.dx5);
-        self.trial = Some(rec);
+        self.trial_ok = true;
         Some(err)
     }
 }
@@ -290,6 +297,9 @@ pub struct Window {
     kind: StepperKind,
     /// The recovered state at the stepper's time, and its conditioning.
     current: Recovered,
+    /// Storage for the next step's trial, swapped with `current` when it
+    /// is accepted.
+    spare: Recovered,
     previous_state: Vec<f64>,
     steps: usize,
     buffers: Buffers,
@@ -338,14 +348,17 @@ impl Window {
                 },
             ));
         }
+        // Asked only for a Magnus window: it linearises (the same
+        // linearisation the integrator's first evaluation then reuses) and
+        // allocates, at every window.
         let magnus_possible =
-            FieldSystem::generator(system, t, &mut Matrix::zeros(n + 1, n + 1)).is_some();
+            || FieldSystem::generator(system, t, &mut Matrix::zeros(n + 1, n + 1)).is_some();
         let (stepper, kind): (StepperOf<OfField>, _) = match kind {
             StepperKind::Stiff => (
                 Integrator::Stiff.start::<OfField>(system, t, &y, options.tol, h_max, h0)?,
                 StepperKind::Stiff,
             ),
-            StepperKind::Magnus if magnus_possible => {
+            StepperKind::Magnus if magnus_possible() => {
                 let h = match h0 {
                     Some(h) => h,
                     None => {
@@ -379,6 +392,7 @@ impl Window {
             kind,
             previous_state: x.to_vec(),
             current,
+            spare: Recovered::empty(),
             steps: 0,
             buffers: Buffers::new(n),
             declined: None,
@@ -464,7 +478,8 @@ impl Window {
             options,
             anchor_x: &self.anchor_x,
             start: &self.current.state,
-            trial: None,
+            trial: &mut self.spare,
+            trial_ok: false,
             declined: None,
             b: &mut self.buffers,
         };
@@ -482,16 +497,23 @@ impl Window {
                 .step_measured(system, t_limit, budget, &mut measure)?;
         }
         self.declined = measure.declined;
+        let trial_ok = measure.trial_ok;
         match outcome {
             StepOutcome::Declined => Ok(WindowStep::Ended),
             StepOutcome::Accepted => {
-                let Some(rec) = measure.trial.take() else {
+                if !trial_ok {
                     return Ok(WindowStep::Ended);
-                };
-                if !options.reanchor {
-                    check_without_reanchoring(&rec, options, self.previous_time(), self.time())?;
                 }
-                self.previous_state = std::mem::replace(&mut self.current, rec).state;
+                if !options.reanchor {
+                    check_without_reanchoring(
+                        &self.spare,
+                        options,
+                        self.previous_time(),
+                        self.time(),
+                    )?;
+                }
+                self.previous_state.copy_from_slice(&self.current.state);
+                std::mem::swap(&mut self.current, &mut self.spare);
                 self.steps += 1;
                 Ok(WindowStep::Accepted)
             }
@@ -514,8 +536,9 @@ impl Window {
             out.copy_from_slice(&self.previous_state);
             return Ok(());
         }
-        let mut y = vec![0.0; system.dim()];
-        self.stepper.dense(system, t, &mut y)?;
+        let b = &mut self.buffers;
+        b.y.resize(system.dim(), 0.0);
+        self.stepper.dense(system, t, &mut b.y)?;
         let singular = || {
             Failure::new(
                 t,
@@ -524,19 +547,13 @@ impl Window {
                 },
             )
         };
-        let b = &mut self.buffers;
-        if system.field(&y, &mut b.f, &mut b.s).is_none() {
+        if system.field(&b.y, &mut b.f, &mut b.s).is_none() {
             return Err(singular());
         }
-        let state = recover_state(&b.f, &b.s, &self.anchor_x).ok_or_else(|| {
-            Failure::new(
-                t,
-                FailureKind::SingularConditionMatrix {
-                    condition: f64::INFINITY,
-                },
-            )
-        })?;
-        out.copy_from_slice(&state);
+        if !recover_state_into(&b.f, &b.s, &self.anchor_x, &mut b.output) {
+            return Err(singular());
+        }
+        out.copy_from_slice(&b.output.state);
         Ok(())
     }
 
