@@ -84,16 +84,65 @@ impl Eq for Node {}
 
 impl Hash for Node {
     fn hash<H: Hasher>(&self, state: &mut H) {
-        std::mem::discriminant(self).hash(state);
         match self {
-            Node::Const(v) => v.to_bits().hash(state),
-            Node::Sym(s) => s.hash(state),
-            Node::Add(ts) | Node::Mul(ts) => ts.hash(state),
-            Node::Pow(a, b) => (a, b).hash(state),
-            Node::Func(f, a) => (f, a).hash(state),
-            Node::Select(g, a, b) => (g, a, b).hash(state),
+            Node::Const(v) => {
+                state.write_u8(0);
+                state.write_u64(v.to_bits());
+            }
+            Node::Sym(s) => {
+                state.write_u8(1);
+                s.hash(state);
+            }
+            Node::Add(ts) => hash_sequence(Sequence::Add, ts, state),
+            Node::Mul(ts) => hash_sequence(Sequence::Mul, ts, state),
+            Node::Pow(a, b) => {
+                state.write_u8(4);
+                (a, b).hash(state);
+            }
+            Node::Func(f, a) => {
+                state.write_u8(5);
+                (f, a).hash(state);
+            }
+            Node::Select(g, a, b) => {
+                state.write_u8(6);
+                (g, a, b).hash(state);
+            }
         }
     }
+}
+
+/// Which n-ary node a sequence of children makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Sequence {
+    Add,
+    Mul,
+}
+
+/// The hash of `Node::Add(ts)` or `Node::Mul(ts)`, from the children alone:
+/// a sum or product is looked up without boxing its children first.
+fn hash_sequence<H: Hasher>(kind: Sequence, ts: &[ExprId], state: &mut H) {
+    state.write_u8(match kind {
+        Sequence::Add => 2,
+        Sequence::Mul => 3,
+    });
+    state.write_usize(ts.len());
+    for t in ts {
+        state.write_u32(t.0);
+    }
+}
+
+fn sequence_node(kind: Sequence, ts: &[ExprId]) -> Node {
+    let ts: Box<[ExprId]> = ts.into();
+    match kind {
+        Sequence::Add => Node::Add(ts),
+        Sequence::Mul => Node::Mul(ts),
+    }
+}
+
+fn fx_hash(node: &Node) -> u64 {
+    let mut state = FxHasher::default();
+    node.hash(&mut state);
+    state.finish()
 }
 
 /// Display names of the model's symbols, by index.
@@ -169,7 +218,11 @@ pub struct Arena {
     aux_index: HashMap<String, u32>,
     pub(crate) nodes: Vec<Node>,
     pub(crate) meta: Vec<Meta>,
-    interned: FxMap<Node, ExprId>,
+    /// Every node by the hash of its content (`fx_hash`): the node itself
+    /// is stored once, in `nodes`. Nodes whose hashes collide with the
+    /// first node of that hash are in `collisions`.
+    interned: FxMap<u64, ExprId>,
+    collisions: FxMap<u64, Vec<ExprId>>,
     pub(crate) symbols: Vec<Symbol>,
     symbol_index: FxMap<Symbol, u32>,
     pub(crate) derivatives: FxMap<(ExprId, Derivation), ExprId>,
@@ -191,6 +244,8 @@ pub struct Arena {
     /// sorting every child's set together (long sums of terms that hold
     /// most of the symbols).
     symbol_marks: Vec<bool>,
+    /// A reused buffer for the factors of a product being looked up.
+    pub(crate) scratch: Vec<ExprId>,
     zero: ExprId,
     one: ExprId,
 }
@@ -204,6 +259,7 @@ impl Arena {
             nodes: Vec::new(),
             meta: Vec::new(),
             interned: FxMap::default(),
+            collisions: FxMap::default(),
             symbols: Vec::new(),
             symbol_index: FxMap::default(),
             derivatives: FxMap::default(),
@@ -211,6 +267,7 @@ impl Arena {
             order_memo: RefCell::new(FxMap::default()),
             walk_marks: RefCell::new(Vec::new()),
             symbol_marks: Vec::new(),
+            scratch: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
         };
@@ -378,14 +435,80 @@ impl Arena {
 
     /// Stores `node` (which must already be canonical) once, and returns its id.
     pub(crate) fn intern(&mut self, node: Node) -> ExprId {
-        if let Some(&id) = self.interned.get(&node) {
+        let hash = fx_hash(&node);
+        if let Some(id) = self.find(hash, |n| *n == node) {
             return id;
         }
+        self.insert(hash, node)
+    }
+
+    /// `intern(Node::Add(ts))` or `intern(Node::Mul(ts))`, with the children
+    /// boxed only when the node is new.
+    pub(crate) fn intern_sequence(&mut self, kind: Sequence, ts: &[ExprId]) -> ExprId {
+        let (hash, found) = self.find_sequence(kind, ts);
+        match found {
+            Some(id) => id,
+            None => self.insert(hash, sequence_node(kind, ts)),
+        }
+    }
+
+    /// `intern_sequence(Sequence::Mul, &fs[1..])` for the product `t = fs`
+    /// (its factors but the first, a number); `t` itself when it is not a
+    /// product of more than two factors.
+    pub(crate) fn intern_product_tail(&mut self, t: ExprId) -> ExprId {
+        let (hash, found) = match self.node(t) {
+            Node::Mul(fs) if fs.len() > 2 => self.find_sequence(Sequence::Mul, &fs[1..]),
+            _ => return t,
+        };
+        if let Some(id) = found {
+            return id;
+        }
+        let node = match self.node(t) {
+            Node::Mul(fs) => sequence_node(Sequence::Mul, &fs[1..]),
+            _ => return t,
+        };
+        self.insert(hash, node)
+    }
+
+    /// The hash of a sum or product of `ts`, and the node if it exists.
+    fn find_sequence(&self, kind: Sequence, ts: &[ExprId]) -> (u64, Option<ExprId>) {
+        let mut state = FxHasher::default();
+        hash_sequence(kind, ts, &mut state);
+        let hash = state.finish();
+        let found = self.find(hash, |n| match (kind, n) {
+            (Sequence::Add, Node::Add(xs)) | (Sequence::Mul, Node::Mul(xs)) => xs[..] == *ts,
+            _ => false,
+        });
+        (hash, found)
+    }
+
+    /// The node of hash `hash` that `is` accepts.
+    fn find(&self, hash: u64, is: impl Fn(&Node) -> bool) -> Option<ExprId> {
+        let &first = self.interned.get(&hash)?;
+        if is(self.node(first)) {
+            return Some(first);
+        }
+        self.collisions
+            .get(&hash)?
+            .iter()
+            .copied()
+            .find(|&id| is(self.node(id)))
+    }
+
+    /// Stores a node not yet in the arena.
+    fn insert(&mut self, hash: u64, node: Node) -> ExprId {
         let meta = self.meta_of(&node);
         let id = ExprId(self.nodes.len() as u32);
-        self.nodes.push(node.clone());
+        self.nodes.push(node);
         self.meta.push(meta);
-        self.interned.insert(node, id);
+        match self.interned.entry(hash) {
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                slot.insert(id);
+            }
+            std::collections::hash_map::Entry::Occupied(_) => {
+                self.collisions.entry(hash).or_default().push(id);
+            }
+        }
         id
     }
 
