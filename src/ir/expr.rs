@@ -208,6 +208,8 @@ pub(crate) struct Meta {
     pub(crate) free: Box<[u32]>,
     /// Depends on `t` or on some jet: moves under the total derivative.
     pub(crate) varies: bool,
+    /// Holds a selection (`Node::Select`) somewhere below.
+    pub(crate) selects: bool,
 }
 
 /// The hash-consed DAG of expressions, with its caches.
@@ -517,18 +519,23 @@ impl Arena {
             Node::Const(_) => Meta {
                 free: Box::new([]),
                 varies: false,
+                selects: false,
             },
             Node::Sym(s) => {
                 let slot = self.slot_for(*s);
                 Meta {
                     free: Box::new([slot]),
                     varies: matches!(s, Symbol::Time | Symbol::Jet { .. } | Symbol::Input(_)),
+                    selects: false,
                 }
             }
             Node::Add(ts) | Node::Mul(ts) => self.union_meta(ts),
             Node::Pow(a, b) => self.union_meta(&[*a, *b]),
             Node::Func(_, a) => self.meta[a.index()].clone(),
-            Node::Select(g, a, b) => self.union_meta(&[*g, *a, *b]),
+            Node::Select(g, a, b) => Meta {
+                selects: true,
+                ..self.union_meta(&[*g, *a, *b])
+            },
         }
     }
 
@@ -537,6 +544,7 @@ impl Arena {
         marks.resize(self.symbols.len(), false);
         let mut free: Vec<u32> = Vec::new();
         let mut varies = false;
+        let mut selects = false;
         for c in children {
             let m = &self.meta[c.index()];
             for &i in m.free.iter() {
@@ -545,6 +553,7 @@ impl Arena {
                 }
             }
             varies |= m.varies;
+            selects |= m.selects;
         }
         for &i in &free {
             marks[i as usize] = false;
@@ -553,6 +562,7 @@ impl Arena {
         Meta {
             free: free.into_boxed_slice(),
             varies,
+            selects,
         }
     }
 

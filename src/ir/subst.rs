@@ -162,6 +162,12 @@ impl Arena {
         if let Some(&r) = memo.get(&e) {
             return r;
         }
+        // Without a selection below, rebuilding gives the node back (its
+        // children come back unchanged, and a canonical node is its own
+        // canonical form): not rebuilt.
+        if !self.meta[e.index()].selects {
+            return e;
+        }
         let r = match self.node(e).clone() {
             Node::Const(_) | Node::Sym(_) => e,
             Node::Add(ts) => {
@@ -201,8 +207,6 @@ impl Arena {
 
     /// Whether `e` holds a selection.
     pub fn has_select(&self, e: ExprId) -> bool {
-        self.reachable(&[e])
-            .iter()
-            .any(|&n| matches!(self.node(n), Node::Select(..)))
+        self.meta[e.index()].selects
     }
 }
