@@ -6,6 +6,7 @@
 //! be cached per node. The canonicalising constructors live in `canon.rs`;
 //! this file only interns nodes that are already canonical.
 
+pub(crate) use super::free::FreeSet;
 use crate::syntax::ast::Func;
 use std::cell::RefCell;
 use std::cmp::Ordering;
@@ -204,8 +205,8 @@ pub(crate) enum Derivation {
 /// Per-node facts computed once when the node is interned.
 #[derive(Debug, Clone)]
 pub(crate) struct Meta {
-    /// Free symbols as sorted indices into `Arena::symbols`.
-    pub(crate) free: Box<[u32]>,
+    /// Free symbols as indices into `Arena::symbols`.
+    pub(crate) free: FreeSet,
     /// Depends on `t` or on some jet: moves under the total derivative.
     pub(crate) varies: bool,
     /// Holds a selection (`Node::Select`) somewhere below.
@@ -241,11 +242,8 @@ pub struct Arena {
     /// large arena (the tidy forms' operation counts, one per expression)
     /// costs its own size, not a fresh `Vec` of the arena's.
     walk_marks: RefCell<Vec<bool>>,
-    /// The marks of `union_meta` by symbol slot, all false between calls:
-    /// a union of free-symbol sets marks each symbol once instead of
-    /// sorting every child's set together (long sums of terms that hold
-    /// most of the symbols).
-    symbol_marks: Vec<bool>,
+    /// The words of `union_meta`'s free-symbol set, reused.
+    symbol_words: Vec<u64>,
     /// A reused buffer for the factors of a product being looked up.
     pub(crate) scratch: Vec<ExprId>,
     zero: ExprId,
@@ -268,7 +266,7 @@ impl Arena {
             lets: FxMap::default(),
             order_memo: RefCell::new(FxMap::default()),
             walk_marks: RefCell::new(Vec::new()),
-            symbol_marks: Vec::new(),
+            symbol_words: Vec::new(),
             scratch: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
@@ -360,13 +358,13 @@ impl Arena {
         self.meta[e.index()]
             .free
             .iter()
-            .map(|&i| self.symbols[i as usize])
+            .map(|i| self.symbols[i as usize])
             .collect()
     }
 
     pub fn depends_on(&self, e: ExprId, s: Symbol) -> bool {
         match self.symbol_index.get(&s) {
-            Some(i) => self.meta[e.index()].free.binary_search(i).is_ok(),
+            Some(&i) => self.meta[e.index()].free.contains(i),
             None => false,
         }
     }
@@ -376,7 +374,7 @@ impl Arena {
         self.meta[e.index()]
             .free
             .iter()
-            .filter_map(|&i| match self.symbols[i as usize] {
+            .filter_map(|i| match self.symbols[i as usize] {
                 Symbol::Jet { coord: c, order } if c == coord => Some(order),
                 _ => None,
             })
@@ -517,14 +515,14 @@ impl Arena {
     fn meta_of(&mut self, node: &Node) -> Meta {
         match node {
             Node::Const(_) => Meta {
-                free: Box::new([]),
+                free: FreeSet::default(),
                 varies: false,
                 selects: false,
             },
             Node::Sym(s) => {
                 let slot = self.slot_for(*s);
                 Meta {
-                    free: Box::new([slot]),
+                    free: FreeSet::single(slot),
                     varies: matches!(s, Symbol::Time | Symbol::Jet { .. } | Symbol::Input(_)),
                     selects: false,
                 }
@@ -540,27 +538,18 @@ impl Arena {
     }
 
     fn union_meta(&mut self, children: &[ExprId]) -> Meta {
-        let marks = &mut self.symbol_marks;
-        marks.resize(self.symbols.len(), false);
-        let mut free: Vec<u32> = Vec::new();
+        let words = &mut self.symbol_words;
+        words.clear();
         let mut varies = false;
         let mut selects = false;
         for c in children {
             let m = &self.meta[c.index()];
-            for &i in m.free.iter() {
-                if !std::mem::replace(&mut marks[i as usize], true) {
-                    free.push(i);
-                }
-            }
+            m.free.or_into(words);
             varies |= m.varies;
             selects |= m.selects;
         }
-        for &i in &free {
-            marks[i as usize] = false;
-        }
-        free.sort_unstable();
         Meta {
-            free: free.into_boxed_slice(),
+            free: FreeSet::from_words(words),
             varies,
             selects,
         }

@@ -33,11 +33,7 @@ impl Arena {
 
     fn touches(&self, e: ExprId, slots: &[u32]) -> bool {
         let free = &self.meta[e.index()].free;
-        if free.len() < slots.len() {
-            free.iter().any(|s| slots.binary_search(s).is_ok())
-        } else {
-            slots.iter().any(|s| free.binary_search(s).is_ok())
-        }
+        slots.iter().any(|&s| free.contains(s))
     }
 
     fn subst_rec(
