@@ -135,7 +135,7 @@ impl Arena {
 
     /// Whether a selection in `e` has a switching function depending on `x`.
     pub fn switches_on(&self, e: ExprId, x: Symbol) -> bool {
-        if !self.depends_on(e, x) {
+        if !self.depends_on(e, x) || !self.has_select(e) {
             return false;
         }
         self.reachable(&[e])
