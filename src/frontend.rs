@@ -63,12 +63,17 @@ pub fn check_and_derive(source: &str) -> Checked {
 
 /// [`check_and_derive`] for a caller that needs only the checked model
 /// (`lagc check`): the derivation goes on into the kernel without the
-/// copy that returning it takes.
-pub fn check_through_kernel(source: &str) -> Result<Model, Vec<Diagnostic>> {
+/// copy that returning it takes. The kernel is returned so that a caller
+/// about to exit may leave it unfreed (a large model's arena holds
+/// millions of nodes, and freeing them one by one is a visible share of
+/// `lagc check`).
+pub fn check_through_kernel(
+    source: &str,
+) -> Result<(Model, crate::kernel::Kernel), Vec<Diagnostic>> {
     let model = frontend(source)?;
     let (derivation, _) = crate::mechanics::derive_checked(&model)?;
-    crate::pipeline::kernel_of(&model, derivation)?;
-    Ok(model)
+    let (kernel, _) = crate::pipeline::kernel_of(&model, derivation)?;
+    Ok((model, kernel))
 }
 
 /// Warnings about the text that do not stop a model, reported by every

@@ -10,7 +10,7 @@
 //! `(x^a)^n → x^(an)` for integer `n`; `sqrt(x) → x^(1/2)`. Products of sums
 //! are never expanded: that keeps the DAG small.
 
-use super::expr::{Arena, ExprId, FxMap, Node, Symbol};
+use super::expr::{Arena, ExprId, FxMap, Node, Sequence, Symbol};
 use crate::syntax::ast::Func;
 use std::cmp::Ordering;
 
@@ -69,7 +69,24 @@ fn is_integer(v: f64) -> bool {
 }
 
 impl Arena {
+    /// The canonical sum of `terms`. Equal terms may come many times (a
+    /// Jacobian's sum of the `O(N)` equal partials `c·∂S_k/∂x` of a row):
+    /// everything that builds or interns nodes is done once per distinct
+    /// term and remembered, and only the cheap part — copying ids and
+    /// adding coefficients, in the order of the terms — is done per copy.
+    /// The result is that of doing it all per copy: the memos hold values
+    /// of pure functions of the arena, and the coefficients are summed in
+    /// the same order.
     pub fn add(&mut self, terms: &[ExprId]) -> ExprId {
+        // One term is its own sum (most of the calls of a Jacobian's
+        // product rule, where one factor moves): returned before the
+        // general path rebuilds and re-interns it. (That path would also
+        // intern `a·b` on splitting `c·a·b`, a node nothing refers to.)
+        if let [t] = *terms {
+            if self.sum_of_itself(t) {
+                return t;
+            }
+        }
         // (rest, coefficient): a term is `coefficient · rest`; a constant has
         // rest = 1. `index` maps a rest to its entry while merging is finite.
         let mut entries: Vec<(ExprId, f64)> = Vec::new();
@@ -82,15 +99,20 @@ impl Arena {
             }
         }
         self.distribute_collecting(&mut flat);
-        // A term repeated next to itself (a Jacobian's sum of many equal
-        // partials) is split once: splitting `c·a·b` interns `a·b`.
-        let mut last: Option<(ExprId, (f64, ExprId))> = None;
+        // Splitting `c·a·b` interns `a·b`: done once per such term.
+        let mut split: FxMap<ExprId, (f64, ExprId)> = FxMap::default();
         for t in flat {
-            let (c, rest) = match last {
-                Some((u, split)) if u == t => split,
+            let (c, rest) = match self.node(t) {
+                Node::Mul(fs) if fs.len() > 2 => match split.get(&t) {
+                    Some(&known) => known,
+                    None => {
+                        let known = self.split_coefficient(t);
+                        split.insert(t, known);
+                        known
+                    }
+                },
                 _ => self.split_coefficient(t),
             };
-            last = Some((t, (c, rest)));
             match index.get(&rest) {
                 Some(&i) if (entries[i].1 + c).is_finite() => entries[i].1 += c,
                 _ => {
@@ -108,7 +130,7 @@ impl Arena {
         match built.len() {
             0 => self.zero(),
             1 => built[0],
-            _ => self.intern(Node::Add(built.into_boxed_slice())),
+            _ => self.intern_sequence(Sequence::Add, &built),
         }
     }
 
@@ -119,31 +141,43 @@ impl Arena {
     /// terms collect with nothing is one multiplication, distributed it is
     /// one per term. Repeats while distributing brings new such terms in.
     /// Depends on the multiset of terms only, never on their order.
+    ///
+    /// Worked on the distinct terms (in order of first appearance): a term
+    /// that comes twice is like itself, so every copy of a `c·S` that
+    /// comes more than once is distributed, as the term-by-term rule
+    /// would distribute each copy.
     fn distribute_collecting(&mut self, flat: &mut Vec<ExprId>) {
         loop {
-            // `scaled[i]`: term `i` as `(c, S)` when it is `c·S`.
-            let scaled: Vec<Option<(f64, ExprId)>> = flat
-                .iter()
-                .map(|&t| match self.node(t) {
-                    Node::Mul(fs) if fs.len() == 2 => match (self.node(fs[0]), self.node(fs[1])) {
-                        (Node::Const(c), Node::Add(_)) => Some((*c, fs[1])),
-                        _ => None,
-                    },
-                    _ => None,
-                })
-                .collect();
-            if scaled.iter().all(Option::is_none) {
+            if !flat.iter().any(|&t| self.scaled_sum(t).is_some()) {
                 return;
             }
-            // rest → the first term of `flat` contributing it (itself, or
-            // for `c·S` one of the terms of `S`); `hit[i]`: term `i` shares
-            // a rest with another term.
+            // The distinct terms of `flat`, first appearance first, and how
+            // often each comes; `which[p]`: the distinct term at position
+            // `p` of `flat`.
+            let mut slot: FxMap<ExprId, usize> = FxMap::default();
+            let mut distinct: Vec<(ExprId, u32)> = Vec::new();
+            let mut which: Vec<usize> = Vec::with_capacity(flat.len());
+            for &t in flat.iter() {
+                let i = *slot.entry(t).or_insert(distinct.len());
+                if i == distinct.len() {
+                    distinct.push((t, 0));
+                }
+                distinct[i].1 += 1;
+                which.push(i);
+            }
+            // `scaled[i]`: distinct term `i` as `(c, S)` when it is `c·S`.
+            let scaled: Vec<Option<(f64, ExprId)>> =
+                distinct.iter().map(|&(t, _)| self.scaled_sum(t)).collect();
+            // rest → the first distinct term contributing it (itself, or
+            // for `c·S` one of the terms of `S`); `hit[i]`: a copy of term
+            // `i` shares a rest with another term of `flat` (another copy
+            // of itself included).
             let mut owner: FxMap<ExprId, usize> = FxMap::default();
-            let mut hit = vec![false; flat.len()];
-            for i in 0..flat.len() {
+            let mut hit: Vec<bool> = distinct.iter().map(|&(_, n)| n > 1).collect();
+            for i in 0..distinct.len() {
                 let inner = match scaled[i] {
                     Some((_, sum)) => self.children(sum),
-                    None => vec![flat[i]],
+                    None => vec![distinct[i].0],
                 };
                 for t in inner {
                     let (_, rest) = self.split_coefficient(t);
@@ -159,22 +193,59 @@ impl Arena {
                     }
                 }
             }
-            if !(0..flat.len()).any(|i| hit[i] && scaled[i].is_some()) {
+            if !(0..distinct.len()).any(|i| hit[i] && scaled[i].is_some()) {
                 return;
             }
+            // Each distributed term's replacement, built at its first copy.
+            let mut spread: Vec<Option<Vec<ExprId>>> = vec![None; distinct.len()];
             let mut out = Vec::with_capacity(flat.len());
-            for (i, &t) in flat.iter().enumerate() {
+            for (&t, &i) in flat.iter().zip(&which) {
                 match scaled[i] {
                     Some((c, sum)) if hit[i] => {
-                        let k = self.constant(c);
-                        for u in self.children(sum) {
-                            out.push(self.mul(&[k, u]));
+                        if spread[i].is_none() {
+                            let k = self.constant(c);
+                            let terms: Vec<ExprId> = self
+                                .children(sum)
+                                .into_iter()
+                                .map(|u| self.mul(&[k, u]))
+                                .collect();
+                            spread[i] = Some(terms);
                         }
+                        out.extend_from_slice(spread[i].as_deref().unwrap_or_default());
                     }
                     _ => out.push(t),
                 }
             }
             *flat = out;
+        }
+    }
+
+    /// `t` as `(c, S)` when it is a number times a sum.
+    fn scaled_sum(&self, t: ExprId) -> Option<(f64, ExprId)> {
+        match self.node(t) {
+            Node::Mul(fs) if fs.len() == 2 => match (self.node(fs[0]), self.node(fs[1])) {
+                (Node::Const(c), Node::Add(_)) => Some((*c, fs[1])),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// Whether the sum of the one term `t` is `t` itself, as the general
+    /// path would build it: every node but a sum, and but a number times a
+    /// product (`c·P`, whose factors the general path would flatten into
+    /// `c·p1·p2…`).
+    fn sum_of_itself(&self, t: ExprId) -> bool {
+        match self.node(t) {
+            Node::Add(_) => false,
+            Node::Mul(fs) => match fs[..] {
+                [c, p] => {
+                    !(matches!(self.node(c), Node::Const(_))
+                        && matches!(self.node(p), Node::Mul(_)))
+                }
+                _ => true,
+            },
+            _ => true,
         }
     }
 
@@ -188,8 +259,7 @@ impl Arena {
                     let rest = if fs.len() == 2 {
                         fs[1]
                     } else {
-                        let rest: Box<[ExprId]> = fs[1..].into();
-                        self.intern(Node::Mul(rest))
+                        self.intern_product_tail(t)
                     };
                     (c, rest)
                 }
@@ -208,11 +278,16 @@ impl Arena {
             return self.constant(c);
         }
         let k = self.constant(c);
-        let factors: Box<[ExprId]> = match self.node(rest) {
-            Node::Mul(fs) => std::iter::once(k).chain(fs.iter().copied()).collect(),
-            _ => Box::new([k, rest]),
-        };
-        self.intern(Node::Mul(factors))
+        let mut factors = std::mem::take(&mut self.scratch);
+        factors.clear();
+        factors.push(k);
+        match self.node(rest) {
+            Node::Mul(fs) => factors.extend_from_slice(fs),
+            _ => factors.push(rest),
+        }
+        let product = self.intern_sequence(Sequence::Mul, &factors);
+        self.scratch = factors;
+        product
     }
 
     pub fn mul(&mut self, factors: &[ExprId]) -> ExprId {
@@ -234,8 +309,7 @@ impl Arena {
                 Node::Mul(fs) => match self.node(fs[0]) {
                     Node::Const(_) => {
                         flat.push(fs[0]);
-                        let rest: Box<[ExprId]> = fs[1..].into();
-                        let rest = self.intern(Node::Mul(rest));
+                        let rest = self.intern_product_tail(f);
                         flat.push(rest);
                     }
                     _ => flat.push(f),
@@ -322,7 +396,7 @@ impl Arena {
         if all.len() == 1 {
             return all[0];
         }
-        self.intern(Node::Mul(all.into_boxed_slice()))
+        self.intern_sequence(Sequence::Mul, &all)
     }
 
     pub fn pow(&mut self, base: ExprId, exp: ExprId) -> ExprId {

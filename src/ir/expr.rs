@@ -6,6 +6,7 @@
 //! be cached per node. The canonicalising constructors live in `canon.rs`;
 //! this file only interns nodes that are already canonical.
 
+pub(crate) use super::free::FreeSet;
 use crate::syntax::ast::Func;
 use std::cell::RefCell;
 use std::cmp::Ordering;
@@ -84,16 +85,65 @@ impl Eq for Node {}
 
 impl Hash for Node {
     fn hash<H: Hasher>(&self, state: &mut H) {
-        std::mem::discriminant(self).hash(state);
         match self {
-            Node::Const(v) => v.to_bits().hash(state),
-            Node::Sym(s) => s.hash(state),
-            Node::Add(ts) | Node::Mul(ts) => ts.hash(state),
-            Node::Pow(a, b) => (a, b).hash(state),
-            Node::Func(f, a) => (f, a).hash(state),
-            Node::Select(g, a, b) => (g, a, b).hash(state),
+            Node::Const(v) => {
+                state.write_u8(0);
+                state.write_u64(v.to_bits());
+            }
+            Node::Sym(s) => {
+                state.write_u8(1);
+                s.hash(state);
+            }
+            Node::Add(ts) => hash_sequence(Sequence::Add, ts, state),
+            Node::Mul(ts) => hash_sequence(Sequence::Mul, ts, state),
+            Node::Pow(a, b) => {
+                state.write_u8(4);
+                (a, b).hash(state);
+            }
+            Node::Func(f, a) => {
+                state.write_u8(5);
+                (f, a).hash(state);
+            }
+            Node::Select(g, a, b) => {
+                state.write_u8(6);
+                (g, a, b).hash(state);
+            }
         }
     }
+}
+
+/// Which n-ary node a sequence of children makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Sequence {
+    Add,
+    Mul,
+}
+
+/// The hash of `Node::Add(ts)` or `Node::Mul(ts)`, from the children alone:
+/// a sum or product is looked up without boxing its children first.
+fn hash_sequence<H: Hasher>(kind: Sequence, ts: &[ExprId], state: &mut H) {
+    state.write_u8(match kind {
+        Sequence::Add => 2,
+        Sequence::Mul => 3,
+    });
+    state.write_usize(ts.len());
+    for t in ts {
+        state.write_u32(t.0);
+    }
+}
+
+fn sequence_node(kind: Sequence, ts: &[ExprId]) -> Node {
+    let ts: Box<[ExprId]> = ts.into();
+    match kind {
+        Sequence::Add => Node::Add(ts),
+        Sequence::Mul => Node::Mul(ts),
+    }
+}
+
+fn fx_hash(node: &Node) -> u64 {
+    let mut state = FxHasher::default();
+    node.hash(&mut state);
+    state.finish()
 }
 
 /// Display names of the model's symbols, by index.
@@ -155,10 +205,12 @@ pub(crate) enum Derivation {
 /// Per-node facts computed once when the node is interned.
 #[derive(Debug, Clone)]
 pub(crate) struct Meta {
-    /// Free symbols as sorted indices into `Arena::symbols`.
-    pub(crate) free: Box<[u32]>,
+    /// Free symbols as indices into `Arena::symbols`.
+    pub(crate) free: FreeSet,
     /// Depends on `t` or on some jet: moves under the total derivative.
     pub(crate) varies: bool,
+    /// Holds a selection (`Node::Select`) somewhere below.
+    pub(crate) selects: bool,
 }
 
 /// The hash-consed DAG of expressions, with its caches.
@@ -169,7 +221,11 @@ pub struct Arena {
     aux_index: HashMap<String, u32>,
     pub(crate) nodes: Vec<Node>,
     pub(crate) meta: Vec<Meta>,
-    interned: FxMap<Node, ExprId>,
+    /// Every node by the hash of its content (`fx_hash`): the node itself
+    /// is stored once, in `nodes`. Nodes whose hashes collide with the
+    /// first node of that hash are in `collisions`.
+    interned: FxMap<u64, ExprId>,
+    collisions: FxMap<u64, Vec<ExprId>>,
     pub(crate) symbols: Vec<Symbol>,
     symbol_index: FxMap<Symbol, u32>,
     pub(crate) derivatives: FxMap<(ExprId, Derivation), ExprId>,
@@ -186,11 +242,10 @@ pub struct Arena {
     /// large arena (the tidy forms' operation counts, one per expression)
     /// costs its own size, not a fresh `Vec` of the arena's.
     walk_marks: RefCell<Vec<bool>>,
-    /// The marks of `union_meta` by symbol slot, all false between calls:
-    /// a union of free-symbol sets marks each symbol once instead of
-    /// sorting every child's set together (long sums of terms that hold
-    /// most of the symbols).
-    symbol_marks: Vec<bool>,
+    /// The words of `union_meta`'s free-symbol set, reused.
+    symbol_words: Vec<u64>,
+    /// A reused buffer for the factors of a product being looked up.
+    pub(crate) scratch: Vec<ExprId>,
     zero: ExprId,
     one: ExprId,
 }
@@ -204,13 +259,15 @@ impl Arena {
             nodes: Vec::new(),
             meta: Vec::new(),
             interned: FxMap::default(),
+            collisions: FxMap::default(),
             symbols: Vec::new(),
             symbol_index: FxMap::default(),
             derivatives: FxMap::default(),
             lets: FxMap::default(),
             order_memo: RefCell::new(FxMap::default()),
             walk_marks: RefCell::new(Vec::new()),
-            symbol_marks: Vec::new(),
+            symbol_words: Vec::new(),
+            scratch: Vec::new(),
             zero: ExprId(0),
             one: ExprId(0),
         };
@@ -301,13 +358,13 @@ impl Arena {
         self.meta[e.index()]
             .free
             .iter()
-            .map(|&i| self.symbols[i as usize])
+            .map(|i| self.symbols[i as usize])
             .collect()
     }
 
     pub fn depends_on(&self, e: ExprId, s: Symbol) -> bool {
         match self.symbol_index.get(&s) {
-            Some(i) => self.meta[e.index()].free.binary_search(i).is_ok(),
+            Some(&i) => self.meta[e.index()].free.contains(i),
             None => false,
         }
     }
@@ -317,7 +374,7 @@ impl Arena {
         self.meta[e.index()]
             .free
             .iter()
-            .filter_map(|&i| match self.symbols[i as usize] {
+            .filter_map(|i| match self.symbols[i as usize] {
                 Symbol::Jet { coord: c, order } if c == coord => Some(order),
                 _ => None,
             })
@@ -378,58 +435,123 @@ impl Arena {
 
     /// Stores `node` (which must already be canonical) once, and returns its id.
     pub(crate) fn intern(&mut self, node: Node) -> ExprId {
-        if let Some(&id) = self.interned.get(&node) {
+        let hash = fx_hash(&node);
+        if let Some(id) = self.find(hash, |n| *n == node) {
             return id;
         }
+        self.insert(hash, node)
+    }
+
+    /// `intern(Node::Add(ts))` or `intern(Node::Mul(ts))`, with the children
+    /// boxed only when the node is new.
+    pub(crate) fn intern_sequence(&mut self, kind: Sequence, ts: &[ExprId]) -> ExprId {
+        let (hash, found) = self.find_sequence(kind, ts);
+        match found {
+            Some(id) => id,
+            None => self.insert(hash, sequence_node(kind, ts)),
+        }
+    }
+
+    /// `intern_sequence(Sequence::Mul, &fs[1..])` for the product `t = fs`
+    /// (its factors but the first, a number); `t` itself when it is not a
+    /// product of more than two factors.
+    pub(crate) fn intern_product_tail(&mut self, t: ExprId) -> ExprId {
+        let (hash, found) = match self.node(t) {
+            Node::Mul(fs) if fs.len() > 2 => self.find_sequence(Sequence::Mul, &fs[1..]),
+            _ => return t,
+        };
+        if let Some(id) = found {
+            return id;
+        }
+        let node = match self.node(t) {
+            Node::Mul(fs) => sequence_node(Sequence::Mul, &fs[1..]),
+            _ => return t,
+        };
+        self.insert(hash, node)
+    }
+
+    /// The hash of a sum or product of `ts`, and the node if it exists.
+    fn find_sequence(&self, kind: Sequence, ts: &[ExprId]) -> (u64, Option<ExprId>) {
+        let mut state = FxHasher::default();
+        hash_sequence(kind, ts, &mut state);
+        let hash = state.finish();
+        let found = self.find(hash, |n| match (kind, n) {
+            (Sequence::Add, Node::Add(xs)) | (Sequence::Mul, Node::Mul(xs)) => xs[..] == *ts,
+            _ => false,
+        });
+        (hash, found)
+    }
+
+    /// The node of hash `hash` that `is` accepts.
+    fn find(&self, hash: u64, is: impl Fn(&Node) -> bool) -> Option<ExprId> {
+        let &first = self.interned.get(&hash)?;
+        if is(self.node(first)) {
+            return Some(first);
+        }
+        self.collisions
+            .get(&hash)?
+            .iter()
+            .copied()
+            .find(|&id| is(self.node(id)))
+    }
+
+    /// Stores a node not yet in the arena.
+    fn insert(&mut self, hash: u64, node: Node) -> ExprId {
         let meta = self.meta_of(&node);
         let id = ExprId(self.nodes.len() as u32);
-        self.nodes.push(node.clone());
+        self.nodes.push(node);
         self.meta.push(meta);
-        self.interned.insert(node, id);
+        match self.interned.entry(hash) {
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                slot.insert(id);
+            }
+            std::collections::hash_map::Entry::Occupied(_) => {
+                self.collisions.entry(hash).or_default().push(id);
+            }
+        }
         id
     }
 
     fn meta_of(&mut self, node: &Node) -> Meta {
         match node {
             Node::Const(_) => Meta {
-                free: Box::new([]),
+                free: FreeSet::default(),
                 varies: false,
+                selects: false,
             },
             Node::Sym(s) => {
                 let slot = self.slot_for(*s);
                 Meta {
-                    free: Box::new([slot]),
+                    free: FreeSet::single(slot),
                     varies: matches!(s, Symbol::Time | Symbol::Jet { .. } | Symbol::Input(_)),
+                    selects: false,
                 }
             }
             Node::Add(ts) | Node::Mul(ts) => self.union_meta(ts),
             Node::Pow(a, b) => self.union_meta(&[*a, *b]),
             Node::Func(_, a) => self.meta[a.index()].clone(),
-            Node::Select(g, a, b) => self.union_meta(&[*g, *a, *b]),
+            Node::Select(g, a, b) => Meta {
+                selects: true,
+                ..self.union_meta(&[*g, *a, *b])
+            },
         }
     }
 
     fn union_meta(&mut self, children: &[ExprId]) -> Meta {
-        let marks = &mut self.symbol_marks;
-        marks.resize(self.symbols.len(), false);
-        let mut free: Vec<u32> = Vec::new();
+        let words = &mut self.symbol_words;
+        words.clear();
         let mut varies = false;
+        let mut selects = false;
         for c in children {
             let m = &self.meta[c.index()];
-            for &i in m.free.iter() {
-                if !std::mem::replace(&mut marks[i as usize], true) {
-                    free.push(i);
-                }
-            }
+            m.free.or_into(words);
             varies |= m.varies;
+            selects |= m.selects;
         }
-        for &i in &free {
-            marks[i as usize] = false;
-        }
-        free.sort_unstable();
         Meta {
-            free: free.into_boxed_slice(),
+            free: FreeSet::from_words(words),
             varies,
+            selects,
         }
     }
 

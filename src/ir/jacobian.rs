@@ -19,7 +19,7 @@
 //! where `diff` hands it one 0 per such term; `add` depends on the
 //! multiset of its terms' values only, and many zeros collect into one.
 
-use super::expr::{Arena, Derivation, ExprId, FxMap, Node, Symbol};
+use super::expr::{Arena, Derivation, ExprId, FreeSet, FxMap, Node, Symbol};
 
 /// A node's partials: `(column, ∂node/∂wrt[column])`, sorted by column,
 /// none of them zero.
@@ -38,12 +38,12 @@ impl Arena {
                 column_of.entry(slot).or_insert(c as u32);
             }
         }
-        let moves = |arena: &Arena, e: ExprId| {
-            arena.meta[e.index()]
-                .free
-                .iter()
-                .any(|slot| column_of.contains_key(slot))
-        };
+        let mut column_words = Vec::new();
+        for &slot in column_of.keys() {
+            FreeSet::single(slot).or_into(&mut column_words);
+        }
+        let columns = FreeSet::from_words(&column_words);
+        let moves = |arena: &Arena, e: ExprId| arena.meta[e.index()].free.meets(&columns);
         // Post-order of the moving nodes below the roots (children first).
         let mut index: FxMap<ExprId, usize> = FxMap::default();
         let mut order: Vec<ExprId> = Vec::new();

@@ -10,6 +10,7 @@
 //! | file | what |
 //! |---|---|
 //! | `expr.rs` | ids, symbols, nodes, the arena, free-symbol facts, sizes |
+//! | `free.rs` | a node's free symbols as a bit set |
 //! | `canon.rs` | canonicalising constructors and the canonical order |
 //! | `diff.rs` | `∂/∂symbol` (and the walk shared with `D`) |
 //! | `jacobian.rs` | many expressions' partials in many symbols, one pass |
@@ -25,6 +26,7 @@ mod diff;
 mod display;
 mod eval;
 mod expr;
+mod free;
 mod jacobian;
 mod jet;
 mod lower;

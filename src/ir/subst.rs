@@ -33,11 +33,7 @@ impl Arena {
 
     fn touches(&self, e: ExprId, slots: &[u32]) -> bool {
         let free = &self.meta[e.index()].free;
-        if free.len() < slots.len() {
-            free.iter().any(|s| slots.binary_search(s).is_ok())
-        } else {
-            slots.iter().any(|s| free.binary_search(s).is_ok())
-        }
+        slots.iter().any(|&s| free.contains(s))
     }
 
     fn subst_rec(
@@ -139,7 +135,7 @@ impl Arena {
 
     /// Whether a selection in `e` has a switching function depending on `x`.
     pub fn switches_on(&self, e: ExprId, x: Symbol) -> bool {
-        if !self.depends_on(e, x) {
+        if !self.depends_on(e, x) || !self.has_select(e) {
             return false;
         }
         self.reachable(&[e])
@@ -161,6 +157,12 @@ impl Arena {
     ) -> ExprId {
         if let Some(&r) = memo.get(&e) {
             return r;
+        }
+        // Without a selection below, rebuilding gives the node back (its
+        // children come back unchanged, and a canonical node is its own
+        // canonical form): not rebuilt.
+        if !self.meta[e.index()].selects {
+            return e;
         }
         let r = match self.node(e).clone() {
             Node::Const(_) | Node::Sym(_) => e,
@@ -201,8 +203,6 @@ impl Arena {
 
     /// Whether `e` holds a selection.
     pub fn has_select(&self, e: ExprId) -> bool {
-        self.reachable(&[e])
-            .iter()
-            .any(|&n| matches!(self.node(n), Node::Select(..)))
+        self.meta[e.index()].selects
     }
 }

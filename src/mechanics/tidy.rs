@@ -65,11 +65,10 @@ fn affine_jets(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
         let mut drop: Option<usize> = None;
         for (a, &v) in vars.iter().enumerate() {
             let c = arena.diff(e, v);
-            for (b, &w) in vars.iter().enumerate() {
-                if arena.depends_on(c, w) {
-                    let candidate = a.max(b);
-                    drop = Some(drop.map_or(candidate, |d: usize| d.max(candidate)));
-                }
+            // The last `w` that `c` depends on gives this `a`'s candidate.
+            if let Some(b) = vars.iter().rposition(|&w| arena.depends_on(c, w)) {
+                let candidate = a.max(b);
+                drop = Some(drop.map_or(candidate, |d: usize| d.max(candidate)));
             }
         }
         match drop {

@@ -126,3 +126,51 @@ fn kernel_partials_follow_a_mass_law_of_the_state() {
         );
     }
 }
+
+/// Latching a kernel's selections (`kernel/switches.rs`) rebuilds only the
+/// nodes that hold a selection: a node without one is taken as it stands,
+/// which is what rebuilding it from its own children through the
+/// constructors gives. Checked here on every node of every example's
+/// kernel that holds no selection.
+#[test]
+fn a_node_without_a_selection_is_its_own_canonical_form() {
+    use lagc::ir::Node;
+    use lagc::kernel::Motion;
+    let mut nodes = 0;
+    for path in crate::expect::lag_files("examples") {
+        let name = path.display().to_string();
+        let source = std::fs::read_to_string(&path).unwrap();
+        let model = lagc::frontend(&source).unwrap_or_else(|d| panic!("{name}: {d:?}"));
+        let (derivation, _) = lagc::mechanics::derive_checked(&model).unwrap();
+        let (kernel, _) = lagc::pipeline::kernel_of(&model, derivation).unwrap();
+        let mut arena = kernel.arena.clone();
+        // The right side and its exact Jacobian, as the crate evaluates them.
+        let mut roots = kernel.rhs_roots();
+        match &kernel.motion {
+            Motion::Explicit(m) => {
+                roots.extend(m.jacobian.iter().map(|&(_, _, e)| e));
+                roots.extend(m.time_partial.iter().map(|&(_, e)| e));
+            }
+            Motion::Implicit(m) => {
+                roots.extend(m.g_x.iter().map(|&(_, _, e)| e));
+                roots.extend(m.g_t.iter().map(|&(_, e)| e));
+            }
+        }
+        for e in arena.reachable(&roots) {
+            if arena.has_select(e) {
+                continue;
+            }
+            let rebuilt = match arena.node(e).clone() {
+                Node::Const(_) | Node::Sym(_) => e,
+                Node::Add(ts) => arena.add(&ts),
+                Node::Mul(fs) => arena.mul(&fs),
+                Node::Pow(b, x) => arena.pow(b, x),
+                Node::Func(f, u) => arena.func(f, u),
+                Node::Select(..) => unreachable!("{name}: a selection holds itself"),
+            };
+            assert_eq!(rebuilt, e, "{name}: {}", arena.display(e));
+            nodes += 1;
+        }
+    }
+    assert!(nodes > 2_000, "{nodes} nodes checked");
+}

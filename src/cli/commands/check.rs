@@ -7,7 +7,15 @@ use std::process::ExitCode;
 
 pub(crate) fn check(args: &CheckArgs) -> ExitCode {
     let file_name = args.file.display().to_string();
-    let stage = |source: &str| lagc::check_through_kernel(source).map(|model| (model, Vec::new()));
+    let stage = |source: &str| {
+        lagc::check_through_kernel(source).map(|(model, kernel)| {
+            // The process ends after the summary line: the kernel's arena
+            // is left to the operating system instead of being freed node
+            // by node (about 3 % of checking a 100-link pendulum).
+            std::mem::forget(kernel);
+            (model, Vec::new())
+        })
+    };
     status(compile(&args.file, stage, |model| {
         let constraints = match model.constraint_order {
             Some(k) => format!(

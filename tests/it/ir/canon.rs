@@ -291,3 +291,91 @@ fn walks_and_free_symbols_do_not_leak_between_calls() {
         [q(0, 0), Symbol::Time].into_iter().collect()
     );
 }
+
+/// `add` works on distinct terms and remembers what it builds, but must
+/// give what summing copy by copy gives: a `c·S` that comes twice is like
+/// itself and distributes, and coefficients are summed in the order of
+/// the terms (floating-point addition does not associate).
+#[test]
+fn repeated_terms_sum_as_their_copies_would() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let y = sym(&mut a, ALPHA);
+    let two = num(&mut a, 2.0);
+    let xy = a.add(&[x, y]);
+    let scaled = a.mul(&[two, xy]);
+    // One copy stays one product; two copies distribute and collect.
+    assert_eq!(a.add(&[scaled]), scaled);
+    let four = num(&mut a, 4.0);
+    let four_x = a.mul(&[four, x]);
+    let four_y = a.mul(&[four, y]);
+    let expected = a.add(&[four_x, four_y]);
+    assert_eq!(a.add(&[scaled, scaled]), expected);
+    let six = num(&mut a, 6.0);
+    let t = sym(&mut a, Symbol::Time);
+    let six_x = a.mul(&[six, x]);
+    let six_y = a.mul(&[six, y]);
+    let expected = a.add(&[six_x, six_y, t]);
+    assert_eq!(a.add(&[scaled, t, scaled, scaled]), expected);
+    // (0.1 + 0.6) + 0.1 = 0.7999999999999999, not 2·0.1 + 0.6 = 0.8.
+    let (p1, p2) = (num(&mut a, 0.1), num(&mut a, 0.6));
+    let (x1, x2) = (a.mul(&[p1, x]), a.mul(&[p2, x]));
+    let e = a.add(&[x1, x2, x1]);
+    let in_order = (0.1 + 0.6) + 0.1;
+    assert_ne!(in_order, 2.0 * 0.1 + 0.6);
+    let c = num(&mut a, in_order);
+    assert_eq!(e, a.mul(&[c, x]), "{}", a.display(e));
+}
+
+/// The sum of one term is the term, but for a number times a long product
+/// kept whole (`canon::SEALED_PRODUCT`): the sum flattens that into one
+/// product, as it always has.
+#[test]
+fn one_term_is_its_own_sum_but_a_number_times_a_sealed_product() {
+    let mut a = arena();
+    let x = sym(&mut a, q(0, 0));
+    let t = sym(&mut a, Symbol::Time);
+    let three = num(&mut a, 3.0);
+    let sin_x = a.func(Func::Sin, x);
+    let xt = a.mul(&[x, t]);
+    let three_xt = a.mul(&[three, xt]);
+    let power = a.powi(x, 3);
+    for e in [x, three, sin_x, xt, three_xt, power] {
+        assert_eq!(a.add(&[e]), e, "{}", a.display(e));
+    }
+    // 13 distinct factors: kept whole as a factor of a product.
+    let factors: Vec<_> = (0..13)
+        .map(|k| {
+            let s = sym(&mut a, q(k % 2, k / 2));
+            a.func(Func::Sin, s)
+        })
+        .collect();
+    let long = a.mul(&factors);
+    let scaled = a.mul(&[three, long]);
+    let Node::Mul(fs) = a.node(scaled).clone() else {
+        panic!("{}", a.display(scaled))
+    };
+    assert_eq!(fs.len(), 2, "the long product stays one factor");
+    let summed = a.add(&[scaled]);
+    match a.node(summed) {
+        Node::Mul(fs) => assert_eq!(fs.len(), 14, "{}", a.display(summed)),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// Free-symbol sets beyond the first 64 symbol slots (kept as bits).
+#[test]
+fn free_symbols_beyond_64_symbols() {
+    let mut a = arena();
+    let syms: Vec<Symbol> = (0..150).map(|k| q(k, k % 3)).collect();
+    let ids: Vec<_> = syms.iter().map(|&s| sym(&mut a, s)).collect();
+    let sum = a.add(&ids);
+    assert_eq!(a.free_symbols(sum), syms.iter().copied().collect());
+    let tail = a.mul(&ids[100..]);
+    assert!(a.depends_on(tail, syms[149]) && a.depends_on(tail, syms[100]));
+    assert!(!a.depends_on(tail, syms[99]) && !a.depends_on(tail, syms[0]));
+    assert_eq!(a.max_jet_order(tail, 120), Some(0));
+    assert_eq!(a.max_jet_order(tail, 20), None);
+    let grad = a.jacobian(&[tail], &[syms[0], syms[120]]).remove(0);
+    assert!(a.is_zero(grad[0]) && !a.is_zero(grad[1]));
+}
