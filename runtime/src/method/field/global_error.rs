@@ -123,7 +123,8 @@ impl FieldError {
             // reference that fails leaves the estimate as it is (the
             // estimate never fails the run).
             let mut measured = None;
-            if carrying || self.global.wants_measure(self.rtol) {
+            let calibrates = self.global.wants_measure(self.rtol);
+            if carrying || calibrates {
                 self.evaluations += 24;
                 let mut reference = vec![0.0; step.x1.len()];
                 if let Ok(true) = step_by_halves(&system, step.t0, &step.x0, h, &mut reference) {
@@ -133,17 +134,37 @@ impl FieldError {
                     measured = Some(reference);
                 }
             }
-            let added = match &measured {
-                Some(m) => self
+            // The sum is calibrated every `CALIBRATION_STRIDE` steps, as
+            // direct integration's (see there why not at every step).
+            let added = match (&measured, calibrates) {
+                (Some(m), true) => self
                     .global
                     .add_measured(estimated, relative(m, &step.x1), h),
-                None => self.global.add(estimated, h),
+                _ => self.global.add(estimated, h),
             };
             if let (Some(Some(growth)), true) = (self.growth.as_mut(), carried) {
-                let mut local = measured.unwrap_or(local);
-                let size = relative(&local, &step.x1);
-                let scale = if size > 0.0 { added / size } else { 0.0 };
-                local.iter_mut().for_each(|v| *v *= scale);
+                // The measured error with its sign, at most the estimate.
+                let scale = |size: f64, bound: f64| {
+                    if size > bound && size > 0.0 {
+                        bound / size
+                    } else {
+                        1.0
+                    }
+                };
+                let local: Vec<f64> = match measured {
+                    Some(m) => {
+                        let k = scale(relative(&m, &step.x1), estimated);
+                        m.iter().map(|v| k * v).collect()
+                    }
+                    None => {
+                        let k = if estimated > 0.0 {
+                            added / estimated
+                        } else {
+                            0.0
+                        };
+                        local.iter().map(|v| k * v).collect()
+                    }
+                };
                 growth.step(&system, (step.t0, &step.x0), step.t1, &local);
             }
         }
