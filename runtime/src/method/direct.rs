@@ -8,7 +8,7 @@ use crate::failure::Failure;
 use crate::method::solver::{GlobalErrorEstimate, KeptPart, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
-use crate::ode::dop853::global_error::growth::{Growth, FROM};
+use crate::ode::dop853::global_error::growth::{past_bound, Growth};
 use crate::ode::dop853::global_error::{relative, GlobalError, BOUND};
 use crate::ode::dop853::Dop853;
 use crate::ode::stepper::{Clocked, OfModel, StepperOf};
@@ -97,7 +97,7 @@ impl StepError {
         }
         let estimated = relative(&self.estimated, &self.x);
         let propagate =
-            global.estimate() > FROM * rtol || growth.as_ref().is_some_and(|(g, _)| g.started());
+            past_bound(global, rtol) || growth.as_ref().is_some_and(|(g, _)| g.started());
         // The sum is calibrated as before: a measure every
         // `CALIBRATION_STRIDE` steps scales the estimates between (one at
         // every step would add, at tight tolerances, the rounding the
@@ -407,7 +407,7 @@ impl Direct {
         let carried = self
             .growth
             .as_ref()
-            .is_some_and(|g| g.started() || global.estimate() > FROM * rtol);
+            .is_some_and(|g| g.started() || past_bound(global, rtol));
         e.calibrates = global.wants_measure(rtol);
         if carried || e.calibrates {
             // A measure that fails (a stage not finite) leaves the estimate

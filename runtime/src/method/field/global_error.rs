@@ -26,7 +26,7 @@
 
 use crate::method::solver::GlobalErrorEstimate;
 use crate::model::DynModel;
-use crate::ode::dop853::global_error::growth::{Growth, FROM};
+use crate::ode::dop853::global_error::growth::{past_bound, Growth};
 use crate::ode::dop853::global_error::{relative, GlobalError};
 use crate::ode::dop853::step_by_halves;
 use crate::ode::system::ModelSystem;
@@ -117,7 +117,7 @@ impl FieldError {
             let h = step.t1 - step.t0;
             let estimated = relative(&local, &step.x1);
             let started = matches!(&self.growth, Some(Some(g)) if g.started());
-            let carried = started || self.global.estimate() > FROM * self.rtol;
+            let carried = started || past_bound(&self.global, self.rtol);
             let carrying = carried && matches!(self.growth, Some(Some(_)));
             // The step's error against the reference, where asked for; a
             // reference that fails leaves the estimate as it is (the

@@ -84,6 +84,11 @@ impl GlobalError {
         self.sum
     }
 
+    /// Whether a measure has calibrated the sum.
+    pub fn calibrated(&self) -> bool {
+        self.ratio.is_some()
+    }
+
     /// Whether every step of the run was accounted for.
     pub fn complete(&self) -> bool {
         self.complete
