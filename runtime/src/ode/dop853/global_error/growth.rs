@@ -26,9 +26,10 @@
 //! where their summed local errors are 800 rtol), so the vectors are the
 //! steps' measured errors (a Richardson difference for direct
 //! integration, a reference step for the field), not Hairer's estimates,
-//! whose sign is the lower-order solution's: with those, added with their
-//! sign or with the sign that makes them add, the soft walls' estimate
-//! was 12× too low at rtol 1e-6 and 200–1000× too high at 1e-12.
+//! whose sign is the lower-order solution's: with those (added with their
+//! sign, or with the sign that makes them add) the soft walls' estimate
+//! ranged from 0.012 to 138 × the error over rtol 1e-6 … 1e-12
+//! (docs/BENCHMARKS.md §10c).
 //!
 //! Events: a step is propagated when the next one begins, over as much of
 //! it as the motion kept: an event cuts it at its time ([`Growth::cut`],
