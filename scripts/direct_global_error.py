@@ -9,7 +9,11 @@ carried (`global_error_estimate`, absent before it existed), the steps,
 evaluations and the smallest wall time of `--repeat` solves.
 
     python3 scripts/direct_global_error.py --lagc target/release/lagc [--json OUT]
-        [--compare OTHER.json] [--repeat 20] [--rtols 1e-6,1e-10] [NAMES...]
+        [--compare OTHER.json] [--repeat 20] [--rtols 1e-6,1e-10]
+        [--method field] [NAMES...]
+
+`--method field` runs the field method instead (its estimate is carried
+the same way since h-gerr).
 
 With --compare, prints the cost (evaluations, time) of this run against
 an earlier one (e.g. the binary before a change), model by model.
@@ -38,14 +42,14 @@ def examples(names):
     return found
 
 
-def run(lagc, path, rtol, repeat, extra, binaries=None):
+def run(lagc, path, rtol, repeat, extra, binaries=None, method="direct"):
     if binaries:
         # Binaries built beforehand (`lagc build`, one target directory).
         name = os.path.basename(path)[:-4].replace("_", "-")
         head = [os.path.join(binaries, f"lag-{name}")]
     else:
         head = [lagc, "run", path]
-    args = head + ["--method", "direct", "--rtol", repr(rtol),
+    args = head + ["--method", method, "--rtol", repr(rtol),
             "--atol", repr(rtol / 100), "--summary", "json", "--samples", "101",
             "--repeat", str(repeat)] + extra
     p = subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -67,6 +71,7 @@ def main():
     ap.add_argument("--rtols", default="1e-6,1e-8,1e-10,1e-12")
     ap.add_argument("--extra", default="", help="more flags for every run")
     ap.add_argument("--binaries", help="run DIR/lag-NAME instead of `lagc run`")
+    ap.add_argument("--method", default="direct", help="direct or field")
     ap.add_argument("names", nargs="*")
     a = ap.parse_args()
     rtols = [float(r) for r in a.rtols.split(",")]
@@ -74,7 +79,7 @@ def main():
     results = {}
     for name, path in examples(set(a.names)):
         for rtol in rtols:
-            s = run(a.lagc, path, rtol, a.repeat, extra, a.binaries)
+            s = run(a.lagc, path, rtol, a.repeat, extra, a.binaries, a.method)
             results[f"{name} {rtol:g}"] = s
             if s["exit"] != 0:
                 print(f"{name:34s} {rtol:7.0e}  exit {s['exit']} {s.get('stderr')}", flush=True)

@@ -87,6 +87,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/method/field/conditions.rs"),
     ),
     (
+        "src/method/field/global_error.rs",
+        include_str!("../../runtime/src/method/field/global_error.rs"),
+    ),
+    (
         "src/method/field/members.rs",
         include_str!("../../runtime/src/method/field/members.rs"),
     ),
@@ -134,6 +138,10 @@ const RUNTIME: &[(&str, &str)] = &[
     (
         "src/ode/dop853/global_error.rs",
         include_str!("../../runtime/src/ode/dop853/global_error.rs"),
+    ),
+    (
+        "src/ode/dop853/global_error/growth.rs",
+        include_str!("../../runtime/src/ode/dop853/global_error/growth.rs"),
     ),
     (
         "src/ode/dop853/tableau.rs",

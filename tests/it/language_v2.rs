@@ -694,6 +694,74 @@ fn soft_walls_keep_the_energy_through_every_bounce() {
     }
 }
 
+/// The soft walls' exact motion at `t` (x, x'): speed 1 between the walls
+/// at ±1, half a period of `ω = √K` in each (tests/data/v2/soft_walls.lag).
+fn soft_walls_exact(t: f64) -> (f64, f64) {
+    let w = 50.0_f64.sqrt();
+    let a = std::f64::consts::PI / w;
+    let s = t % (4.0 + 2.0 * a);
+    if s < 1.0 {
+        (s, 1.0)
+    } else if s < 1.0 + a {
+        let u = w * (s - 1.0);
+        (1.0 + u.sin() / w, u.cos())
+    } else if s < 3.0 + a {
+        (2.0 + a - s, -1.0)
+    } else if s < 3.0 + 2.0 * a {
+        let u = w * (s - 3.0 - a);
+        (-1.0 - u.sin() / w, -u.cos())
+    } else {
+        (s - 4.0 - 2.0 * a, 1.0)
+    }
+}
+
+/// Issue 29: the soft walls over 200 periods (800 events) end 4e4 × rtol
+/// off at rtol 1e-10 with either method: the energy error made at each
+/// bounce turns into a phase error that grows with time. Both methods
+/// warn, with an estimate within 10× of the largest error against the
+/// exact motion (the field said nothing; direct integration's summed
+/// estimate was 300× too low).
+#[test]
+fn soft_walls_over_200_periods_are_warned_with_their_error_s_size() {
+    let binary = build_file(&crate::root().join("tests/data/v2/soft_walls.lag"));
+    for method in METHODS {
+        let args = [
+            "--method",
+            method,
+            "--rtol",
+            "1e-10",
+            "--atol",
+            "1e-12",
+            "--samples",
+            "20001",
+        ];
+        let run = run(&binary, &args);
+        assert_eq!(run.code, 0, "{method}: {}", run.stderr);
+        let (x, v) = (run.column("x"), run.column("x'"));
+        let error = run
+            .rows
+            .iter()
+            .map(|r| {
+                let (xe, ve) = soft_walls_exact(r[0]);
+                ((r[x] - xe).abs() / xe.abs().max(1.0)).max((r[v] - ve).abs() / ve.abs().max(1.0))
+            })
+            .fold(0.0, f64::max);
+        assert!(error > 1e-6, "{method}: error {error:e} (the case is gone)");
+        let estimate: f64 = run
+            .stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("warning: estimated global error "))
+            .and_then(|l| l.split_whitespace().next())
+            .unwrap_or_else(|| panic!("{method} does not warn:\n{}", run.stderr))
+            .parse()
+            .unwrap();
+        assert!(
+            estimate > 0.1 * error && estimate < 10.0 * error,
+            "{method}: estimate {estimate:e} against an error of {error:e}"
+        );
+    }
+}
+
 /// A stop condition that reads another switch's branch (a kink) is read
 /// at t0 under the branches the initial state is on.
 #[test]

@@ -176,14 +176,16 @@ impl Summary {
 /// units of its relative tolerance.
 pub use crate::ode::dop853::global_error::BOUND as GLOBAL_ERROR_BOUND;
 
-/// The summary's line on the global error direct integration carried:
-/// within `10·rtol`, or a warning past it (see `dop853::global_error`).
+/// The summary's line on the global error the method carried (direct
+/// integration and the quasilinear field): within `10·rtol`, or a warning
+/// past it (see `dop853::global_error` and its `growth`).
 fn global_error_line(g: &GlobalErrorEstimate) -> String {
     let bound = GLOBAL_ERROR_BOUND * g.rtol;
     let partial = if g.complete {
         ""
     } else {
-        " (DOP853's steps only: RODAS4's are not accounted for)"
+        " (partial: RODAS4's steps, and the field's stiff and Magnus windows', are not \
+         accounted for)"
     };
     if g.largest <= bound {
         format!(
@@ -194,9 +196,10 @@ fn global_error_line(g: &GlobalErrorEstimate) -> String {
     } else {
         format!(
             "warning: estimated global error {:.1e} passes 10·rtol = {bound:.1e}{partial}: \
-             the steps' local errors add up over the run (their sum, for a motion that does \
-             not amplify errors; not counting where events were located, nor the output \
-             between steps); a tighter --rtol brings it down, --estimate-error measures it",
+             the steps' local errors add up over the run (past the bound, each step's error \
+             measured and carried along the motion, which may amplify it; not counting the \
+             output between steps, nor an impact's jump); a tighter --rtol brings it down, \
+             --estimate-error measures it",
             g.largest
         )
     }

@@ -28,11 +28,11 @@ pub struct Report {
     pub linearizations: usize,
     /// Lines for the summary (a switch of integrator, a stiffness note).
     pub notes: Vec<String>,
-    /// Direct integration: the global error estimate it carried.
+    /// The global error estimate the method carried.
     pub global_error: Option<GlobalErrorEstimate>,
 }
 
-/// The global error a direct integration estimated along its run
+/// The global error a method estimated along its run
 /// (`dop853::global_error`), for the summary.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GlobalErrorEstimate {
@@ -96,6 +96,11 @@ pub trait Solver {
         out.clear();
         out.push(self.time());
     }
+    /// An event at `t` within the last advance, where the run goes on
+    /// from `x` (read from [`Solver::dense`]), told before the regime
+    /// changes: the advance's motion ends there (a method carrying its
+    /// errors along the motion propagates them to `t` only).
+    fn cut(&mut self, _model: &dyn DynModel, _t: f64, _x: &[f64]) {}
     /// Starts afresh from `(t, x)` (after an event changed the regime).
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
     /// [`Solver::restart`] after an event that left the state where it was

@@ -155,6 +155,11 @@ impl Dop853 {
         &self.y
     }
 
+    /// The state at the last accepted step's start.
+    pub fn previous_state(&self) -> &[f64] {
+        &self.y_old
+    }
+
     /// The slope `X(t, y)` at the current state.
     pub fn slope(&self) -> &[f64] {
         &self.k[..self.y.len()]
@@ -881,6 +886,64 @@ fn plain_step<S: System + ?Sized>(
         axpy(h * w, &k[j * n..(j + 1) * n], &mut out[..n]);
     }
     Ok(())
+}
+
+/// Two DOP853 steps of length `h/2` from `(t, y)`, into `out`: a
+/// reference for a step of length `h` of another method (the field's),
+/// whose own error is 1/256 of a whole DOP853 step's. 24 evaluations;
+/// `Ok(false)` when a value was not finite.
+pub fn step_by_halves<S: System + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+    h: f64,
+    out: &mut [f64],
+) -> Result<bool, Failure> {
+    let n = y.len();
+    let half = 0.5 * h;
+    let mut k = vec![0.0; STAGES * n];
+    let mut stage_state = vec![0.0; n];
+    let mut mid = vec![0.0; n];
+    system.rhs(t, y, &mut k[..n])?;
+    plain_step(system, t, y, half, &mut k, &mut stage_state, &mut mid)?;
+    system.rhs(t + half, &mid, &mut k[..n])?;
+    plain_step(system, t + half, &mid, half, &mut k, &mut stage_state, out)?;
+    Ok(first_non_finite(&out[..n]).is_none())
+}
+
+/// The derivative of one DOP853 step of length `h` from `(t, y)` in the
+/// direction `d`, `(step(y + ε d) − step(y)) / ε` with `ε d` about √eps of
+/// the state, into `out`: how the step carries a small error
+/// (`global_error::growth`). 24 evaluations; `Ok(false)` when a value was
+/// not finite.
+pub fn step_derivative<S: System + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+    h: f64,
+    d: &[f64],
+    out: &mut [f64],
+) -> Result<bool, Failure> {
+    let n = y.len();
+    let size = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    if size == 0.0 || !size.is_finite() {
+        out[..n].fill(0.0);
+        return Ok(size == 0.0);
+    }
+    let scale = y.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    let eps = f64::EPSILON.sqrt() * scale / size;
+    let mut k = vec![0.0; STAGES * n];
+    let mut stage_state = vec![0.0; n];
+    let mut base = vec![0.0; n];
+    system.rhs(t, y, &mut k[..n])?;
+    plain_step(system, t, y, h, &mut k, &mut stage_state, &mut base)?;
+    let moved: Vec<f64> = y.iter().zip(d).map(|(y, d)| y + eps * d).collect();
+    system.rhs(t, &moved, &mut k[..n])?;
+    plain_step(system, t, &moved, h, &mut k, &mut stage_state, out)?;
+    for (o, b) in out[..n].iter_mut().zip(&base) {
+        *o = (*o - b) / eps;
+    }
+    Ok(first_non_finite(&out[..n]).is_none())
 }
 
 /// `dst = base + h Σ_m a_m k_m` component by component; `R` is a

@@ -811,6 +811,7 @@ impl<'m> Integration<'m> {
             } => {
                 let x_event = &mut s.x_event;
                 s.solver.dense(model, t_event, x_event)?;
+                s.solver.cut(model, t_event, x_event);
                 if let Some(keeper) = self.keeper.as_mut() {
                     keeper.project(model, regime.mode, t_event, x_event)?;
                 }

@@ -6,6 +6,7 @@ use super::coefficients::{
     Augmented, FieldSystem, Iterate, LinearizationScratch, ProjectiveCoefficients,
     SymbolicCoefficients,
 };
+use super::global_error::FieldError;
 use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::ensemble::States;
@@ -39,6 +40,8 @@ pub struct AffineField {
     /// `step` where that step is too long and the coefficients' extension
     /// serves.
     between: Option<Between>,
+    /// The global error estimate carried along the run.
+    error: FieldError,
 }
 
 /// [`AffineField`]'s output for the step `[t_old, t_new]`.
@@ -91,6 +94,7 @@ impl AffineField {
             StepperKind::Explicit
         };
         let magnus = options.magnus;
+        let options_rtol = options.tol.rtol;
         let scratch = LinearizationScratch::new(model.dim());
         let window = with_system(model, magnus, &scratch, |system| {
             Window::open(system, &options, t0, x0, None, h_max, kind)
@@ -110,6 +114,7 @@ impl AffineField {
             members: None,
             scratch,
             between: None,
+            error: FieldError::new(x0.len(), options_rtol),
         })
     }
 }
@@ -133,6 +138,8 @@ impl Solver for AffineField {
         t_limit: f64,
         budget: &Budget,
     ) -> Result<(), Failure> {
+        self.error.feed(model, f64::INFINITY);
+        let (t_old, x_old) = (self.window.time(), self.window.state().to_vec());
         let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
         let (mut done, mut reanchorings, mut largest) =
             (Stats::default(), 0, self.largest_condition);
@@ -154,6 +161,16 @@ impl Solver for AffineField {
         self.done += done;
         self.reanchorings += reanchorings;
         self.largest_condition = largest;
+        if result.is_ok() {
+            let mut local = vec![0.0; x_old.len()];
+            let estimated = self.window.local_error(self.options.tol, &mut local);
+            self.error.window(
+                (t_old, &x_old),
+                &[self.window.time()],
+                &[self.window.state().to_vec()],
+                &[estimated.then_some(local)],
+            );
+        }
         result.map_err(|f| super::explain(model, f, self.window.time(), self.window.state()))
     }
 
@@ -250,7 +267,13 @@ impl Solver for AffineField {
         }
     }
 
+    fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
+        self.error.cut(model, t, x);
+    }
+
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        // The steps before (all of them but after an event's cut).
+        self.error.feed(model, f64::INFINITY);
         let h = self.window.proposed_step();
         self.done += self.window.stats();
         self.between = None;
@@ -301,9 +324,15 @@ impl Solver for AffineField {
                 ),
                 StepperKind::Explicit => self.method.to_string(),
             },
-            stats: self.done + self.window.stats(),
+            stats: {
+                let mut stats = self.done + self.window.stats();
+                // The estimate's measures are the run's work too.
+                stats.rhs_evaluations += self.error.evaluations();
+                stats
+            },
             largest_condition: Some(self.largest_condition),
             reanchorings: Some(self.reanchorings),
+            global_error: Some(self.error.estimate()),
             ..Report::default()
         }
     }

@@ -21,6 +21,7 @@
 
 use super::coefficients::{FieldSystem, Iterate, LinearizedMotion, ProjectiveCoefficients};
 use super::conditions::{recover, recover_state};
+use super::global_error::FieldError;
 use super::members::{Frame, Frames, Members};
 use super::window::{propagator, SharedField, StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
@@ -299,6 +300,8 @@ pub struct QuasilinearField {
     /// The failure that ended the last accepted window's pass (the work
     /// budget): reported by the next advance.
     pending: Option<Failure>,
+    /// The global error estimate carried along the run.
+    error: FieldError,
 }
 
 impl QuasilinearField {
@@ -308,6 +311,7 @@ impl QuasilinearField {
         // tolerance leaves it well below the tolerance.
         let ratio = (0.1 / options.tol.rtol.sqrt()).clamp(MIN_PREDICTOR_RATIO, MAX_PREDICTOR_RATIO);
         let stiff = options.stiff;
+        let error = FieldError::new(x0.len(), options.tol.rtol);
         QuasilinearField {
             options,
             h_max,
@@ -330,6 +334,7 @@ impl QuasilinearField {
             stiff,
             oscillatory: false,
             members: None,
+            error,
         }
     }
 
@@ -395,6 +400,8 @@ impl DefectScratch {
 struct Pass {
     steps: Vec<StoredStep>,
     states: Vec<Vec<f64>>,
+    /// Each step's local error in the state, where estimated.
+    errors: Vec<Option<Vec<f64>>>,
     end: WindowEnd,
     stats: Stats,
     largest_condition: f64,
@@ -424,6 +431,7 @@ impl Solver for QuasilinearField {
         if let Some(failure) = self.pending.take() {
             return Err(failure);
         }
+        self.error.feed(model, f64::INFINITY);
         let mut retries = 0;
         let mut t_limit = t_limit;
         loop {
@@ -537,6 +545,9 @@ impl Solver for QuasilinearField {
                 cursor: Cell::new(0),
             };
             let count = pass.steps.len();
+            let ends: Vec<f64> = pass.steps.iter().map(StoredStep::t_new).collect();
+            self.error
+                .window((self.t, &self.x), &ends, &pass.states, &pass.errors);
             if let Some(old) = self.accepted.take() {
                 self.pool.extend(old.steps);
                 self.state_pool.extend(old.states);
@@ -618,7 +629,13 @@ impl Solver for QuasilinearField {
         Ok(())
     }
 
-    fn restart(&mut self, _model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+    fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
+        self.error.cut(model, t, x);
+    }
+
+    fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        // The steps before (all of them but after an event's cut).
+        self.error.feed(model, f64::INFINITY);
         self.t = t;
         self.t_prev = t;
         self.x = x.to_vec();
@@ -650,9 +667,10 @@ impl Solver for QuasilinearField {
         Ok(())
     }
 
-    fn project(&mut self, _model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+    fn project(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         // A projection onto the constraints is no change of regime: the
         // step sizes learnt go on.
+        self.error.feed(model, f64::INFINITY);
         self.t = t;
         self.t_prev = t;
         self.x = x.to_vec();
@@ -747,14 +765,18 @@ impl Solver for QuasilinearField {
                 StepperKind::Explicit => "field (quasilinear, DOP853)",
             }
             .to_string(),
-            stats: self.stats,
+            stats: Stats {
+                // The estimate's propagation is the run's work too.
+                rhs_evaluations: self.stats.rhs_evaluations + self.error.evaluations(),
+                ..self.stats
+            },
             largest_condition: Some(self.largest_condition),
             reanchorings: Some(self.windows.saturating_sub(1)),
             windows: Some(self.windows),
             passes: Some(self.passes),
             predictor: Some(self.predictor_stats),
             linearizations: self.linearizations,
-            global_error: None,
+            global_error: Some(self.error.estimate()),
             notes: self
                 .members
                 .iter()
@@ -838,6 +860,7 @@ impl QuasilinearField {
         )?;
         let mut steps: Vec<StoredStep> = Vec::new();
         let mut states: Vec<Vec<f64>> = Vec::new();
+        let mut errors: Vec<Option<Vec<f64>>> = Vec::new();
         let mut scratch = DefectScratch::new(n);
         let mut bound = 0.0;
         let (mut t_last, mut defect_last) = (self.t, 0.0);
@@ -886,6 +909,12 @@ impl QuasilinearField {
                     state.clear();
                     state.extend_from_slice(window.state());
                     states.push(state);
+                    let mut local = vec![0.0; n];
+                    errors.push(
+                        window
+                            .local_error(self.options.tol, &mut local)
+                            .then_some(local),
+                    );
                     kept_at = (t, budget.used());
                 }
                 WindowStep::Ended if window.steps() == 0 => {
@@ -906,6 +935,7 @@ impl QuasilinearField {
         Ok(Pass {
             steps,
             states,
+            errors,
             end,
             stats: window.stats(),
             largest_condition,

@@ -426,6 +426,37 @@ impl Window {
         &self.previous_state
     }
 
+    /// The last accepted step's local error in the state, into `out`: the
+    /// coefficients' error estimates mapped through the conditions, as
+    /// DOP853's `local_error` makes the vector whose scaled norm the step
+    /// was accepted with (Hairer's share of the 5th-order estimate). Only
+    /// an explicit window's estimates are of that kind: `false` for the
+    /// others.
+    pub fn local_error(&self, tol: Tolerance, out: &mut [f64]) -> bool {
+        if self.kind != StepperKind::Explicit || self.steps == 0 {
+            return false;
+        }
+        let b = &self.buffers;
+        let (x0, x1) = (&self.previous_state, &self.current.state);
+        let (mut err3, mut err5) = (0.0, 0.0);
+        for i in 0..x1.len() {
+            let inverse = 1.0 / (tol.atol + tol.rtol * x0[i].abs().max(x1[i].abs()));
+            err3 += (b.dx3[i] * inverse).powi(2);
+            err5 += (b.dx5[i] * inverse).powi(2);
+        }
+        let denominator = err5 + 0.01 * err3;
+        let share = if denominator > 0.0 {
+            (err5 / denominator).sqrt()
+        } else {
+            0.0
+        };
+        let h = (self.time() - self.previous_time()).abs();
+        for (o, d) in out.iter_mut().zip(&b.dx5) {
+            *o = h * share * d;
+        }
+        out.iter().all(|v| v.is_finite())
+    }
+
     pub fn recovered(&self) -> &Recovered {
         &self.current
     }

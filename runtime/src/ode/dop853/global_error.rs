@@ -33,6 +33,8 @@
 //! knife edge and the particle on a circle (1e9× rtol), where the run
 //! itself is kept on them.
 
+pub mod growth;
+
 /// The bound the summary holds the estimate to, in units of rtol: below
 /// it the unscaled sum (an over-estimate) already says the run is within.
 pub const BOUND: f64 = 10.0;
@@ -82,6 +84,11 @@ impl GlobalError {
         self.sum
     }
 
+    /// Whether a measure has calibrated the sum.
+    pub fn calibrated(&self) -> bool {
+        self.ratio.is_some()
+    }
+
     /// Whether every step of the run was accounted for.
     pub fn complete(&self) -> bool {
         self.complete
@@ -102,11 +109,11 @@ impl GlobalError {
     }
 
     /// An accepted step of length `h` whose local error Hairer's estimate
-    /// puts at `estimated` (relative, [`relative`]).
-    pub fn add(&mut self, estimated: f64, h: f64) {
+    /// puts at `estimated` (relative, [`relative`]); what it added.
+    pub fn add(&mut self, estimated: f64, h: f64) -> f64 {
         if !estimated.is_finite() {
             self.complete = false;
-            return;
+            return 0.0;
         }
         let scale = match self.ratio {
             Some((kappa, h_kappa)) if h_kappa > 0.0 => kappa * (h / h_kappa).clamp(0.125, 8.0),
@@ -114,14 +121,15 @@ impl GlobalError {
         };
         self.sum += scale * estimated;
         self.since += 1;
+        scale * estimated
     }
 
     /// An accepted step of length `h` whose local error was measured:
-    /// `measured`, against Hairer's `estimated` (both relative).
-    pub fn add_measured(&mut self, estimated: f64, measured: f64, h: f64) {
+    /// `measured`, against Hairer's `estimated` (both relative); what it
+    /// added.
+    pub fn add_measured(&mut self, estimated: f64, measured: f64, h: f64) -> f64 {
         if !(measured.is_finite() && estimated > 0.0) {
-            self.add(estimated, h);
-            return;
+            return self.add(estimated, h);
         }
         // Below a few roundings a difference measures nothing, and above
         // Hairer's estimate it is rounding or a step across a kink: the
@@ -135,6 +143,7 @@ impl GlobalError {
         self.ratio = Some((kappa, h.abs()));
         self.sum += measured;
         self.since = 0;
+        measured
     }
 }
 

@@ -1,0 +1,256 @@
+//! The steps' local errors carried along the motion, as the motion
+//! carries them: `e_{n+1} = Φ_n e_n ± ℓ_n`, with `Φ_n e_n` the derivative
+//! of a DOP853 step over step `n` in the direction of the carried error
+//! (a difference of two steps, [`crate::ode::dop853::step_derivative`]).
+//!
+//! Why: the sum of the local errors ([`super::GlobalError`]) is the global
+//! error only where the motion neither amplifies nor damps errors. A
+//! motion whose period depends on its energy turns an energy error into a
+//! phase error that grows with time: two soft walls bounced off 400 times
+//! (`tests/data/v2/soft_walls.lag`, rtol 1e-10) end 4.9e-6 off where the
+//! sum of the local errors is 1.6e-8.
+//!
+//! Why the step's own derivative and not a cheaper linearised flow: the
+//! soft walls' flow over a period has a double eigenvalue 1 (errors grow
+//! linearly, not exponentially), and any error in the propagator tips it
+//! to a pair `1 ± √ε`, an exponential growth. The trapezoidal rule on
+//! `e' = J e` (a Jacobian a step) was tried first: its phase error in the
+//! walls (`(hω)³/12` a step) made the carried error 1e31 after 400
+//! bounces. A difference of DOP853 steps is the step's derivative to about
+//! √eps, so `ε` is about 1e-8 and the growth stays linear over thousands
+//! of periods.
+//!
+//! The local errors: with their signs. Whether an energy error made at
+//! one bounce adds to the last one's or cancels it decides the growth
+//! (the soft walls at rtol 1e-12 lose almost no energy over 800 events,
+//! where their summed local errors are 800 rtol), so the vectors are the
+//! steps' measured errors (a Richardson difference for direct
+//! integration, a reference step for the field), not Hairer's estimates,
+//! whose sign is the lower-order solution's: with those (added with their
+//! sign, or with the sign that makes them add) the soft walls' estimate
+//! ranged from 0.012 to 138 × the error over rtol 1e-6 … 1e-12
+//! (docs/BENCHMARKS.md §10c).
+//!
+//! Events: a step is propagated when the next one begins, over as much of
+//! it as the motion kept: an event cuts it at its time ([`Growth::cut`],
+//! in the old regime), and the error of the state the run restarts from
+//! (read from the step's continuous extension, of order 7) is measured
+//! there. The error is carried through the event; a jump of the state (an
+//! impact's reset) and the saltation of the event's time are not
+//! accounted for.
+//!
+//! Cost: 24 evaluations a step, and the measure of the step's error,
+//! spent only once the calibrated sum of the local errors passes
+//! [`FROM`]`·rtol` ([`past_bound`]):
+//! there the summary warns already, and the propagation tells how far the
+//! error grew; below it a run pays nothing. The errors before are not
+//! carried (at most the bound, in the sum): the carried error starts at
+//! zero there.
+
+use super::relative;
+use crate::ode::dop853::{step_by_halves, step_derivative};
+use crate::ode::system::System;
+
+/// The sum of the local errors, in units of rtol, from which the carried
+/// error is propagated (the summary's bound).
+pub const FROM: f64 = super::BOUND;
+
+/// Whether the calibrated sum passes the bound: from there the errors are
+/// carried along the motion (an uncalibrated sum, Hairer's estimates, is
+/// often 10× the error: the first measure scales it first, or a run
+/// within the bound pays for the carrying, 3.4× the evaluations of
+/// bit_identity's third_order_constraint).
+pub fn past_bound(global: &super::GlobalError, rtol: f64) -> bool {
+    global.calibrated() && global.estimate() > FROM * rtol
+}
+
+/// The carried error of one run.
+#[derive(Clone, Debug)]
+pub struct Growth {
+    e: Vec<f64>,
+    /// The last step, propagated when the next begins or an event cuts it.
+    pending: Option<Step>,
+    /// The largest carried error relative to `max(|x|, 1)` so far.
+    largest: f64,
+    moved: Vec<f64>,
+    /// Evaluations spent.
+    evaluations: usize,
+    started: bool,
+}
+
+#[derive(Clone, Debug)]
+struct Step {
+    t0: f64,
+    x0: Vec<f64>,
+    t1: f64,
+    local: Vec<f64>,
+}
+
+impl Growth {
+    pub fn new(n: usize) -> Growth {
+        Growth {
+            e: vec![0.0; n],
+            pending: None,
+            largest: 0.0,
+            moved: vec![0.0; n],
+            evaluations: 0,
+            started: false,
+        }
+    }
+
+    /// The largest carried error over the run, relative to `max(|x|, 1)`
+    /// component by component.
+    pub fn largest(&self) -> f64 {
+        self.largest
+    }
+
+    /// Whether a step was carried: from then on every step is (the sum
+    /// that started it may fall back below the bound when a measure
+    /// scales it).
+    pub fn started(&self) -> bool {
+        self.started
+    }
+
+    /// The right-side evaluations the propagation cost.
+    pub fn evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    /// The step from `(t0, x0)` to `t1` whose local error is `local` (a
+    /// vector with its sign): the carried error is propagated over it and
+    /// the step's error added when the next step begins or an event cuts
+    /// it. The step before it is done now.
+    pub fn step<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        (t0, x0): (f64, &[f64]),
+        t1: f64,
+        local: &[f64],
+    ) {
+        self.flush(system, f64::INFINITY);
+        self.started = true;
+        self.pending = Some(Step {
+            t0,
+            x0: x0.to_vec(),
+            t1,
+            local: local.to_vec(),
+        });
+    }
+
+    /// An event at `t`, where the run goes on from `x` (the step's
+    /// continuous extension there): the last step's motion ends at `t`
+    /// (called in the regime the step was taken in), and its error is
+    /// that of `x`, measured against two DOP853 half-steps from the
+    /// step's start (24 evaluations): the extension's error, which no
+    /// step's estimate holds, is the error the run restarts with.
+    pub fn cut<S: System + ?Sized>(&mut self, system: &S, t: f64, x: &[f64]) {
+        if let Some(step) = self.pending.as_mut() {
+            let h = t - step.t0;
+            let mut reference = vec![0.0; x.len()];
+            if h > 0.0 && t <= step.t1 {
+                self.evaluations += 24;
+                if let Ok(true) = step_by_halves(system, step.t0, &step.x0, h, &mut reference) {
+                    for ((l, x), r) in step.local.iter_mut().zip(x).zip(&reference) {
+                        *l = x - r;
+                    }
+                }
+            }
+        }
+        self.flush(system, t);
+    }
+
+    /// Propagates the pending step over `[t0, min(t1, t_end)]` and adds its
+    /// error.
+    fn flush<S: System + ?Sized>(&mut self, system: &S, t_end: f64) {
+        let Some(step) = self.pending.take() else {
+            return;
+        };
+        let h = step.t1.min(t_end) - step.t0;
+        if h > 0.0 && self.e.iter().any(|&v| v != 0.0) {
+            // A derivative that fails leaves the error as it is: the
+            // estimate never fails the run.
+            self.evaluations += 24;
+            if let Ok(true) =
+                step_derivative(system, step.t0, &step.x0, h, &self.e, &mut self.moved)
+            {
+                self.e.copy_from_slice(&self.moved);
+            }
+        }
+        for (e, l) in self.e.iter_mut().zip(&step.local) {
+            *e += l;
+        }
+        let size = relative(&self.e, &step.x0);
+        if size.is_finite() {
+            self.largest = self.largest.max(size);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::failure::Failure;
+    use crate::linalg::Matrix;
+
+    /// `x' = v, v' = −ω² x` (ω = 0 is the soft walls' free flight).
+    struct Oscillator(f64);
+
+    impl System for Oscillator {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+            dy[0] = y[1];
+            dy[1] = -self.0 * self.0 * y[0];
+            Ok(())
+        }
+        fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+            unreachable!()
+        }
+        fn time_partial(&self, _t: f64, _y: &[f64], _d: &mut [f64]) -> Result<(), Failure> {
+            unreachable!()
+        }
+    }
+
+    #[test]
+    fn a_velocity_error_grows_into_a_position_error_and_errors_add_with_their_signs() {
+        let free = Oscillator(0.0);
+        let mut g = Growth::new(2);
+        let x = [0.0, 1.0];
+        // One velocity error, then 10 s of free flight: 10× in position.
+        g.step(&free, (0.0, &x), 0.0, &[0.0, 1e-10]);
+        g.step(&free, (0.0, &x), 10.0, &[0.0, 0.0]);
+        g.step(&free, (10.0, &x), 10.0, &[0.0, 0.0]);
+        assert!((g.largest() - 1e-9).abs() < 1e-16, "{}", g.largest());
+        // An error of the other sign cancels (the velocity's stays).
+        g.step(&free, (10.0, &x), 10.0, &[-1e-9, 0.0]);
+        g.cut(&free, 10.0, &x);
+        assert!((g.largest() - 1e-9).abs() < 1e-16, "{}", g.largest());
+        assert!(g.e[0].abs() < 1e-16 && g.e[1] == 1e-10, "{:?}", g.e);
+        // An event cuts a step: its motion ends there.
+        let mut h = Growth::new(2);
+        h.step(&free, (0.0, &x), 0.0, &[0.0, 1e-10]);
+        h.step(&free, (0.0, &x), 10.0, &[0.0, 0.0]);
+        // The state the run goes on from, 1e-12 off the motion there.
+        h.cut(&free, 5.0, &[5.0 + 1e-12, 1.0]);
+        // (5 + 1e-12 holds the 1e-12 to an ulp of 5, 9e-16.)
+        assert!((h.largest() - 5.01e-10).abs() < 1e-14, "{}", h.largest());
+        assert!((h.e[0] - (5e-10 + 1e-12)).abs() < 1e-14, "{:?}", h.e);
+        assert_eq!(h.evaluations(), 48);
+    }
+
+    #[test]
+    fn an_oscillation_keeps_the_error_s_size() {
+        let spring = Oscillator(1.0);
+        let mut g = Growth::new(2);
+        let x = [0.0, 0.0];
+        g.step(&spring, (0.0, &x), 0.0, &[1e-10, 0.0]);
+        let mut t = 0.0;
+        while t < 20.0 * std::f64::consts::PI {
+            g.step(&spring, (t, &x), t + 0.3, &[0.0, 0.0]);
+            t += 0.3;
+        }
+        g.cut(&spring, t, &[0.0, 0.0]);
+        assert!((g.largest() - 1e-10).abs() < 1e-16, "{}", g.largest());
+    }
+}
