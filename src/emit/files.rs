@@ -91,10 +91,6 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/method/field/global_error.rs"),
     ),
     (
-        "src/method/field/members.rs",
-        include_str!("../../runtime/src/method/field/members.rs"),
-    ),
-    (
         "src/method/field/mod.rs",
         include_str!("../../runtime/src/method/field/mod.rs"),
     ),

@@ -133,10 +133,10 @@ pub trait Solver {
         model: &dyn DynModel,
     ) -> Result<Vec<crate::method::segment::Segment>, Failure>;
 
-    /// Follows other initial states through the same field (an ensemble:
-    /// exact for affine motions; for others each member corrected to
-    /// `tol`, see [`Solver::member_estimates`]); `false` when the method
-    /// cannot.
+    /// Follows other initial states through the same field (an ensemble,
+    /// exact for an affine motion's field); `false` when the method
+    /// cannot. A method that estimates its members
+    /// ([`Solver::member_estimates`]) is not exact on them.
     fn track_members(
         &mut self,
         _members: crate::ensemble::States,

@@ -137,8 +137,8 @@ pub fn run_ensemble(
     }
     // A non-affine motion's members as deviations from the first (exact
     // at any spread, and cheaper than the field's frames were: issue 27,
-    // BENCHMARKS §4a). The field's own non-affine members (field/members.rs)
-    // are no longer reached from here.
+    // BENCHMARKS §4a; the field's frames that carried them before were
+    // removed with this path).
     if !model.affine() {
         return deviations(model, options, t0, t1, members, times, sample);
     }

@@ -8,13 +8,11 @@
 //! | `affine.rs` | the field method proper, for affine reduced systems |
 //! | `quasilinear.rs` | non-affine systems: Newton–Kantorovich on windows, each pass an affine field |
 //! | `global_error.rs` | the global error estimate carried along the run, for the summary |
-//! | `members.rs` | ensemble members of a non-affine motion, corrected to the tolerance in each window's frame |
 
 pub mod affine;
 pub mod coefficients;
 pub mod conditions;
 pub mod global_error;
-pub mod members;
 pub mod quasilinear;
 pub mod window;
 

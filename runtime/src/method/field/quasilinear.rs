@@ -20,12 +20,10 @@
 //! window is anchored at its end.
 
 use super::coefficients::{FieldSystem, Iterate, LinearizedMotion, ProjectiveCoefficients};
-use super::conditions::{recover, recover_state};
+use super::conditions::recover_state;
 use super::global_error::FieldError;
-use super::members::{Frame, Frames, Members};
-use super::window::{propagator, SharedField, StepperKind, StoredStep, Window, WindowStep};
+use super::window::{StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
-use crate::ensemble::States;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::method::solver::{Report, Solver};
@@ -295,8 +293,6 @@ pub struct QuasilinearField {
     stiff: bool,
     /// ... by a fast vibration (not a fast decay): see `found_stiff`.
     oscillatory: bool,
-    /// Ensemble members, corrected to the tolerance along each window.
-    members: Option<Members>,
     /// The failure that ended the last accepted window's pass (the work
     /// budget): reported by the next advance.
     pending: Option<Failure>,
@@ -333,7 +329,6 @@ impl QuasilinearField {
             state_pool: Vec::new(),
             stiff,
             oscillatory: false,
-            members: None,
             error,
         }
     }
@@ -560,17 +555,6 @@ impl Solver for QuasilinearField {
                 states: pass.states,
                 outputs: vec![None; count],
             });
-            if let Some(members) = self.members.as_mut() {
-                if let Some(window) = self.accepted.as_mut() {
-                    let steps = window.steps.len();
-                    let mut frames = WindowFrames {
-                        window,
-                        model,
-                        options: &self.options,
-                    };
-                    members.through(&mut frames, model, (self.t, end_time), steps)?;
-                }
-            }
             self.t_prev = self.t;
             self.t = end_time;
             self.windows += 1;
@@ -726,37 +710,6 @@ impl Solver for QuasilinearField {
         Ok(out)
     }
 
-    fn track_members(&mut self, members: States, tol: Tolerance) -> bool {
-        self.members = Some(Members::new(members, tol));
-        true
-    }
-
-    fn members_at(
-        &mut self,
-        model: &dyn DynModel,
-        t: f64,
-        out: &mut States,
-    ) -> Result<(), Failure> {
-        let Some(members) = self.members.as_mut() else {
-            out.clone_from(&States::default());
-            return Ok(());
-        };
-        let Some(window) = self.accepted.as_mut() else {
-            out.clone_from(&members.states);
-            return Ok(());
-        };
-        let mut frames = WindowFrames {
-            window,
-            model,
-            options: &self.options,
-        };
-        members.at(&mut frames, model, t, out)
-    }
-
-    fn member_estimates(&self) -> Option<Vec<f64>> {
-        self.members.as_ref().map(|m| m.estimates.clone())
-    }
-
     fn report(&self) -> Report {
         Report {
             method: match self.window_kind() {
@@ -777,16 +730,7 @@ impl Solver for QuasilinearField {
             predictor: Some(self.predictor_stats),
             linearizations: self.linearizations,
             global_error: Some(self.error.estimate()),
-            notes: self
-                .members
-                .iter()
-                .map(|m| {
-                    format!(
-                        "ensemble members: {} shared steps, {} rejected",
-                        m.steps, m.rejected
-                    )
-                })
-                .collect(),
+            notes: Vec::new(),
         }
     }
 }
@@ -941,70 +885,6 @@ impl QuasilinearField {
             largest_condition,
             field_h: window.proposed_step(),
         })
-    }
-}
-
-/// An accepted window's frames for its ensemble members: the reference's
-/// linear motion, its propagator (both from the window's field) and the
-/// linearisation at the predictor, at any time within the window.
-struct WindowFrames<'a> {
-    window: &'a mut AcceptedWindow,
-    model: &'a dyn DynModel,
-    options: &'a FieldOptions,
-}
-
-impl Frames for WindowFrames<'_> {
-    fn breaks(&self) -> Vec<f64> {
-        self.window.steps.iter().map(StoredStep::t_new).collect()
-    }
-
-    fn frame(&mut self, t: f64, out: &mut Frame) -> Result<(), Failure> {
-        let window = &mut *self.window;
-        let n = window.anchor_x.len();
-        let singular = || {
-            Failure::new(
-                t,
-                FailureKind::SingularConditionMatrix {
-                    condition: f64::INFINITY,
-                },
-            )
-        };
-        out.t = t;
-        if window.steps.is_empty() {
-            out.x_lin.copy_from_slice(&window.anchor_x);
-            out.phi.fill(0.0);
-            for i in 0..n {
-                out.phi[i * n + i] = 1.0;
-            }
-        } else {
-            let i = window
-                .steps
-                .iter()
-                .position(|s| t <= s.t_new())
-                .unwrap_or(window.steps.len() - 1);
-            let mut y = vec![0.0; n * (n + 1)];
-            window.coefficients_at(self.model, i, t, &mut y)?;
-            let source = ProjectiveCoefficients::new(self.model, &window.path);
-            let (mut f, mut s) = (vec![0.0; n], vec![0.0; n * n]);
-            source.field(&y, &mut f, &mut s).ok_or_else(singular)?;
-            let reference = recover(&f, &s, &window.anchor_x).ok_or_else(singular)?;
-            let shared = SharedField {
-                system: &source,
-                options: self.options,
-                anchor_x: &window.anchor_x,
-                reference: &reference,
-                y: &y,
-                t,
-            };
-            propagator(&shared, &window.anchor_x, &mut out.x_lin, &mut out.phi)?;
-        }
-        window.path.eval(t, &mut out.p)?;
-        out.a.fill(0.0);
-        self.model.linearize(t, &out.p, &mut out.xp, &mut out.a)?;
-        if !out.invert() {
-            return Err(singular());
-        }
-        Ok(())
     }
 }
 
