@@ -179,6 +179,10 @@ pub use crate::ode::dop853::global_error::BOUND as GLOBAL_ERROR_BOUND;
 /// The summary's line on the global error the method carried (direct
 /// integration and the quasilinear field): within `10·rtol`, or a warning
 /// past it (see `dop853::global_error` and its `growth`).
+/// A carried global error estimate at least this large (relative) is
+/// reported as amplification, not as a number.
+const AMPLIFIED: f64 = 1.0;
+
 fn global_error_line(g: &GlobalErrorEstimate) -> String {
     let bound = GLOBAL_ERROR_BOUND * g.rtol;
     let partial = if g.complete {
@@ -187,6 +191,19 @@ fn global_error_line(g: &GlobalErrorEstimate) -> String {
         " (partial: RODAS4's steps, and the field's stiff and Magnus windows', are not \
          accounted for)"
     };
+    // Carried past the state's own size (relative to max(|x|, 1)), the
+    // linear estimate means nothing as a number: a chaotic double
+    // pendulum over 100 s gave 1e49.
+    if g.largest >= AMPLIFIED {
+        return format!(
+            "warning: the motion amplifies the steps' errors past the state's own size \
+             (estimated global error above {AMPLIFIED:.0e}, relative{partial}): the state \
+             after some time is not determined by the tolerance, as a chaotic motion's is \
+             not; a tighter --rtol moves that time later only logarithmically, \
+             --estimate-error measures the difference; invariants (an energy) and \
+             statistics are what such a run can give"
+        );
+    }
     if g.largest <= bound {
         format!(
             "global error: within 10·rtol = {bound:.1e} (estimated {:.1e}{partial}: the \
@@ -229,4 +246,31 @@ pub fn json_string(text: &str) -> String {
     }
     out.push('"');
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_estimate_past_the_states_size_is_reported_as_amplification() {
+        let at = |largest: f64| {
+            global_error_line(&GlobalErrorEstimate {
+                largest,
+                rtol: 1e-10,
+                complete: true,
+            })
+        };
+        assert!(
+            at(1e-10).starts_with("global error: within"),
+            "{}",
+            at(1e-10)
+        );
+        assert!(at(1e-6).starts_with("warning: estimated global error 1.0e-6"));
+        let amplified = at(1.1e49);
+        assert!(
+            amplified.contains("amplifies") && !amplified.contains("e49"),
+            "{amplified}"
+        );
+    }
 }
