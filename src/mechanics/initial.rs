@@ -472,10 +472,13 @@ fn undetermined(
     user: Option<&(ExprId, &crate::check::model::Initial)>,
 ) -> Diagnostic {
     let name = arena.symbol_name(symbol);
-    let Symbol::Jet { coord, .. } = symbol else {
-        unreachable!("a constraint fixes a coordinate's derivative")
+    // A constraint fixes a coordinate's derivative; any other symbol gets
+    // the message without the constraint's label.
+    let coord = match symbol {
+        Symbol::Jet { coord, .. } => coord as usize,
+        _ => usize::MAX,
     };
-    let constraint = model.constraints.iter().find(|c| c.coord == coord as usize);
+    let constraint = model.constraints.iter().find(|c| c.coord == coord);
     let mut diagnostic = Diagnostic::error(
         codes::INCONSISTENT_INITIAL,
         format!("the constraint does not determine `{name}` at the start"),
@@ -498,7 +501,7 @@ fn undetermined(
             implicit
                 .candidates
                 .iter()
-                .filter(|&&q| q != coord as usize)
+                .filter(|&&q| q != coord)
                 .map(|&q| model.coords[q].name.as_str())
                 .collect()
         })
@@ -508,7 +511,7 @@ fn undetermined(
     };
     let holonomic = c.implicit.as_ref().is_some_and(|i| i.holonomic);
     let primes = |order: u32| "'".repeat(order as usize);
-    let (this, level) = (&model.coords[coord as usize].name, c.order);
+    let (this, level) = (&model.coords[c.coord].name, c.order);
     // A holonomic constraint's candidates are coordinates; the user gives
     // derivatives of the order the constraint fixes.
     let candidate = |q: &str| {
