@@ -762,6 +762,71 @@ fn soft_walls_over_200_periods_are_warned_with_their_error_s_size() {
     }
 }
 
+/// A slider-crank turning 30 times (tests/data/v2/slider_crank.lag, a
+/// closed loop of two holonomic constraints): its phase error grows with
+/// time, to 9–34× the sum of the steps' local errors, while that sum
+/// stays just under 10·rtol. Direct integration said "within" there; it
+/// now carries its errors along the motion (projected onto the loop as
+/// the state is) and warns with the error's size. The reference is the
+/// field method at rtol 1e-12 (3e-12 from SciPy's DOP853 at 1e-13 on the
+/// crank angle's own equation, derived by SymPy).
+#[test]
+fn a_slider_crank_s_growing_phase_error_is_warned_with_its_size() {
+    let binary = build_file(&crate::root().join("tests/data/v2/slider_crank.lag"));
+    let samples = ["--samples", "201"];
+    let reference = run(
+        &binary,
+        &[
+            &["--method", "field", "--rtol", "1e-12", "--atol", "1e-14"],
+            &samples[..],
+        ]
+        .concat(),
+    );
+    assert_eq!(reference.code, 0, "{}", reference.stderr);
+    for (rtol, atol) in [("1e-6", "1e-8"), ("1e-10", "1e-12")] {
+        let args = [
+            &["--method", "direct", "--rtol", rtol, "--atol", atol],
+            &samples[..],
+        ]
+        .concat();
+        let run = run(&binary, &args);
+        assert_eq!(run.code, 0, "{}", run.stderr);
+        let error = run
+            .rows
+            .iter()
+            .zip(&reference.rows)
+            .flat_map(|(a, b)| {
+                a[1..7]
+                    .iter()
+                    .zip(&b[1..7])
+                    .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
+            })
+            .fold(0.0, f64::max);
+        let rtol: f64 = rtol.parse().unwrap();
+        assert!(
+            error > 10.0 * rtol,
+            "rtol {rtol:e}: error {error:e} (the case is gone)"
+        );
+        let estimate: f64 = run
+            .stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("warning: estimated global error "))
+            .and_then(|l| l.split_whitespace().next())
+            .unwrap_or_else(|| {
+                panic!(
+                    "rtol {rtol:e}: error {error:e}, not warned:\n{}",
+                    run.stderr
+                )
+            })
+            .parse()
+            .unwrap();
+        assert!(
+            estimate > 0.25 * error && estimate < 4.0 * error,
+            "rtol {rtol:e}: estimate {estimate:e} against an error of {error:e}"
+        );
+    }
+}
+
 /// A stop condition that reads another switch's branch (a kink) is read
 /// at t0 under the branches the initial state is on.
 #[test]

@@ -5,10 +5,10 @@
 
 use crate::choice::IntegratorChoice;
 use crate::failure::Failure;
-use crate::method::solver::{GlobalErrorEstimate, KeptPart, Report, Solver};
+use crate::method::solver::{GlobalErrorEstimate, Keeping, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
-use crate::ode::dop853::global_error::growth::{past_bound, Growth};
+use crate::ode::dop853::global_error::growth::{past, Growth, Keep, FROM_DIRECT};
 use crate::ode::dop853::global_error::{relative, GlobalError, BOUND};
 use crate::ode::dop853::Dop853;
 use crate::ode::stepper::{Clocked, OfModel, StepperOf};
@@ -41,11 +41,11 @@ pub struct Direct {
     /// local error.
     global: GlobalError,
     step_error: StepError,
-    /// The steps' errors carried along the motion (`global_error::growth`);
-    /// `None` where the run keeps constraints (see [`Direct::new`]).
+    /// The steps' errors carried along the motion (`global_error::growth`).
     growth: Option<Growth>,
-    /// The run keeps holonomic constraints: a step's local error waits for
-    /// [`Solver::keep_on_constraints`] to remove its part off them.
+    /// The run keeps constraints: a step's local error waits for
+    /// [`Solver::keep_on_constraints`] to remove its part off the
+    /// holonomic ones, and the carried error to be projected.
     keeps: bool,
     /// The last probe's ratio of the part of a step's error that the
     /// holonomic constraints keep to the whole, and the steps since.
@@ -91,13 +91,14 @@ impl StepError {
         global: &mut GlobalError,
         rtol: f64,
         growth: Option<(&mut Growth, &dyn DynModel)>,
+        keep: Option<&mut Keep<'_>>,
     ) {
         if !std::mem::take(&mut self.waiting) {
             return;
         }
         let estimated = relative(&self.estimated, &self.x);
         let propagate =
-            past_bound(global, rtol) || growth.as_ref().is_some_and(|(g, _)| g.started());
+            past(global, rtol, FROM_DIRECT) || growth.as_ref().is_some_and(|(g, _)| g.started());
         // The sum is calibrated as before: a measure every
         // `CALIBRATION_STRIDE` steps scales the estimates between (one at
         // every step would add, at tight tolerances, the rounding the
@@ -131,7 +132,13 @@ impl StepError {
                 }
             };
             let local: Vec<f64> = local.iter().map(|v| scale * v).collect();
-            growth.step(&ModelSystem(model), (self.t0, &self.x0), self.t1, &local);
+            growth.step_kept(
+                &ModelSystem(model),
+                (self.t0, &self.x0),
+                self.t1,
+                &local,
+                keep,
+            );
         }
     }
 }
@@ -170,14 +177,13 @@ impl Direct {
                 ..StepError::default()
             },
             // The reduced system of a constrained model drifts off its
-            // constraints (the run is kept on the holonomic ones by
-            // projection, and its velocity constraints hold the motion's
-            // own drift small): its linearised flow carries that drift, and
-            // made a propagated error grow without bound on the knife edge
-            // and the particle on a circle (`global_error`'s comment).
-            growth: (model.constraints().is_empty() && !model.keeps_constraints())
-                .then(|| Growth::new(x0.len())),
-            keeps: model.keeps_positions(),
+            // constraints, and its flow's derivative carries that drift
+            // (a propagated error grew without bound on the knife edge and
+            // the particle on a circle, `global_error`'s comment): in a run
+            // that keeps them, the carried error is projected as the state
+            // is (`keep_on_constraints`).
+            growth: Some(Growth::new(x0.len())),
+            keeps: model.keeps_positions() || model.keeps_constraints(),
             kept_ratio: None,
         })
     }
@@ -256,7 +262,7 @@ impl Solver for Direct {
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         let growth = self.growth.as_mut().map(|g| (g, model));
         self.step_error
-            .add_to(&mut self.global, self.tol.rtol, growth);
+            .add_to(&mut self.global, self.tol.rtol, growth, None);
         self.kept_ratio = None;
         let h = self.stepper.proposed_step();
         let integrator = self.integrator;
@@ -283,7 +289,7 @@ impl Solver for Direct {
     fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
         let growth = self.growth.as_mut().map(|g| (g, model));
         self.step_error
-            .add_to(&mut self.global, self.tol.rtol, growth);
+            .add_to(&mut self.global, self.tol.rtol, growth, None);
         if let Some(growth) = self.growth.as_mut() {
             growth.cut(&ModelSystem(model), t, x);
         }
@@ -300,7 +306,7 @@ impl Solver for Direct {
             .collect())
     }
 
-    fn keep_on_constraints(&mut self, kept_part: &mut KeptPart<'_>) {
+    fn keep_on_constraints(&mut self, model: &dyn DynModel, keeping: &mut dyn Keeping) {
         let e = &mut self.step_error;
         // While the sum with this step's whole error stays within the
         // bound, the run is within without the projection. Past it, the
@@ -322,16 +328,24 @@ impl Solver for Direct {
                     // keeper's own projection after the step reports a
                     // state it cannot keep).
                     let whole = relative(&e.estimated, &e.x);
-                    let probed = kept_part(&e.x, &mut e.estimated).is_ok() && whole > 0.0;
+                    let probed = keeping.kept_part(&e.x, &mut e.estimated).is_ok() && whole > 0.0;
                     let ratio = relative(&e.estimated, &e.x) / whole;
                     if let Some(measured) = e.measured.as_mut() {
-                        let _ = kept_part(&e.x, measured);
+                        let _ = keeping.kept_part(&e.x, measured);
                     }
                     self.kept_ratio = (probed && ratio.is_finite()).then_some((ratio, 1));
                 }
             }
         }
-        e.add_to(&mut self.global, self.tol.rtol, None);
+        // The error carried so far, once propagated to this step's start,
+        // is projected as the state was.
+        let mut keep = |t: f64, x: &[f64], d: &mut [f64]| keeping.tangent(t, x, d);
+        e.add_to(
+            &mut self.global,
+            self.tol.rtol,
+            self.growth.as_mut().map(|g| (g, model)),
+            Some(&mut keep),
+        );
     }
 
     fn report(&self) -> Report {
@@ -339,7 +353,7 @@ impl Solver for Direct {
         // The last step's error, should no projection have come for it.
         self.step_error
             .clone()
-            .add_to(&mut global, self.tol.rtol, None);
+            .add_to(&mut global, self.tol.rtol, None, None);
         let carried = self.growth.as_ref().map_or(0.0, Growth::largest);
         let mut notes = Vec::new();
         if let Some(t) = self.switched_back_at {
@@ -386,7 +400,7 @@ impl Direct {
     fn carry_global_error(&mut self, model: &dyn DynModel) {
         let (global, e) = (&mut self.global, &mut self.step_error);
         let rtol = self.tol.rtol;
-        e.add_to(global, rtol, self.growth.as_mut().map(|g| (g, model)));
+        e.add_to(global, rtol, self.growth.as_mut().map(|g| (g, model)), None);
         let Some(dop) = self.stepper.as_any_mut().downcast_mut::<Dop853>() else {
             global.skip();
             return;
@@ -407,7 +421,7 @@ impl Direct {
         let carried = self
             .growth
             .as_ref()
-            .is_some_and(|g| g.started() || past_bound(global, rtol));
+            .is_some_and(|g| g.started() || past(global, rtol, FROM_DIRECT));
         e.calibrates = global.wants_measure(rtol);
         if carried || e.calibrates {
             // A measure that fails (a stage not finite) leaves the estimate
@@ -419,7 +433,7 @@ impl Direct {
         }
         e.waiting = true;
         if !self.keeps {
-            e.add_to(global, rtol, self.growth.as_mut().map(|g| (g, model)));
+            e.add_to(global, rtol, self.growth.as_mut().map(|g| (g, model)), None);
         }
     }
 

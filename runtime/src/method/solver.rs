@@ -63,10 +63,19 @@ impl GlobalErrorEstimate {
     }
 }
 
-/// The linearised projection onto the constraints, as
-/// [`Solver::keep_on_constraints`] is given it: `(x, d)`, with `d`
-/// replaced in place (left as it is on failure, which is reported).
-pub type KeptPart<'a> = dyn FnMut(&[f64], &mut [f64]) -> Result<(), Failure> + 'a;
+/// The linearised projections onto the constraints, as
+/// [`Solver::keep_on_constraints`] is given them: each replaces a small
+/// change `d` of a state `x` in place (and leaves it as it is on failure,
+/// which is reported).
+pub trait Keeping {
+    /// The part of `d` at `x` (the last advance's end) that the holonomic
+    /// constraints keep (`run::keep::Keeper::kept_part`).
+    fn kept_part(&mut self, x: &[f64], d: &mut [f64]) -> Result<(), Failure>;
+    /// The part of `d` at `(t, x)` that the run's whole projection keeps,
+    /// velocity constraints included (`run::keep::Keeper::tangent`): what
+    /// of an error carried to `x` survives the projections.
+    fn tangent(&mut self, t: f64, x: &[f64], d: &mut [f64]) -> Result<(), Failure>;
+}
 
 /// A method advancing a model's motion step by step.
 pub trait Solver {
@@ -116,13 +125,14 @@ pub trait Solver {
         self.restart(model, t, x)
     }
     /// Takes the run's projection onto the constraints into account for
-    /// the last advance: `kept_part(x, d)` replaces a small change `d` of
-    /// the state `x` by the part of it that the constraints keep (the
-    /// part a projection does not remove). Called after every advance of
-    /// a run that keeps constraints; direct integration passes its steps'
-    /// local errors through it, for a drift off the constraints is
-    /// projected away, not carried to the run's end.
-    fn keep_on_constraints(&mut self, _kept_part: &mut KeptPart<'_>) {}
+    /// the last advance: `keeping` replaces a small change `d` of a state
+    /// by the part of it that the constraints keep (the part a projection
+    /// does not remove). Called after every advance of a run that keeps
+    /// constraints; direct integration passes its steps' local errors
+    /// and the error it carries along the motion through it, for a drift
+    /// off the constraints is projected away, not carried to the run's
+    /// end.
+    fn keep_on_constraints(&mut self, _model: &dyn DynModel, _keeping: &mut dyn Keeping) {}
     /// The work so far.
     fn report(&self) -> Report;
 

@@ -31,7 +31,7 @@ use crate::method::direct::Direct;
 use crate::method::field::affine::AffineField;
 use crate::method::field::quasilinear::QuasilinearField;
 use crate::method::field::FieldOptions;
-use crate::method::solver::{Report, Solver};
+use crate::method::solver::{Keeping, Report, Solver};
 use crate::model::{DynModel, Regime};
 use crate::ode::budget::Budget;
 use crate::run::diagnosis::{check_masses, diagnose, near_singular_configuration, MassScale};
@@ -636,7 +636,13 @@ impl<'m> Integration<'m> {
         self.progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
         if let Some(keeper) = self.keeper.as_mut() {
-            solver.keep_on_constraints(&mut |x, d| keeper.kept_part(model, tb, x, d));
+            let mut keeping = Kept {
+                keeper,
+                model,
+                mode: regime.mode,
+                t: tb,
+            };
+            solver.keep_on_constraints(model, &mut keeping);
         }
         if let Some(pieces) = self.pieces.as_mut() {
             for segment in solver.segments(model)? {
@@ -1090,4 +1096,22 @@ fn observe_to_event(
     model.switching_functions(t_event, x_event, &mut at_event);
     pace.observe_to_event(h, [&g[0], &g[1], &g[2], &g[3], &at_event], switched);
     Ok(())
+}
+
+/// The run's keeper as a solver sees it after an advance ending at `t`
+/// in `mode` ([`Solver::keep_on_constraints`]).
+struct Kept<'a> {
+    keeper: &'a mut Keeper,
+    model: &'a dyn DynModel,
+    mode: usize,
+    t: f64,
+}
+
+impl Keeping for Kept<'_> {
+    fn kept_part(&mut self, x: &[f64], d: &mut [f64]) -> Result<(), Failure> {
+        self.keeper.kept_part(self.model, self.t, x, d)
+    }
+    fn tangent(&mut self, t: f64, x: &[f64], d: &mut [f64]) -> Result<(), Failure> {
+        self.keeper.tangent(self.model, self.mode, t, x, d)
+    }
 }

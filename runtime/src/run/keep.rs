@@ -224,6 +224,42 @@ impl Keeper {
         result
     }
 
+    /// Replaces `d`, a small change of the state `x` at `t` (an error
+    /// carried along the motion), by the part of it that the run's whole
+    /// projection keeps — holonomic constraints and velocity constraints
+    /// in `mode` — its derivative at `x` applied to `d` by a central
+    /// difference, as [`Keeper::kept_part`] does for the holonomic ones.
+    /// Unlike a step's local error (whose velocity part across a velocity
+    /// constraint integrates into unconstrained positions before a
+    /// projection removes it), a carried error is carried over a step
+    /// first and then projected, as the run's state is: the part across
+    /// the constraints never reaches the answer, and left in, the reduced
+    /// system's drift off them (`e' = −φ_{q_d} e`) grows it without bound
+    /// (1e9× rtol on the knife edge, `dop853::global_error`). `d` is left
+    /// as it is on failure.
+    pub fn tangent(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &[f64],
+        d: &mut [f64],
+    ) -> Result<(), Failure> {
+        let size = crate::ode::dop853::global_error::relative(d, x);
+        if !(size > 0.0 && size.is_finite()) {
+            return Ok(());
+        }
+        let s = f64::EPSILON.sqrt() / size;
+        let mut plus: Vec<f64> = x.iter().zip(d.iter()).map(|(x, d)| x + s * d).collect();
+        let mut minus: Vec<f64> = x.iter().zip(d.iter()).map(|(x, d)| x - s * d).collect();
+        self.project_in_place(model, mode, t, &mut plus, false)?;
+        self.project_in_place(model, mode, t, &mut minus, false)?;
+        for ((d, p), m) in d.iter_mut().zip(&plus).zip(&minus) {
+            *d = (p - m) / (2.0 * s);
+        }
+        Ok(())
+    }
+
     pub fn kept(&self) -> Kept {
         Kept {
             largest: self.largest,

@@ -67,8 +67,9 @@ usage: MODEL [OPTIONS]
                          columns `d(X)/d(Y0)`, `d(X)/d(P)` (the variational
                          equations integrated with the motion by the direct
                          method, inside its error control, with their jumps
-                         at events, across changes of candidates; refused
-                         for holonomic constraints)
+                         at events, across changes of candidates, kept
+                         on holonomic constraints by the projection's
+                         derivative)
   -o FILE                write the CSV to FILE instead of stdout; with
                          --ensemble, the members' states (member,t,<state...>,
                          member by member) instead of timing them against
