@@ -224,6 +224,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/run/solution.rs"),
     ),
     (
+        "src/run/start.rs",
+        include_str!("../../runtime/src/run/start.rs"),
+    ),
+    (
         "src/run/watch.rs",
         include_str!("../../runtime/src/run/watch.rs"),
     ),

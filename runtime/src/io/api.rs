@@ -201,42 +201,10 @@ fn quiet(options: &Options) -> Options {
 }
 
 /// The time span and the initial state, with the checks the command line
-/// applies: `given[i]` replaces a value the model states; one the
-/// constraints fix is checked against them.
+/// applies (`run::start`): `given[i]` replaces a value the model states;
+/// one the constraints fix is checked against them.
 fn initial(model: &dyn DynModel, given: &[Option<f64>]) -> Result<(f64, f64, Vec<f64>), Failure> {
-    let (t0, t1) = model.time_span();
-    if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
-        return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
-    }
-    let stated: Vec<Option<f64>> = given
-        .iter()
-        .zip(model.initial_kinds())
-        .map(|(g, kind)| if *kind == Initial::Given { *g } else { None })
-        .collect();
-    let x0 = model.initial_state(&stated)?;
-    if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
-        crate::run::regime::check_first_candidates(model, t0, &x0)?;
-        return Err(Failure::new(
-            t0,
-            FailureKind::NonFiniteInitialValue {
-                component: model.state_names()[i].to_string(),
-            },
-        ));
-    }
-    for (i, (g, kind)) in given.iter().zip(model.initial_kinds()).enumerate() {
-        if let (Some(stated), false) = (g, *kind == Initial::Given) {
-            if (stated - x0[i]).abs() > 1e-9 * x0[i].abs().max(1.0) {
-                return Err(Failure::new(
-                    t0,
-                    FailureKind::InconsistentInitialValue {
-                        component: model.state_names()[i].to_string(),
-                        stated: *stated,
-                        required: x0[i],
-                    },
-                ));
-            }
-        }
-    }
-    crate::run::regime::check_initial_candidates(model, t0, &x0)?;
+    let (t0, t1) = crate::run::start::time_span(model)?;
+    let x0 = crate::run::start::initial_state(model, t0, given)?;
     Ok((t0, t1, x0))
 }

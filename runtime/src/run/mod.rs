@@ -28,6 +28,7 @@ pub mod progress;
 pub mod regime;
 pub mod sensitivity;
 pub mod solution;
+pub mod start;
 pub mod watch;
 
 use crate::choice::Method;

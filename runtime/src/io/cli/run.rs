@@ -7,7 +7,7 @@ use super::args::Invocation;
 use super::bench::ensemble;
 use super::exit::fail;
 use crate::choice::{IntegratorChoice, Method};
-use crate::failure::{Failure, FailureKind, USAGE_EXIT_STATUS};
+use crate::failure::{Failure, USAGE_EXIT_STATUS};
 use crate::io::output::{sample_times, write_header, write_row};
 use crate::io::plot::write_plot;
 use crate::io::summary::Summary;
@@ -46,48 +46,15 @@ pub fn prepare_driven(
     }
     let params = prototype.parameters(&overrides);
     let mut model = prototype.with_params(&params);
-    let (t0, t1) = model.time_span();
-    if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
-        return Err(Failure::new(t0, FailureKind::BadTimeSpan { t0, t1 }));
-    }
+    let (t0, t1) = crate::run::start::time_span(&*model)?;
     if let Some(schedule) = schedule {
         model.set_inputs(&schedule.at(model.input_defaults(), t0));
     }
     let mut given = vec![None; model.dim()];
     for &(i, v) in &inv.inits {
-        if model.initial_kinds().get(i) == Some(&Initial::Given) {
-            given[i] = Some(v);
-        }
+        given[i] = Some(v);
     }
-    let x0 = model.initial_state(&given)?;
-    for (i, v) in x0.iter().enumerate() {
-        if !v.is_finite() {
-            crate::run::regime::check_first_candidates(&*model, t0, &x0)?;
-            return Err(Failure::new(
-                t0,
-                FailureKind::NonFiniteInitialValue {
-                    component: model.state_names()[i].to_string(),
-                },
-            ));
-        }
-    }
-    // A value the constraints fix may be stated, if it agrees.
-    for &(i, stated) in &inv.inits {
-        if model.initial_kinds().get(i) != Some(&Initial::Given) {
-            let required = x0[i];
-            if (stated - required).abs() > 1e-9 * required.abs().max(1.0) {
-                return Err(Failure::new(
-                    t0,
-                    FailureKind::InconsistentInitialValue {
-                        component: model.state_names()[i].to_string(),
-                        stated,
-                        required,
-                    },
-                ));
-            }
-        }
-    }
-    crate::run::regime::check_initial_candidates(&*model, t0, &x0)?;
+    let x0 = crate::run::start::initial_state(&*model, t0, &given)?;
     Ok(Prepared { model, t0, t1, x0 })
 }
 
