@@ -630,7 +630,7 @@ impl Solver for QuasilinearField {
             let count = pass.steps.len();
             let ends: Vec<f64> = pass.steps.iter().map(StoredStep::t_new).collect();
             self.error
-                .window((self.t, &self.x), &ends, &pass.states, &pass.errors);
+                .window(model, (self.t, &self.x), &ends, &pass.states, &pass.errors);
             if let Some(old) = self.accepted.take() {
                 self.pool.extend(old.steps);
                 self.state_pool.extend(old.states);
