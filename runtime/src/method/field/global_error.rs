@@ -31,11 +31,9 @@ use crate::ode::dop853::global_error::{relative, GlobalError, BOUND, CALIBRATION
 use crate::ode::dop853::step_by_halves;
 use crate::ode::system::ModelSystem;
 
-/// The length every window is given in the calibrated sum: a window's
-/// error is not of an order in its length, as a step's is (direct
-/// integration's measure scales the estimates between two measures by the
-/// steps' lengths).
-const WINDOW: f64 = 1.0;
+/// After the first, a window is measured once this many times its steps
+/// have been added since the last measure.
+const WINDOW_SHARE: usize = 4;
 
 /// One accepted step of a window, not yet added.
 #[derive(Clone, Debug)]
@@ -46,10 +44,20 @@ struct Unfed {
     x1: Vec<f64>,
     /// `None`: a step whose error is not estimated.
     local: Option<Vec<f64>>,
-    /// Constrained models, a window measured: the error of the state at
-    /// the step's end against the reference carried from the window's
-    /// anchor (relative; `feed_window`).
-    measured: Option<f64>,
+    /// Constrained models: the step's measure, taken when its window was
+    /// accepted (`feed_window`).
+    measured: Measured,
+}
+
+/// A constrained model's step, measured (relative errors).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Measured {
+    No,
+    /// The state at the step's end against a reference carried along its
+    /// window from the anchor.
+    InWindow(f64),
+    /// Against a reference from the step's start (a long window's step).
+    Alone(f64),
 }
 
 /// The carried estimate of one field run.
@@ -65,12 +73,47 @@ pub struct FieldError {
     /// Evaluations of the reference steps.
     evaluations: usize,
     unfed: Vec<Unfed>,
-    /// Constrained models: steps added since the last window measured
-    /// (`feed_window`).
+    /// A constrained model's windows (`feed_window`).
+    windows: Windows,
+}
+
+/// A constrained model's windows, each added as one (`feed_window`).
+#[derive(Clone, Debug, Default)]
+struct Windows {
+    /// Whether a window was measured.
+    measured: bool,
+    /// The measured windows' errors at their ends (relative), summed, and
+    /// their steps' estimates, summed.
+    ends: f64,
+    ends_estimated: f64,
+    /// The other windows' steps' estimates, summed.
+    unmeasured: f64,
+    /// Steps added since the last measured window.
     since_measure: usize,
-    /// Constrained models: the largest error inside a measured window on
-    /// top of the windows' ends before it (relative).
+    /// Steps of long windows since the last step measured alone.
+    since_alone: usize,
+    /// The largest error inside a measured window on top of the windows
+    /// before it.
     peak: f64,
+}
+
+impl Windows {
+    /// What the measured windows' ends are of their estimates, at most 1
+    /// (as direct integration's `κ`; summed over the measures, for one
+    /// window's ratio is no other's: on knife_edge_circling they ranged
+    /// over 1e-3 … 0.3).
+    fn ratio(&self) -> f64 {
+        if self.ends_estimated > 0.0 {
+            (self.ends / self.ends_estimated).min(1.0)
+        } else {
+            1.0
+        }
+    }
+
+    /// The estimated error at the last window's end.
+    fn sum(&self) -> f64 {
+        self.ends + self.ratio() * self.unmeasured
+    }
 }
 
 impl FieldError {
@@ -83,8 +126,7 @@ impl FieldError {
             n,
             evaluations: 0,
             unfed: Vec::new(),
-            since_measure: 0,
-            peak: 0.0,
+            windows: Windows::default(),
         }
     }
 
@@ -117,30 +159,77 @@ impl FieldError {
                 t1,
                 x1: x1.clone(),
                 local: local.clone(),
-                measured: None,
+                measured: Measured::No,
             });
             (t0, x0) = (t1, x1);
         }
         // A constrained model's window is measured now, in the model's
         // regime of the window (the driver may change the candidates
         // before the window is added).
-        if self.growth(model).is_none() && self.wants_window_measure(&self.unfed[first..]) {
-            self.evaluations += 24 * (self.unfed.len() - first);
-            measure_window(&ModelSystem(model), &mut self.unfed[first..]);
+        if self.growth(model).is_some() {
+            return;
+        }
+        let system = ModelSystem(model);
+        let count = self.unfed.len() - first;
+        if count > CALIBRATION_STRIDE {
+            self.measure_steps(&system, first);
+        } else if self.wants_window_measure(&self.unfed[first..]) {
+            self.evaluations += 24 * count;
+            measure_window(&system, &mut self.unfed[first..]);
+        }
+    }
+
+    /// A window too long to measure whole (its measure would cost more
+    /// than the run: a ball on a turntable's one window of 49 steps, 2.8x
+    /// its evaluations): some of its steps, each against a reference from
+    /// its start, as direct integration's steps are, once the sum passes
+    /// the bound and every `CALIBRATION_STRIDE` steps after.
+    fn measure_steps(&mut self, system: &ModelSystem<'_>, first: usize) {
+        let mut sum = self.windows.sum() + self.global.estimate();
+        let mut calibrated = self.global.calibrated();
+        for step in &mut self.unfed[first..] {
+            let Some(local) = &step.local else {
+                continue;
+            };
+            let estimated = relative(local, &step.x1);
+            let w = &mut self.windows;
+            let measures = if calibrated {
+                w.since_alone >= CALIBRATION_STRIDE
+            } else {
+                sum + estimated > BOUND * self.rtol
+            };
+            sum += estimated;
+            w.since_alone += 1;
+            if !measures {
+                continue;
+            }
+            w.since_alone = 0;
+            self.evaluations += 24;
+            let mut reference = vec![0.0; step.x1.len()];
+            if let Ok(true) =
+                step_by_halves(system, step.t0, &step.x0, step.t1 - step.t0, &mut reference)
+            {
+                for (r, x) in reference.iter_mut().zip(&step.x1) {
+                    *r = x - *r;
+                }
+                step.measured = Measured::Alone(relative(&reference, &step.x1));
+            }
+            // The sum is calibrated from this measure on (when added).
+            calibrated = true;
         }
     }
 
     /// Whether a constrained model's window of `steps` is measured (see
     /// `feed_window`).
     fn wants_window_measure(&self, steps: &[Unfed]) -> bool {
-        if self.global.calibrated() {
-            return self.since_measure + steps.len() >= CALIBRATION_STRIDE;
+        if self.windows.measured {
+            // A measured window costs 24 evaluations a step: at most a
+            // fifth of the steps are measured (a window of 49 steps,
+            // measured whole each time, was 2.8x the run's evaluations).
+            return self.windows.since_measure
+                >= (WINDOW_SHARE * steps.len()).max(CALIBRATION_STRIDE);
         }
-        let estimated: f64 = steps
-            .iter()
-            .filter_map(|s| s.local.as_ref().map(|l| relative(l, &s.x1)))
-            .sum();
-        self.global.estimate() + estimated > BOUND * self.rtol
+        self.windows.sum() + self.global.estimate() + estimated(steps) > BOUND * self.rtol
     }
 
     /// Adds the steps that start before `t` (all: `f64::INFINITY`).
@@ -234,8 +323,9 @@ impl FieldError {
     ///
     /// The window's error is measured against a reference carried along
     /// the window from its anchor (two DOP853 half-steps a step, 24
-    /// evaluations), once the sum of the estimates passes the bound and
-    /// then after every `CALIBRATION_STRIDE` steps; the ratio of the
+    /// evaluations) when it is accepted, once the sum of the estimates
+    /// passes the bound, and then once `CALIBRATION_STRIDE` steps and four
+    /// times its own have been added since the last; the ratio of the
     /// window's end error to its steps' summed estimates scales the sum
     /// before the first measure and the windows between measures, as
     /// direct integration's Richardson measure does. The largest error
@@ -247,34 +337,50 @@ impl FieldError {
         if steps.is_empty() {
             return;
         }
-        let mut estimated = 0.0;
-        for step in &steps {
-            match &step.local {
-                Some(local) => estimated += relative(local, &step.x1),
-                None => self.global.skip(),
-            }
+        if steps.iter().any(|s| s.local.is_none()) {
+            self.global.skip();
         }
-        self.since_measure += steps.len();
+        if steps.len() > CALIBRATION_STRIDE
+            || steps
+                .iter()
+                .any(|s| matches!(s.measured, Measured::Alone(_)))
+        {
+            // A long window's steps, as direct integration's.
+            for step in &steps {
+                let Some(local) = &step.local else {
+                    continue;
+                };
+                let (estimated, h) = (relative(local, &step.x1), step.t1 - step.t0);
+                match step.measured {
+                    Measured::Alone(m) => self.global.add_measured(estimated, m, h),
+                    _ => self.global.add(estimated, h),
+                };
+            }
+            return;
+        }
+        let estimated = estimated(&steps);
+        self.windows.since_measure += steps.len();
         let measured = steps
             .iter()
-            .map(|s| s.measured)
+            .map(|s| match s.measured {
+                Measured::InWindow(e) => Some(e),
+                _ => None,
+            })
             .collect::<Option<Vec<f64>>>()
             .map(|errors| {
                 let inside = errors.iter().fold(0.0_f64, |m, &e| m.max(e));
                 (errors[errors.len() - 1], inside)
             });
+        let w = &mut self.windows;
         match measured {
             Some((end, inside)) => {
-                self.since_measure = 0;
-                let before = self.global.estimate();
-                self.global.add_measured(estimated, end, WINDOW);
-                // The sum before may have been scaled down by this measure.
-                let before = before.min(self.global.estimate());
-                self.peak = self.peak.max(before + inside);
+                w.measured = true;
+                w.since_measure = 0;
+                w.ends += end;
+                w.ends_estimated += estimated;
+                w.peak = w.peak.max(self.global.estimate() + w.sum() - end + inside);
             }
-            None => {
-                self.global.add(estimated, WINDOW);
-            }
+            None => w.unmeasured += estimated,
         }
     }
 
@@ -300,6 +406,16 @@ impl FieldError {
     /// For the summary: the steps added so far (and those waiting,
     /// summed).
     pub fn estimate(&self) -> GlobalErrorEstimate {
+        if let Some(None) = self.growth {
+            let w = &self.windows;
+            let partial = self.unfed.iter().any(|s| s.local.is_none());
+            return GlobalErrorEstimate {
+                largest: (w.sum() + self.global.estimate() + w.ratio() * estimated(&self.unfed))
+                    .max(w.peak),
+                rtol: self.rtol,
+                complete: self.global.complete() && !partial,
+            };
+        }
         let mut global = self.global.clone();
         for step in &self.unfed {
             match &step.local {
@@ -315,11 +431,20 @@ impl FieldError {
             .and_then(Option::as_ref)
             .map_or(0.0, Growth::largest);
         GlobalErrorEstimate {
-            largest: global.estimate().max(carried).max(self.peak),
+            largest: global.estimate().max(carried),
             rtol: self.rtol,
             complete: global.complete(),
         }
     }
+}
+
+/// The steps' estimates summed (relative; the steps not estimated left
+/// out).
+fn estimated(steps: &[Unfed]) -> f64 {
+    steps
+        .iter()
+        .filter_map(|s| s.local.as_ref().map(|l| relative(l, &s.x1)))
+        .sum()
 }
 
 /// Each step's error against a reference carried along the window's
@@ -341,6 +466,6 @@ fn measure_window(system: &ModelSystem<'_>, steps: &mut [Unfed]) {
         for ((d, x), r) in difference.iter_mut().zip(&step.x1).zip(&reference) {
             *d = x - r;
         }
-        step.measured = Some(relative(&difference, &step.x1));
+        step.measured = Measured::InWindow(relative(&difference, &step.x1));
     }
 }
