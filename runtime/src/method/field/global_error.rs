@@ -23,6 +23,13 @@
 //! along the motion with its sign (`global_error::growth`). The steps of
 //! stiff and Magnus windows are not counted (the estimate then says it is
 //! partial).
+//!
+//! A model with constraints carries no errors along the motion (its
+//! reduced system drifts off the constraints, which the run's projections
+//! undo): there a window of at most `CALIBRATION_STRIDE` steps is added as
+//! one, its error at its end measured against a reference carried along it
+//! from its anchor (`FieldError::feed_window`), and a longer window's steps
+//! as above.
 
 use crate::method::solver::GlobalErrorEstimate;
 use crate::model::DynModel;
@@ -47,6 +54,9 @@ struct Unfed {
     /// Constrained models: the step's measure, taken when its window was
     /// accepted (`feed_window`).
     measured: Measured,
+    /// Constrained models: the step is one of a window too long to be
+    /// measured whole (`measure_steps`), added step by step.
+    alone: bool,
 }
 
 /// A constrained model's step, measured (relative errors).
@@ -160,6 +170,7 @@ impl FieldError {
                 x1: x1.clone(),
                 local: local.clone(),
                 measured: Measured::No,
+                alone: false,
             });
             (t0, x0) = (t1, x1);
         }
@@ -172,6 +183,9 @@ impl FieldError {
         let system = ModelSystem(model);
         let count = self.unfed.len() - first;
         if count > CALIBRATION_STRIDE {
+            for step in &mut self.unfed[first..] {
+                step.alone = true;
+            }
             self.measure_steps(&system, first);
         } else if self.wants_window_measure(&self.unfed[first..]) {
             self.evaluations += 24 * count;
@@ -323,14 +337,16 @@ impl FieldError {
     ///
     /// The window's error is measured against a reference carried along
     /// the window from its anchor (two DOP853 half-steps a step, 24
-    /// evaluations) when it is accepted, once the sum of the estimates
-    /// passes the bound, and then once `CALIBRATION_STRIDE` steps and four
-    /// times its own have been added since the last; the ratio of the
-    /// window's end error to its steps' summed estimates scales the sum
-    /// before the first measure and the windows between measures, as
-    /// direct integration's Richardson measure does. The largest error
-    /// inside a measured window, on top of the sum before it, is kept too
-    /// (the run's samples are taken there).
+    /// evaluations) when it is accepted (`window`), once the sum of the
+    /// estimates passes the bound, and then once `CALIBRATION_STRIDE`
+    /// steps and four times its own have been added since the last; the
+    /// measured windows' end errors over their steps' estimates, both
+    /// summed, scale the other windows' estimates (`Windows::ratio`), as
+    /// direct integration's Richardson measure scales its steps'. The
+    /// largest error inside a measured window, on top of the sum before
+    /// it, is kept too (the run's samples are taken there). A window of
+    /// more steps is added step by step, some measured alone
+    /// (`measure_steps`).
     fn feed_window(&mut self, t: f64) {
         let mut steps = std::mem::take(&mut self.unfed);
         steps.retain(|s| s.t0 < t);
@@ -340,12 +356,9 @@ impl FieldError {
         if steps.iter().any(|s| s.local.is_none()) {
             self.global.skip();
         }
-        if steps.len() > CALIBRATION_STRIDE
-            || steps
-                .iter()
-                .any(|s| matches!(s.measured, Measured::Alone(_)))
-        {
-            // A long window's steps, as direct integration's.
+        if steps[0].alone {
+            // A long window's steps (all, or those before an event), as
+            // direct integration's.
             for step in &steps {
                 let Some(local) = &step.local else {
                     continue;
