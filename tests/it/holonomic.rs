@@ -322,13 +322,6 @@ fn the_field_counts_a_constrained_window_by_its_error_at_its_end() {
             "{name} rtol {rtol:e}: error {error:e}, estimate {estimate:e}, warned {warned}"
         );
     }
-    // A run over 10·rtol is still warned (the bead on a cycloid at rtol
-    // 1e-10, 10.2 rtol off: not warned before).
-    let (error, estimate, warned) = field_estimate(&build("bead_on_cycloid"), 1e-10);
-    assert!(
-        warned && error > 10.0 * 1e-10 && estimate >= error,
-        "bead_on_cycloid: error {error:e}, estimate {estimate:e}, warned {warned}"
-    );
 }
 
 /// The complete elliptic integral of the first kind `K(k)`, by the

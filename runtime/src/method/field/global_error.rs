@@ -207,10 +207,12 @@ impl FieldError {
             };
             let estimated = relative(local, &step.x1);
             let w = &mut self.windows;
+            // As direct integration's `wants_measure`: the sum before the
+            // step past the bound.
             let measures = if calibrated {
                 w.since_alone >= CALIBRATION_STRIDE
             } else {
-                sum + estimated > BOUND * self.rtol
+                sum > BOUND * self.rtol
             };
             sum += estimated;
             w.since_alone += 1;
@@ -420,11 +422,24 @@ impl FieldError {
     /// summed).
     pub fn estimate(&self) -> GlobalErrorEstimate {
         if let Some(None) = self.growth {
+            // The window not yet added: a long one's steps scaled as the
+            // steps are, a short one by the windows' ratio.
             let w = &self.windows;
             let partial = self.unfed.iter().any(|s| s.local.is_none());
+            let mut global = self.global.clone();
+            let mut pending = 0.0;
+            for step in &self.unfed {
+                if let Some(local) = &step.local {
+                    let estimated = relative(local, &step.x1);
+                    if step.alone {
+                        global.add(estimated, step.t1 - step.t0);
+                    } else {
+                        pending += w.ratio() * estimated;
+                    }
+                }
+            }
             return GlobalErrorEstimate {
-                largest: (w.sum() + self.global.estimate() + w.ratio() * estimated(&self.unfed))
-                    .max(w.peak),
+                largest: (w.sum() + global.estimate() + pending).max(w.peak),
                 rtol: self.rtol,
                 complete: self.global.complete() && !partial,
             };
