@@ -165,6 +165,7 @@ impl Solver for AffineField {
             let mut local = vec![0.0; x_old.len()];
             let estimated = self.window.local_error(self.options.tol, &mut local);
             self.error.window(
+                model,
                 (t_old, &x_old),
                 &[self.window.time()],
                 &[self.window.state().to_vec()],

@@ -27,7 +27,7 @@ use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
 use crate::method::solver::{Report, Solver};
-use crate::model::DynModel;
+use crate::model::{DomainKind, DynModel};
 use crate::ode::budget::Budget;
 use crate::ode::dop853::dense_step_between;
 use crate::ode::stepper::DenseStep;
@@ -39,6 +39,13 @@ use std::cell::{Cell, RefCell};
 
 /// Newton's error bound a window may reach, in units of the tolerance.
 const DEFECT_LIMIT: f64 = 0.2;
+/// Near the end of a constraint's branch, Newton's error may move the
+/// branch's argument by at most this fraction of its value...
+const DOMAIN_FRACTION: f64 = 0.1;
+/// ... but the bound is not cut below this fraction of `DEFECT_LIMIT`
+/// (where the branch truly ends, the windows stay finite and the run
+/// stops there, named).
+const DOMAIN_FLOOR: f64 = 1e-3;
 /// The most field steps one window keeps (its steps are stored until it
 /// is accepted).
 const MAX_WINDOW_STEPS: usize = 400;
@@ -367,6 +374,65 @@ impl QuasilinearField {
         }
         Ok((sum / n as f64).sqrt())
     }
+
+    /// Newton's error bound a window may reach at `(t, x)`, in units of
+    /// the tolerance: [`DEFECT_LIMIT`], less where the state is within
+    /// that much error of the end of a constraint's branch (the argument
+    /// `a` of a square root, logarithm, arcsine, …, whose 0 ends it). An
+    /// error of one tolerance in component `i` moves `a` by `δa_i`; the
+    /// bound keeps `Σ δa_i` times it below a tenth of `a`. Why: the
+    /// tolerance is no measure of the distance to a branch's end. A
+    /// constant-speed particle near the top of its arc (`y' = sqrt(c^2 -
+    /// x'^2)`, examples/nonlinear_constraint_near_branch.lag, rtol 1e-6)
+    /// is 1.4e-8 from the end in `x'` at t = 0.9998 with a tolerance of
+    /// 1e-6 there: a window's Newton error of 0.14 tolerances, within the
+    /// bound, carried the state onto the end (`c^2 - x'^2` = 3e-15) and
+    /// the run stopped at t = 0.99984, where direct integration, whose
+    /// errors the motion damps there, went on to the span's end.
+    fn defect_limit(
+        &self,
+        model: &dyn DynModel,
+        t: f64,
+        x: &[f64],
+        scratch: &mut DefectScratch,
+    ) -> f64 {
+        let domains = model.domains();
+        if domains.is_empty() {
+            return DEFECT_LIMIT;
+        }
+        let m = domains.len();
+        scratch.domains.resize(5 * m, 0.0);
+        let (values, rest) = scratch.domains.split_at_mut(2 * m);
+        let (moved, trial) = rest.split_at_mut(m);
+        model.domain_values(t, x, values);
+        moved.fill(0.0);
+        let tol = self.options.tol;
+        let mut y = x.to_vec();
+        for i in 0..x.len() {
+            y[i] = x[i] + tol.atol + tol.rtol * x[i].abs();
+            model.domain_values(t, &y, trial);
+            y[i] = x[i];
+            for d in 0..m {
+                moved[d] += (trial[2 * d] - values[2 * d]).abs();
+            }
+        }
+        let mut limit = DEFECT_LIMIT;
+        for (d, domain) in domains.iter().enumerate() {
+            let ends = matches!(
+                domain.kind,
+                DomainKind::Root
+                    | DomainKind::Power
+                    | DomainKind::Logarithm
+                    | DomainKind::Arcsine
+                    | DomainKind::Arccosine
+            );
+            let (a, da) = (values[2 * d], moved[d]);
+            if ends && a > 0.0 && da > 0.0 && da.is_finite() {
+                limit = limit.min(DOMAIN_FRACTION * a / da);
+            }
+        }
+        limit.max(DOMAIN_FLOOR * DEFECT_LIMIT)
+    }
 }
 
 struct DefectScratch {
@@ -376,6 +442,8 @@ struct DefectScratch {
     dx: Vec<f64>,
     lin: Vec<f64>,
     x0: Vec<f64>,
+    /// The constraints' domain values (`defect_limit`).
+    domains: Vec<f64>,
 }
 
 impl DefectScratch {
@@ -387,6 +455,7 @@ impl DefectScratch {
             dx: vec![0.0; n],
             lin: vec![0.0; n],
             x0: vec![0.0; n],
+            domains: Vec::new(),
         }
     }
 }
@@ -401,6 +470,9 @@ struct Pass {
     stats: Stats,
     largest_condition: f64,
     field_h: f64,
+    /// Why the window could not take its first step at all (the
+    /// conditions degraded on every shortening), if it could not.
+    start_failed: Option<Failure>,
 }
 
 impl Solver for QuasilinearField {
@@ -497,19 +569,35 @@ impl Solver for QuasilinearField {
             self.passes += 1;
             self.stats += pass.stats;
             if pass.steps.is_empty() {
-                // Even the first step's Newton error was too large: the
-                // predictor is too loose for this motion, or the step too
-                // long for the linearisation.
+                // Even the first step's Newton error was too large, or its
+                // coefficients were not finite: the predictor is too loose
+                // for this motion, or its step too long for the
+                // linearisation. Both are shortened: the predictor's first
+                // step was kept from the last window, and a tighter
+                // predictor accepted the same step again (the particle on a
+                // circle at rtol 1e-8: one step from x = -0.45 onto the
+                // pole x = 0 of its candidate's equations, accurate at its
+                // end and 1e8 off in its middle, twelve times).
                 retries += 1;
                 self.predictor_ratio = (self.predictor_ratio * 0.1).max(MIN_PREDICTOR_RATIO);
-                self.field_h = Some(0.25 * pass.field_h);
+                self.field_h = match pass.start_failed {
+                    // Its shortenings ran down to nothing.
+                    Some(_) => self.field_h.map(|h| 0.25 * h),
+                    None => Some(0.25 * pass.field_h),
+                };
+                let first = predictor.steps.borrow().first().map(|s| s.t_new - s.t_old);
+                if let Some(h) = first {
+                    self.predictor_h = Some(0.25 * h);
+                }
                 if retries > 12 {
-                    return Err(Failure::new(
-                        self.t,
-                        FailureKind::FieldNotConverging {
-                            correction: DEFECT_LIMIT,
-                        },
-                    ));
+                    return Err(pass.start_failed.unwrap_or_else(|| {
+                        Failure::new(
+                            self.t,
+                            FailureKind::FieldNotConverging {
+                                correction: DEFECT_LIMIT,
+                            },
+                        )
+                    }));
                 }
                 continue;
             }
@@ -542,7 +630,7 @@ impl Solver for QuasilinearField {
             let count = pass.steps.len();
             let ends: Vec<f64> = pass.steps.iter().map(StoredStep::t_new).collect();
             self.error
-                .window((self.t, &self.x), &ends, &pass.states, &pass.errors);
+                .window(model, (self.t, &self.x), &ends, &pass.states, &pass.errors);
             if let Some(old) = self.accepted.take() {
                 self.pool.extend(old.steps);
                 self.state_pool.extend(old.states);
@@ -812,6 +900,7 @@ impl QuasilinearField {
         let mut largest_condition = 1.0_f64;
         // The last step kept: its time and the budget's draws by then.
         let mut kept_at = (self.t, budget.used());
+        let mut start_failed = None;
         let end = loop {
             if window.time() >= t_limit {
                 break WindowEnd::Span;
@@ -838,7 +927,7 @@ impl QuasilinearField {
                     scratch.x0 = x0;
                     let defect = defect?;
                     let grown = bound + 0.5 * (defect + defect_last) * (t - t_last);
-                    if grown > DEFECT_LIMIT {
+                    if grown > self.defect_limit(model, t, window.state(), &mut scratch) {
                         break WindowEnd::Defect;
                     }
                     bound = grown;
@@ -865,7 +954,10 @@ impl QuasilinearField {
                     shortenings += 1;
                     let h = 0.25 * window.proposed_step();
                     if shortenings > MAX_SHORTENINGS || underflows(self.t, h) {
-                        return Err(window.degraded());
+                        // Retried from a shorter predictor step (`advance`)
+                        // before it is reported.
+                        start_failed = Some(window.degraded());
+                        break WindowEnd::Conditioning;
                     }
                     window.propose_step(h);
                 }
@@ -884,6 +976,7 @@ impl QuasilinearField {
             stats: window.stats(),
             largest_condition,
             field_h: window.proposed_step(),
+            start_failed,
         })
     }
 }
