@@ -53,15 +53,6 @@ pub trait FieldSystem: System {
         None
     }
 
-    /// The factor by which computing `(f, S)` from `y` amplifies
-    /// rounding, as [`FieldSystem::field`] returns it but measured with
-    /// every state component in its own scale (`scale[k]` for `x_k`,
-    /// `scale[0]` for the constant term), so that a change of units of a
-    /// coordinate leaves it unchanged; `None` at a pole.
-    fn scaled_loss(&self, _y: &[f64], _scale: &[f64]) -> Option<f64> {
-        Some(1.0)
-    }
-
     /// `y` is the projective form `(w, P)` rather than `(f, S)`.
     fn is_projective(&self) -> bool {
         false
@@ -884,40 +875,6 @@ impl<I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, I> {
             f64::INFINITY
         };
         let loss = loss.max(growth);
-        loss.is_finite().then_some(loss)
-    }
-
-    /// The loss of [`FieldSystem::field`] with `P_jk` (units of
-    /// `x_{slot j} / x_k`) weighed by `scale_k / scale_{slot j}`: the raw
-    /// largest entry carried units (on tests/data/stiff_joint.lag, 422,
-    /// the ratio of the joint's rates to its angles).
-    fn scaled_loss(&self, y: &[f64], scale: &[f64]) -> Option<f64> {
-        let n = self.dim;
-        let w = &y[..=n];
-        let w1 = w[1];
-        if w1 == 0.0 || !w1.is_finite() {
-            return None;
-        }
-        let (mut magnitude, mut value, mut growth) = (0.0_f64, 0.0_f64, 1.0_f64);
-        for j in 0..n {
-            let own = scale[Self::slot(j)];
-            for (k, sk) in scale.iter().enumerate() {
-                growth = growth.max((sensitivity(y, n, j, k) * sk / own).abs());
-            }
-            for i in 0..n {
-                let k = Self::slot(i);
-                let weight = scale[k] / own;
-                let a = sensitivity(y, n, j, k) * w1 * weight;
-                let b = w[k] * sensitivity(y, n, j, 1) * weight;
-                magnitude = magnitude.max(a.abs() + b.abs());
-                value = value.max((a - b).abs());
-            }
-        }
-        let loss = if value > 0.0 {
-            (magnitude / value).max(growth)
-        } else {
-            f64::INFINITY
-        };
         loss.is_finite().then_some(loss)
     }
 

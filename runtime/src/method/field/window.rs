@@ -82,9 +82,6 @@ struct Buffers {
     s: Vec<f64>,
     df: Vec<f64>,
     ds: Vec<f64>,
-    /// Each state component's scale for the rounding watch: 1 for the
-    /// constant term, `|x_k| + atol/rtol` for `x_k`.
-    scale: Vec<f64>,
 }
 
 impl Buffers {
@@ -98,7 +95,6 @@ impl Buffers {
             s: vec![0.0; n * n],
             df: vec![0.0; n],
             ds: vec![0.0; n * n],
-            scale: vec![1.0; n + 1],
         }
     }
 }
@@ -142,17 +138,7 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
     ) -> Option<f64> {
         let b = &mut *self.b;
         self.trial_ok = false;
-        if self.system.field(y1, &mut b.f, &mut b.s).is_none() {
-            self.declined = Some(Decline::Conditions);
-            return None;
-        }
-        // The loss in the state's own scales: in raw numbers it measured
-        // the units of the coordinates as much as rounding.
-        let floor = self.tol.atol / self.tol.rtol;
-        for (sk, x) in b.scale[1..].iter_mut().zip(self.start) {
-            *sk = x.abs() + floor;
-        }
-        let Some(loss) = self.system.scaled_loss(y1, &b.scale) else {
+        let Some(loss) = self.system.field(y1, &mut b.f, &mut b.s) else {
             self.declined = Some(Decline::Conditions);
             return None;
         };
