@@ -59,25 +59,50 @@ fn affine_jets(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
         Symbol::Jet { coord, order } => (std::cmp::Reverse(order), coord),
         _ => (std::cmp::Reverse(0), 0),
     });
-    loop {
-        // (position of a var to drop): a var whose coefficient depends on
-        // itself, else the lower-priority end of a cross dependence.
-        let mut drop: Option<usize> = None;
-        for (a, &v) in vars.iter().enumerate() {
-            let c = arena.diff(e, v);
-            // The last `w` that `c` depends on gives this `a`'s candidate.
-            if let Some(b) = vars.iter().rposition(|&w| arena.depends_on(c, w)) {
-                let candidate = a.max(b);
-                drop = Some(drop.map_or(candidate, |d: usize| d.max(candidate)));
-            }
-        }
-        match drop {
-            Some(i) => {
-                vars.remove(i);
-            }
-            None => return vars,
+    // The coefficient of each jet, in this order (the order `diff` interns
+    // its nodes in), and the jets each coefficient depends on.
+    let coefficients: Vec<ExprId> = vars.iter().map(|&v| arena.diff(e, v)).collect();
+    let slots: Vec<Option<u32>> = vars.iter().map(|&v| arena.symbol_slot(v)).collect();
+    let depends: Vec<Vec<usize>> = coefficients
+        .iter()
+        .map(|&c| {
+            (0..vars.len())
+                .filter(|&b| slots[b].is_some_and(|s| arena.holds_slot(c, s)))
+                .collect()
+        })
+        .collect();
+    let mut dependents: Vec<Vec<usize>> = vec![Vec::new(); vars.len()];
+    for (a, ds) in depends.iter().enumerate() {
+        for &b in ds {
+            dependents[b].push(a);
         }
     }
+    // Drop, one at a time, the lowest-priority jet that takes part in a
+    // dependence among the jets kept (its coefficient depends on a kept
+    // jet, or a kept jet's coefficient depends on it); `uses` and
+    // `used_by` count those among the kept. Dropping the last such jet is
+    // what a scan of every pair would drop (a var whose coefficient
+    // depends on itself, else the lower-priority end of a cross
+    // dependence), without rescanning the pairs after each drop.
+    let mut kept = vec![true; vars.len()];
+    let mut uses: Vec<usize> = depends.iter().map(Vec::len).collect();
+    let mut used_by: Vec<usize> = dependents.iter().map(Vec::len).collect();
+    while let Some(r) = (0..vars.len())
+        .rev()
+        .find(|&i| kept[i] && (uses[i] > 0 || used_by[i] > 0))
+    {
+        kept[r] = false;
+        for &b in &depends[r] {
+            used_by[b] -= 1;
+        }
+        for &a in &dependents[r] {
+            uses[a] -= 1;
+        }
+    }
+    vars.into_iter()
+        .zip(kept)
+        .filter_map(|(v, k)| k.then_some(v))
+        .collect()
 }
 
 /// The smallest (by operation count) of a few equal forms of `e`; on a tie
