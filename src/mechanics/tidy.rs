@@ -16,11 +16,40 @@ const DISTRIBUTE_DEPTH: u32 = 2;
 /// `e` as a sum of collected terms, the highest derivatives first and the
 /// jet-free term last. Their sum equals `e`.
 pub fn tidy_terms(arena: &mut Arena, e: ExprId) -> Vec<ExprId> {
-    let vars = affine_jets(arena, e);
+    tidy_terms_all(arena, &[e]).concat()
+}
+
+/// [`tidy_terms`] of each of `es`, their coefficients taken in one
+/// Jacobian: the equations of a large model share most of their nodes
+/// (the N-link pendulum's inner sums), and a Jacobian of each alone
+/// builds the partials of every shared node once per equation.
+pub fn tidy_terms_all(arena: &mut Arena, es: &[ExprId]) -> Vec<Vec<ExprId>> {
+    let mut jets: Vec<Symbol> = es
+        .iter()
+        .flat_map(|&e| arena.free_symbols(e))
+        .filter(|s| matches!(s, Symbol::Jet { .. }))
+        .collect::<BTreeSet<Symbol>>()
+        .into_iter()
+        .collect();
+    jets.sort_by_key(|&s| priority(s));
+    let column: HashMap<Symbol, usize> = jets.iter().enumerate().map(|(c, &s)| (s, c)).collect();
+    // Each entry is the node `diff` gives (and `diff` finds it afterwards).
+    let rows = arena.jacobian(es, &jets);
+    es.iter()
+        .zip(rows)
+        .map(|(&e, row)| {
+            let vars = affine_jets(arena, e, |v| row[column[&v]]);
+            terms_in(arena, e, &vars)
+        })
+        .collect()
+}
+
+/// `e` as `Σ c_v·v + e(vars = 0)` over the jets `vars` it is affine in.
+fn terms_in(arena: &mut Arena, e: ExprId, vars: &[Symbol]) -> Vec<ExprId> {
     let zero = arena.zero();
     let at_zero: HashMap<Symbol, ExprId> = vars.iter().map(|&v| (v, zero)).collect();
     let mut terms = Vec::new();
-    for &v in &vars {
+    for &v in vars {
         let c = arena.diff(e, v);
         if arena.is_zero(c) {
             continue;
@@ -36,6 +65,15 @@ pub fn tidy_terms(arena: &mut Arena, e: ExprId) -> Vec<ExprId> {
     terms
 }
 
+/// The order of preference of the jets: the highest derivatives first,
+/// then by coordinate.
+fn priority(s: Symbol) -> (std::cmp::Reverse<u32>, u32) {
+    match s {
+        Symbol::Jet { coord, order } => (std::cmp::Reverse(order), coord),
+        _ => (std::cmp::Reverse(0), 0),
+    }
+}
+
 /// `e` rewritten as the sum of [`tidy_terms`].
 pub fn tidy(arena: &mut Arena, e: ExprId) -> ExprId {
     let terms = tidy_terms(arena, e);
@@ -44,8 +82,8 @@ pub fn tidy(arena: &mut Arena, e: ExprId) -> ExprId {
 
 /// The jets of `e` in which `e` is affine (no coefficient depends on any of
 /// them), preferring the highest derivatives; ordered by order descending,
-/// then coordinate.
-fn affine_jets(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
+/// then coordinate. `coefficient(v)` is `∂e/∂v`.
+fn affine_jets(arena: &Arena, e: ExprId, coefficient: impl Fn(Symbol) -> ExprId) -> Vec<Symbol> {
     let mut vars: Vec<Symbol> = arena
         .free_symbols(e)
         .into_iter()
@@ -55,13 +93,9 @@ fn affine_jets(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
         // pick one branch for good.
         .filter(|&s| !arena.switches_on(e, s))
         .collect();
-    vars.sort_by_key(|s| match *s {
-        Symbol::Jet { coord, order } => (std::cmp::Reverse(order), coord),
-        _ => (std::cmp::Reverse(0), 0),
-    });
-    // The coefficient of each jet, in this order (the order `diff` interns
-    // its nodes in), and the jets each coefficient depends on.
-    let coefficients: Vec<ExprId> = vars.iter().map(|&v| arena.diff(e, v)).collect();
+    vars.sort_by_key(|&s| priority(s));
+    // The jets each coefficient depends on.
+    let coefficients: Vec<ExprId> = vars.iter().map(|&v| coefficient(v)).collect();
     let slots: Vec<Option<u32>> = vars.iter().map(|&v| arena.symbol_slot(v)).collect();
     let depends: Vec<Vec<usize>> = coefficients
         .iter()
