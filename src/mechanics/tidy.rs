@@ -4,7 +4,7 @@
 //! common denominator). Every rewrite is an algebraic identity; the
 //! canonical constructors do the cancelling.
 
-use crate::ir::{Arena, ExprId, Node, Symbol};
+use crate::ir::{Arena, ExprId, FxMap, Node, Symbol};
 use std::collections::{BTreeSet, HashMap};
 
 /// Sums with more terms than this are left alone by the fraction merging
@@ -35,32 +35,58 @@ pub fn tidy_terms_all(arena: &mut Arena, es: &[ExprId]) -> Vec<Vec<ExprId>> {
     let column: HashMap<Symbol, usize> = jets.iter().enumerate().map(|(c, &s)| (s, c)).collect();
     // Each entry is the node `diff` gives (and `diff` finds it afterwards).
     let rows = arena.jacobian(es, &jets);
+    let vars: Vec<Vec<Symbol>> = es
+        .iter()
+        .zip(&rows)
+        .map(|(&e, row)| affine_jets(arena, e, |v| row[column[&v]]))
+        .collect();
+    // The jet-free terms, those of the expressions affine in the same jets
+    // substituted together (the nodes they share rebuilt once).
+    let mut free = vec![arena.zero(); es.len()];
+    let mut groups: Vec<(&[Symbol], Vec<usize>)> = Vec::new();
+    for (i, v) in vars.iter().enumerate() {
+        match groups.iter_mut().find(|(g, _)| *g == &v[..]) {
+            Some((_, members)) => members.push(i),
+            None => groups.push((v, vec![i])),
+        }
+    }
+    for (group, members) in groups {
+        let zero = arena.zero();
+        let at_zero: HashMap<Symbol, ExprId> = group.iter().map(|&v| (v, zero)).collect();
+        let roots: Vec<ExprId> = members.iter().map(|&i| es[i]).collect();
+        for (i, f) in members.into_iter().zip(arena.subst_all(&roots, &at_zero)) {
+            free[i] = f;
+        }
+    }
+    let mut simplifier = Simplifier::default();
     es.iter()
-        .zip(rows)
-        .map(|(&e, row)| {
-            let vars = affine_jets(arena, e, |v| row[column[&v]]);
-            terms_in(arena, e, &vars)
-        })
+        .zip(&vars)
+        .zip(free)
+        .map(|((&e, vars), free)| terms_in(arena, &mut simplifier, e, vars, free))
         .collect()
 }
 
-/// `e` as `Σ c_v·v + e(vars = 0)` over the jets `vars` it is affine in.
-fn terms_in(arena: &mut Arena, e: ExprId, vars: &[Symbol]) -> Vec<ExprId> {
-    let zero = arena.zero();
-    let at_zero: HashMap<Symbol, ExprId> = vars.iter().map(|&v| (v, zero)).collect();
+/// `e` as `Σ c_v·v + free` over the jets `vars` it is affine in, `free`
+/// being `e` at `vars = 0`.
+fn terms_in(
+    arena: &mut Arena,
+    simplifier: &mut Simplifier,
+    e: ExprId,
+    vars: &[Symbol],
+    free: ExprId,
+) -> Vec<ExprId> {
     let mut terms = Vec::new();
     for &v in vars {
         let c = arena.diff(e, v);
         if arena.is_zero(c) {
             continue;
         }
-        let c = simplify(arena, c);
+        let c = simplifier.simplify(arena, c);
         let x = arena.symbol(v);
         terms.push(arena.mul(&[c, x]));
     }
-    let free = arena.subst(e, &at_zero);
     if !arena.is_zero(free) || terms.is_empty() {
-        terms.push(simplify(arena, free));
+        terms.push(simplifier.simplify(arena, free));
     }
     terms
 }
@@ -142,71 +168,128 @@ fn affine_jets(arena: &Arena, e: ExprId, coefficient: impl Fn(Symbol) -> ExprId)
 /// The smallest (by operation count) of a few equal forms of `e`; on a tie
 /// the form with common factors pulled out wins (`M*(1 + t^2)`).
 pub fn simplify(arena: &mut Arena, e: ExprId) -> ExprId {
-    // Distributing brings `X sin²u` and `X cos²u` side by side: pair them.
-    let distributed = distribute(arena, e, DISTRIBUTE_DEPTH);
-    let distributed = arena.pythagoras(distributed);
-    let merged = merge_fractions(arena, distributed);
-    // And where distributing merges `sin u · sin²u` into `sin³u`, the
-    // squares paired in `e` as it is: `sin u (1 + ½sin²u + ½cos²u)`.
-    let paired = arena.pythagoras(e);
-    let candidates = [
-        factor_common(arena, merged),
-        factor_common(arena, paired),
-        factor_common(arena, e),
-        merged,
-        distributed,
-        merge_fractions(arena, e),
-        e,
-    ];
-    let mut best = e;
-    let mut best_cost = usize::MAX;
-    for c in candidates {
-        let cost = arena.op_count(&[c]);
-        if cost < best_cost {
-            best = c;
-            best_cost = cost;
+    Simplifier::default().simplify(arena, e)
+}
+
+/// [`simplify`] of many expressions that share nodes: each rewrite is a
+/// function of the node alone, so its results are remembered across
+/// expressions (the equations of the N-link pendulum share their inner
+/// sums, which each equation's own walks rewrote afresh).
+#[derive(Default)]
+pub struct Simplifier {
+    /// The result by expression (a symmetric mass matrix has each
+    /// off-diagonal entry twice).
+    simplified: FxMap<ExprId, ExprId>,
+    /// `distribute(e, depth)` by `(e, depth)`.
+    distributed: FxMap<(ExprId, u32), ExprId>,
+    /// `sin²u + cos²u = 1` by node.
+    paired: FxMap<ExprId, ExprId>,
+    /// By the other factors of a product of a sum and the depth left: each
+    /// term's product with them, distributed. The pendulum's `sin θ_i·S_k`
+    /// over its nested inner sums `S_k ⊃ S_{k−1} ⊃ …` multiply the same
+    /// term by the same factors once per `k`.
+    products: FxMap<(Vec<ExprId>, u32), FxMap<ExprId, ExprId>>,
+}
+
+impl Simplifier {
+    /// [`simplify`] through the memos.
+    pub fn simplify(&mut self, arena: &mut Arena, e: ExprId) -> ExprId {
+        if let Some(&r) = self.simplified.get(&e) {
+            return r;
         }
+        let r = self.simplify_once(arena, e);
+        self.simplified.insert(e, r);
+        r
     }
-    best
+
+    fn simplify_once(&mut self, arena: &mut Arena, e: ExprId) -> ExprId {
+        // Distributing brings `X sin²u` and `X cos²u` side by side: pair them.
+        let distributed = self.distribute(arena, e, DISTRIBUTE_DEPTH);
+        let distributed = arena.pythagoras_rec(distributed, &mut self.paired);
+        let merged = merge_fractions(arena, distributed);
+        // And where distributing merges `sin u · sin²u` into `sin³u`, the
+        // squares paired in `e` as it is: `sin u (1 + ½sin²u + ½cos²u)`.
+        let paired = arena.pythagoras_rec(e, &mut self.paired);
+        let candidates = [
+            factor_common(arena, merged),
+            factor_common(arena, paired),
+            factor_common(arena, e),
+            merged,
+            distributed,
+            merge_fractions(arena, e),
+            e,
+        ];
+        let mut best = e;
+        let mut best_cost = usize::MAX;
+        for c in candidates {
+            let cost = arena.op_count(&[c]);
+            if cost < best_cost {
+                best = c;
+                best_cost = cost;
+            }
+        }
+        best
+    }
+
+    /// Multiplies out products of sums, `depth` levels deep.
+    fn distribute(&mut self, arena: &mut Arena, e: ExprId, depth: u32) -> ExprId {
+        if depth == 0 {
+            return e;
+        }
+        if let Some(&r) = self.distributed.get(&(e, depth)) {
+            return r;
+        }
+        let r = match arena.node(e).clone() {
+            Node::Add(ts) => {
+                let ts: Vec<ExprId> = ts
+                    .iter()
+                    .map(|&t| self.distribute(arena, t, depth))
+                    .collect();
+                arena.add(&ts)
+            }
+            Node::Mul(fs) => match fs
+                .iter()
+                .position(|&f| matches!(arena.node(f), Node::Add(_)))
+            {
+                None => e,
+                Some(at) => {
+                    let rest: Vec<ExprId> = fs
+                        .iter()
+                        .enumerate()
+                        .filter(|&(i, _)| i != at)
+                        .map(|(_, &f)| f)
+                        .collect();
+                    let sum = arena.children(fs[at]);
+                    let key = (rest.clone(), depth);
+                    let mut done = self.products.remove(&key).unwrap_or_default();
+                    let terms: Vec<ExprId> = sum
+                        .into_iter()
+                        .map(|t| match done.get(&t) {
+                            Some(&r) => r,
+                            None => {
+                                let mut factors = rest.clone();
+                                factors.push(t);
+                                let product = arena.mul(&factors);
+                                let r = self.distribute(arena, product, depth - 1);
+                                done.insert(t, r);
+                                r
+                            }
+                        })
+                        .collect();
+                    self.products.insert(key, done);
+                    arena.add(&terms)
+                }
+            },
+            _ => e,
+        };
+        self.distributed.insert((e, depth), r);
+        r
+    }
 }
 
 /// Multiplies out products of sums, `depth` levels deep.
 fn distribute(arena: &mut Arena, e: ExprId, depth: u32) -> ExprId {
-    if depth == 0 {
-        return e;
-    }
-    match arena.node(e).clone() {
-        Node::Add(ts) => {
-            let ts: Vec<ExprId> = ts.iter().map(|&t| distribute(arena, t, depth)).collect();
-            arena.add(&ts)
-        }
-        Node::Mul(fs) => {
-            let Some(at) = fs
-                .iter()
-                .position(|&f| matches!(arena.node(f), Node::Add(_)))
-            else {
-                return e;
-            };
-            let rest: Vec<ExprId> = fs
-                .iter()
-                .enumerate()
-                .filter(|&(i, _)| i != at)
-                .map(|(_, &f)| f)
-                .collect();
-            let sum = arena.children(fs[at]);
-            let terms: Vec<ExprId> = sum
-                .into_iter()
-                .map(|t| {
-                    let mut factors = rest.clone();
-                    factors.push(t);
-                    let product = arena.mul(&factors);
-                    distribute(arena, product, depth - 1)
-                })
-                .collect();
-            arena.add(&terms)
-        }
-        _ => e,
-    }
+    Simplifier::default().distribute(arena, e, depth)
 }
 
 /// `(base, exponent)` factors of a term with numeric exponents.
