@@ -28,10 +28,16 @@ pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
                 Format::Text => {
                     print!("{}", derivation.text());
                     print!("{}", derivation.impacts_text(&model));
-                    let reduced = derivation.reduced.clone();
-                    let mut arena = derivation.arena.clone();
+                    // The derivation's arena goes on into the field's
+                    // system without a copy (a large model's holds millions
+                    // of nodes), and is left to the operating system at exit
+                    // instead of being freed node by node.
+                    let lagc::mechanics::Derivation {
+                        mut arena, reduced, ..
+                    } = derivation;
                     let field = lagc::field::field_system(&mut arena, &reduced);
                     print!("{}", field.text(&arena, &reduced.state));
+                    std::mem::forget(arena);
                     let modes = others.len() + 1;
                     for (i, other) in others.iter().enumerate() {
                         println!(
@@ -44,15 +50,18 @@ pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
                     }
                 }
                 Format::Latex => {
-                    let reduced = derivation.reduced.clone();
-                    let mut arena = derivation.arena.clone();
+                    let lines = derivation.latex_lines();
+                    let impacts = derivation.impacts_latex_lines(&model);
+                    // As for the text: the arena without a copy, unfreed.
+                    let lagc::mechanics::Derivation {
+                        mut arena, reduced, ..
+                    } = derivation;
                     let field = lagc::field::field_system(&mut arena, &reduced);
                     print!(
-                        "\\begin{{align*}}\n{}{}{}\\end{{align*}}\n",
-                        derivation.latex_lines(),
-                        derivation.impacts_latex_lines(&model),
+                        "\\begin{{align*}}\n{lines}{impacts}{}\\end{{align*}}\n",
                         field.latex_lines(&arena, &reduced.state)
                     );
+                    std::mem::forget(arena);
                 }
             }
             eprintln!(
