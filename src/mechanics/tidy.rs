@@ -10,6 +10,10 @@ use std::collections::{BTreeSet, HashMap};
 /// Sums with more terms than this are left alone by the fraction merging
 /// (it tries pairs of terms).
 const MERGE_MAX_TERMS: usize = 12;
+/// From this many expressions on, [`tidy_terms_all`] takes their
+/// coefficients in one Jacobian (their shared nodes' partials built once)
+/// rather than by `diff`.
+const JOINT_JACOBIAN_ROOTS: usize = 8;
 /// How deep `distribute` multiplies out nested products of sums.
 const DISTRIBUTE_DEPTH: u32 = 2;
 
@@ -34,7 +38,16 @@ pub fn tidy_terms_all(arena: &mut Arena, es: &[ExprId]) -> Vec<Vec<ExprId>> {
     jets.sort_by_key(|&s| priority(s));
     let column: HashMap<Symbol, usize> = jets.iter().enumerate().map(|(c, &s)| (s, c)).collect();
     // Each entry is the node `diff` gives (and `diff` finds it afterwards).
-    let rows = arena.jacobian(es, &jets);
+    // A few expressions share little: there `diff`, whose memo keeps the
+    // partials of every node for later (the derivation's own partials of
+    // a deep chain are found there), costs less than a Jacobian's pass.
+    let rows = if es.len() >= JOINT_JACOBIAN_ROOTS {
+        arena.jacobian(es, &jets)
+    } else {
+        es.iter()
+            .map(|&e| jets.iter().map(|&v| arena.diff(e, v)).collect())
+            .collect()
+    };
     let vars: Vec<Vec<Symbol>> = es
         .iter()
         .zip(&rows)
