@@ -417,3 +417,185 @@ fn denominators(arena: &Arena, term: ExprId) -> Vec<ExprId> {
         .map(|(b, _)| b)
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ir::Names;
+    use crate::mechanics::Rng;
+    use crate::syntax::ast::Func;
+
+    fn arena() -> Arena {
+        Arena::new(Names {
+            params: vec!["alpha".into()],
+            coords: vec!["q1".into(), "q2".into(), "q3".into()],
+            masses: Vec::new(),
+            inputs: Vec::new(),
+        })
+    }
+
+    /// A random sum of products over the jets of three coordinates up to
+    /// order 2, `sin`/`cos` of positions, a parameter and sums (products
+    /// of sums, for `distribute`); some affine in the highest jets, some
+    /// with cross dependences (`q1''·q2''`), some with a jet squared.
+    fn random_expr(a: &mut Arena, rng: &mut Rng) -> ExprId {
+        let factor = |a: &mut Arena, rng: &mut Rng| -> ExprId {
+            let jet = Symbol::Jet {
+                coord: rng.below(3) as u32,
+                order: rng.below(3) as u32,
+            };
+            match rng.below(7) {
+                0 | 1 => a.symbol(jet),
+                2 => {
+                    let x = a.symbol(Symbol::Jet {
+                        coord: jet_coord(jet),
+                        order: 0,
+                    });
+                    a.func(Func::Sin, x)
+                }
+                3 => {
+                    let x = a.symbol(Symbol::Jet {
+                        coord: jet_coord(jet),
+                        order: 0,
+                    });
+                    a.func(Func::Cos, x)
+                }
+                4 => a.symbol(Symbol::Param(0)),
+                5 => {
+                    let x = a.symbol(jet);
+                    let one = a.one();
+                    a.add(&[one, x])
+                }
+                _ => a.constant(1.0 + rng.below(4) as f64),
+            }
+        };
+        let terms: Vec<ExprId> = (0..1 + rng.below(5))
+            .map(|_| {
+                let fs: Vec<ExprId> = (0..1 + rng.below(3)).map(|_| factor(a, rng)).collect();
+                a.mul(&fs)
+            })
+            .collect();
+        a.add(&terms)
+    }
+
+    fn jet_coord(s: Symbol) -> u32 {
+        match s {
+            Symbol::Jet { coord, .. } => coord,
+            _ => 0,
+        }
+    }
+
+    /// The rule as first written: rescan every pair of jets after each
+    /// drop, dropping the last end of the last dependence.
+    fn affine_jets_by_pairs(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
+        let mut vars: Vec<Symbol> = arena
+            .free_symbols(e)
+            .into_iter()
+            .filter(|s| matches!(s, Symbol::Jet { .. }))
+            .filter(|&s| !arena.switches_on(e, s))
+            .collect();
+        vars.sort_by_key(|&s| priority(s));
+        loop {
+            let mut drop: Option<usize> = None;
+            for (a, &v) in vars.iter().enumerate() {
+                let c = arena.diff(e, v);
+                if let Some(b) = vars.iter().rposition(|&w| arena.depends_on(c, w)) {
+                    let candidate = a.max(b);
+                    drop = Some(drop.map_or(candidate, |d: usize| d.max(candidate)));
+                }
+            }
+            match drop {
+                Some(i) => {
+                    vars.remove(i);
+                }
+                None => return vars,
+            }
+        }
+    }
+
+    /// The counting rule keeps the jets the pair scan keeps, on random
+    /// expressions with self and cross dependences.
+    #[test]
+    fn affine_jets_is_the_pair_scan() {
+        let mut rng = Rng::new(29);
+        let mut a = arena();
+        let mut dropped_some = 0;
+        for _ in 0..400 {
+            let e = random_expr(&mut a, &mut rng);
+            let expected = affine_jets_by_pairs(&mut a, e);
+            let all = a
+                .free_symbols(e)
+                .into_iter()
+                .filter(|s| matches!(s, Symbol::Jet { .. }));
+            if all.count() > expected.len() {
+                dropped_some += 1;
+            }
+            let coefficients: HashMap<Symbol, ExprId> = a
+                .free_symbols(e)
+                .into_iter()
+                .map(|v| (v, a.diff(e, v)))
+                .collect();
+            let got = affine_jets(&a, e, |v| coefficients[&v]);
+            assert_eq!(got, expected, "{}", a.display(e));
+        }
+        assert!(
+            dropped_some > 100,
+            "only {dropped_some} expressions drop a jet"
+        );
+    }
+
+    /// Tidying many expressions together (one Jacobian, shared memos)
+    /// writes each as tidying it alone does, in both of the batch's ways
+    /// of taking the coefficients (few expressions by `diff`, many by the
+    /// Jacobian). Compared as text, each in its own copy of the arena.
+    #[test]
+    fn tidy_together_is_tidy_alone() {
+        for (seed, count) in [(1, 3), (2, JOINT_JACOBIAN_ROOTS), (3, 60)] {
+            let mut rng = Rng::new(seed);
+            let mut a = arena();
+            let mut es: Vec<ExprId> = (0..count).map(|_| random_expr(&mut a, &mut rng)).collect();
+            // Shared parts and a repeat, as equations have.
+            let shared = es[0];
+            let extra = a.add(&[es[1], shared]);
+            es.push(extra);
+            es.push(es[2]);
+            let mut alone = a.clone();
+            let together = tidy_terms_all(&mut a, &es);
+            for (i, &e) in es.iter().enumerate() {
+                let one = tidy_terms(&mut alone, e);
+                let one: Vec<String> = one.iter().map(|&t| alone.display(t).to_string()).collect();
+                let batch: Vec<String> = together[i]
+                    .iter()
+                    .map(|&t| a.display(t).to_string())
+                    .collect();
+                assert_eq!(batch, one, "{}", alone.display(e));
+            }
+        }
+    }
+
+    /// A `Simplifier` kept across expressions gives what a fresh
+    /// `simplify` gives each.
+    #[test]
+    fn simplifier_remembers_what_simplify_gives() {
+        let mut rng = Rng::new(7);
+        let mut a = arena();
+        let mut es: Vec<ExprId> = (0..200).map(|_| random_expr(&mut a, &mut rng)).collect();
+        // Products of sums sharing factors, for the product memo.
+        for i in 0..20 {
+            let p = a.mul(&[es[i], es[i + 1], es[i + 2]]);
+            es.push(p);
+        }
+        let mut fresh = a.clone();
+        let mut simplifier = Simplifier::default();
+        for &e in &es {
+            let kept = simplifier.simplify(&mut a, e);
+            let alone = simplify(&mut fresh, e);
+            assert_eq!(
+                a.display(kept).to_string(),
+                fresh.display(alone).to_string(),
+                "{}",
+                a.display(e)
+            );
+        }
+    }
+}
