@@ -166,12 +166,20 @@ impl Derivation {
     /// The derivation as plain text.
     pub fn text(&self) -> String {
         let mut arena = self.arena.clone();
+        self.text_in(&mut arena)
+    }
+
+    /// [`Derivation::text`] built in `arena`: the derivation's own arena
+    /// taken out of it, or one grown from it (a caller done with the
+    /// derivation spares the copy, which on a large model is millions of
+    /// nodes to copy and to free).
+    pub fn text_in(&self, arena: &mut Arena) -> String {
         let mut first = Printer::collecting();
-        first.prepare(&mut arena, &self.bulk());
-        self.text_with(&mut arena, &mut first);
-        let prefix = name_prefix(&arena, &self.lets);
-        let mut second = first.printing(&arena, &prefix);
-        self.text_with(&mut arena, &mut second)
+        first.prepare(arena, &self.bulk());
+        self.text_with(arena, &mut first);
+        let prefix = name_prefix(arena, &self.lets);
+        let mut second = first.printing(arena, &prefix);
+        self.text_with(arena, &mut second)
     }
 
     /// The expressions that make most of the text: both sides of (4) and

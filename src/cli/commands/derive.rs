@@ -26,12 +26,18 @@ pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
         |((derivation, check), others, model)| {
             match args.format {
                 Format::Text => {
-                    print!("{}", derivation.text());
+                    // The derivation's arena is written in and goes on into
+                    // the field's system without a copy (a large model's
+                    // holds millions of nodes), and is left to the
+                    // operating system at exit instead of being freed node
+                    // by node.
+                    let mut derivation = derivation;
+                    let names = derivation.arena.names().clone();
+                    let mut arena =
+                        std::mem::replace(&mut derivation.arena, lagc::ir::Arena::new(names));
+                    print!("{}", derivation.text_in(&mut arena));
+                    std::mem::swap(&mut derivation.arena, &mut arena);
                     print!("{}", derivation.impacts_text(&model));
-                    // The derivation's arena goes on into the field's
-                    // system without a copy (a large model's holds millions
-                    // of nodes), and is left to the operating system at exit
-                    // instead of being freed node by node.
                     let lagc::mechanics::Derivation {
                         mut arena, reduced, ..
                     } = derivation;
