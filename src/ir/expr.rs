@@ -369,6 +369,12 @@ impl Arena {
         }
     }
 
+    /// Whether `e` holds the symbol of slot `slot` ([`Arena::symbol_slot`]):
+    /// [`Arena::depends_on`] without the symbol's lookup.
+    pub(crate) fn holds_slot(&self, e: ExprId, slot: u32) -> bool {
+        self.meta[e.index()].free.contains(slot)
+    }
+
     /// The highest derivative order of coordinate `coord` in `e`, if any.
     pub fn max_jet_order(&self, e: ExprId, coord: u32) -> Option<u32> {
         self.meta[e.index()]

@@ -23,7 +23,9 @@ impl Arena {
             .collect()
     }
 
-    fn pythagoras_rec(&mut self, e: ExprId, memo: &mut FxMap<ExprId, ExprId>) -> ExprId {
+    /// [`Arena::pythagoras`] through a memo kept by the caller across
+    /// calls (the rewrite of a node does not depend on where it is).
+    pub(crate) fn pythagoras_rec(&mut self, e: ExprId, memo: &mut FxMap<ExprId, ExprId>) -> ExprId {
         if let Some(&r) = memo.get(&e) {
             return r;
         }

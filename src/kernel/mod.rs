@@ -162,12 +162,15 @@ fn build_with(
     } else {
         Vec::new()
     };
+    // One simplifier for all entries: it remembers what they share (and
+    // each off-diagonal entry of a symmetric matrix comes twice).
+    let mut simplifier = crate::mechanics::tidy::Simplifier::default();
     let mut mass_matrix: Vec<Vec<ExprId>> = reduced
         .mass_matrix
         .iter()
         .map(|row| {
             row.iter()
-                .map(|&e| crate::mechanics::tidy::simplify(&mut arena, e))
+                .map(|&e| simplifier.simplify(&mut arena, e))
                 .collect()
         })
         .collect();

@@ -4,7 +4,7 @@
 //! values.
 
 use super::reduced::{Highest, InitialValue};
-use super::tidy::tidy_terms;
+use super::tidy::{tidy_terms, tidy_terms_all};
 use super::Derivation;
 use crate::ir::{Arena, ExprId, FxMap, SharedNames, Symbol};
 use std::fmt::Write;
@@ -55,6 +55,19 @@ impl Printer {
             roots: Vec::new(),
             tidied: self.tidied,
         }
+    }
+
+    /// Tidies `es` together (one Jacobian for all, see [`tidy_terms_all`])
+    /// ahead of their [`sum`]s.
+    fn prepare(&mut self, arena: &mut Arena, es: &[ExprId]) {
+        let mut todo: Vec<ExprId> = Vec::new();
+        for &e in es {
+            if !self.tidied.contains_key(&e) && !todo.contains(&e) {
+                todo.push(e);
+            }
+        }
+        let tidied = tidy_terms_all(arena, &todo);
+        self.tidied.extend(todo.into_iter().zip(tidied));
     }
 
     /// The definitions of the shared names, as a text section or LaTeX lines.
@@ -153,11 +166,42 @@ impl Derivation {
     /// The derivation as plain text.
     pub fn text(&self) -> String {
         let mut arena = self.arena.clone();
+        self.text_in(&mut arena)
+    }
+
+    /// [`Derivation::text`] built in `arena`: the derivation's own arena
+    /// taken out of it, or one grown from it (a caller done with the
+    /// derivation spares the copy, which on a large model is millions of
+    /// nodes to copy and to free).
+    pub fn text_in(&self, arena: &mut Arena) -> String {
         let mut first = Printer::collecting();
-        self.text_with(&mut arena, &mut first);
-        let prefix = name_prefix(&arena, &self.lets);
-        let mut second = first.printing(&arena, &prefix);
-        self.text_with(&mut arena, &mut second)
+        first.prepare(arena, &self.bulk());
+        self.text_with(arena, &mut first);
+        let prefix = name_prefix(arena, &self.lets);
+        let mut second = first.printing(arena, &prefix);
+        self.text_with(arena, &mut second)
+    }
+
+    /// The expressions that make most of the text: both sides of (4) and
+    /// the reduced system's.
+    fn bulk(&self) -> Vec<ExprId> {
+        let mut es: Vec<ExprId> = self
+            .equations
+            .iter()
+            .flat_map(|eq| [eq.lhs, eq.rhs])
+            .collect();
+        match &self.reduced.highest {
+            Highest::Explicit(exprs) => es.extend_from_slice(exprs),
+            Highest::Implicit {
+                residual,
+                dependent,
+                ..
+            } => {
+                es.extend_from_slice(residual);
+                es.extend(dependent.iter().map(|&(_, e)| e));
+            }
+        }
+        es
     }
 
     fn text_with(&self, a: &mut Arena, p: &mut Printer) -> String {
@@ -333,6 +377,7 @@ impl Derivation {
     pub fn latex_lines(&self) -> String {
         let mut arena = self.arena.clone();
         let mut first = Printer::collecting();
+        first.prepare(&mut arena, &self.bulk());
         self.latex_lines_with(&mut arena, &mut first);
         let prefix = name_prefix(&arena, &self.lets);
         let mut second = first.printing(&arena, &prefix);

@@ -26,12 +26,24 @@ pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
         |((derivation, check), others, model)| {
             match args.format {
                 Format::Text => {
-                    print!("{}", derivation.text());
+                    // The derivation's arena is written in and goes on into
+                    // the field's system without a copy (a large model's
+                    // holds millions of nodes), and is left to the
+                    // operating system at exit instead of being freed node
+                    // by node.
+                    let mut derivation = derivation;
+                    let names = derivation.arena.names().clone();
+                    let mut arena =
+                        std::mem::replace(&mut derivation.arena, lagc::ir::Arena::new(names));
+                    print!("{}", derivation.text_in(&mut arena));
+                    std::mem::swap(&mut derivation.arena, &mut arena);
                     print!("{}", derivation.impacts_text(&model));
-                    let reduced = derivation.reduced.clone();
-                    let mut arena = derivation.arena.clone();
+                    let lagc::mechanics::Derivation {
+                        mut arena, reduced, ..
+                    } = derivation;
                     let field = lagc::field::field_system(&mut arena, &reduced);
                     print!("{}", field.text(&arena, &reduced.state));
+                    std::mem::forget(arena);
                     let modes = others.len() + 1;
                     for (i, other) in others.iter().enumerate() {
                         println!(
@@ -44,15 +56,18 @@ pub(crate) fn derive(args: &DeriveArgs) -> ExitCode {
                     }
                 }
                 Format::Latex => {
-                    let reduced = derivation.reduced.clone();
-                    let mut arena = derivation.arena.clone();
+                    let lines = derivation.latex_lines();
+                    let impacts = derivation.impacts_latex_lines(&model);
+                    // As for the text: the arena without a copy, unfreed.
+                    let lagc::mechanics::Derivation {
+                        mut arena, reduced, ..
+                    } = derivation;
                     let field = lagc::field::field_system(&mut arena, &reduced);
                     print!(
-                        "\\begin{{align*}}\n{}{}{}\\end{{align*}}\n",
-                        derivation.latex_lines(),
-                        derivation.impacts_latex_lines(&model),
+                        "\\begin{{align*}}\n{lines}{impacts}{}\\end{{align*}}\n",
                         field.latex_lines(&arena, &reduced.state)
                     );
+                    std::mem::forget(arena);
                 }
             }
             eprintln!(
