@@ -42,7 +42,7 @@ pub struct Direct {
     global: GlobalError,
     step_error: StepError,
     /// The steps' errors carried along the motion (`global_error::growth`).
-    growth: Option<Growth>,
+    growth: Growth,
     /// The run keeps constraints: a step's local error waits for
     /// [`Solver::keep_on_constraints`] to remove its part off the
     /// holonomic ones, and the carried error to be projected.
@@ -182,7 +182,7 @@ impl Direct {
             // the particle on a circle, `global_error`'s comment): in a run
             // that keeps them, the carried error is projected as the state
             // is (`keep_on_constraints`).
-            growth: Some(Growth::new(x0.len())),
+            growth: Growth::new(x0.len()),
             keeps: model.keeps_positions() || model.keeps_constraints(),
             kept_ratio: None,
         })
@@ -260,9 +260,12 @@ impl Solver for Direct {
     }
 
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
-        let growth = self.growth.as_mut().map(|g| (g, model));
-        self.step_error
-            .add_to(&mut self.global, self.tol.rtol, growth, None);
+        self.step_error.add_to(
+            &mut self.global,
+            self.tol.rtol,
+            Some((&mut self.growth, model)),
+            None,
+        );
         self.kept_ratio = None;
         let h = self.stepper.proposed_step();
         let integrator = self.integrator;
@@ -287,12 +290,13 @@ impl Solver for Direct {
     }
 
     fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
-        let growth = self.growth.as_mut().map(|g| (g, model));
-        self.step_error
-            .add_to(&mut self.global, self.tol.rtol, growth, None);
-        if let Some(growth) = self.growth.as_mut() {
-            growth.cut(&ModelSystem(model), t, x);
-        }
+        self.step_error.add_to(
+            &mut self.global,
+            self.tol.rtol,
+            Some((&mut self.growth, model)),
+            None,
+        );
+        self.growth.cut(&ModelSystem(model), t, x);
     }
 
     fn segments(
@@ -343,7 +347,7 @@ impl Solver for Direct {
         e.add_to(
             &mut self.global,
             self.tol.rtol,
-            self.growth.as_mut().map(|g| (g, model)),
+            Some((&mut self.growth, model)),
             Some(&mut keep),
         );
     }
@@ -354,7 +358,7 @@ impl Solver for Direct {
         self.step_error
             .clone()
             .add_to(&mut global, self.tol.rtol, None, None);
-        let carried = self.growth.as_ref().map_or(0.0, Growth::largest);
+        let carried = self.growth.largest();
         let mut notes = Vec::new();
         if let Some(t) = self.switched_back_at {
             notes.push(format!(
@@ -374,7 +378,7 @@ impl Solver for Direct {
         }
         let mut stats = self.done + self.stepper.stats();
         // The propagation's work is the run's too.
-        stats.rhs_evaluations += self.growth.as_ref().map_or(0, Growth::evaluations);
+        stats.rhs_evaluations += self.growth.evaluations();
         Report {
             method: self.method_name(),
             stats,
@@ -400,7 +404,7 @@ impl Direct {
     fn carry_global_error(&mut self, model: &dyn DynModel) {
         let (global, e) = (&mut self.global, &mut self.step_error);
         let rtol = self.tol.rtol;
-        e.add_to(global, rtol, self.growth.as_mut().map(|g| (g, model)), None);
+        e.add_to(global, rtol, Some((&mut self.growth, model)), None);
         let Some(dop) = self.stepper.as_any_mut().downcast_mut::<Dop853>() else {
             global.skip();
             return;
@@ -418,10 +422,7 @@ impl Direct {
         // estimate is the difference to a lower-order solution, whose
         // sign is not the error's: added with its own sign it made the
         // soft walls' estimate 1000× their error at rtol 1e-12).
-        let carried = self
-            .growth
-            .as_ref()
-            .is_some_and(|g| g.started() || past(global, rtol, FROM_DIRECT));
+        let carried = self.growth.started() || past(global, rtol, FROM_DIRECT);
         e.calibrates = global.wants_measure(rtol);
         if carried || e.calibrates {
             // A measure that fails (a stage not finite) leaves the estimate
@@ -433,7 +434,7 @@ impl Direct {
         }
         e.waiting = true;
         if !self.keeps {
-            e.add_to(global, rtol, self.growth.as_mut().map(|g| (g, model)), None);
+            e.add_to(global, rtol, Some((&mut self.growth, model)), None);
         }
     }
 
