@@ -31,6 +31,16 @@ impl Run {
             .unwrap_or_else(|| panic!("the run did not stop:\n{}", self.stderr));
         line.split_whitespace().next().unwrap().parse().unwrap()
     }
+
+    /// The global error estimate the run warned of (`None` without the
+    /// warning).
+    fn warned_estimate(&self) -> Option<f64> {
+        self.stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("warning: estimated global error "))
+            .and_then(|l| l.split_whitespace().next())
+            .map(|v| v.parse().unwrap())
+    }
 }
 
 fn run(binary: &Path, args: &[&str]) -> Run {
@@ -747,14 +757,9 @@ fn soft_walls_over_200_periods_are_warned_with_their_error_s_size() {
             })
             .fold(0.0, f64::max);
         assert!(error > 1e-6, "{method}: error {error:e} (the case is gone)");
-        let estimate: f64 = run
-            .stderr
-            .lines()
-            .find_map(|l| l.strip_prefix("warning: estimated global error "))
-            .and_then(|l| l.split_whitespace().next())
-            .unwrap_or_else(|| panic!("{method} does not warn:\n{}", run.stderr))
-            .parse()
-            .unwrap();
+        let estimate = run
+            .warned_estimate()
+            .unwrap_or_else(|| panic!("{method} does not warn:\n{}", run.stderr));
         assert!(
             estimate > 0.1 * error && estimate < 10.0 * error,
             "{method}: estimate {estimate:e} against an error of {error:e}"
@@ -807,19 +812,12 @@ fn a_slider_crank_s_growing_phase_error_is_warned_with_its_size() {
             error > 10.0 * rtol,
             "rtol {rtol:e}: error {error:e} (the case is gone)"
         );
-        let estimate: f64 = run
-            .stderr
-            .lines()
-            .find_map(|l| l.strip_prefix("warning: estimated global error "))
-            .and_then(|l| l.split_whitespace().next())
-            .unwrap_or_else(|| {
-                panic!(
-                    "rtol {rtol:e}: error {error:e}, not warned:\n{}",
-                    run.stderr
-                )
-            })
-            .parse()
-            .unwrap();
+        let estimate = run.warned_estimate().unwrap_or_else(|| {
+            panic!(
+                "rtol {rtol:e}: error {error:e}, not warned:\n{}",
+                run.stderr
+            )
+        });
         assert!(
             estimate > 0.25 * error && estimate < 4.0 * error,
             "rtol {rtol:e}: estimate {estimate:e} against an error of {error:e}"
