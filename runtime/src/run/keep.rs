@@ -250,14 +250,23 @@ impl Keeper {
             return Ok(());
         }
         let s = f64::EPSILON.sqrt() / size;
-        let mut plus: Vec<f64> = x.iter().zip(d.iter()).map(|(x, d)| x + s * d).collect();
-        let mut minus: Vec<f64> = x.iter().zip(d.iter()).map(|(x, d)| x - s * d).collect();
-        self.project_in_place(model, mode, t, &mut plus, false)?;
-        self.project_in_place(model, mode, t, &mut minus, false)?;
-        for ((d, p), m) in d.iter_mut().zip(&plus).zip(&minus) {
-            *d = (p - m) / (2.0 * s);
+        // The probe buffers of `kept_part`, taken out while the
+        // projections borrow the keeper.
+        let (mut plus, mut minus) = std::mem::take(&mut self.probe);
+        plus.clear();
+        plus.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
+        minus.clear();
+        minus.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
+        let result = self
+            .project_in_place(model, mode, t, &mut plus, false)
+            .and_then(|_| self.project_in_place(model, mode, t, &mut minus, false));
+        if result.is_ok() {
+            for ((d, p), m) in d.iter_mut().zip(&plus).zip(&minus) {
+                *d = (p - m) / (2.0 * s);
+            }
         }
-        Ok(())
+        self.probe = (plus, minus);
+        result
     }
 
     pub fn kept(&self) -> Kept {
