@@ -11,7 +11,7 @@ use super::window::{StepperKind, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::ensemble::States;
 use crate::failure::Failure;
-use crate::method::solver::{Report, Solver};
+use crate::method::solver::{Keeping, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
 use crate::ode::dop853::dense_step_between_measured;
@@ -313,6 +313,11 @@ impl Solver for AffineField {
         with_system(model, options.magnus, &self.scratch, |system| {
             window.members_at(system, options, t, anchors, out)
         })
+    }
+
+    fn keep_on_constraints(&mut self, model: &dyn DynModel, keeping: &mut dyn Keeping) {
+        // The carried error projected as the state is (`FieldError::keep`).
+        self.error.keep(model, keeping);
     }
 
     fn report(&self) -> Report {

@@ -24,17 +24,25 @@
 //! stiff and Magnus windows are not counted (the estimate then says it is
 //! partial).
 //!
-//! A model with constraints carries no errors along the motion (its
-//! reduced system drifts off the constraints, which the run's projections
-//! undo): there a window of at most `CALIBRATION_STRIDE` steps is added as
-//! one, its error at its end measured against a reference carried along it
-//! from its anchor (`FieldError::feed_window`), and a longer window's steps
-//! as above.
+//! A model with constraints: a window of at most `CALIBRATION_STRIDE`
+//! steps is added to the sum as one, its error at its end measured
+//! against a reference carried along it from its anchor
+//! (`FieldError::feed_window`), and a longer window's steps as above.
+//! Its errors are carried along the motion too, from the window in which
+//! the calibrated sum passes `FROM_DIRECT`·rtol (as direct integration's):
+//! every step's error measured with its sign, propagated step by step
+//! through the window, and the carried error projected at each window's
+//! anchor as the run projects the state there (`FieldError::keep`, the
+//! projection's derivative). Without the projection the reduced system's
+//! drift off the constraints grows the carried error without bound;
+//! without the carrying, a slider-crank whose period depends on its
+//! energy ended 154 rtol off at rtol 1e-6 saying "within" (its windows'
+//! summed errors were 3 rtol: the phase error grows with time).
 
-use crate::method::solver::GlobalErrorEstimate;
+use crate::method::solver::{GlobalErrorEstimate, Keeping};
 use crate::model::DynModel;
-use crate::ode::dop853::global_error::growth::{past_bound, Growth};
-use crate::ode::dop853::global_error::{relative, GlobalError, BOUND, CALIBRATION_STRIDE};
+use crate::ode::dop853::global_error::growth::{past_bound, Growth, Keep, FROM_DIRECT};
+use crate::ode::dop853::global_error::{relative, GlobalError, CALIBRATION_STRIDE};
 use crate::ode::dop853::step_by_halves;
 use crate::ode::system::ModelSystem;
 
@@ -57,6 +65,12 @@ struct Unfed {
     /// Constrained models: the step is one of a window too long to be
     /// measured whole (`measure_steps`), added step by step.
     alone: bool,
+    /// Constrained models, once their errors are carried: the step's
+    /// error with its sign, against a reference from its start.
+    signed: Option<Vec<f64>>,
+    /// Constrained models: the step was carried already (a window's
+    /// first, at the projection before it: `FieldError::keep`).
+    carried: bool,
 }
 
 /// A constrained model's step, measured (relative errors).
@@ -75,11 +89,13 @@ enum Measured {
 pub struct FieldError {
     rtol: f64,
     global: GlobalError,
-    /// Set at the first step from the model: `None` for a constrained
-    /// model, whose reduced system drifts off its constraints (direct
-    /// integration's comment).
-    growth: Option<Option<Growth>>,
-    n: usize,
+    /// Set at the first step from the model: whether it has constraints,
+    /// whose windows are added as wholes to the sum (`feed_window`) and
+    /// whose carried error is projected as the state is (`keep`).
+    constrained: Option<bool>,
+    /// The errors carried along the motion.
+    growth: Growth,
+
     /// Evaluations of the reference steps.
     evaluations: usize,
     unfed: Vec<Unfed>,
@@ -132,22 +148,59 @@ impl FieldError {
         FieldError {
             rtol,
             global: GlobalError::new(),
-            growth: None,
-            n,
+            constrained: None,
+            growth: Growth::new(n),
             evaluations: 0,
             unfed: Vec::new(),
             windows: Windows::default(),
         }
     }
 
-    fn growth(&mut self, model: &dyn DynModel) -> Option<&mut Growth> {
-        let n = self.n;
-        self.growth
-            .get_or_insert_with(|| {
-                (model.constraints().is_empty() && !model.keeps_constraints())
-                    .then(|| Growth::new(n))
-            })
-            .as_mut()
+    fn constrained(&mut self, model: &dyn DynModel) -> bool {
+        *self
+            .constrained
+            .get_or_insert_with(|| !model.constraints().is_empty() || model.keeps_constraints())
+    }
+
+    /// Whether a constrained model's errors are carried along the motion
+    /// from the window whose steps start at `first` (once measured): from
+    /// the window in which the calibrated sum passes [`FROM_DIRECT`]·rtol,
+    /// as direct integration's from the step (see there why not from the
+    /// bound). The window's own steps are carried too: a particle in a
+    /// cone's four windows of 7.5 s each, carried from the second, were
+    /// estimated 11× below their error.
+    fn carries_constrained(&self, first: usize) -> bool {
+        if self.growth.started() {
+            return true;
+        }
+        let steps = &self.unfed[first..];
+        let mut calibrated = self.windows.measured || self.global.calibrated();
+        // The window's part: its end's measure, its steps' own measures
+        // scaling their estimates, or its estimates as the windows' are
+        // scaled.
+        let own = match steps.last().map(|s| s.measured) {
+            Some(Measured::InWindow(end)) => {
+                calibrated = true;
+                end
+            }
+            _ => {
+                let (mut measured, mut estimated_measured) = (0.0, 0.0);
+                for step in steps {
+                    if let (Measured::Alone(m), Some(local)) = (step.measured, &step.local) {
+                        measured += m;
+                        estimated_measured += relative(local, &step.x1);
+                    }
+                }
+                let ratio = if estimated_measured > 0.0 {
+                    calibrated = true;
+                    (measured / estimated_measured).min(1.0)
+                } else {
+                    self.windows.ratio()
+                };
+                ratio * estimated(steps)
+            }
+        };
+        calibrated && self.windows.sum() + self.global.estimate() + own > FROM_DIRECT * self.rtol
     }
 
     /// A window accepted from `(t, x)`: its steps' ends `ends` with their
@@ -171,13 +224,15 @@ impl FieldError {
                 local: local.clone(),
                 measured: Measured::No,
                 alone: false,
+                signed: None,
+                carried: false,
             });
             (t0, x0) = (t1, x1);
         }
         // A constrained model's window is measured now, in the model's
         // regime of the window (the driver may change the candidates
         // before the window is added).
-        if self.growth(model).is_some() {
+        if !self.constrained(model) {
             return;
         }
         let system = ModelSystem(model);
@@ -191,13 +246,16 @@ impl FieldError {
             self.evaluations += 24 * count;
             measure_window(&system, &mut self.unfed[first..]);
         }
+        if self.carries_constrained(first) {
+            self.measure_signed(&system, first);
+        }
     }
 
     /// A window too long to measure whole (its measure would cost more
     /// than the run: a ball on a turntable's one window of 49 steps, 2.8x
     /// its evaluations): some of its steps, each against a reference from
     /// its start, as direct integration's steps are, once the sum passes
-    /// the bound and every `CALIBRATION_STRIDE` steps after.
+    /// `FROM_DIRECT`·rtol and every `CALIBRATION_STRIDE` steps after.
     fn measure_steps(&mut self, system: &ModelSystem<'_>, first: usize) {
         let mut sum = self.windows.sum() + self.global.estimate();
         let mut calibrated = self.global.calibrated();
@@ -208,11 +266,13 @@ impl FieldError {
             let estimated = relative(local, &step.x1);
             let w = &mut self.windows;
             // As direct integration's `wants_measure`: the sum before the
-            // step past the bound.
+            // step past `FROM_DIRECT`·rtol, where the errors may start to
+            // be carried (`carries_constrained`), which needs a
+            // calibrated sum.
             let measures = if calibrated {
                 w.since_alone >= CALIBRATION_STRIDE
             } else {
-                sum > BOUND * self.rtol
+                sum > FROM_DIRECT * self.rtol
             };
             sum += estimated;
             w.since_alone += 1;
@@ -235,6 +295,47 @@ impl FieldError {
         }
     }
 
+    /// A constrained model's steps from `first` on, each against a
+    /// reference from its start (24 evaluations), with their signs: what
+    /// is carried along the motion.
+    fn measure_signed(&mut self, system: &ModelSystem<'_>, first: usize) {
+        for step in &mut self.unfed[first..] {
+            if step.local.is_none() {
+                continue;
+            }
+            self.evaluations += 24;
+            let mut reference = vec![0.0; step.x1.len()];
+            if let Ok(true) =
+                step_by_halves(system, step.t0, &step.x0, step.t1 - step.t0, &mut reference)
+            {
+                for (r, x) in reference.iter_mut().zip(&step.x1) {
+                    *r = x - *r;
+                }
+                step.signed = Some(reference);
+            }
+        }
+    }
+
+    /// After a constrained model's advance, before the run projects its
+    /// state: the error carried so far, propagated to the last window's
+    /// anchor, is projected there as the state was (`keeping`'s
+    /// derivative of the projection), and the window's first step is
+    /// carried. Its other steps are carried when they are added
+    /// (`feed`): an event found in the window cuts them.
+    pub fn keep(&mut self, model: &dyn DynModel, keeping: &mut dyn Keeping) {
+        if !self.constrained(model) {
+            return;
+        }
+        let Some(i) = self.unfed.iter().position(|s| !s.carried) else {
+            return;
+        };
+        let system = ModelSystem(model);
+        let mut keep = |t: f64, x: &[f64], d: &mut [f64]| keeping.tangent(t, x, d);
+        let step = &mut self.unfed[i];
+        step.carried = true;
+        carry(&mut self.growth, &system, step, Some(&mut keep));
+    }
+
     /// Whether a constrained model's window of `steps` is measured (see
     /// `feed_window`).
     fn wants_window_measure(&self, steps: &[Unfed]) -> bool {
@@ -245,13 +346,17 @@ impl FieldError {
             return self.windows.since_measure
                 >= (WINDOW_SHARE * steps.len()).max(CALIBRATION_STRIDE);
         }
-        self.windows.sum() + self.global.estimate() + estimated(steps) > BOUND * self.rtol
+        self.windows.sum() + self.global.estimate() + estimated(steps) > FROM_DIRECT * self.rtol
     }
 
     /// Adds the steps that start before `t` (all: `f64::INFINITY`).
     pub fn feed(&mut self, model: &dyn DynModel, t: f64) {
         let system = ModelSystem(model);
-        if self.growth(model).is_none() {
+        if self.constrained(model) {
+            for step in self.unfed.iter_mut().filter(|s| s.t0 < t && !s.carried) {
+                step.carried = true;
+                carry(&mut self.growth, &system, step, None);
+            }
             self.feed_window(t);
             return;
         }
@@ -265,15 +370,13 @@ impl FieldError {
             };
             let h = step.t1 - step.t0;
             let estimated = relative(&local, &step.x1);
-            let started = matches!(&self.growth, Some(Some(g)) if g.started());
-            let carried = started || past_bound(&self.global, self.rtol);
-            let carrying = carried && matches!(self.growth, Some(Some(_)));
+            let carried = self.growth.started() || past_bound(&self.global, self.rtol);
             // The step's error against the reference, where asked for; a
             // reference that fails leaves the estimate as it is (the
             // estimate never fails the run).
             let mut measured = None;
             let calibrates = self.global.wants_measure(self.rtol);
-            if carrying || calibrates {
+            if carried || calibrates {
                 self.evaluations += 24;
                 let mut reference = vec![0.0; step.x1.len()];
                 if let Ok(true) = step_by_halves(&system, step.t0, &step.x0, h, &mut reference) {
@@ -291,7 +394,7 @@ impl FieldError {
                     .add_measured(estimated, relative(m, &step.x1), h),
                 _ => self.global.add(estimated, h),
             };
-            if let (Some(Some(growth)), true) = (self.growth.as_mut(), carried) {
+            if carried {
                 // The measured error with its sign, at most the estimate.
                 let scale = |size: f64, bound: f64| {
                     if size > bound && size > 0.0 {
@@ -314,7 +417,8 @@ impl FieldError {
                         local.iter().map(|v| k * v).collect()
                     }
                 };
-                growth.step(&system, (step.t0, &step.x0), step.t1, &local);
+                self.growth
+                    .step(&system, (step.t0, &step.x0), step.t1, &local);
             }
         }
     }
@@ -332,15 +436,15 @@ impl FieldError {
     /// two-half-step reference's own error 2e-13), the state 2.4e-9 off
     /// in mid-window and 1.2e-11 at the window's end; 852 such steps
     /// summed to 1.4e-6 against a largest error of 6e-9 (2.4e-9 at the
-    /// samples). Where the model has no constraints the errors are
-    /// carried with their signs once past the bound (`growth`), which
-    /// cancels them; here the reduced system drifts off the constraints,
-    /// which the run's projections undo at the windows' ends.
+    /// samples). Carried with their signs (`growth`, from
+    /// `FROM_DIRECT`·rtol on, projected at the windows' anchors), they
+    /// cancel; summed, they do not.
     ///
     /// The window's error is measured against a reference carried along
     /// the window from its anchor (two DOP853 half-steps a step, 24
     /// evaluations) when it is accepted (`window`), once the sum of the
-    /// estimates passes the bound, and then once `CALIBRATION_STRIDE`
+    /// estimates passes `FROM_DIRECT`·rtol (a calibrated sum decides
+    /// where the carrying starts), and then once `CALIBRATION_STRIDE`
     /// steps and four times its own have been added since the last; the
     /// measured windows' end errors over their steps' estimates, both
     /// summed, scale the other windows' estimates (`Windows::ratio`), as
@@ -403,25 +507,18 @@ impl FieldError {
     /// are the motion's.
     pub fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
         self.feed(model, t);
-        if let Some(growth) = self.growth(model) {
-            growth.cut(&ModelSystem(model), t, x);
-        }
+        self.growth.cut(&ModelSystem(model), t, x);
     }
 
     /// The right-side evaluations the estimate cost.
     pub fn evaluations(&self) -> usize {
-        self.evaluations
-            + self
-                .growth
-                .as_ref()
-                .and_then(Option::as_ref)
-                .map_or(0, Growth::evaluations)
+        self.evaluations + self.growth.evaluations()
     }
 
     /// For the summary: the steps added so far (and those waiting,
     /// summed).
     pub fn estimate(&self) -> GlobalErrorEstimate {
-        if let Some(None) = self.growth {
+        if self.constrained == Some(true) {
             // The window not yet added: a long one's steps scaled as the
             // steps are, a short one by the windows' ratio.
             let w = &self.windows;
@@ -439,7 +536,9 @@ impl FieldError {
                 }
             }
             return GlobalErrorEstimate {
-                largest: (w.sum() + global.estimate() + pending).max(w.peak),
+                largest: (w.sum() + global.estimate() + pending)
+                    .max(w.peak)
+                    .max(self.growth.largest()),
                 rtol: self.rtol,
                 complete: self.global.complete() && !partial,
             };
@@ -453,17 +552,34 @@ impl FieldError {
                 None => global.skip(),
             }
         }
-        let carried = self
-            .growth
-            .as_ref()
-            .and_then(Option::as_ref)
-            .map_or(0.0, Growth::largest);
         GlobalErrorEstimate {
-            largest: global.estimate().max(carried),
+            largest: global.estimate().max(self.growth.largest()),
             rtol: self.rtol,
             complete: global.complete(),
         }
     }
+}
+
+/// A constrained model's step carried along the motion: its signed
+/// error where it was measured (at most its estimate, as the other
+/// models' steps), none where not (it was taken before the carrying
+/// started, or not estimated: the carried error is still propagated over
+/// it), the error carried before it projected at its start by `keep`.
+fn carry(growth: &mut Growth, system: &ModelSystem<'_>, step: &Unfed, keep: Option<&mut Keep<'_>>) {
+    let local = match (&step.signed, &step.local) {
+        (Some(signed), Some(local)) => {
+            let (size, estimated) = (relative(signed, &step.x1), relative(local, &step.x1));
+            let k = if size > estimated && size > 0.0 {
+                estimated / size
+            } else {
+                1.0
+            };
+            signed.iter().map(|v| k * v).collect()
+        }
+        _ if !growth.started() => return,
+        _ => vec![0.0; step.x1.len()],
+    };
+    growth.step_kept(system, (step.t0, &step.x0), step.t1, &local, keep);
 }
 
 /// The steps' estimates summed (relative; the steps not estimated left

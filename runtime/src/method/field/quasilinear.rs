@@ -26,7 +26,7 @@ use super::window::{StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::Matrix;
-use crate::method::solver::{Report, Solver};
+use crate::method::solver::{Keeping, Report, Solver};
 use crate::model::{DomainKind, DynModel};
 use crate::ode::budget::Budget;
 use crate::ode::dop853::dense_step_between;
@@ -796,6 +796,11 @@ impl Solver for QuasilinearField {
             out.push(crate::method::segment::Segment::Points { t: ts, x: xs });
         }
         Ok(out)
+    }
+
+    fn keep_on_constraints(&mut self, model: &dyn DynModel, keeping: &mut dyn Keeping) {
+        // The carried error projected as the state is (`FieldError::keep`).
+        self.error.keep(model, keeping);
     }
 
     fn report(&self) -> Report {
