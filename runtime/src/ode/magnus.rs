@@ -33,9 +33,8 @@ use crate::failure::{Failure, FailureKind};
 use crate::linalg::{expm, Matrix};
 use crate::ode::budget::Budget;
 use crate::ode::controller::Controller;
-use crate::ode::stepper::{
-    Clock, Clocked, DenseStep, ErrorMeasure, RmsMeasure, StepOutcome, Stepper,
-};
+use crate::ode::dop853::HairerMeasure;
+use crate::ode::stepper::{Clock, Clocked, DenseStep, ErrorMeasure, StepOutcome, Stepper};
 use crate::ode::tolerance::{first_non_finite, Stats, Tolerance};
 
 /// Offset of the outer Gauss–Legendre nodes from the midpoint, in units of
@@ -366,7 +365,8 @@ impl<G: LinearGenerator + ?Sized> Stepper<G> for Magnus {
     }
 
     fn step(&mut self, system: &G, t_limit: f64, budget: &Budget) -> Result<(), Failure> {
-        let mut measure = RmsMeasure(self.tol);
+        // Hairer's measure, as the field's: it combines the two estimates.
+        let mut measure = HairerMeasure(self.tol);
         // The inherent step, with this measure's type: no dynamic call
         // per attempt.
         Magnus::step_measured(self, system, t_limit, budget, &mut measure).map(|_| ())
