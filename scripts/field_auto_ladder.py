@@ -16,7 +16,9 @@ Usage (from the repository root, after `cargo build --release -p lagc`):
     python3 scripts/field_auto_ladder.py MODEL.lag [BINARY]
 
 BINARY: a generated crate's binary to use instead of `lagc run` (to
-compare two runtimes on one model side by side).
+compare two runtimes on one model side by side). INTEGRATOR=<name> passes
+`--integrator <name>` to the field runs (`magnus`: exponential windows
+from the start, what auto gives only once DOP853 finds stiffness).
 """
 
 import json
@@ -85,8 +87,10 @@ def main():
     points = {"field": [], "direct": []}
     for method in ("field", "direct"):
         for rtol in TOLERANCES:
+            extra = (["--integrator", os.environ["INTEGRATOR"]]
+                     if method == "field" and os.environ.get("INTEGRATOR") else [])
             rows, s = run(["--method", method, "--rtol", str(rtol), "--atol", str(rtol * 1e-2),
-                           "--repeat", "3"])
+                           "--repeat", "3"] + extra)
             if rows is None:
                 print(f"| {method} | {rtol:g} | failed | | | | |")
                 continue

@@ -63,11 +63,14 @@ fn the_field_keeps_long_windows_on_a_stiff_joint_and_meets_its_tolerance() {
 /// to the Magnus integrator, which follows the fast mode exactly where it
 /// is constant, and the predictor stays explicit. RODAS4 there (the rule
 /// before, which cannot tell a vibration from a decay) took 7,049 field
-/// steps and 287 ms (error 1.1e-4); Magnus 470 steps and 5–10 ms
-/// (1.25e-4, direct DOP853 1.1e-4 at the same tolerance). Fails without
-/// the exponential windows (the method says RODAS4, the steps 7,049).
-/// Every sample but the ends lies inside a Magnus step, so the samples
-/// check its output between steps too.
+/// steps and 287 ms (error 1.1e-4); Magnus of order 4 with step doubling
+/// 470 steps (1.25e-4, direct DOP853 1.1e-4 at the same tolerance); of
+/// order 6 with embedded estimates 721 steps, 2.05e-5, in less time (side
+/// by side under load: 7.2 against 9.7 ms). Fails without the exponential
+/// windows (the method says RODAS4, the steps 7,049) and without the
+/// sixth order (the error over half direct's). Every sample but the ends
+/// lies inside a Magnus step, so the samples check its output between
+/// steps too.
 #[test]
 fn a_stiff_vibration_goes_to_exponential_windows_with_long_steps() {
     let binary = build_file(&crate::root().join("tests/data/stiff_joint.lag"));
@@ -101,9 +104,9 @@ fn a_stiff_vibration_goes_to_exponential_windows_with_long_steps() {
         "not exponential windows:\n{summary}"
     );
     assert!(
-        field_error <= 2.0 * direct_error,
+        field_error <= 0.5 * direct_error,
         "field error {field_error:e}, direct {direct_error:e}\n{summary}"
     );
     let steps = count(&summary, "steps");
-    assert!(steps <= 1_000, "{steps} steps (470 measured)\n{summary}");
+    assert!(steps <= 1_000, "{steps} steps (721 measured)\n{summary}");
 }

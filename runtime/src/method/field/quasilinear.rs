@@ -101,7 +101,7 @@ impl<'a> Predictor<'a> {
         while stepper.time() < t && stepper.time() < t_limit {
             stepper.step(&system, t_limit, self.budget)?;
             // Every registered integrator has a continuous extension of
-            // its own (only Magnus-4, which is not registered, has none).
+            // its own (only Magnus, which is not registered, has none).
             if let Some(dense) = stepper.dense_step(&system)? {
                 self.steps.borrow_mut().push(dense);
             }
