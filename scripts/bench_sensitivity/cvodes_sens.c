@@ -8,7 +8,10 @@
  * sensitivity right side fS = J s + df/d(column), CV_SIMULTANEOUS, errconS
  * on, the same rtol and atol for state and sensitivities. Adams with
  * fixed-point iteration (non-stiff) or BDF with Newton and the exact dense
- * Jacobian, by argument.
+ * Jacobian, by argument. A model with an impact (NEVENT 1) has its switching
+ * function as a root, direction down; at each root the state is reset,
+ * the columns jump (impact, the formula docs/SENSITIVITY.md states) and
+ * CVODES is re-initialized there.
  *
  * usage: cvodes_sens adams|bdf RTOL ATOL REPEAT
  * prints: the fastest solve's time (s), the steps, then the state and the
@@ -59,6 +62,42 @@ static int sens_rhs(int ns, double t, N_Vector y, N_Vector yd, N_Vector *s,
   }
   return 0;
 }
+
+#if NEVENT
+static int groot(double t, N_Vector y, double *g, void *u) {
+  (void)u;
+  model_g(t, N_VGetArrayPointer(y), g);
+  return 0;
+}
+
+/* The impact at t: x <- R(x), and every column jumps by
+ * dtau = -(g_x s + g_c) / (g_x f- + g_t), s <- R_x s + R_c + (R_x f- - f+) dtau. */
+static void impact(double t, double *x, N_Vector *s) {
+  double fm[NX], fp[NX], e[NX + 1 + NC], r[NX + NX * NX + NC * NX], jf[NX];
+  model_f(t, x, fm);
+  model_gd(t, x, e);
+  model_reset(t, x, r);
+  for (int i = 0; i < NX; i++) x[i] = r[i];
+  model_f(t, x, fp);
+  const double *rx = r + NX, *rp = r + NX + NX * NX;
+  double den = e[NX];
+  for (int k = 0; k < NX; k++) den += e[k] * fm[k];
+  for (int i = 0; i < NX; i++) {
+    jf[i] = -fp[i];
+    for (int k = 0; k < NX; k++) jf[i] += rx[i * NX + k] * fm[k];
+  }
+  for (int c = 0; c < NC; c++) {
+    double *v = N_VGetArrayPointer(s[c]), w[NX], num = e[NX + 1 + c];
+    for (int k = 0; k < NX; k++) num += e[k] * v[k];
+    double dtau = -num / den;
+    for (int i = 0; i < NX; i++) {
+      w[i] = rp[c * NX + i] + jf[i] * dtau;
+      for (int k = 0; k < NX; k++) w[i] += rx[i * NX + k] * v[k];
+    }
+    for (int i = 0; i < NX; i++) v[i] = w[i];
+  }
+}
+#endif
 
 static double now(void) {
   struct timespec ts;
@@ -111,14 +150,34 @@ int main(int argc, char **argv) {
       NLSS = SUNNonlinSol_FixedPointSens(NC + 1, y, 0, ctx);
       CVodeSetNonlinearSolverSensSim(mem, NLSS);
     }
+#if NEVENT
+    int down = -1; /* g falls through zero */
+    CVodeRootInit(mem, 1, groot);
+    CVodeSetRootDirection(mem, &down);
+#endif
     double t;
     int flag = CVode(mem, T1, y, &t, CV_NORMAL);
+#if NEVENT
+    long s_total = 0, s_part;
+    while (flag == CV_ROOT_RETURN) {
+      CVodeGetSens(mem, &t, s);
+      impact(t, x, s);
+      CVodeGetNumSteps(mem, &s_part);
+      s_total += s_part;
+      CVodeReInit(mem, t, y);
+      CVodeSensReInit(mem, CV_SIMULTANEOUS, s);
+      flag = CVode(mem, T1, y, &t, CV_NORMAL);
+    }
+#endif
     if (flag < 0) { fprintf(stderr, "CVode failed: %d\n", flag); return 1; }
     CVodeGetSens(mem, &t, s);
     for (int i = 0; i < NX; i++) out[i] = x[i];
     for (int c = 0; c < NC; c++)
       for (int i = 0; i < NX; i++) out[NX * (1 + c) + i] = N_VGetArrayPointer(s[c])[i];
     CVodeGetNumSteps(mem, &steps);
+#if NEVENT
+    steps += s_total;
+#endif
     N_VDestroyVectorArray(s, NC);
     N_VDestroy(y);
     CVodeFree(&mem);

@@ -23,10 +23,12 @@ class Model:
     expressions of the stated values (symbols named like the columns) and
     the params; values: every symbol's value."""
 
-    def __init__(self, name, lag, t1, x, f, start, columns, values):
+    def __init__(self, name, lag, t1, x, f, start, columns, values, event=None):
         self.name, self.lag, self.t1 = name, lag, t1
         self.x, self.f, self.start = list(x), list(f), list(start)
         self.columns, self.values = columns, values
+        # (g, R): an impact where g falls through zero, the state reset to R.
+        self.event = event
 
     def column_symbols(self):
         return [sp.Symbol(c) for c in self.columns]
@@ -156,8 +158,20 @@ def chaplygin_sleigh():
                  {m: 1.0, a: 0.01, J: 0.02, s[0]: 0.0, s[1]: 0.0, s[2]: 0.0, s[3]: 0.2, s[4]: 5.0})
 
 
+def bouncing_ball():
+    # y'' = −g; where y falls through 0 the impact y' ← −e y'. Six impacts
+    # before t = 3 (the impacts accumulate at 4.06 s).
+    y, yd = sp.symbols("y y_d")
+    g, e, h0 = sp.symbols("g e h0")
+    ys, yds = sp.symbols("y0 y'0")
+    vals = {g: 9.81, e: 0.8, h0: 1.0, ys: 0.0, yds: 0.0}
+    return Model("bouncing_ball", "scripts/bench_sensitivity/bouncing_ball.lag", 3.0, [y, yd],
+                 [yd, -g], [ys + h0, yds], ["y0", "y'0", "g", "e", "h0"], vals,
+                 event=(y, [y, -e * yd]))
+
+
 ALL = [oscillator, pendulum, vertical_rocket, second_order_constraint, cartesian_pendulum,
-       chaplygin_sleigh]
+       chaplygin_sleigh, bouncing_ball]
 
 
 def sensitivity_system(model):
@@ -172,3 +186,17 @@ def sensitivity_system(model):
     x0 = sp.Matrix(model.start)
     S0 = x0.jacobian(cols)
     return (f.subs(sub), J.subs(sub), Fp.subs(sub), x0.subs(sub).evalf(17), S0.subs(sub).evalf(17))
+
+
+def event_system(model):
+    """The impact's pieces, numeric in the params: g, its partials g_x
+    (a row), g_t and g_(column); the reset R, R_x and R_(column)."""
+    g, R = model.event
+    cols = model.column_symbols()
+    sub = model.values
+    R = sp.Matrix(R)
+    gx = sp.Matrix([g]).jacobian(model.x)
+    gp = sp.Matrix([[sp.diff(g, c) for c in cols]])
+    Rp = sp.Matrix.hstack(*[sp.diff(R, c) for c in cols])
+    return (sp.sympify(g).subs(sub), gx.subs(sub), sp.diff(g, t), gp.subs(sub), R.subs(sub),
+            R.jacobian(model.x).subs(sub), Rp.subs(sub))
