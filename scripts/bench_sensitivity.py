@@ -2,11 +2,12 @@
 """lagc --sensitivity against CVODES forward sensitivities at equal error
 (docs/BENCHMARKS.md §15).
 
-Six models (scripts/bench_sensitivity/models.py): a damped oscillator and a
-pendulum, a variable-mass rocket, Chaplygin's sleigh (non-holonomic, its
-dependent chosen at run time), a k = 2 constraint and the Cartesian
-pendulum (holonomic, kept by projection). Their right sides, Jacobians,
-∂f/∂p and starts are derived with SymPy from the physics (not from lagc),
+Seven models (scripts/bench_sensitivity/models.py): a damped oscillator and
+a pendulum, a variable-mass rocket, Chaplygin's sleigh (non-holonomic, its
+dependent chosen at run time), a k = 2 constraint, the Cartesian pendulum
+(holonomic, kept by projection) and a bouncing ball (impacts: CVODES roots,
+the sensitivities' jump applied at each). Their right sides, Jacobians,
+∂f/∂p, starts and impacts are derived with SymPy from the physics (not from lagc),
 printed as C for CVODES (scripts/bench_sensitivity/cvodes_sens.c includes
 the generated header) and integrated by SciPy's DOP853 at rtol 1e-13 on the
 augmented system as the reference. lagc's tightest run must agree with that
