@@ -5,12 +5,41 @@
 //! Jacobian of the augmented system holds the variational equations'
 //! second derivatives).
 
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
 use lagc_runtime::api::solve_sensitivity;
 use lagc_runtime::failure::Failure;
 use lagc_runtime::linalg::Matrix;
 use lagc_runtime::method::IntegratorChoice;
-use lagc_runtime::model::{Initial, Model};
+use lagc_runtime::model::{DynModel, Initial, Model};
 use lagc_runtime::run::options::Options;
+use lagc_runtime::run::sensitivity::Augmented;
+
+/// The system allocator, counting this thread's allocations (the tests
+/// run on threads of their own).
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|n| n.set(n.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static COUNTING: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
 
 #[derive(Clone, Debug)]
 struct Decay {
@@ -83,4 +112,22 @@ fn sensitivities_meet_the_closed_form_by_both_integrators() {
         }
         assert!(worst < 1e-8, "{choice:?}: {worst:e}");
     }
+}
+
+/// The augmented right side runs a dozen times a step: it reuses its `J`
+/// and `∂X/∂p` buffers (allocating them each call was a third of the
+/// bouncing ball's `--sensitivity` run, docs/BENCHMARKS.md §15b). Its
+/// values: `x' = −a x²`, `S' = J S + ∂X/∂p` with `J = −2 a x`, `∂X/∂a = −x²`.
+#[test]
+fn the_augmented_right_side_allocates_nothing() {
+    let augmented = Augmented::new(Box::new(Decay::new(&[0.5])), vec![1.0]);
+    let z = [2.0, 0.3, -0.7];
+    let mut dz = [0.0; 3];
+    augmented.rhs(0.0, &z, &mut dz).unwrap();
+    let before = allocations();
+    for _ in 0..100 {
+        augmented.rhs(0.0, &z, &mut dz).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
+    assert_eq!(dz, [-2.0, -2.0 * 0.3, -2.0 * -0.7 - 4.0]);
 }

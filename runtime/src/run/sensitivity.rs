@@ -42,6 +42,8 @@
 //! motion is the reduced system's own (on which they are invariant), and
 //! the command line prints the state from the ordinary run beside it.
 
+use std::cell::RefCell;
+
 use crate::choice::{IntegratorChoice, Method};
 use crate::failure::Failure;
 use crate::linalg::Matrix;
@@ -369,6 +371,27 @@ pub struct Augmented {
     /// constraint in any mode (one empty slice per mode of the model): the
     /// holonomic constraints are kept by `Augmented::project` alone.
     unfixed: &'static [&'static [usize]],
+    /// `variational`'s buffers: it runs a dozen times a step, and making
+    /// `J` and `∂X/∂p` anew each time was a third of the bouncing ball's
+    /// sensitivity run (perf: malloc and free; docs/BENCHMARKS.md §15).
+    scratch: RefCell<Scratch>,
+}
+
+/// `J` (`N × N`), `∂X/∂p` and its chained total (`N × np`).
+struct Scratch {
+    jac: Matrix,
+    partial: Matrix,
+    total: Matrix,
+}
+
+impl Scratch {
+    fn new(n: usize, np: usize) -> RefCell<Scratch> {
+        RefCell::new(Scratch {
+            jac: Matrix::zeros(n, n),
+            partial: Matrix::zeros(n, np),
+            total: Matrix::zeros(n, np),
+        })
+    }
 }
 
 impl Augmented {
@@ -393,6 +416,7 @@ impl Augmented {
             chain,
             names: Box::leak(names.into_boxed_slice()),
             unfixed: Box::leak(unfixed.into_boxed_slice()),
+            scratch: Scratch::new(n, columns - given),
         }
     }
 
@@ -410,18 +434,26 @@ impl Augmented {
             chain: self.chain.clone(),
             names: self.names,
             unfixed: self.unfixed,
+            scratch: Scratch::new(self.n, self.columns - self.given),
         }
     }
 
-    /// `∂X/∂p · dp/dp` (`N × np`, the chain applied).
-    fn param_partials(&self, t: f64, x: &[f64]) -> Result<Matrix, Failure> {
+    /// `total = ∂X/∂p · dp/dp` (`N × np`, the chain applied), `partial`
+    /// holding `∂X/∂p`.
+    fn param_partials(
+        &self,
+        t: f64,
+        x: &[f64],
+        partial: &mut Matrix,
+        total: &mut Matrix,
+    ) -> Result<(), Failure> {
         let np = self.columns - self.given;
-        let mut partial = Matrix::zeros(self.n, np);
         if np == 0 {
-            return Ok(partial);
+            return Ok(());
         }
-        self.inner.param_jacobian(t, x, &mut partial)?;
-        let mut total = Matrix::zeros(self.n, np);
+        partial.fill(0.0);
+        self.inner.param_jacobian(t, x, partial)?;
+        total.fill(0.0);
         for j in 0..np {
             for k in 0..np {
                 let c = self.chain[k * np + j];
@@ -433,7 +465,7 @@ impl Augmented {
                 }
             }
         }
-        Ok(total)
+        Ok(())
     }
 
     /// The params' columns of `dp`-chained partials of `f(model) ∈ R^k`:
@@ -509,25 +541,6 @@ impl Augmented {
             })?[0];
         }
         let g_t = derivative(t, 1.0, &mut |v| Ok(vec![g_of(old, v, xm)]))?[0];
-        let g_p = self.param_slopes(&|model| {
-            let mut model = model.boxed_clone();
-            model.set_regime(before);
-            Ok(vec![g_of(&*model, t, xm)])
-        })?;
-        let rate = dot(&g_x, &f_minus) + g_t;
-        if !(rate.abs() > 0.0) || !rate.is_finite() {
-            return Err(Failure::new(
-                t,
-                crate::failure::FailureKind::Unsupported {
-                    message: format!(
-                        "`--sensitivity`: at t = {t} the switching function {} touches zero \
-                         without crossing it (a grazing event): the sensitivities are not \
-                         defined there",
-                        k + 1
-                    ),
-                },
-            ));
-        }
         // The impacts that fired: the resets `R`, applied in order.
         let mut mid = before.branches.clone();
         for &s in switched {
@@ -546,9 +559,40 @@ impl Augmented {
             }
             y
         };
+        // `∂g/∂p` and `∂R/∂p` in one pass over the models with a param
+        // moved (making each is most of an event's cost on a small model).
+        let slopes = self.param_slopes(&|model| {
+            let mut regime = model.boxed_clone();
+            regime.set_regime(before);
+            let mut out = vec![g_of(&*regime, t, xm)];
+            if !fired.is_empty() {
+                out.extend(reset(model, xm));
+            }
+            Ok(out)
+        })?;
+        let rate = dot(&g_x, &f_minus) + g_t;
+        if !(rate.abs() > 0.0) || !rate.is_finite() {
+            return Err(Failure::new(
+                t,
+                crate::failure::FailureKind::Unsupported {
+                    message: format!(
+                        "`--sensitivity`: at t = {t} the switching function {} touches zero \
+                         without crossing it (a grazing event): the sensitivities are not \
+                         defined there",
+                        k + 1
+                    ),
+                },
+            ));
+        }
         // R_x, column by column (the identity where nothing fired).
         let mut r_x = Matrix::identity(n);
-        let mut r_p = vec![vec![0.0; n]; m - self.given];
+        let r_p: Vec<Vec<f64>> = slopes
+            .iter()
+            .map(|s| match s.len() {
+                1 => vec![0.0; n],
+                _ => s[1..].to_vec(),
+            })
+            .collect();
         if !fired.is_empty() {
             let mut moved = xm.to_vec();
             for j in 0..n {
@@ -560,7 +604,6 @@ impl Augmented {
                 })?;
                 r_x.column_mut(j).copy_from_slice(&column);
             }
-            r_p = self.param_slopes(&|model| Ok(reset(model, xm)))?;
         }
         let mut r_f = vec![0.0; n];
         r_x.mul_vec(&f_minus, &mut r_f);
@@ -569,7 +612,7 @@ impl Augmented {
             let s_minus = &sm[c * n..(c + 1) * n];
             let mut slope = dot(&g_x, s_minus);
             if c >= self.given {
-                slope += g_p[c - self.given][0];
+                slope += slopes[c - self.given][0];
             }
             let d_tau = -slope / rate;
             r_x.mul_vec(s_minus, &mut column);
@@ -639,9 +682,15 @@ impl Augmented {
     /// `J S + ∂X/∂p` at `(t, x)` for the sensitivities `s`, into `out`.
     fn variational(&self, t: f64, x: &[f64], s: &[f64], out: &mut [f64]) -> Result<(), Failure> {
         let n = self.n;
-        let mut jac = Matrix::zeros(n, n);
-        self.inner.jacobian(t, x, &mut jac)?;
-        let fp = self.param_partials(t, x)?;
+        let mut scratch = self.scratch.borrow_mut();
+        let Scratch {
+            jac,
+            partial,
+            total: fp,
+        } = &mut *scratch;
+        jac.fill(0.0);
+        self.inner.jacobian(t, x, jac)?;
+        self.param_partials(t, x, partial, fp)?;
         for c in 0..self.columns {
             let column = &s[c * n..(c + 1) * n];
             let target = &mut out[c * n..(c + 1) * n];
