@@ -50,6 +50,8 @@ pub struct Direct {
     /// The last probe's ratio of the part of a step's error that the
     /// holonomic constraints keep to the whole, and the steps since.
     kept_ratio: Option<(f64, usize)>,
+    /// Whether the global error is estimated (`Options::global_error`).
+    estimates: bool,
 }
 
 /// Steps between two probes of the part of the error that the holonomic
@@ -185,7 +187,15 @@ impl Direct {
             growth: Growth::new(x0.len()),
             keeps: model.keeps_positions() || model.keeps_constraints(),
             kept_ratio: None,
+            estimates: true,
         })
+    }
+
+    /// A run whose global error is not estimated: no measures, no
+    /// carried error (`Options::global_error`).
+    pub fn without_global_error(mut self) -> Direct {
+        self.estimates = false;
+        self
     }
 
     /// The integrator finishing the run.
@@ -311,6 +321,9 @@ impl Solver for Direct {
     }
 
     fn keep_on_constraints(&mut self, model: &dyn DynModel, keeping: &mut dyn Keeping) {
+        if !self.estimates {
+            return;
+        }
         let e = &mut self.step_error;
         // While the sum with this step's whole error stays within the
         // bound, the run is within without the projection. Past it, the
@@ -383,7 +396,7 @@ impl Solver for Direct {
             method: self.method_name(),
             stats,
             notes,
-            global_error: Some(GlobalErrorEstimate {
+            global_error: self.estimates.then_some(GlobalErrorEstimate {
                 largest: global.estimate().max(carried),
                 rtol: self.tol.rtol,
                 complete: global.complete(),
@@ -402,6 +415,9 @@ impl Direct {
     /// constraints the step's error waits for the part of it the
     /// constraints keep ([`Solver::keep_on_constraints`]).
     fn carry_global_error(&mut self, model: &dyn DynModel) {
+        if !self.estimates {
+            return;
+        }
         let (global, e) = (&mut self.global, &mut self.step_error);
         let rtol = self.tol.rtol;
         e.add_to(global, rtol, Some((&mut self.growth, model)), None);

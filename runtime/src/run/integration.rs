@@ -990,7 +990,14 @@ pub fn make_solver(
 ) -> Result<Box<dyn Solver>, Failure> {
     let choice = options.integrator_choice(model);
     Ok(match options.method {
-        Method::Direct => Box::new(Direct::new(model, choice, options.tol, t0, x0, h_max)?),
+        Method::Direct => {
+            let direct = Direct::new(model, choice, options.tol, t0, x0, h_max)?;
+            Box::new(if options.global_error {
+                direct
+            } else {
+                direct.without_global_error()
+            })
+        }
         Method::Field => {
             let field = FieldOptions {
                 tol: options.tol,

@@ -326,6 +326,10 @@ pub fn sample(
     let options = Options {
         method: Method::Direct,
         progress: false,
+        // The augmented run's own estimate is not read (the sensitivities'
+        // note is the summary's), and carried through the projection of
+        // every column it cost most of a holonomic model's run.
+        global_error: false,
         ..options.clone()
     };
     let n = model.dim();
