@@ -199,3 +199,46 @@ fn a_spread_1_ensemble_is_as_right_as_direct() {
     );
     assert_eq!(outcome.along_field + outcome.on_their_own, 12);
 }
+
+/// A shared step that one member fails is rejected there, without
+/// stepping the members after it: on the chaotic double pendulum (200
+/// members at spread 1e-2, rtol 1e-8) the member steps beyond the accepted
+/// shared steps are a fraction of a full rejection each. When only the
+/// eight members that were worst at the last step were tried first, a
+/// failure among the others cost every member's step (34 of 64 rejections
+/// with 1,000 members: 13 % of the work).
+#[test]
+fn a_rejected_shared_step_stops_at_the_member_that_fails_it() {
+    use lagc_runtime::method::deviation::follow;
+    let mut model = DoublePendulum::new(&DoublePendulum::parameters(&[]));
+    let (t0, t1) = model.time_span();
+    let x0 = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0];
+    let count = 200;
+    let all = members(&x0, count, 1e-2);
+    let tol = Tolerance {
+        rtol: 1e-8,
+        atol: 1e-10,
+    };
+    let base_options = Options {
+        method: Method::Direct,
+        tol: tol.scaled(0.01),
+        ..Options::default()
+    };
+    let base = lagc_runtime::run::solve(&mut model, &base_options, t0, t1, &all[0]).unwrap();
+    let states = lagc_runtime::ensemble::States::from_rows(&all);
+    let mut samples = Vec::new();
+    let followed = follow(&model, &base, tol, &states, (t0, t1), &[], &mut samples).unwrap();
+    let beyond = followed.member_steps - followed.steps * count;
+    eprintln!(
+        "double pendulum, {count} members: {} shared steps, {} rejected, {} member steps ({beyond} \
+         beyond the accepted ones)",
+        followed.steps, followed.rejected, followed.member_steps
+    );
+    assert!(followed.estimates.iter().all(|e| e.is_finite()));
+    assert!(followed.rejected > 10, "{}", followed.rejected);
+    assert!(
+        beyond * 4 <= followed.rejected * count,
+        "{beyond} member steps in {} rejections of {count} members",
+        followed.rejected
+    );
+}
