@@ -241,8 +241,8 @@ fn deviations(
     let mut outcome = base.outcome;
     outcome.report.method = format!("deviations around {}", outcome.report.method);
     outcome.report.notes.push(format!(
-        "ensemble members: {} shared steps, {} rejected",
-        followed.steps, followed.rejected
+        "ensemble members: {} shared steps, {} rejected, {} member steps",
+        followed.steps, followed.rejected, followed.member_steps
     ));
     let (on_their_own, largest) = integrate_on_their_own(
         model,
