@@ -1039,3 +1039,73 @@ impl Start for Dop853 {
         Dop853::new(system, t0, y0, tol, h_max, h0)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::Matrix;
+
+    /// A nonlinear, time-dependent system of any size: every component
+    /// coupled to the next.
+    struct Ring(usize);
+
+    impl System for Ring {
+        fn dim(&self) -> usize {
+            self.0
+        }
+        fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+            let n = self.0;
+            for i in 0..n {
+                dy[i] = (1.0 + 0.5 * t) * y[(i + 1) % n].sin() - 0.3 * y[i] + 0.1 * i as f64;
+            }
+            Ok(())
+        }
+        fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+            unreachable!()
+        }
+        fn time_partial(&self, _t: f64, _y: &[f64], _d: &mut [f64]) -> Result<(), Failure> {
+            unreachable!()
+        }
+    }
+
+    /// The step compiled for a size (`step_sized::<N>`, what
+    /// `step_measured` runs for n ∈ {2, 3, 4, 6, 8}) is the step that
+    /// reads the size at run time, bit for bit: states, step sizes,
+    /// rejections and error estimates.
+    #[test]
+    fn the_step_compiled_for_a_size_is_the_general_step_bit_for_bit() {
+        fn run(n: usize, sized: bool) -> Vec<u64> {
+            let system = Ring(n);
+            let y0: Vec<f64> = (0..n).map(|i| 0.3 + 0.7 * i as f64).collect();
+            let tol = Tolerance {
+                rtol: 1e-9,
+                atol: 1e-11,
+            };
+            let mut dop = Dop853::new(&system, 0.0, &y0, tol, f64::INFINITY, None).unwrap();
+            let budget = Budget::default();
+            let mut bits = Vec::new();
+            while dop.clock.t < 20.0 {
+                let mut measure = HairerMeasure(tol);
+                if sized {
+                    dop.step_measured(&system, 20.0, &budget, &mut measure)
+                } else {
+                    dop.step_sized::<_, _, 0>(&system, 20.0, &budget, &mut measure)
+                }
+                .unwrap();
+                let mut local = vec![0.0; n];
+                dop.local_error(&mut local);
+                bits.extend(dop.y.iter().chain(&local).map(|v| v.to_bits()));
+                bits.push(dop.clock.t.to_bits());
+                bits.push(dop.clock.h.to_bits());
+            }
+            bits.push(dop.clock.stats.rejected_steps as u64);
+            bits.push(dop.clock.stats.rhs_evaluations as u64);
+            bits
+        }
+        for n in [1, 2, 3, 4, 5, 6, 8] {
+            let general = run(n, false);
+            assert!(general.len() > 50, "n = {n}: {} numbers", general.len());
+            assert_eq!(run(n, true), general, "n = {n}");
+        }
+    }
+}
