@@ -429,8 +429,6 @@ impl Direct {
         e.x.clear();
         e.x.extend_from_slice(dop.current_state());
         (e.t0, e.t1, e.h) = dop.clock().last_step();
-        e.x0.clear();
-        e.x0.extend_from_slice(dop.previous_state());
         let mut measured = e.measured.take().unwrap_or_default();
         // Past the bound, where the errors are carried along the motion,
         // every step's: the sign and direction of a step's error decide
@@ -439,6 +437,14 @@ impl Direct {
         // sign is not the error's: added with its own sign it made the
         // soft walls' estimate 1000× their error at rtol 1e-12).
         let carried = self.growth.started() || past(global, rtol, FROM_DIRECT);
+        // The step's start is read only where its error is carried along
+        // the motion (`StepError::add_to` decides that by the same test,
+        // on the same sum: no step is added between): not copied on every
+        // step of a run that never carries.
+        e.x0.clear();
+        if carried {
+            e.x0.extend_from_slice(dop.previous_state());
+        }
         e.calibrates = global.wants_measure(rtol);
         if carried || e.calibrates {
             // A measure that fails (a stage not finite) leaves the estimate

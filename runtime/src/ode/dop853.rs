@@ -174,6 +174,34 @@ impl Dop853 {
         budget: &Budget,
         measure: &mut E,
     ) -> Result<StepOutcome, Failure> {
+        // The state sizes of small mechanical models, known at compile
+        // time: the stage loops then unroll and lose their bounds checks
+        // and loop overhead, which at n = 2 cost more than the arithmetic
+        // (callgrind on vertical_rocket: a quarter of the step's
+        // instructions were the loops' counting; BENCHMARKS §10). The same
+        // operations in the same order at every size: results are
+        // bit-identical.
+        match self.y.len() {
+            2 => self.step_sized::<S, E, 2>(system, t_limit, budget, measure),
+            3 => self.step_sized::<S, E, 3>(system, t_limit, budget, measure),
+            4 => self.step_sized::<S, E, 4>(system, t_limit, budget, measure),
+            6 => self.step_sized::<S, E, 6>(system, t_limit, budget, measure),
+            8 => self.step_sized::<S, E, 8>(system, t_limit, budget, measure),
+            _ => self.step_sized::<S, E, 0>(system, t_limit, budget, measure),
+        }
+    }
+
+    /// [`Dop853::step_measured`] for a state of `N` numbers (`N = 0`: of
+    /// any size, read at run time).
+    #[inline(always)]
+    fn step_sized<S: System + ?Sized, E: ErrorMeasure + ?Sized, const N: usize>(
+        &mut self,
+        system: &S,
+        t_limit: f64,
+        budget: &Budget,
+        measure: &mut E,
+    ) -> Result<StepOutcome, Failure> {
+        let n = if N == 0 { self.y.len() } else { N };
         let mut last_non_finite = false;
         let mut rate_broken: Option<usize> = None;
         loop {
@@ -183,14 +211,13 @@ impl Dop853 {
                 stalled(system, self.clock.t, h, component, rate_broken)
             })?;
             let fused = measure.hairer_tolerance();
-            let (finite, fused_error) = self.attempt(system, h, fused)?;
+            let (finite, fused_error) = self.attempt::<S, N>(system, h, fused)?;
             let err = if !finite {
                 f64::INFINITY
             } else if fused.is_some() {
                 fused_error
             } else {
                 self.clock.controller.end_ramp();
-                let n = self.y.len();
                 match measure.measure(
                     self.clock.t,
                     h,
@@ -221,7 +248,6 @@ impl Dop853 {
                 let t_new = self.clock.end(h, reaches_limit, t_limit);
                 // The slope at the step's end (kept in k[12] until the
                 // step is taken: it is the next step's first stage).
-                let n = self.y.len();
                 let end_slope = &mut self.k[12 * n..13 * n];
                 system.rhs(t_new, &self.y_trial, end_slope)?;
                 self.clock.stats.rhs_evaluations += 1;
@@ -241,7 +267,7 @@ impl Dop853 {
                 let (start, rest) = self.k.split_at_mut(12 * n);
                 start[..n].swap_with_slice(&mut rest[..n]);
                 self.dense_ready = false;
-                self.test_stiffness(h);
+                self.test_stiffness::<N>(h);
                 return Ok(StepOutcome::Accepted);
             } else {
                 self.clock.reject(h, err);
@@ -319,9 +345,10 @@ impl Dop853 {
     /// Hairer's test after an accepted step of length `h`: `y` is the new
     /// state, `k[0] = X(t, y)`, and the last stage `k[11] = X(t, y₁)` was
     /// evaluated at the same time at `stage_state = y₁`.
-    fn test_stiffness(&mut self, h: f64) {
+    #[inline(always)]
+    fn test_stiffness<const N: usize>(&mut self, h: f64) {
         let (mut numerator, mut denominator) = (0.0, 0.0);
-        let n = self.y.len();
+        let n = if N == 0 { self.y.len() } else { N };
         let (slope, last) = (&self.k[..n], &self.k[(STAGES - 1) * n..STAGES * n]);
         let (y, y1) = (
             &self.y[..n],
@@ -391,13 +418,13 @@ impl Dop853 {
     // then kept this out of line, which cost direct DOP853 about 27 % more
     // instructions on the rocket (callgrind, BENCHMARKS §10).
     #[inline(always)]
-    fn attempt<S: System + ?Sized>(
+    fn attempt<S: System + ?Sized, const N: usize>(
         &mut self,
         system: &S,
         h: f64,
         hairer: Option<Tolerance>,
     ) -> Result<(bool, f64), Failure> {
-        let n = self.y.len();
+        let n = if N == 0 { self.y.len() } else { N };
         let t = self.clock.t;
         let y = &self.y[..n];
         let (k, scratch) = self.k.split_at_mut(STAGE_STATE * n);
@@ -407,11 +434,26 @@ impl Dop853 {
         macro_rules! stage {
             ($s:literal, $r:literal) => {{
                 let (done, rest) = k.split_at_mut($s * n);
-                let row: [(f64, &[f64]); $r] = std::array::from_fn(|m| {
-                    let j = A[$s][m].0;
-                    (A[$s][m].1, &done[j * n..(j + 1) * n])
-                });
-                combine(ys, y, h, &row);
+                if N == 0 {
+                    let row: [(f64, &[f64]); $r] = std::array::from_fn(|m| {
+                        let j = A[$s][m].0;
+                        (A[$s][m].1, &done[j * n..(j + 1) * n])
+                    });
+                    combine(ys, y, h, &row);
+                } else {
+                    // Every index a constant: `combine`'s sums, each
+                    // component's in its order, a stage at a time over
+                    // the components (so that they vectorise).
+                    let mut acc = [0.0; N];
+                    for &(j, a) in A[$s] {
+                        for i in 0..N {
+                            acc[i] += a * done[j * N + i];
+                        }
+                    }
+                    for i in 0..N {
+                        ys[i] = y[i] + h * acc[i];
+                    }
+                }
                 system.rhs(t + C[$s] * h, ys, &mut rest[..n])?;
             }};
         }
@@ -427,7 +469,21 @@ impl Dop853 {
         stage!(10, 8);
         stage!(11, 9);
         self.clock.stats.rhs_evaluations += STAGES - 1;
-        let ks: [&[f64]; STAGES] = std::array::from_fn(|j| &k[j * n..(j + 1) * n]);
+        let stages = &k[..STAGES * n];
+        // Stage `j`'s component `i`: through slices made once when the size
+        // is read at run time, by constant indices when it is known.
+        let ks: [&[f64]; STAGES] = if N == 0 {
+            std::array::from_fn(|j| &k[j * n..(j + 1) * n])
+        } else {
+            [&[]; STAGES]
+        };
+        let kv = |j: usize, i: usize| {
+            if N == 0 {
+                ks[j][i]
+            } else {
+                stages[j * n + i]
+            }
+        };
         let y_trial = &mut self.y_trial[..n];
         // 0·v is 0 for every finite v and NaN otherwise: one sum tells
         // whether every number of the step is finite.
@@ -436,16 +492,16 @@ impl Dop853 {
         for i in 0..n {
             let mut b = 0.0;
             for &(j, w) in &B {
-                b += w * ks[j][i];
+                b += w * kv(j, i);
             }
             let mut e5 = 0.0;
             for &(j, w) in &ER {
-                e5 += w * ks[j][i];
+                e5 += w * kv(j, i);
             }
             let e3 = b
-                - BHH[0].1 * ks[BHH[0].0][i]
-                - BHH[1].1 * ks[BHH[1].0][i]
-                - BHH[2].1 * ks[BHH[2].0][i];
+                - BHH[0].1 * kv(BHH[0].0, i)
+                - BHH[1].1 * kv(BHH[1].0, i)
+                - BHH[2].1 * kv(BHH[2].0, i);
             let y1 = y[i] + h * b;
             y_trial[i] = y1;
             error3[i] = e3;
@@ -981,5 +1037,75 @@ impl Start for Dop853 {
         h0: Option<f64>,
     ) -> Result<Self, Failure> {
         Dop853::new(system, t0, y0, tol, h_max, h0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::Matrix;
+
+    /// A nonlinear, time-dependent system of any size: every component
+    /// coupled to the next.
+    struct Ring(usize);
+
+    impl System for Ring {
+        fn dim(&self) -> usize {
+            self.0
+        }
+        fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+            let n = self.0;
+            for i in 0..n {
+                dy[i] = (1.0 + 0.5 * t) * y[(i + 1) % n].sin() - 0.3 * y[i] + 0.1 * i as f64;
+            }
+            Ok(())
+        }
+        fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+            unreachable!()
+        }
+        fn time_partial(&self, _t: f64, _y: &[f64], _d: &mut [f64]) -> Result<(), Failure> {
+            unreachable!()
+        }
+    }
+
+    /// The step compiled for a size (`step_sized::<N>`, what
+    /// `step_measured` runs for n ∈ {2, 3, 4, 6, 8}) is the step that
+    /// reads the size at run time, bit for bit: states, step sizes,
+    /// rejections and error estimates.
+    #[test]
+    fn the_step_compiled_for_a_size_is_the_general_step_bit_for_bit() {
+        fn run(n: usize, sized: bool) -> Vec<u64> {
+            let system = Ring(n);
+            let y0: Vec<f64> = (0..n).map(|i| 0.3 + 0.7 * i as f64).collect();
+            let tol = Tolerance {
+                rtol: 1e-9,
+                atol: 1e-11,
+            };
+            let mut dop = Dop853::new(&system, 0.0, &y0, tol, f64::INFINITY, None).unwrap();
+            let budget = Budget::default();
+            let mut bits = Vec::new();
+            while dop.clock.t < 20.0 {
+                let mut measure = HairerMeasure(tol);
+                if sized {
+                    dop.step_measured(&system, 20.0, &budget, &mut measure)
+                } else {
+                    dop.step_sized::<_, _, 0>(&system, 20.0, &budget, &mut measure)
+                }
+                .unwrap();
+                let mut local = vec![0.0; n];
+                dop.local_error(&mut local);
+                bits.extend(dop.y.iter().chain(&local).map(|v| v.to_bits()));
+                bits.push(dop.clock.t.to_bits());
+                bits.push(dop.clock.h.to_bits());
+            }
+            bits.push(dop.clock.stats.rejected_steps as u64);
+            bits.push(dop.clock.stats.rhs_evaluations as u64);
+            bits
+        }
+        for n in [1, 2, 3, 4, 5, 6, 8] {
+            let general = run(n, false);
+            assert!(general.len() > 50, "n = {n}: {} numbers", general.len());
+            assert_eq!(run(n, true), general, "n = {n}");
+        }
     }
 }
