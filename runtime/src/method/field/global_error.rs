@@ -100,7 +100,6 @@ pub struct FieldError {
     /// Whether the model keeps holonomic constraints: only those carry
     /// their errors (`carries_constrained`).
     holonomic: bool,
-
     /// Evaluations of the reference steps.
     evaluations: usize,
     unfed: Vec<Unfed>,
@@ -163,10 +162,11 @@ impl FieldError {
     }
 
     fn constrained(&mut self, model: &dyn DynModel) -> bool {
-        self.holonomic = model.keeps_positions();
-        *self
-            .constrained
-            .get_or_insert_with(|| !model.constraints().is_empty() || model.keeps_constraints())
+        if self.constrained.is_none() {
+            self.holonomic = model.keeps_positions();
+            self.constrained = Some(!model.constraints().is_empty() || model.keeps_constraints());
+        }
+        self.constrained == Some(true)
     }
 
     /// Whether a constrained model's errors are carried along the motion
