@@ -427,18 +427,8 @@ impl FieldError {
             };
             if carried {
                 // The measured error with its sign, at most the estimate.
-                let scale = |size: f64, bound: f64| {
-                    if size > bound && size > 0.0 {
-                        bound / size
-                    } else {
-                        1.0
-                    }
-                };
                 let local: Vec<f64> = match measured {
-                    Some(m) => {
-                        let k = scale(relative(&m, &step.x1), estimated);
-                        m.iter().map(|v| k * v).collect()
-                    }
+                    Some(m) => at_most_estimated(&m, &local, &step.x1),
                     None => {
                         let k = if estimated > 0.0 {
                             added / estimated
@@ -598,19 +588,25 @@ impl FieldError {
 /// it), the error carried before it projected at its start by `keep`.
 fn carry(growth: &mut Growth, system: &ModelSystem<'_>, step: &Unfed, keep: Option<&mut Keep<'_>>) {
     let local = match (&step.signed, &step.local) {
-        (Some(signed), Some(local)) => {
-            let (size, estimated) = (relative(signed, &step.x1), relative(local, &step.x1));
-            let k = if size > estimated && size > 0.0 {
-                estimated / size
-            } else {
-                1.0
-            };
-            signed.iter().map(|v| k * v).collect()
-        }
+        (Some(signed), Some(local)) => at_most_estimated(signed, local, &step.x1),
         _ if !growth.started() => return,
         _ => vec![0.0; step.x1.len()],
     };
     growth.step_kept(system, (step.t0, &step.x0), step.t1, &local, keep);
+}
+
+/// A step's measured error `measured` (with its sign), scaled down to
+/// the size of its estimate `local` where it is larger (relative to
+/// `x1`): what is carried along the motion, at most the calibration's
+/// bound.
+fn at_most_estimated(measured: &[f64], local: &[f64], x1: &[f64]) -> Vec<f64> {
+    let (size, estimated) = (relative(measured, x1), relative(local, x1));
+    let k = if size > estimated && size > 0.0 {
+        estimated / size
+    } else {
+        1.0
+    };
+    measured.iter().map(|v| k * v).collect()
 }
 
 /// The steps' estimates summed (relative; the steps not estimated left
