@@ -28,23 +28,30 @@
 //! steps is added to the sum as one, its error at its end measured
 //! against a reference carried along it from its anchor
 //! (`FieldError::feed_window`), and a longer window's steps as above.
-//! A model that keeps holonomic constraints (a closed loop, a bead on a
-//! curve written in Cartesian coordinates) carries its errors along the
-//! motion too, from the window in which
-//! the calibrated sum passes `FROM_DIRECT`·rtol (as direct integration's):
-//! every step's error measured with its sign, propagated step by step
-//! through the window, and the carried error projected at each window's
-//! anchor as the run projects the state there (`FieldError::keep`, the
-//! projection's derivative). Without the projection the reduced system's
-//! drift off the constraints grows the carried error without bound;
-//! without the carrying, a slider-crank whose period depends on its
-//! energy ended 154 rtol off at rtol 1e-6 saying "within" (its windows'
-//! summed errors were 3 rtol: the phase error grows with time).
+//! A constrained model carries its errors along the motion too, from
+//! the window in which the calibrated sum passes `FROM_DIRECT`·rtol (as
+//! direct integration's): every step's error measured with its sign,
+//! propagated step by step through the window, and the carried error
+//! projected at each window's anchor as the run projects the state there
+//! (`FieldError::keep`, the projection's derivative). Without the
+//! projection the reduced system's drift off the constraints grows the
+//! carried error without bound; without the carrying, a slider-crank
+//! whose period depends on its energy ended 154 rtol off at rtol 1e-6
+//! saying "within" (its windows' summed errors were 3 rtol: the phase
+//! error grows with time), and the same four-bar loop kept by velocity
+//! constraints (`four_bar_velocity`) was estimated 100× below its error.
+//!
+//! Once carried, a constrained model's estimate is the sum at the start
+//! of the carrying (the errors before it, not carried) plus the largest
+//! carried error, no longer the sum of the windows' errors: that sum is a
+//! bound only where errors neither cancel nor grow, and a knife edge
+//! circling at constant speed (whose errors of position go round with it
+//! and cancel) summed 22 rtol against an error of 1.0 rtol at rtol 1e-6.
 
 use crate::method::solver::{GlobalErrorEstimate, Keeping};
 use crate::model::DynModel;
 use crate::ode::dop853::global_error::growth::{past_bound, Growth, Keep, FROM_DIRECT};
-use crate::ode::dop853::global_error::{relative, GlobalError, BOUND, CALIBRATION_STRIDE};
+use crate::ode::dop853::global_error::{relative, GlobalError, CALIBRATION_STRIDE};
 use crate::ode::dop853::step_by_halves;
 use crate::ode::system::ModelSystem;
 
@@ -97,14 +104,17 @@ pub struct FieldError {
     constrained: Option<bool>,
     /// The errors carried along the motion.
     growth: Growth,
-    /// Whether the model keeps holonomic constraints: only those carry
-    /// their errors (`carries_constrained`).
-    holonomic: bool,
     /// Evaluations of the reference steps.
     evaluations: usize,
     unfed: Vec<Unfed>,
     /// A constrained model's windows (`feed_window`).
     windows: Windows,
+    /// The estimate when the carrying started: the errors before it, not
+    /// carried (`estimate`).
+    before_carrying: Option<f64>,
+    /// The last measured window's end and its error there, with its sign:
+    /// where the carrying starts at that end, the error it starts from.
+    window_end: Option<(f64, Vec<f64>)>,
 }
 
 /// A constrained model's windows, each added as one (`feed_window`).
@@ -154,16 +164,16 @@ impl FieldError {
             global: GlobalError::new(),
             constrained: None,
             growth: Growth::new(n),
-            holonomic: false,
             evaluations: 0,
             unfed: Vec::new(),
             windows: Windows::default(),
+            before_carrying: None,
+            window_end: None,
         }
     }
 
     fn constrained(&mut self, model: &dyn DynModel) -> bool {
         if self.constrained.is_none() {
-            self.holonomic = model.keeps_positions();
             self.constrained = Some(!model.constraints().is_empty() || model.keeps_constraints());
         }
         self.constrained == Some(true)
@@ -177,14 +187,6 @@ impl FieldError {
     /// cone's four windows of 7.5 s each, carried from the second, were
     /// estimated 11× below their error.
     fn carries_constrained(&self, first: usize) -> bool {
-        if !self.holonomic {
-            // Velocity constraints alone: carried, the circling knife
-            // edge's estimate at rtol 1e-6 was 22× its error (1.0 rtol over
-            // 4,001 samples; not explained: the steps' measured errors are
-            // real and the propagation by half-steps changed nothing), so
-            // those keep the windows' sum.
-            return false;
-        }
         if self.growth.started() {
             return true;
         }
@@ -259,7 +261,8 @@ impl FieldError {
             self.measure_steps(&system, first);
         } else if self.wants_window_measure(&self.unfed[first..]) {
             self.evaluations += 24 * count;
-            measure_window(&system, &mut self.unfed[first..]);
+            let end = self.unfed[self.unfed.len() - 1].t1;
+            self.window_end = measure_window(&system, &mut self.unfed[first..]).map(|e| (end, e));
         }
         if self.carries_constrained(first) {
             self.measure_signed(&system, first);
@@ -272,7 +275,6 @@ impl FieldError {
     /// its start, as direct integration's steps are, once the sum passes
     /// `FROM_DIRECT`·rtol and every `CALIBRATION_STRIDE` steps after.
     fn measure_steps(&mut self, system: &ModelSystem<'_>, first: usize) {
-        let from = self.first_measure_from();
         let mut sum = self.windows.sum() + self.global.estimate();
         let mut calibrated = self.global.calibrated();
         for step in &mut self.unfed[first..] {
@@ -288,7 +290,7 @@ impl FieldError {
             let measures = if calibrated {
                 w.since_alone >= CALIBRATION_STRIDE
             } else {
-                sum > from * self.rtol
+                sum > FROM_DIRECT * self.rtol
             };
             sum += estimated;
             w.since_alone += 1;
@@ -308,20 +310,6 @@ impl FieldError {
             }
             // The sum is calibrated from this measure on (when added).
             calibrated = true;
-        }
-    }
-
-    /// The sum, in units of rtol, from which a constrained model's first
-    /// window (or long window's step) is measured: where the errors may
-    /// start to be carried, which needs a calibrated sum ([`FROM_DIRECT`],
-    /// holonomic constraints), else the bound (measured from a tenth of it,
-    /// the circling knife edge's windows' sum at rtol 1e-6 became 22 rtol
-    /// against an error of 1.0).
-    fn first_measure_from(&self) -> f64 {
-        if self.holonomic {
-            FROM_DIRECT
-        } else {
-            BOUND
         }
     }
 
@@ -349,21 +337,66 @@ impl FieldError {
     /// After a constrained model's advance, before the run projects its
     /// state: the error carried so far, propagated to the last window's
     /// anchor, is projected there as the state was (`keeping`'s
-    /// derivative of the projection), and the window's first step is
-    /// carried. Its other steps are carried when they are added
-    /// (`feed`): an event found in the window cuts them.
+    /// derivative of the projection), and the window's steps are carried.
+    /// A model with switches has only the window's first step carried now,
+    /// its others when they are added (`feed`): an event found in the
+    /// window cuts them.
     pub fn keep(&mut self, model: &dyn DynModel, keeping: &mut dyn Keeping) {
         if !self.constrained(model) {
             return;
         }
-        let Some(i) = self.unfed.iter().position(|s| !s.carried) else {
-            return;
-        };
-        let system = ModelSystem(model);
         let mut keep = |t: f64, x: &[f64], d: &mut [f64]| keeping.tangent(t, x, d);
-        let step = &mut self.unfed[i];
-        step.carried = true;
-        carry(&mut self.growth, &system, step, Some(&mut keep));
+        self.carry_steps(model, f64::INFINITY, model.switches() > 0, Some(&mut keep));
+    }
+
+    /// Carries the steps not yet carried that start before `t` (only the
+    /// first of them if `first_only`), the error before them projected at
+    /// the first's start by `keep`.
+    fn carry_steps(
+        &mut self,
+        model: &dyn DynModel,
+        t: f64,
+        first_only: bool,
+        mut keep: Option<&mut Keep<'_>>,
+    ) {
+        let system = ModelSystem(model);
+        let summed = self.summed();
+        let (growth, window_end) = (&mut self.growth, &self.window_end);
+        for step in self.unfed.iter_mut().filter(|s| s.t0 < t && !s.carried) {
+            step.carried = true;
+            if let (false, Some(_), Some((end, error))) =
+                (growth.started(), &step.signed, window_end)
+            {
+                if *end == step.t0 {
+                    // The carrying starts at a measured window's end: the
+                    // error there is carried too (a ball on a turntable in
+                    // Euler angles at rtol 1e-8 amplified its first
+                    // window's 0.5 rtol 70-fold, estimated 1.5 rtol for an
+                    // error of 35).
+                    let keep = keep.as_mut().map(|k| (&mut **k, step.t0, &step.x0[..]));
+                    growth.seed(error, keep);
+                }
+            }
+            carry(growth, &system, step, keep.take());
+            if first_only {
+                break;
+            }
+        }
+        self.note_start(summed);
+    }
+
+    /// The sum of the errors added so far (a constrained model's), the
+    /// largest inside a measured window included.
+    fn summed(&self) -> f64 {
+        (self.windows.sum() + self.global.estimate()).max(self.windows.peak)
+    }
+
+    /// After a step was carried: the sum before it, `summed`, if it was
+    /// the first (what the estimate adds to the carried error).
+    fn note_start(&mut self, summed: f64) {
+        if self.growth.started() && self.before_carrying.is_none() {
+            self.before_carrying = Some(summed);
+        }
     }
 
     /// Whether a constrained model's window of `steps` is measured (see
@@ -376,21 +409,17 @@ impl FieldError {
             return self.windows.since_measure
                 >= (WINDOW_SHARE * steps.len()).max(CALIBRATION_STRIDE);
         }
-        self.windows.sum() + self.global.estimate() + estimated(steps)
-            > self.first_measure_from() * self.rtol
+        self.windows.sum() + self.global.estimate() + estimated(steps) > FROM_DIRECT * self.rtol
     }
 
     /// Adds the steps that start before `t` (all: `f64::INFINITY`).
     pub fn feed(&mut self, model: &dyn DynModel, t: f64) {
-        let system = ModelSystem(model);
         if self.constrained(model) {
-            for step in self.unfed.iter_mut().filter(|s| s.t0 < t && !s.carried) {
-                step.carried = true;
-                carry(&mut self.growth, &system, step, None);
-            }
+            self.carry_steps(model, t, false, None);
             self.feed_window(t);
             return;
         }
+        let system = ModelSystem(model);
         for step in std::mem::take(&mut self.unfed) {
             if step.t0 >= t {
                 break;
@@ -540,10 +569,28 @@ impl FieldError {
     /// summed).
     pub fn estimate(&self) -> GlobalErrorEstimate {
         if self.constrained == Some(true) {
+            let partial = self.unfed.iter().any(|s| s.local.is_none());
+            let complete = self.global.complete() && !partial;
+            if let Some(before) = self.before_carrying {
+                // Carried: the errors before the carrying, and the carried
+                // error (the module's comment: why not the windows' sum),
+                // and the steps not carried yet (a model with switches: the
+                // last window's after its first), summed.
+                let waiting: f64 = self
+                    .unfed
+                    .iter()
+                    .filter(|s| !s.carried)
+                    .filter_map(|s| s.local.as_ref().map(|l| relative(l, &s.x1)))
+                    .sum();
+                return GlobalErrorEstimate {
+                    largest: before + self.growth.largest() + self.windows.ratio() * waiting,
+                    rtol: self.rtol,
+                    complete,
+                };
+            }
             // The window not yet added: a long one's steps scaled as the
             // steps are, a short one by the windows' ratio.
             let w = &self.windows;
-            let partial = self.unfed.iter().any(|s| s.local.is_none());
             let mut global = self.global.clone();
             let mut pending = 0.0;
             for step in &self.unfed {
@@ -561,7 +608,7 @@ impl FieldError {
                     .max(w.peak)
                     .max(self.growth.largest()),
                 rtol: self.rtol,
-                complete: self.global.complete() && !partial,
+                complete,
             };
         }
         let mut global = self.global.clone();
@@ -621,17 +668,15 @@ fn estimated(steps: &[Unfed]) -> f64 {
 /// Each step's error against a reference carried along the window's
 /// steps from the first one's start (two DOP853 half-steps a step), into
 /// `measured` (relative); left `None` from where the reference fails.
-fn measure_window(system: &ModelSystem<'_>, steps: &mut [Unfed]) {
-    let Some(first) = steps.first() else {
-        return;
-    };
+fn measure_window(system: &ModelSystem<'_>, steps: &mut [Unfed]) -> Option<Vec<f64>> {
+    let first = steps.first()?;
     let mut reference = first.x0.clone();
     let mut next = vec![0.0; reference.len()];
     let mut difference = vec![0.0; reference.len()];
     for step in steps {
         match step_by_halves(system, step.t0, &reference, step.t1 - step.t0, &mut next) {
             Ok(true) => {}
-            _ => return,
+            _ => return None,
         }
         std::mem::swap(&mut reference, &mut next);
         for ((d, x), r) in difference.iter_mut().zip(&step.x1).zip(&reference) {
@@ -639,4 +684,5 @@ fn measure_window(system: &ModelSystem<'_>, steps: &mut [Unfed]) {
         }
         step.measured = Measured::InWindow(relative(&difference, &step.x1));
     }
+    Some(difference)
 }

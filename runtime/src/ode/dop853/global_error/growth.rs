@@ -181,6 +181,21 @@ impl Growth {
         });
     }
 
+    /// Before the first step: the error the carrying starts from, `e` at
+    /// `(t, x)` (an error measured before, whose steps were not carried),
+    /// projected by `keep` as the run's state is there.
+    pub fn seed(&mut self, e: &[f64], keep: Option<(&mut Keep<'_>, f64, &[f64])>) {
+        if self.started || self.pending.is_some() {
+            return;
+        }
+        self.e.copy_from_slice(e);
+        if let Some((keep, t, x)) = keep {
+            // As in `flush`: a projection's derivative that fails leaves
+            // the error whole.
+            let _ = keep(t, x, &mut self.e);
+        }
+    }
+
     /// An event at `t`, where the run goes on from `x` (the step's
     /// continuous extension there): the last step's motion ends at `t`
     /// (called in the regime the step was taken in), and its error is
@@ -291,6 +306,24 @@ mod tests {
         assert!((h.largest() - 5.01e-10).abs() < 1e-14, "{}", h.largest());
         assert!((h.e[0] - (5e-10 + 1e-12)).abs() < 1e-14, "{:?}", h.e);
         assert_eq!(h.evaluations(), 48);
+    }
+
+    #[test]
+    fn a_seeded_error_is_carried_from_the_first_step_and_only_before_it() {
+        let free = Oscillator(0.0);
+        let mut g = Growth::new(2);
+        let x = [0.0, 1.0];
+        g.seed(&[0.0, 1e-10], None);
+        g.step(&free, (0.0, &x), 10.0, &[0.0, 0.0]);
+        g.step(&free, (10.0, &x), 10.0, &[0.0, 0.0]);
+        assert!((g.largest() - 1e-9).abs() < 1e-16, "{}", g.largest());
+        // Once the carrying started, a seed changes nothing.
+        g.seed(&[1.0, 1.0], None);
+        assert!(
+            (g.e[0] - 1e-9).abs() < 1e-16 && g.e[1] == 1e-10,
+            "{:?}",
+            g.e
+        );
     }
 
     #[test]
