@@ -813,6 +813,64 @@ pub fn dense_step_between<S: System + ?Sized>(
     dense_step_between_measured(system, t_old, h, y_old, y_new, None).map(|(step, _)| step)
 }
 
+/// The most pieces [`dense_steps_between`] cuts a step into.
+pub const MOST_PIECES: usize = 64;
+
+/// The continuous extension over `[t_old, t_old + h]` of DOP853 on
+/// `system` from `y_old`, ending on `y_new` (as [`dense_step_between`]),
+/// in as many equal pieces (1, 2, 4, … [`MOST_PIECES`]) as it takes for
+/// the chain of steps to meet `y_new` within `tol`: the pieces before the
+/// last end where their own step does, the last is pinned to `y_new`.
+/// Why: a field step may be far longer than one explicit step of the
+/// motion where the motion changes fast and the coefficients do not (a
+/// knife edge turning to its singular heading at rtol 1e-6: one field step
+/// over the last 0.24 s, its output 2e-5 off in mid-step, 30 rtol, while
+/// both of its ends were right to 1e-11). Returns the pieces and the last
+/// one's miss (Hairer's scaled RMS norm).
+pub fn dense_steps_between<S: System + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y_new: &[f64],
+    tol: Tolerance,
+) -> Result<(Vec<DenseStep>, f64), Failure> {
+    let n = y_old.len();
+    let (one, mut miss) = dense_step_between_measured(system, t_old, h, y_old, y_new, Some(tol))?;
+    let mut pieces = vec![one];
+    let mut count = 1;
+    let mut k = vec![0.0; STAGES * n];
+    let (mut stage_state, mut start, mut end) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    while miss > 1.0 && count < MOST_PIECES {
+        count *= 2;
+        let piece = h / count as f64;
+        let mut chain = Vec::with_capacity(count);
+        start.copy_from_slice(y_old);
+        for j in 0..count - 1 {
+            let t = t_old + j as f64 * piece;
+            system.rhs(t, &start, &mut k[..n])?;
+            plain_step(system, t, &start, piece, &mut k, &mut stage_state, &mut end)?;
+            if first_non_finite(&end).is_some() {
+                return Err(Failure::non_finite(t, system.component_name(0)));
+            }
+            chain.push(dense_step_between(system, t, piece, &start, &end)?);
+            std::mem::swap(&mut start, &mut end);
+        }
+        let t_last = t_old + (count - 1) as f64 * piece;
+        let (last, last_miss) = dense_step_between_measured(
+            system,
+            t_last,
+            t_old + h - t_last,
+            &start,
+            y_new,
+            Some(tol),
+        )?;
+        chain.push(last);
+        (pieces, miss) = (chain, last_miss);
+    }
+    Ok((pieces, miss))
+}
+
 /// [`dense_step_between`], and with `tol` how far the step's own end
 /// misses `y_new` (Hairer's scaled RMS norm; `0` without `tol`): above 1
 /// the step is too long for one explicit step of `system`, and so is its
@@ -1066,6 +1124,61 @@ mod tests {
         fn time_partial(&self, _t: f64, _y: &[f64], _d: &mut [f64]) -> Result<(), Failure> {
             unreachable!()
         }
+    }
+
+    /// `x'' = −ω² x`.
+    struct Spring(f64);
+
+    impl System for Spring {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+            dy[0] = y[1];
+            dy[1] = -self.0 * self.0 * y[0];
+            Ok(())
+        }
+        fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
+            unreachable!()
+        }
+        fn time_partial(&self, _t: f64, _y: &[f64], _d: &mut [f64]) -> Result<(), Failure> {
+            unreachable!()
+        }
+    }
+
+    /// A step over three periods of a spring is cut into pieces until the
+    /// chain meets the given end; a short step stays one piece.
+    #[test]
+    fn an_output_step_too_long_for_the_motion_is_cut_into_pieces() {
+        let w = 20.0_f64;
+        let tol = Tolerance {
+            rtol: 1e-8,
+            atol: 1e-10,
+        };
+        let exact = |t: f64| [(w * t).cos(), -w * (w * t).sin()];
+        let (pieces, miss) =
+            dense_steps_between(&Spring(w), 0.0, 1.0, &exact(0.0), &exact(1.0), tol).unwrap();
+        assert!(
+            pieces.len() > 1 && pieces.len() <= MOST_PIECES,
+            "{}",
+            pieces.len()
+        );
+        assert!(miss <= 1.0, "{miss}");
+        let mut x = [0.0; 2];
+        for t in [0.013, 0.37, 0.5, 0.999] {
+            let piece = pieces.iter().find(|p| t <= p.t_new).unwrap();
+            piece.eval(t, &mut x);
+            let e = exact(t);
+            assert!(
+                (x[0] - e[0]).abs() < 1e-7,
+                "t {t}: {} against {}",
+                x[0],
+                e[0]
+            );
+        }
+        let (short, _) =
+            dense_steps_between(&Spring(w), 0.0, 0.01, &exact(0.0), &exact(0.01), tol).unwrap();
+        assert_eq!(short.len(), 1);
     }
 
     /// The step compiled for a size (`step_sized::<N>`, what

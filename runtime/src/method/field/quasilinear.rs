@@ -29,7 +29,7 @@ use crate::linalg::Matrix;
 use crate::method::solver::{Keeping, Report, Solver};
 use crate::model::{DomainKind, DynModel};
 use crate::ode::budget::Budget;
-use crate::ode::dop853::dense_step_between;
+use crate::ode::dop853::dense_steps_between;
 use crate::ode::stepper::DenseStep;
 use crate::ode::stepper::{OfModel, StepperOf};
 use crate::ode::system::ModelSystem;
@@ -189,9 +189,9 @@ struct AcceptedWindow {
     prepared: Vec<Option<DenseStep>>,
     /// The recovered state at the end of each step.
     states: Vec<Vec<f64>>,
-    /// The state's continuous extension over each step, built when output
-    /// asks for it (see `dense`).
-    outputs: Vec<Option<DenseStep>>,
+    /// The state's continuous extension over each step, in one or more
+    /// pieces, built when output asks for it (see `dense`).
+    outputs: Vec<Option<Vec<DenseStep>>>,
 }
 
 impl AcceptedWindow {
@@ -242,10 +242,17 @@ impl AcceptedWindow {
         Ok(used)
     }
 
-    /// The state's continuous extension over explicit step `i`: one DOP853
-    /// step of the motion linearised along the window's predictor, between
-    /// the two recovered states. Returns the linearisations it took.
-    fn build_output(&mut self, model: &dyn DynModel, i: usize) -> Result<usize, Failure> {
+    /// The state's continuous extension over explicit step `i`: DOP853 on
+    /// the motion linearised along the window's predictor, between the two
+    /// recovered states, in as many pieces as meet the later one within
+    /// `tol` (`dop853::dense_steps_between`). Returns the linearisations it
+    /// took.
+    fn build_output(
+        &mut self,
+        model: &dyn DynModel,
+        i: usize,
+        tol: Tolerance,
+    ) -> Result<usize, Failure> {
         if self.outputs[i].is_some() {
             return Ok(0);
         }
@@ -257,9 +264,9 @@ impl AcceptedWindow {
             &self.states[i - 1]
         };
         let motion = LinearizedMotion::new(model, &self.path);
-        let dense = dense_step_between(&motion, t_old, h, x_old, &self.states[i]);
+        let dense = dense_steps_between(&motion, t_old, h, x_old, &self.states[i], tol);
         let used = motion.linearizations();
-        self.outputs[i] = Some(dense?);
+        self.outputs[i] = Some(dense?.0);
         Ok(used)
     }
 }
@@ -691,9 +698,13 @@ impl Solver for QuasilinearField {
             // (the rocket with drag at rtol 1e-9, 101 samples: 1.8e-9 →
             // 3.3e-10, direct 1.2e-10). A stiff window's steps are too long
             // for an explicit step: there the coefficients' extension.
-            self.linearizations += window.build_output(model, i)?;
-            if let Some(dense) = &window.outputs[i] {
-                dense.eval(t, out);
+            self.linearizations += window.build_output(model, i, self.options.tol)?;
+            if let Some(pieces) = &window.outputs[i] {
+                let piece = pieces
+                    .iter()
+                    .find(|p| t <= p.t_new)
+                    .unwrap_or(&pieces[pieces.len() - 1]);
+                piece.eval(t, out);
             }
             return Ok(());
         }
@@ -762,9 +773,13 @@ impl Solver for QuasilinearField {
             // The same output as `dense`: the state's own extension over
             // explicit steps, the coefficients' over stiff ones.
             if window.steps[i].is_explicit() {
-                self.linearizations += window.build_output(model, i)?;
-                if let Some(d) = &window.outputs[i] {
-                    out.push(crate::method::segment::Segment::State(d.clone()));
+                self.linearizations += window.build_output(model, i, self.options.tol)?;
+                if let Some(pieces) = &window.outputs[i] {
+                    out.extend(
+                        pieces
+                            .iter()
+                            .map(|d| crate::method::segment::Segment::State(d.clone())),
+                    );
                 }
                 continue;
             }
