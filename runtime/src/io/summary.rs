@@ -181,7 +181,7 @@ pub use crate::ode::dop853::global_error::BOUND as GLOBAL_ERROR_BOUND;
 /// past it (see `dop853::global_error` and its `growth`).
 /// A carried global error estimate at least this large (relative) is
 /// reported as amplification, not as a number.
-const AMPLIFIED: f64 = 1.0;
+use crate::ode::dop853::global_error::AMPLIFIED;
 
 fn global_error_line(g: &GlobalErrorEstimate) -> String {
     let bound = GLOBAL_ERROR_BOUND * g.rtol;
