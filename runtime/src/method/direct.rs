@@ -451,6 +451,17 @@ impl Direct {
             global.skip();
             return;
         };
+        let carried = carries(global, rtol, &self.growth);
+        e.calibrates = global.wants_measure(rtol);
+        if !(self.keeps || carried || e.calibrates) {
+            // A step whose error is only summed (most steps of most
+            // runs): its relative size, as `add_to` would take it, without
+            // the vectors (about 200 instructions a step of bookkeeping
+            // before, BENCHMARKS §10a).
+            let (_, _, h) = dop.clock().last_step();
+            global.add(dop.local_error_relative(), h);
+            return;
+        }
         dop.local_error(&mut e.estimated);
         e.x.clear();
         e.x.extend_from_slice(dop.current_state());
@@ -462,7 +473,6 @@ impl Direct {
         // estimate is the difference to a lower-order solution, whose
         // sign is not the error's: added with its own sign it made the
         // soft walls' estimate 1000× their error at rtol 1e-12).
-        let carried = carries(global, rtol, &self.growth);
         // The step's start is read only where its error is carried along
         // the motion (`StepError::add_to` decides that by the same test,
         // on the same sum: no step is added between): not copied on every
@@ -471,7 +481,6 @@ impl Direct {
         if carried {
             e.x0.extend_from_slice(dop.previous_state());
         }
-        e.calibrates = global.wants_measure(rtol);
         if carried || e.calibrates {
             // A measure that fails (a stage not finite) leaves the estimate
             // unscaled: it never fails the run.

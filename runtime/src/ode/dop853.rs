@@ -290,6 +290,22 @@ impl Dop853 {
         }
     }
 
+    /// [`Dop853::local_error`] relative to the state it ended on, without
+    /// the vector: `global_error::relative(local, y)` bit for bit (the same
+    /// operations in the same order), for the steps whose error is only
+    /// summed (the direct run's bookkeeping at every step, BENCHMARKS
+    /// §10a).
+    pub fn local_error_relative(&self) -> f64 {
+        let n = self.y.len();
+        let e5 = &self.k[ERROR5 * n..(ERROR5 + 1) * n];
+        let factor = self.local_error_factor();
+        let mut worst = 0.0_f64;
+        for (e, x) in e5.iter().zip(&self.y[..n]) {
+            worst = worst.max((factor * e).abs() / x.abs().max(1.0));
+        }
+        worst
+    }
+
     /// `h √(ε₅² / (ε₅² + 0.01 ε₃²))`, the factor of `ε₅` in
     /// [`Dop853::local_error`].
     fn local_error_factor(&self) -> f64 {
@@ -1188,6 +1204,31 @@ mod tests {
             let general = run(n, false);
             assert!(general.len() > 50, "n = {n}: {} numbers", general.len());
             assert_eq!(run(n, true), general, "n = {n}");
+        }
+    }
+
+    /// The summed steps' relative error without the vector is the
+    /// vector's, bit for bit.
+    #[test]
+    fn the_relative_local_error_is_that_of_the_vector_bit_for_bit() {
+        for n in [1, 2, 3, 5] {
+            let system = Ring(n);
+            let y0: Vec<f64> = (0..n).map(|i| 0.3 + 0.7 * i as f64).collect();
+            let tol = Tolerance {
+                rtol: 1e-9,
+                atol: 1e-11,
+            };
+            let mut dop = Dop853::new(&system, 0.0, &y0, tol, f64::INFINITY, None).unwrap();
+            let budget = Budget::default();
+            let mut local = vec![0.0; n];
+            while dop.clock.t < 5.0 {
+                dop.step_measured(&system, 5.0, &budget, &mut HairerMeasure(tol))
+                    .unwrap();
+                dop.local_error(&mut local);
+                let vector = global_error::relative(&local, &dop.y);
+                assert!(vector > 0.0);
+                assert_eq!(dop.local_error_relative().to_bits(), vector.to_bits());
+            }
         }
     }
 
