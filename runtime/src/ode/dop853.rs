@@ -1061,8 +1061,9 @@ fn step_as_accepted<S: System + ?Sized>(
 /// `(t, y)` that ended at `y_end`: the difference is taken against the
 /// step already taken, so only the step from `y + ε d` is new (12
 /// evaluations where [`step_derivative`] takes 24). The same one-sided
-/// difference, with the accepted step's arithmetic on both sides
-/// ([`step_as_accepted`]). `Ok(false)` when a value was not finite.
+/// difference, with the accepted step's arithmetic on both sides (each
+/// stage `y + h Σ a_m k_m`, the end `y + h Σ b_j k_j`, each sum from zero
+/// in the tableau's order). `Ok(false)` when a value was not finite.
 pub fn step_derivative_from_accepted<S: System + ?Sized>(
     system: &S,
     (t, y): (f64, &[f64]),
