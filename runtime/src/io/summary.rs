@@ -176,13 +176,13 @@ impl Summary {
 /// units of its relative tolerance.
 pub use crate::ode::dop853::global_error::BOUND as GLOBAL_ERROR_BOUND;
 
+// A carried global error estimate at least this large (relative) is
+// reported as amplification, not as a number.
+use crate::ode::dop853::global_error::AMPLIFIED;
+
 /// The summary's line on the global error the method carried (direct
 /// integration and the quasilinear field): within `10·rtol`, or a warning
 /// past it (see `dop853::global_error` and its `growth`).
-/// A carried global error estimate at least this large (relative) is
-/// reported as amplification, not as a number.
-const AMPLIFIED: f64 = 1.0;
-
 fn global_error_line(g: &GlobalErrorEstimate) -> String {
     let bound = GLOBAL_ERROR_BOUND * g.rtol;
     let partial = if g.complete {

@@ -8,7 +8,7 @@ use crate::failure::Failure;
 use crate::method::solver::{GlobalErrorEstimate, Keeping, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
-use crate::ode::dop853::global_error::growth::{past, Growth, Keep, FROM_DIRECT};
+use crate::ode::dop853::global_error::growth::{past, Accepted, Growth, Keep, FROM_DIRECT};
 use crate::ode::dop853::global_error::{relative, GlobalError, BOUND};
 use crate::ode::dop853::Dop853;
 use crate::ode::stepper::{Clocked, OfModel, StepperOf};
@@ -99,8 +99,9 @@ impl StepError {
             return;
         }
         let estimated = relative(&self.estimated, &self.x);
-        let propagate =
-            past(global, rtol, FROM_DIRECT) || growth.as_ref().is_some_and(|(g, _)| g.started());
+        let propagate = growth
+            .as_ref()
+            .is_some_and(|(g, _)| carries(global, rtol, g));
         // The sum is calibrated as before: a measure every
         // `CALIBRATION_STRIDE` steps scales the estimates between (one at
         // every step would add, at tight tolerances, the rounding the
@@ -134,15 +135,31 @@ impl StepError {
                 }
             };
             let local: Vec<f64> = local.iter().map(|v| scale * v).collect();
+            // The step DOP853 took from `x0` (the stepper's previous
+            // state, a projected one in a run that keeps constraints) to
+            // `x`, of length `h`.
+            let accepted = Accepted {
+                h: self.h,
+                end: &self.x,
+            };
             growth.step_kept(
                 &ModelSystem(model),
                 (self.t0, &self.x0),
                 self.t1,
                 &local,
                 keep,
+                Some(accepted),
             );
         }
     }
+}
+
+/// Whether a step's error is measured and carried along the motion: from
+/// where the calibrated sum passes [`FROM_DIRECT`]`·rtol` on (once
+/// started, every step is), until the carried error passes the state's
+/// own size ([`Growth::saturated`]: nothing more is learned there).
+fn carries(global: &GlobalError, rtol: f64, growth: &Growth) -> bool {
+    (growth.started() || past(global, rtol, FROM_DIRECT)) && !growth.saturated()
 }
 
 impl Direct {
@@ -270,33 +287,19 @@ impl Solver for Direct {
     }
 
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
-        self.step_error.add_to(
-            &mut self.global,
-            self.tol.rtol,
-            Some((&mut self.growth, model)),
-            None,
-        );
+        self.restart_at(model, t, x)?;
+        // A restart without an event's cut may follow a change of the
+        // model's regime (a pivot switch): the last step's derivative is
+        // not differenced against the step it took in the old one.
+        self.growth.forget_accepted();
         self.kept_ratio = None;
-        let h = self.stepper.proposed_step();
-        let integrator = self.integrator;
-        self.done += self.stepper.stats();
-        self.stepper = integrator.start::<OfModel>(
-            &ModelSystem(model),
-            t,
-            x,
-            self.tol,
-            self.h_max,
-            Some(h),
-        )?;
         Ok(())
     }
 
     fn project(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
-        // A projection moves the state, not the directions of the errors.
-        let kept_ratio = self.kept_ratio;
-        self.restart(model, t, x)?;
-        self.kept_ratio = kept_ratio;
-        Ok(())
+        // A projection moves the state, not the model nor the directions
+        // of the errors.
+        self.restart_at(model, t, x)
     }
 
     fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
@@ -407,6 +410,29 @@ impl Solver for Direct {
 }
 
 impl Direct {
+    /// Goes on from `(t, x)` with a fresh stepper of the same integrator,
+    /// the step just taken added to the estimate.
+    fn restart_at(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        self.step_error.add_to(
+            &mut self.global,
+            self.tol.rtol,
+            Some((&mut self.growth, model)),
+            None,
+        );
+        let h = self.stepper.proposed_step();
+        let integrator = self.integrator;
+        self.done += self.stepper.stats();
+        self.stepper = integrator.start::<OfModel>(
+            &ModelSystem(model),
+            t,
+            x,
+            self.tol,
+            self.h_max,
+            Some(h),
+        )?;
+        Ok(())
+    }
+
     /// Adds the step just taken to the global error estimate (see
     /// `dop853::global_error`): DOP853's local error estimate, scaled by
     /// the ratio a Richardson measure of the local error gives where the
@@ -425,6 +451,23 @@ impl Direct {
             global.skip();
             return;
         };
+        let carried = carries(global, rtol, &self.growth);
+        e.calibrates = global.wants_measure(rtol);
+        if !(carried || e.calibrates) {
+            // A step whose error is only summed (most steps of most
+            // runs): its relative size, as `add_to` would take it, without
+            // the vectors (about 200 instructions a step of bookkeeping
+            // before, BENCHMARKS §10a). In a run that keeps constraints,
+            // only where the sum with the whole of it stays within the
+            // bound: there `keep_on_constraints` takes no part of it off
+            // (its `within`), and adds it as it is.
+            let (_, _, h) = dop.clock().last_step();
+            let estimated = dop.local_error_relative();
+            if !self.keeps || global.estimate() + estimated <= BOUND * rtol {
+                global.add(estimated, h);
+                return;
+            }
+        }
         dop.local_error(&mut e.estimated);
         e.x.clear();
         e.x.extend_from_slice(dop.current_state());
@@ -436,7 +479,6 @@ impl Direct {
         // estimate is the difference to a lower-order solution, whose
         // sign is not the error's: added with its own sign it made the
         // soft walls' estimate 1000× their error at rtol 1e-12).
-        let carried = self.growth.started() || past(global, rtol, FROM_DIRECT);
         // The step's start is read only where its error is carried along
         // the motion (`StepError::add_to` decides that by the same test,
         // on the same sum: no step is added between): not copied on every
@@ -445,7 +487,6 @@ impl Direct {
         if carried {
             e.x0.extend_from_slice(dop.previous_state());
         }
-        e.calibrates = global.wants_measure(rtol);
         if carried || e.calibrates {
             // A measure that fails (a stage not finite) leaves the estimate
             // unscaled: it never fails the run.

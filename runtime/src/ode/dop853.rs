@@ -284,6 +284,31 @@ impl Dop853 {
     pub fn local_error(&self, out: &mut [f64]) {
         let n = self.y.len();
         let e5 = &self.k[ERROR5 * n..(ERROR5 + 1) * n];
+        let factor = self.local_error_factor();
+        for (o, e) in out[..n].iter_mut().zip(e5) {
+            *o = factor * e;
+        }
+    }
+
+    /// [`Dop853::local_error`] relative to the state it ended on, without
+    /// the vector: `global_error::relative(local, y)` bit for bit (the same
+    /// operations in the same order), for the steps whose error is only
+    /// summed (the direct run's bookkeeping at every step, BENCHMARKS
+    /// §10a).
+    pub fn local_error_relative(&self) -> f64 {
+        let n = self.y.len();
+        let e5 = &self.k[ERROR5 * n..(ERROR5 + 1) * n];
+        let factor = self.local_error_factor();
+        let mut worst = 0.0_f64;
+        for (e, x) in e5.iter().zip(&self.y[..n]) {
+            worst = worst.max((factor * e).abs() / x.abs().max(1.0));
+        }
+        worst
+    }
+
+    /// `h √(ε₅² / (ε₅² + 0.01 ε₃²))`, the factor of `ε₅` in
+    /// [`Dop853::local_error`].
+    fn local_error_factor(&self) -> f64 {
         let (err3, err5) = self.hairer_sums;
         let denominator = err5 + 0.01 * err3;
         let share = if denominator > 0.0 {
@@ -291,10 +316,7 @@ impl Dop853 {
         } else {
             0.0
         };
-        let factor = self.clock.h_old * share;
-        for (o, e) in out[..n].iter_mut().zip(e5) {
-            *o = factor * e;
-        }
+        self.clock.h_old * share
     }
 
     /// The last accepted step's local error by Richardson extrapolation:
@@ -1039,13 +1061,10 @@ pub fn step_derivative<S: System + ?Sized>(
     out: &mut [f64],
 ) -> Result<bool, Failure> {
     let n = y.len();
-    let size = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-    if size == 0.0 || !size.is_finite() {
+    let Some(eps) = difference_size(y, d) else {
         out[..n].fill(0.0);
-        return Ok(size == 0.0);
-    }
-    let scale = y.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
-    let eps = f64::EPSILON.sqrt() * scale / size;
+        return Ok(d.iter().all(|&v| v == 0.0));
+    };
     let mut k = vec![0.0; STAGES * n];
     let mut stage_state = vec![0.0; n];
     let mut base = vec![0.0; n];
@@ -1058,6 +1077,86 @@ pub fn step_derivative<S: System + ?Sized>(
         *o = (*o - b) / eps;
     }
     Ok(first_non_finite(&out[..n]).is_none())
+}
+
+/// One DOP853 step of length `h` from `(t, y)` into `out` with the
+/// arithmetic of an accepted step ([`Dop853::attempt`]: each stage state
+/// `y + h Σ a_m k_m`, the end `y + h Σ b_j k_j`, each sum from zero in the
+/// tableau's order), so that from the same `(t, y, h)` it ends on the
+/// accepted state bit for bit. `k[..n]` holds `X(t, y)` on entry.
+fn step_as_accepted<S: System + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+    h: f64,
+    k: &mut [f64],
+    stage_state: &mut [f64],
+    out: &mut [f64],
+) -> Result<(), Failure> {
+    let n = y.len();
+    for s in 1..STAGES {
+        let (done, rest) = k.split_at_mut(s * n);
+        for i in 0..n {
+            let mut acc = 0.0;
+            for &(j, a) in A[s] {
+                acc += a * done[j * n + i];
+            }
+            stage_state[i] = y[i] + h * acc;
+        }
+        system.rhs(t + C[s] * h, stage_state, &mut rest[..n])?;
+    }
+    for i in 0..n {
+        let mut b = 0.0;
+        for &(j, w) in &B {
+            b += w * k[j * n + i];
+        }
+        out[i] = y[i] + h * b;
+    }
+    Ok(())
+}
+
+/// [`step_derivative`] of an accepted DOP853 step of length `h` from
+/// `(t, y)` that ended at `y_end`: the difference is taken against the
+/// step already taken, so only the step from `y + ε d` is new (12
+/// evaluations where [`step_derivative`] takes 24). The same one-sided
+/// difference, with the accepted step's arithmetic on both sides (each
+/// stage `y + h Σ a_m k_m`, the end `y + h Σ b_j k_j`, each sum from zero
+/// in the tableau's order). `Ok(false)` when a value was not finite.
+pub fn step_derivative_from_accepted<S: System + ?Sized>(
+    system: &S,
+    (t, y): (f64, &[f64]),
+    h: f64,
+    y_end: &[f64],
+    d: &[f64],
+    out: &mut [f64],
+) -> Result<bool, Failure> {
+    let n = y.len();
+    let Some(eps) = difference_size(y, d) else {
+        out[..n].fill(0.0);
+        return Ok(d.iter().all(|&v| v == 0.0));
+    };
+    let mut k = vec![0.0; STAGES * n];
+    let mut stage_state = vec![0.0; n];
+    let moved: Vec<f64> = y.iter().zip(d).map(|(y, d)| y + eps * d).collect();
+    system.rhs(t, &moved, &mut k[..n])?;
+    step_as_accepted(system, t, &moved, h, &mut k, &mut stage_state, out)?;
+    for (o, b) in out[..n].iter_mut().zip(y_end) {
+        *o = (*o - b) / eps;
+    }
+    Ok(first_non_finite(&out[..n]).is_none())
+}
+
+/// The difference quotient's `ε` for a direction `d` at `y`: `ε d` about
+/// √eps of the state (the one-sided difference's balance of truncation,
+/// `ε |d|²`, and rounding, `eps |y| / ε`); `None` for a zero or not
+/// finite direction.
+fn difference_size(y: &[f64], d: &[f64]) -> Option<f64> {
+    let size = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    if size == 0.0 || !size.is_finite() {
+        return None;
+    }
+    let scale = y.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    Some(f64::EPSILON.sqrt() * scale / size)
 }
 
 /// `dst = base + h Σ_m a_m k_m` component by component; `R` is a
@@ -1219,6 +1318,96 @@ mod tests {
             let general = run(n, false);
             assert!(general.len() > 50, "n = {n}: {} numbers", general.len());
             assert_eq!(run(n, true), general, "n = {n}");
+        }
+    }
+
+    /// The summed steps' relative error without the vector is the
+    /// vector's, bit for bit.
+    #[test]
+    fn the_relative_local_error_is_that_of_the_vector_bit_for_bit() {
+        for n in [1, 2, 3, 5] {
+            let system = Ring(n);
+            let y0: Vec<f64> = (0..n).map(|i| 0.3 + 0.7 * i as f64).collect();
+            let tol = Tolerance {
+                rtol: 1e-9,
+                atol: 1e-11,
+            };
+            let mut dop = Dop853::new(&system, 0.0, &y0, tol, f64::INFINITY, None).unwrap();
+            let budget = Budget::default();
+            let mut local = vec![0.0; n];
+            while dop.clock.t < 5.0 {
+                dop.step_measured(&system, 5.0, &budget, &mut HairerMeasure(tol))
+                    .unwrap();
+                dop.local_error(&mut local);
+                let vector = global_error::relative(&local, &dop.y);
+                assert!(vector > 0.0);
+                assert_eq!(dop.local_error_relative().to_bits(), vector.to_bits());
+            }
+        }
+    }
+
+    /// The step a derivative is differenced against is the step the run
+    /// took: taken again from its start with `step_as_accepted` it ends on
+    /// the accepted state bit for bit, at every size (the sized and the
+    /// general step), at every step, the last one cut to the limit too.
+    /// And the derivative against it is the derivative of two new steps
+    /// to the difference's own accuracy (about √eps).
+    #[test]
+    fn the_derivative_against_the_accepted_step_is_the_derivative_of_two_new_steps() {
+        for n in [1, 2, 3, 4, 5, 6, 8, 9] {
+            let system = Ring(n);
+            let y0: Vec<f64> = (0..n).map(|i| 0.3 + 0.7 * i as f64).collect();
+            let tol = Tolerance {
+                rtol: 1e-7,
+                atol: 1e-9,
+            };
+            let mut dop = Dop853::new(&system, 0.0, &y0, tol, f64::INFINITY, None).unwrap();
+            let budget = Budget::default();
+            let d: Vec<f64> = (0..n).map(|i| 1e-8 * (1.0 - 0.4 * i as f64)).collect();
+            let mut steps = 0;
+            while dop.clock.t < 7.3 {
+                dop.step_measured(&system, 7.3, &budget, &mut HairerMeasure(tol))
+                    .unwrap();
+                steps += 1;
+                let (t0, _, h) = dop.clock.last_step();
+                let mut k = vec![0.0; STAGES * n];
+                let (mut stage_state, mut end) = (vec![0.0; n], vec![0.0; n]);
+                system.rhs(t0, &dop.y_old, &mut k[..n]).unwrap();
+                step_as_accepted(
+                    &system,
+                    t0,
+                    &dop.y_old,
+                    h,
+                    &mut k,
+                    &mut stage_state,
+                    &mut end,
+                )
+                .unwrap();
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&end), bits(&dop.y), "n = {n}, step {steps}");
+                let (mut one, mut two) = (vec![0.0; n], vec![0.0; n]);
+                let y_old = dop.y_old.clone();
+                assert!(step_derivative_from_accepted(
+                    &system,
+                    (t0, &y_old),
+                    h,
+                    &dop.y,
+                    &d,
+                    &mut one
+                )
+                .unwrap());
+                assert!(step_derivative(&system, t0, &y_old, h, &d, &mut two).unwrap());
+                // The difference's rounding, `eps |y| / ε`, is √eps of the
+                // direction's size (a few dozen roundings of the stages).
+                let size = d.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+                for (a, b) in one.iter().zip(&two) {
+                    assert!(
+                        (a - b).abs() <= 1e-6 * size,
+                        "n = {n}: {one:?} against {two:?}"
+                    );
+                }
+            }
+            assert!(steps > 10, "n = {n}: {steps} steps");
         }
     }
 }

@@ -639,7 +639,7 @@ fn carry(growth: &mut Growth, system: &ModelSystem<'_>, step: &Unfed, keep: Opti
         _ if !growth.started() => return,
         _ => vec![0.0; step.x1.len()],
     };
-    growth.step_kept(system, (step.t0, &step.x0), step.t1, &local, keep);
+    growth.step_kept(system, (step.t0, &step.x0), step.t1, &local, keep, None);
 }
 
 /// A step's measured error `measured` (with its sign), scaled down to

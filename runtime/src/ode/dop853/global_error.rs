@@ -39,6 +39,12 @@ pub mod growth;
 /// it the unscaled sum (an over-estimate) already says the run is within.
 pub const BOUND: f64 = 10.0;
 
+/// A carried global error at least this large (relative to
+/// `max(|x|, 1)`) is past the state's own size: the summary reports it
+/// as amplification, not as a number, and the errors are no longer
+/// carried (`growth::Growth::saturated`).
+pub const AMPLIFIED: f64 = 1.0;
+
 /// Steps between two measures of the local error.
 pub const CALIBRATION_STRIDE: usize = 32;
 
