@@ -161,7 +161,7 @@ impl Arena {
             // The distinct terms of `flat`, first appearance first, and how
             // often each comes; `which[p]`: the distinct term at position
             // `p` of `flat`.
-            let mut slot: FxMap<ExprId, usize> = FxMap::default();
+            let mut slot: FxMap<ExprId, usize> = fx_map_with_capacity(flat.len());
             let mut distinct: Vec<(ExprId, u32)> = Vec::new();
             let mut which: Vec<usize> = Vec::with_capacity(flat.len());
             for &t in flat.iter() {
@@ -179,7 +179,7 @@ impl Arena {
             // for `c·S` one of the terms of `S`); `hit[i]`: a copy of term
             // `i` shares a rest with another term of `flat` (another copy
             // of itself included).
-            let mut owner: FxMap<ExprId, usize> = FxMap::default();
+            let mut owner: FxMap<ExprId, usize> = fx_map_with_capacity(flat.len());
             let mut hit: Vec<bool> = distinct.iter().map(|&(_, n)| n > 1).collect();
             for i in 0..distinct.len() {
                 let inner = match scaled[i] {
