@@ -125,6 +125,27 @@ fn take_up_to(arena: &mut Arena, es: &[ExprId], pending: &mut [Pending], needs: 
             .take_while(|&s| order(s) >= o)
             .collect()
     };
+    // Coefficients the derivation already took (the mass matrix of the
+    // reduced system is the accelerations' coefficients of its residuals,
+    // often equations (4) themselves) are found in `diff`'s memo: an
+    // expression whose coefficients are all there takes no part in the
+    // Jacobian.
+    let mut unknown: Vec<usize> = Vec::new();
+    for &i in needs {
+        let known: Option<Vec<ExprId>> = missing(&pending[i])
+            .into_iter()
+            .map(|s| arena.known_partial(es[i], s))
+            .collect();
+        match known {
+            Some(known) => {
+                let p = &mut pending[i];
+                p.taken += known.len();
+                p.coefficients.extend(known);
+            }
+            None => unknown.push(i),
+        }
+    }
+    let needs = &unknown[..];
     if needs.len() >= JOINT_JACOBIAN_ROOTS {
         let columns: Vec<Symbol> = needs
             .iter()
