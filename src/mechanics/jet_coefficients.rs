@@ -16,7 +16,8 @@
 //! The N-link pendulum's equations hold every angle in the coefficients of
 //! the accelerations (its mass matrix), so the coefficients in the 100
 //! angles (each `∂row/∂θ_k` some O(N) terms built through `add`) are never
-//! built: they were about a quarter of the coefficients' Jacobian.
+//! built (the tidy forms' Jacobian of pendulum_100 went from 1.48e9
+//! instructions to 0.85e9).
 
 use super::tidy::priority;
 use crate::ir::{Arena, ExprId, Symbol};
