@@ -14,6 +14,17 @@ impl Arena {
         self.derive(e, Derivation::Partial(wrt))
     }
 
+    /// `∂e/∂wrt` when [`Arena::diff`] would find it without building
+    /// anything: `e` does not hold `wrt`, or the partial is remembered.
+    pub(crate) fn known_partial(&mut self, e: ExprId, wrt: Symbol) -> Option<ExprId> {
+        if !self.depends_on(e, wrt) {
+            return Some(self.zero());
+        }
+        self.derivatives
+            .get(&(e, Derivation::Partial(wrt)))
+            .copied()
+    }
+
     pub(crate) fn derive(&mut self, e: ExprId, d: Derivation) -> ExprId {
         let moves = match d {
             Derivation::Partial(s) => self.depends_on(e, s),

@@ -1,6 +1,6 @@
 //! Simultaneous substitution of symbols by expressions.
 
-use super::expr::{Arena, ExprId, FxMap, Node, Symbol};
+use super::expr::{Arena, ExprId, FreeSet, FxMap, Node, Symbol};
 use std::collections::HashMap;
 
 impl Arena {
@@ -8,11 +8,9 @@ impl Arena {
     /// not substituted again), and re-canonicalises. Sub-expressions free of
     /// the mapped symbols are kept as they are; shared nodes are rebuilt once.
     pub fn subst(&mut self, e: ExprId, map: &HashMap<Symbol, ExprId>) -> ExprId {
-        let mut slots: Vec<u32> = map.keys().filter_map(|&s| self.symbol_slot(s)).collect();
-        if slots.is_empty() {
+        let Some(slots) = self.slots_of(map) else {
             return e;
-        }
-        slots.sort_unstable();
+        };
         let mut memo = FxMap::default();
         self.subst_rec(e, map, &slots, &mut memo)
     }
@@ -20,27 +18,38 @@ impl Arena {
     /// [`Arena::subst`] of each of `es` with one `map`, the nodes they
     /// share rebuilt once.
     pub fn subst_all(&mut self, es: &[ExprId], map: &HashMap<Symbol, ExprId>) -> Vec<ExprId> {
-        let mut slots: Vec<u32> = map.keys().filter_map(|&s| self.symbol_slot(s)).collect();
-        if slots.is_empty() {
+        let Some(slots) = self.slots_of(map) else {
             return es.to_vec();
-        }
-        slots.sort_unstable();
+        };
         let mut memo = FxMap::default();
         es.iter()
             .map(|&e| self.subst_rec(e, map, &slots, &mut memo))
             .collect()
     }
 
-    fn touches(&self, e: ExprId, slots: &[u32]) -> bool {
-        let free = &self.meta[e.index()].free;
-        slots.iter().any(|&s| free.contains(s))
+    /// The slots of the mapped symbols as a set, `None` when the arena
+    /// holds none of them (nothing to substitute).
+    fn slots_of(&self, map: &HashMap<Symbol, ExprId>) -> Option<FreeSet> {
+        let mut words = Vec::new();
+        for slot in map.keys().filter_map(|&s| self.symbol_slot(s)) {
+            FreeSet::single(slot).or_into(&mut words);
+        }
+        let slots = FreeSet::from_words(&words);
+        (slots != FreeSet::default()).then_some(slots)
+    }
+
+    /// Whether `e` holds a mapped symbol: one AND per 64 slots (a loop
+    /// over the mapped slots cost the 100-link pendulum's jet-free terms,
+    /// 100 mapped jets, a hundred look-ups per node visited).
+    fn touches(&self, e: ExprId, slots: &FreeSet) -> bool {
+        self.meta[e.index()].free.meets(slots)
     }
 
     fn subst_rec(
         &mut self,
         e: ExprId,
         map: &HashMap<Symbol, ExprId>,
-        slots: &[u32],
+        slots: &FreeSet,
         memo: &mut FxMap<ExprId, ExprId>,
     ) -> ExprId {
         if !self.touches(e, slots) {

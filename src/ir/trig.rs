@@ -68,6 +68,20 @@ impl Arena {
         }
     }
 
+    /// `(k, u)` for the first factor `k` of a term that is `sin(u)²`, read
+    /// in place (most terms have none, and a copy of every term's factors
+    /// was most of the allocations of the tidy forms' pairing).
+    fn first_sin_square(&self, t: ExprId) -> Option<(usize, ExprId)> {
+        let pick = |(k, &f): (usize, &ExprId)| match self.trig_square(f) {
+            Some((Func::Sin, u)) => Some((k, u)),
+            _ => None,
+        };
+        match self.node(t) {
+            Node::Mul(fs) => fs.iter().enumerate().find_map(pick),
+            _ => pick((0, &t)),
+        }
+    }
+
     /// `(f, u)` for a factor `f(u)²` with `f` sine or cosine.
     fn trig_square(&self, factor: ExprId) -> Option<(Func, ExprId)> {
         let Node::Pow(base, exp) = self.node(factor) else {
@@ -86,18 +100,11 @@ impl Arena {
     fn pair_squares(&mut self, mut terms: Vec<ExprId>) -> Vec<ExprId> {
         let mut i = 0;
         while i < terms.len() {
-            let factors = self.factors(terms[i]);
-            let found = factors
-                .iter()
-                .enumerate()
-                .find_map(|(k, &f)| match self.trig_square(f) {
-                    Some((Func::Sin, u)) => Some((k, u)),
-                    _ => None,
-                });
-            let Some((k, u)) = found else {
+            let Some((k, u)) = self.first_sin_square(terms[i]) else {
                 i += 1;
                 continue;
             };
+            let factors = self.factors(terms[i]);
             let mut rest = factors.clone();
             rest.remove(k);
             let sin_u = self.func(Func::Cos, u);

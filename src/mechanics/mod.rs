@@ -23,6 +23,7 @@ pub mod coupled;
 mod equations;
 mod generalized_forces;
 mod initial;
+mod jet_coefficients;
 mod mass_factor;
 mod multiplier_route;
 mod reactive_forces;

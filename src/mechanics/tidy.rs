@@ -4,16 +4,13 @@
 //! common denominator). Every rewrite is an algebraic identity; the
 //! canonical constructors do the cancelling.
 
+use super::jet_coefficients::jet_coefficients;
 use crate::ir::{Arena, ExprId, FxMap, Node, Symbol};
 use std::collections::{BTreeSet, HashMap};
 
 /// Sums with more terms than this are left alone by the fraction merging
 /// (it tries pairs of terms).
 const MERGE_MAX_TERMS: usize = 12;
-/// From this many expressions on, [`tidy_terms_all`] takes their
-/// coefficients in one Jacobian (their shared nodes' partials built once)
-/// rather than by `diff`.
-const JOINT_JACOBIAN_ROOTS: usize = 8;
 /// How deep `distribute` multiplies out nested products of sums.
 const DISTRIBUTE_DEPTH: u32 = 2;
 
@@ -23,35 +20,15 @@ pub fn tidy_terms(arena: &mut Arena, e: ExprId) -> Vec<ExprId> {
     tidy_terms_all(arena, &[e]).concat()
 }
 
-/// [`tidy_terms`] of each of `es`, their coefficients taken in one
-/// Jacobian: the equations of a large model share most of their nodes
-/// (the N-link pendulum's inner sums), and a Jacobian of each alone
-/// builds the partials of every shared node once per equation.
+/// [`tidy_terms`] of each of `es`, their coefficients taken together
+/// ([`jet_coefficients`]: one Jacobian per derivative order): the
+/// equations of a large model share most of their nodes (the N-link
+/// pendulum's inner sums), and a Jacobian of each alone builds the
+/// partials of every shared node once per equation.
 pub fn tidy_terms_all(arena: &mut Arena, es: &[ExprId]) -> Vec<Vec<ExprId>> {
-    let mut jets: Vec<Symbol> = es
-        .iter()
-        .flat_map(|&e| arena.free_symbols(e))
-        .filter(|s| matches!(s, Symbol::Jet { .. }))
-        .collect::<BTreeSet<Symbol>>()
+    let vars: Vec<Vec<Symbol>> = jet_coefficients(arena, es)
         .into_iter()
-        .collect();
-    jets.sort_by_key(|&s| priority(s));
-    let column: HashMap<Symbol, usize> = jets.iter().enumerate().map(|(c, &s)| (s, c)).collect();
-    // Each entry is the node `diff` gives (and `diff` finds it afterwards).
-    // A few expressions share little: there `diff`, whose memo keeps the
-    // partials of every node for later (the derivation's own partials of
-    // a deep chain are found there), costs less than a Jacobian's pass.
-    let rows = if es.len() >= JOINT_JACOBIAN_ROOTS {
-        arena.jacobian(es, &jets)
-    } else {
-        es.iter()
-            .map(|&e| jets.iter().map(|&v| arena.diff(e, v)).collect())
-            .collect()
-    };
-    let vars: Vec<Vec<Symbol>> = es
-        .iter()
-        .zip(&rows)
-        .map(|(&e, row)| affine_jets(arena, e, |v| row[column[&v]]))
+        .map(|jc| affine_among(arena, jc.vars, &jc.coefficients))
         .collect();
     // The jet-free terms, those of the expressions affine in the same jets
     // substituted together (the nodes they share rebuilt once).
@@ -106,7 +83,7 @@ fn terms_in(
 
 /// The order of preference of the jets: the highest derivatives first,
 /// then by coordinate.
-fn priority(s: Symbol) -> (std::cmp::Reverse<u32>, u32) {
+pub(crate) fn priority(s: Symbol) -> (std::cmp::Reverse<u32>, u32) {
     match s {
         Symbol::Jet { coord, order } => (std::cmp::Reverse(order), coord),
         _ => (std::cmp::Reverse(0), 0),
@@ -119,22 +96,14 @@ pub fn tidy(arena: &mut Arena, e: ExprId) -> ExprId {
     arena.add(&terms)
 }
 
-/// The jets of `e` in which `e` is affine (no coefficient depends on any of
-/// them), preferring the highest derivatives; ordered by order descending,
-/// then coordinate. `coefficient(v)` is `∂e/∂v`.
-fn affine_jets(arena: &Arena, e: ExprId, coefficient: impl Fn(Symbol) -> ExprId) -> Vec<Symbol> {
-    let mut vars: Vec<Symbol> = arena
-        .free_symbols(e)
-        .into_iter()
-        .filter(|s| matches!(s, Symbol::Jet { .. }))
-        // A selection switching on a jet is not affine in it, though its
-        // derivative there is 0 (`sign(x')`): setting the jet to 0 would
-        // pick one branch for good.
-        .filter(|&s| !arena.switches_on(e, s))
-        .collect();
-    vars.sort_by_key(|&s| priority(s));
+/// The jets among `vars` (in priority order) in which their expression is
+/// affine (no coefficient depends on any of them), preferring the highest
+/// derivatives; `coefficients[i]` is `∂e/∂vars[i]`. The candidates
+/// [`jet_coefficients`] leaves out come after all of `vars` and are held by
+/// their coefficients: this rule would drop them, and its decisions on
+/// the jets before them do not look at them.
+fn affine_among(arena: &Arena, vars: Vec<Symbol>, coefficients: &[ExprId]) -> Vec<Symbol> {
     // The jets each coefficient depends on.
-    let coefficients: Vec<ExprId> = vars.iter().map(|&v| coefficient(v)).collect();
     let slots: Vec<Option<u32>> = vars.iter().map(|&v| arena.symbol_slot(v)).collect();
     let depends: Vec<Vec<usize>> = coefficients
         .iter()
@@ -234,7 +203,13 @@ impl Simplifier {
         ];
         let mut best = e;
         let mut best_cost = usize::MAX;
-        for c in candidates {
+        for (i, &c) in candidates.iter().enumerate() {
+            // A form found again costs what it cost before and cannot win
+            // (only a smaller cost replaces the best): often most of the
+            // forms are one node, and each count walks the whole form.
+            if candidates[..i].contains(&c) {
+                continue;
+            }
             let cost = arena.op_count(&[c]);
             if cost < best_cost {
                 best = c;
@@ -422,6 +397,7 @@ fn denominators(arena: &Arena, term: ExprId) -> Vec<ExprId> {
 mod tests {
     use super::*;
     use crate::ir::Names;
+    use crate::mechanics::jet_coefficients::{candidate_jets, JOINT_JACOBIAN_ROOTS};
     use crate::mechanics::Rng;
     use crate::syntax::ast::Func;
 
@@ -535,13 +511,64 @@ mod tests {
                 .into_iter()
                 .map(|v| (v, a.diff(e, v)))
                 .collect();
-            let got = affine_jets(&a, e, |v| coefficients[&v]);
+            let vars = candidate_jets(&a, e);
+            let all: Vec<ExprId> = vars.iter().map(|&v| coefficients[&v]).collect();
+            let got = affine_among(&a, vars, &all);
+            assert_eq!(got, expected, "{}", a.display(e));
+            let staged = jet_coefficients(&mut a, &[e]).remove(0);
+            let got = affine_among(&a, staged.vars, &staged.coefficients);
             assert_eq!(got, expected, "{}", a.display(e));
         }
         assert!(
             dropped_some > 100,
             "only {dropped_some} expressions drop a jet"
         );
+    }
+
+    /// The coefficients taken an order at a time, for many expressions
+    /// at once (one Jacobian per order), decide the jets as every
+    /// coefficient does; some expressions skip an order, and some take a
+    /// skipped order after all (a later order holds a jet no coefficient
+    /// taken holds).
+    #[test]
+    fn staged_coefficients_decide_as_all_do() {
+        let mut rng = Rng::new(31);
+        let mut a = arena();
+        let es: Vec<ExprId> = (0..400).map(|_| random_expr(&mut a, &mut rng)).collect();
+        let staged = jet_coefficients(&mut a, &es);
+        let (mut skipped, mut retaken) = (0, 0);
+        for (&e, jc) in es.iter().zip(staged) {
+            let expected = affine_jets_by_pairs(&mut a, e);
+            let vars = candidate_jets(&a, e);
+            if jc.vars.len() < vars.len() {
+                skipped += 1;
+            }
+            // An order every jet of which the coefficients of the higher
+            // orders hold, yet taken: skipped at its turn, taken after
+            // all for a later order's jet that nothing held.
+            let all: Vec<ExprId> = vars.iter().map(|&v| a.diff(e, v)).collect();
+            let order = |s: Symbol| match s {
+                Symbol::Jet { order, .. } => order,
+                _ => 0,
+            };
+            let orders: BTreeSet<u32> = vars.iter().map(|&s| order(s)).collect();
+            let retook = orders.iter().any(|&o| {
+                let first = vars.iter().position(|&s| order(s) == o).unwrap_or(0);
+                let group: Vec<Symbol> = vars.iter().copied().filter(|&s| order(s) == o).collect();
+                first > 0
+                    && jc.vars.contains(&group[0])
+                    && group
+                        .iter()
+                        .all(|&s| all[..first].iter().any(|&c| a.depends_on(c, s)))
+            });
+            if retook {
+                retaken += 1;
+            }
+            let got = affine_among(&a, jc.vars, &jc.coefficients);
+            assert_eq!(got, expected, "{}", a.display(e));
+        }
+        assert!(skipped > 50, "only {skipped} expressions skip an order");
+        assert!(retaken > 5, "only {retaken} expressions retake an order");
     }
 
     /// Tidying many expressions together (one Jacobian, shared memos)
