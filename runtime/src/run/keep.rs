@@ -335,22 +335,40 @@ impl Keeper {
             }
         }
         let m = self.fixed.len();
-        let mut scratch = std::mem::take(&mut self.scratch);
-        scratch.residual.resize(m, 0.0);
-        scratch.gram.resize(m * m, 0.0);
-        scratch.lambda.resize(m, 0.0);
-        let Scratch {
-            residual,
-            gram: normal_gram,
-            lambda,
-        } = &mut scratch;
+        if self.scratch.residual.len() != m {
+            self.scratch.residual.resize(m, 0.0);
+            self.scratch.gram.resize(m * m, 0.0);
+            self.scratch.lambda.resize(m, 0.0);
+        }
+        // The fields borrowed apart, the scratch buffers in place (taking
+        // them out and back, and the closure over the whole keeper, were a
+        // tenth of a measuring call, docs/BENCHMARKS.md §10f).
+        let Keeper {
+            tol,
+            fixed,
+            velocities,
+            kept,
+            gradient,
+            projected,
+            scratch:
+                Scratch {
+                    residual,
+                    gram: normal_gram,
+                    lambda,
+                },
+            largest,
+            largest_absolute,
+            largest_at,
+            ..
+        } = self;
+        let fixed: &[usize] = fixed;
         let mut distance: Option<(f64, f64)> = None;
         let mut last = (0.0_f64, 0.0_f64);
         for _ in 0..ITERATIONS {
-            self.kept.copy_from_slice(&self.projected);
-            model.constrained(t, &self.projected, &mut self.kept)?;
-            for (c, &j) in self.fixed.iter().enumerate() {
-                if !self.kept[j].is_finite() {
+            kept.copy_from_slice(projected);
+            model.constrained(t, projected, kept)?;
+            for (c, &j) in fixed.iter().enumerate() {
+                if !kept[j].is_finite() {
                     return Err(Failure::new(
                         t,
                         FailureKind::ConstraintUndefined {
@@ -358,14 +376,13 @@ impl Keeper {
                         },
                     ));
                 }
-                residual[c] = self.projected[j] - self.kept[j];
+                residual[c] = projected[j] - kept[j];
             }
             if bounded && distance.is_none() {
                 let norm = residual.iter().map(|h| h * h).sum::<f64>().sqrt();
-                let smallest = self
-                    .velocities
+                let smallest = velocities
                     .clone()
-                    .map(|i| self.tol.atol + self.tol.rtol * x[i].abs())
+                    .map(|i| tol.atol + tol.rtol * x[i].abs())
                     .fold(f64::INFINITY, f64::min);
                 if norm <= PROJECT_ABOVE * smallest {
                     // The holonomic constraints' correction (already in
@@ -375,28 +392,25 @@ impl Keeper {
                     } else {
                         (norm / smallest, norm)
                     };
-                    if relative > self.largest {
-                        (self.largest, self.largest_absolute, self.largest_at) =
-                            (relative, absolute, t);
+                    if relative > *largest {
+                        (*largest, *largest_absolute, *largest_at) = (relative, absolute, t);
                     }
-                    self.scratch = scratch;
                     return Ok(relative);
                 }
             }
-            self.gradient.fill(0.0);
-            model.kept_gradient(t, &self.projected, &mut self.gradient)?;
+            gradient.fill(0.0);
+            model.kept_gradient(t, projected, gradient)?;
             // The normals J_c = e_{d_c} − ∂φ_c/∂v over the velocities; the
             // smallest correction is Δv = −Jᵀ (J Jᵀ)⁻¹ h.
-            let normal = |keeper: &Keeper, c: usize, i: usize| -> f64 {
-                let j = keeper.fixed[c];
-                f64::from(u8::from(i == j)) - keeper.gradient[(j, i)]
+            let normal = |c: usize, i: usize| -> f64 {
+                let j = fixed[c];
+                f64::from(u8::from(i == j)) - gradient[(j, i)]
             };
             for a in 0..m {
                 for b in 0..m {
-                    normal_gram[a * m + b] = self
-                        .velocities
+                    normal_gram[a * m + b] = velocities
                         .clone()
-                        .map(|i| normal(self, a, i) * normal(self, b, i))
+                        .map(|i| normal(a, i) * normal(b, i))
                         .sum();
                 }
             }
@@ -408,21 +422,21 @@ impl Keeper {
                 solve_dense(m, normal_gram, lambda)
             };
             let (mut relative, mut absolute) = (0.0_f64, 0.0_f64);
-            let mut worst = self.fixed.first().copied().unwrap_or(0);
-            for i in self.velocities.clone() {
+            let mut worst = fixed.first().copied().unwrap_or(0);
+            for i in velocities.clone() {
                 let delta = if solved {
-                    -(0..m).map(|c| normal(self, c, i) * lambda[c]).sum::<f64>()
+                    -(0..m).map(|c| normal(c, i) * lambda[c]).sum::<f64>()
                 } else {
                     // Normals that are not independent: the dependent
                     // components take their values.
-                    match self.fixed.iter().position(|&j| j == i) {
+                    match fixed.iter().position(|&j| j == i) {
                         Some(c) => -residual[c],
                         None => 0.0,
                     }
                 };
-                let v = self.projected[i];
-                self.projected[i] = v + delta;
-                let scale = self.tol.atol + self.tol.rtol * v.abs().max(self.projected[i].abs());
+                let v = projected[i];
+                projected[i] = v + delta;
+                let scale = tol.atol + tol.rtol * v.abs().max(projected[i].abs());
                 if delta.abs() / scale > relative {
                     worst = i;
                 }
@@ -430,9 +444,9 @@ impl Keeper {
                 absolute = absolute.max(delta.abs());
             }
             if distance.is_none() {
-                let size = x[worst].abs().max(self.projected[worst].abs()).max(1.0);
+                let size = x[worst].abs().max(projected[worst].abs()).max(1.0);
                 if judged && relative > BROKEN_TIMES_TOLERANCE && absolute > BROKEN_ABOVE * size {
-                    return Err(self.left(model, t, residual, absolute));
+                    return Err(left(model, fixed, t, residual, absolute));
                 }
                 distance = Some((relative, absolute));
             }
@@ -444,37 +458,42 @@ impl Keeper {
         // Gauss–Newton that does not settle within the tolerance: no point
         // of the constraints near the state (a branch that ends).
         if last.0 > 1.0 {
-            return Err(self.left(model, t, residual, last.1));
+            return Err(left(model, fixed, t, residual, last.1));
         }
-        self.scratch = scratch;
         let (relative, absolute) = distance.unwrap_or((0.0, 0.0));
         let (relative, absolute) = if closure.0 > relative {
             closure
         } else {
             (relative, absolute)
         };
-        if judged && relative > self.largest {
-            self.largest = relative;
-            self.largest_absolute = absolute;
-            self.largest_at = t;
+        if judged && relative > *largest {
+            *largest = relative;
+            *largest_absolute = absolute;
+            *largest_at = t;
         }
         Ok(relative)
     }
+}
 
-    /// The failure of a state that has left the constraints, naming the
-    /// fixed component with the largest residual.
-    fn left(&self, model: &dyn DynModel, t: f64, residual: &[f64], distance: f64) -> Failure {
-        let c = (0..residual.len())
-            .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
-            .unwrap_or(0);
-        Failure::new(
-            t,
-            FailureKind::ConstraintLeft {
-                component: model.state_names()[self.fixed[c]].to_string(),
-                residual: distance,
-            },
-        )
-    }
+/// The failure of a state that has left the constraints, naming the
+/// fixed component (of `fixed`) with the largest residual.
+fn left(
+    model: &dyn DynModel,
+    fixed: &[usize],
+    t: f64,
+    residual: &[f64],
+    distance: f64,
+) -> Failure {
+    let c = (0..residual.len())
+        .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
+        .unwrap_or(0);
+    Failure::new(
+        t,
+        FailureKind::ConstraintLeft {
+            component: model.state_names()[fixed[c]].to_string(),
+            residual: distance,
+        },
+    )
 }
 
 /// Checks the components that mode 0 fixes but the initial values give
