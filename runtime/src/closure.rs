@@ -236,7 +236,7 @@ fn project_with(
     for step in 0..STEPS {
         normals.fill(0.0);
         eval(x, 0, f, normals);
-        let residual = norm(&f);
+        let residual = norm(f);
         if !residual.is_finite() {
             return Err(left(residual, false));
         }
@@ -249,7 +249,7 @@ fn project_with(
             break;
         }
         previous = residual;
-        let Some(moved) = correct(x, 0, &f, &normals) else {
+        let Some(moved) = correct(x, 0, f, normals) else {
             return Err(left(residual, true));
         };
         if moved <= 4.0 * f64::EPSILON * magnitude {
@@ -265,11 +265,11 @@ fn project_with(
         for _ in 0..2 {
             let mut unused = Matrix::zeros(0, 0);
             eval(x, r, f, &mut unused);
-            if norm(&f) == 0.0 {
+            if norm(f) == 0.0 {
                 break;
             }
-            if correct(x, r, &f, &normals).is_none() {
-                return Err(left(norm(&f), true));
+            if correct(x, r, f, normals).is_none() {
+                return Err(left(norm(f), true));
             }
         }
     }

@@ -7,6 +7,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
+use lagc_runtime::closure::ProjectFn;
 use lagc_runtime::failure::Failure;
 use lagc_runtime::integration::Integration;
 use lagc_runtime::linalg::Matrix;
@@ -260,7 +261,7 @@ fn the_projection_onto_holonomic_constraints_allocates_nothing_after_its_first_c
             }
         }
     };
-    let project = |eval: &mut dyn FnMut(&[f64], usize, &mut [f64], &mut Matrix), k: usize| {
+    let project = |eval: ProjectFn<'_>, k: usize| {
         let s = 1e-3 * k as f64;
         let mut x = [0.6 + s, 0.8, 1.2, 1.6 - s, 0.8, -0.6 + s, 1.6, -1.2];
         lagc_runtime::closure::project(0.0, &mut x, (2, 4, 1), "circles", eval).unwrap();
