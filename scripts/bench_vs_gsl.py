@@ -34,7 +34,10 @@ below the tightest run's error, nothing: no extrapolation); ratio = lagc
 time / peer time (< 1: lagc faster).
 
 Usage: python3 scripts/bench_vs_gsl.py [--quick] [--json OUT] [--models a,b]
-       [--step-to-times] [--samples N]
+       [--step-to-times] [--samples N] [--baseline LAGC]
+--baseline LAGC: another lagc binary (main's) builds the same crates, which
+  run as method "lagc-base" alternated with this tree's at every rtol (each
+  rtol runs every method in turn), and a second table compares it.
 --step-to-times: lagc steps onto the sample times too (as rk8pd, rkf78 do);
 --samples 2: the final time only, a step end for every method.
 """
@@ -66,6 +69,8 @@ SAMPLES = 11
 # rk8pd and rkf78 do (issue 29); `--samples 2`: only the final time, where
 # every method's sample is a step end.
 STEP_TO_TIMES = False
+# `--baseline LAGC`: the crates built by that lagc too, run as "lagc-base".
+BASELINE = None
 LEVELS = [10.0 ** -k for k in range(4, 12)]
 
 
@@ -110,19 +115,23 @@ def build():
         check=True,
     )
     binaries = {}
-    for model, (path, _) in MODELS.items():
-        crate = os.path.join(WORK, model)
-        run([LAGC, "build", os.path.join(ROOT, path), "-o", crate])
-        env = dict(os.environ, CARGO_TARGET_DIR=os.path.join(WORK, "target"))
-        subprocess.run(
-            ["cargo", "build", "--release", "--quiet"], cwd=crate, env=env, check=True
-        )
-        name = [
-            line.split("=")[1].strip().strip('"')
-            for line in open(os.path.join(crate, "Cargo.toml"))
-            if line.startswith("name")
-        ][0]
-        binaries[model] = os.path.join(WORK, "target", "release", name)
+    compilers = [("lagc", LAGC, "")] + ([("lagc-base", BASELINE, "-base")] if BASELINE else [])
+    for method, lagc, suffix in compilers:
+        binaries[method] = {}
+        for model, (path, _) in MODELS.items():
+            crate = os.path.join(WORK, model + suffix)
+            run([lagc, "build", os.path.join(ROOT, path), "-o", crate])
+            target = os.path.join(WORK, "target" + suffix)
+            env = dict(os.environ, CARGO_TARGET_DIR=target)
+            subprocess.run(
+                ["cargo", "build", "--release", "--quiet"], cwd=crate, env=env, check=True
+            )
+            name = [
+                line.split("=")[1].strip().strip('"')
+                for line in open(os.path.join(crate, "Cargo.toml"))
+                if line.startswith("name")
+            ][0]
+            binaries[method][model] = os.path.join(target, "release", name)
     return binaries
 
 
@@ -139,7 +148,7 @@ def parse_csv(text, n):
 def solve(binary, model, method, rtol, atol, repeat):
     """(rows, wall time, rhs evaluations)."""
     n = MODELS[model][1]
-    if method == "lagc":
+    if method in ("lagc", "lagc-base"):
         cmd = [
             binary, "--method", "direct", "--integrator", "explicit",
             "--rtol", repr(rtol), "--atol", repr(atol), "--samples", str(SAMPLES),
@@ -196,7 +205,7 @@ def cost_at(points, level):
 
 
 def main():
-    global SAMPLES, STEP_TO_TIMES
+    global SAMPLES, STEP_TO_TIMES, BASELINE
     quick = "--quick" in sys.argv
     STEP_TO_TIMES = "--step-to-times" in sys.argv
     out_json = None
@@ -209,6 +218,8 @@ def main():
             models = args[i + 1].split(",")
         if a == "--samples":
             SAMPLES = int(args[i + 1])
+        if a == "--baseline":
+            BASELINE = os.path.abspath(args[i + 1])
     binaries = build()
     budget = 0.1 if quick else 0.3
     ladder = [10.0 ** -k for k in range(3, 14)]
@@ -216,21 +227,25 @@ def main():
     for model in models:
         reference = None
         if exact(model, 0.0) is None:
-            ref = solve(binaries[model], model, "rk8pd", 1e-14, 1e-16, 1)
-            check = solve(binaries[model], model, "lagc", 1e-13, 1e-15, 1)
+            ref = solve(binaries["lagc"][model], model, "rk8pd", 1e-14, 1e-16, 1)
+            check = solve(binaries["lagc"][model], model, "lagc", 1e-13, 1e-15, 1)
             reference = ref[0]
             gap = error(model, check[0], reference)
             print(f"{model}: reference GSL rk8pd 1e-14 vs lagc 1e-13: {gap:.1e}", file=sys.stderr)
-        per_method = {}
-        for method in ["lagc"] + PEER_METHODS:
-            points = []
-            for rtol in ladder:
+        methods = ["lagc"] + (["lagc-base"] if BASELINE else []) + PEER_METHODS
+        per_method = {method: [] for method in methods}
+        # Every method in turn at each rtol: a drift of the machine's speed
+        # reaches all of them alike.
+        for rtol in ladder:
+            for method in methods:
+                points = per_method[method]
+                binary = binaries["lagc-base" if method == "lagc-base" else "lagc"][model]
                 atol = rtol * 1e-2
-                probe = solve(binaries[model], model, method, rtol, atol, 3)
+                probe = solve(binary, model, method, rtol, atol, 3)
                 if probe is None:
                     continue
                 repeat = max(5, min(20000, int(budget / max(probe[1], 1e-7))))
-                got = solve(binaries[model], model, method, rtol, atol, repeat)
+                got = solve(binary, model, method, rtol, atol, repeat)
                 if got is None:
                     continue
                 rows, wall, evals = got
@@ -239,21 +254,34 @@ def main():
                     {"rtol": rtol, "error": err, "time": wall, "rhs": evals, "repeat": repeat}
                 )
                 print(
-                    f"{model:16} {method:7} rtol {rtol:.0e}: error {err:.2e} "
+                    f"{model:16} {method:9} rtol {rtol:.0e}: error {err:.2e} "
                     f"time {wall * 1e6:9.1f} us  rhs {evals}",
                     file=sys.stderr,
                 )
-            per_method[method] = points
         results[model] = per_method
+    table = equal_error_table(models, results, "lagc")
+    tables = {"lagc": table}
+    if BASELINE:
+        tables["lagc-base"] = equal_error_table(models, results, "lagc-base")
+    if out_json:
+        with open(out_json, "w") as f:
+            json.dump({"points": results, "table": table, "tables": tables}, f, indent=1)
+
+
+def equal_error_table(models, results, lagc_key):
+    """Prints and returns, for each model, `lagc_key`'s cost and each
+    peer's at the error levels, and the ratios to the best peer."""
     # The table: cost at equal error.
     table = {}
     print()
+    print(f"{lagc_key}:")
     print("| model | error | lagc (µs) | " + " | ".join(f"{m} (µs) | ratio" for m in PEER_METHODS) + " |")
     print("|---|---|---|" + "---|---|" * len(PEER_METHODS))
     for model in models:
         curves = {
             m: [(p["error"], p["time"]) for p in results[model][m]] for m in results[model]
         }
+        curves["lagc"] = curves[lagc_key]
         table[model] = []
         for level in LEVELS:
             lagc = cost_at(curves["lagc"], level)
@@ -276,12 +304,10 @@ def main():
         ]
         if ratios:
             print(
-                f"{model}: lagc / best peer at equal error: "
+                f"{model}: {lagc_key} / best peer at equal error: "
                 f"{min(ratios):.2f} .. {max(ratios):.2f} (worst over {len(ratios)} levels)"
             )
-    if out_json:
-        with open(out_json, "w") as f:
-            json.dump({"points": results, "table": table}, f, indent=1)
+    return table
 
 
 if __name__ == "__main__":

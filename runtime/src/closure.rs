@@ -5,6 +5,8 @@
 //! (`crate::run::keep`) makes before it keeps the velocities. The generated code
 //! supplies `f` and its partials.
 
+use std::cell::Cell;
+
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{Lu, Matrix};
 
@@ -132,13 +134,64 @@ pub type ProjectFn<'a> = &'a mut dyn FnMut(&[f64], usize, &mut [f64], &mut Matri
 pub fn project(
     t: f64,
     x: &mut [f64],
+    sizes: (usize, usize, usize),
+    constraint: &str,
+    eval: ProjectFn,
+) -> Result<(), Failure> {
+    let mut workspace = WORKSPACE.with(Cell::take).unwrap_or_else(|| Workspace {
+        f: Vec::new(),
+        normals: Matrix::zeros(0, 0),
+        gram: Vec::new(),
+        lambda: Vec::new(),
+        lu: Lu::empty(),
+    });
+    let result = project_with(&mut workspace, t, x, sizes, constraint, eval);
+    WORKSPACE.with(|w| w.set(Some(workspace)));
+    result
+}
+
+/// The buffers of [`project`], kept on the thread from call to call: the
+/// keeper projects a holonomic model's state after every step and at
+/// every output, and these were four allocations a call and two more a
+/// correction (docs/BENCHMARKS.md §10f). Taken out of the cell for a call
+/// and put back after it (a call that never returns them leaves `None`,
+/// and the next makes new ones).
+#[derive(Debug)]
+struct Workspace {
+    f: Vec<f64>,
+    normals: Matrix,
+    gram: Vec<f64>,
+    lambda: Vec<f64>,
+    lu: Lu,
+}
+
+thread_local! {
+    static WORKSPACE: Cell<Option<Workspace>> = const { Cell::new(None) };
+}
+
+fn project_with(
+    workspace: &mut Workspace,
+    t: f64,
+    x: &mut [f64],
     (m, n, levels): (usize, usize, usize),
     constraint: &str,
     eval: ProjectFn,
 ) -> Result<(), Failure> {
-    let mut f = vec![0.0; m];
-    let mut normals = Matrix::zeros(m, n);
-    let mut gram = vec![0.0; m * m];
+    let Workspace {
+        f,
+        normals,
+        gram,
+        lambda,
+        lu,
+    } = workspace;
+    // As new buffers would be: `f` zeros, `normals` m × n (zeroed before
+    // every use), `gram` and `lambda` written before they are read.
+    f.clear();
+    f.resize(m, 0.0);
+    if normals.rows() != m || normals.cols() != n {
+        *normals = Matrix::zeros(m, n);
+    }
+    gram.resize(m * m, 0.0);
     let norm = |f: &[f64]| f.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
     let left = |residual: f64, singular: bool| {
         Failure::new(
@@ -158,8 +211,17 @@ pub fn project(
                 gram[a * m + b] = (0..n).map(|j| normals[(a, j)] * normals[(b, j)]).sum();
             }
         }
-        let mut lambda = f.to_vec();
-        if !crate::linalg::solve_dense(m, &mut gram, &mut lambda) {
+        lambda.clear();
+        lambda.extend_from_slice(f);
+        // What `linalg::solve_dense` does, in kept storage.
+        lu.refactor(m, |a| {
+            for i in 0..m {
+                for j in 0..m {
+                    a[(i, j)] = gram[i * m + j];
+                }
+            }
+        });
+        if !(lu.solve_in_place(lambda) && lambda.iter().all(|v| v.is_finite())) {
             return None;
         }
         let mut largest = 0.0_f64;
@@ -173,8 +235,8 @@ pub fn project(
     let mut previous = f64::INFINITY;
     for step in 0..STEPS {
         normals.fill(0.0);
-        eval(x, 0, &mut f, &mut normals);
-        let residual = norm(&f);
+        eval(x, 0, f, normals);
+        let residual = norm(f);
         if !residual.is_finite() {
             return Err(left(residual, false));
         }
@@ -187,7 +249,7 @@ pub fn project(
             break;
         }
         previous = residual;
-        let Some(moved) = correct(x, 0, &f, &normals) else {
+        let Some(moved) = correct(x, 0, f, normals) else {
             return Err(left(residual, true));
         };
         if moved <= 4.0 * f64::EPSILON * magnitude {
@@ -198,16 +260,16 @@ pub fn project(
         }
     }
     normals.fill(0.0);
-    eval(x, 0, &mut f, &mut normals);
+    eval(x, 0, f, normals);
     for r in 1..=levels {
         for _ in 0..2 {
             let mut unused = Matrix::zeros(0, 0);
-            eval(x, r, &mut f, &mut unused);
-            if norm(&f) == 0.0 {
+            eval(x, r, f, &mut unused);
+            if norm(f) == 0.0 {
                 break;
             }
-            if correct(x, r, &f, &normals).is_none() {
-                return Err(left(norm(&f), true));
+            if correct(x, r, f, normals).is_none() {
+                return Err(left(norm(f), true));
             }
         }
     }

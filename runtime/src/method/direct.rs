@@ -422,14 +422,18 @@ impl Direct {
         let h = self.stepper.proposed_step();
         let integrator = self.integrator;
         self.done += self.stepper.stats();
-        self.stepper = integrator.start::<OfModel>(
-            &ModelSystem(model),
-            t,
-            x,
-            self.tol,
-            self.h_max,
-            Some(h),
-        )?;
+        let system = ModelSystem(model);
+        // DOP853 restarts in its own buffers (the same stepper as a new
+        // one; a projection after a step restarts it).
+        match self.stepper.as_any_mut().downcast_mut::<Dop853>() {
+            Some(dop) if integrator == Integrator::Explicit => {
+                dop.restart_at(&system, t, x, self.tol, self.h_max, Some(h))?;
+            }
+            _ => {
+                self.stepper =
+                    integrator.start::<OfModel>(&system, t, x, self.tol, self.h_max, Some(h))?;
+            }
+        }
         Ok(())
     }
 

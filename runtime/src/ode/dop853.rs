@@ -149,6 +149,56 @@ impl Dop853 {
         })
     }
 
+    /// [`Dop853::new`] in place: afterwards the stepper is the one `new`
+    /// would make from the same arguments (every field as `new` sets it,
+    /// the same right side evaluated into the first stage), its buffers
+    /// and its box reused. A projection after a step restarts the
+    /// integrator, and five allocations a restart were all a drifting
+    /// constrained run allocated per step (docs/BENCHMARKS.md §10f). A
+    /// failing start changes only the trial state, scratch that a step
+    /// writes before it reads.
+    pub fn restart_at<S: System + ?Sized>(
+        &mut self,
+        system: &S,
+        t0: f64,
+        y0: &[f64],
+        tol: Tolerance,
+        h_max: f64,
+        h0: Option<f64>,
+    ) -> Result<(), Failure> {
+        let n = y0.len();
+        if n != self.y.len() {
+            *self = Dop853::new(system, t0, y0, tol, h_max, h0)?;
+            return Ok(());
+        }
+        let controller = Controller::dop853();
+        let slope = &mut self.y_trial;
+        let clock = Clock::start(system, t0, y0, slope, tol, 8, h_max, h0, controller)?;
+        let mut k = std::mem::take(&mut self.k);
+        k.fill(0.0);
+        k[..n].copy_from_slice(&self.y_trial);
+        let mut y_trial = std::mem::take(&mut self.y_trial);
+        y_trial.fill(0.0);
+        let mut y = std::mem::take(&mut self.y);
+        y.copy_from_slice(y0);
+        let mut y_old = std::mem::take(&mut self.y_old);
+        y_old.copy_from_slice(y0);
+        *self = Dop853 {
+            tol,
+            clock,
+            y,
+            k,
+            y_trial,
+            y_old,
+            dense_ready: false,
+            stiff_tests: 0,
+            non_stiff_tests: 0,
+            stiffness_detected: None,
+            hairer_sums: (0.0, 0.0),
+        };
+        Ok(())
+    }
+
     /// The current state (also [`Stepper::state`], which needs its system
     /// named where the stepper's type is known).
     pub fn current_state(&self) -> &[f64] {
@@ -1409,5 +1459,54 @@ mod tests {
             }
             assert!(steps > 10, "n = {n}: {steps} steps");
         }
+    }
+
+    /// A restart in place (`restart_at`, after a projection) is the new
+    /// stepper it replaces: from a state moved off the last step's, both
+    /// go on bit for bit (states, step sizes, dense output, evaluations),
+    /// whether or not the first step size is given; and a failing start
+    /// leaves the state and time as they were.
+    #[test]
+    fn a_restart_in_place_is_a_new_stepper_bit_for_bit() {
+        let system = Ring(4);
+        let y0 = [0.3, 1.0, 1.7, 2.4];
+        let tol = Tolerance {
+            rtol: 1e-9,
+            atol: 1e-11,
+        };
+        let budget = Budget::default();
+        let trace = |dop: &mut Dop853| {
+            let mut bits = Vec::new();
+            let mut out = [0.0; 4];
+            for _ in 0..12 {
+                let t = dop.clock.t;
+                Stepper::step(dop, &system, 20.0, &budget).unwrap();
+                Stepper::dense(dop, &system, 0.5 * (t + dop.clock.t), &mut out).unwrap();
+                bits.extend(dop.y.iter().chain(&out).map(|v| v.to_bits()));
+                bits.push(dop.clock.h.to_bits());
+            }
+            bits.push(dop.clock.stats.rhs_evaluations as u64);
+            bits
+        };
+        for h0 in [Some(0.05), None] {
+            let mut dop = Dop853::new(&system, 0.0, &y0, tol, f64::INFINITY, None).unwrap();
+            trace(&mut dop);
+            let t = dop.clock.t;
+            let moved: Vec<f64> = dop.y.iter().map(|v| v * (1.0 + 1e-7)).collect();
+            let mut fresh = Dop853::new(&system, t, &moved, tol, f64::INFINITY, h0).unwrap();
+            dop.restart_at(&system, t, &moved, tol, f64::INFINITY, h0)
+                .unwrap();
+            let expected = trace(&mut fresh);
+            assert!(expected.len() > 100);
+            assert_eq!(trace(&mut dop), expected, "h0 {h0:?}");
+        }
+        let mut dop = Dop853::new(&system, 0.0, &y0, tol, f64::INFINITY, None).unwrap();
+        trace(&mut dop);
+        let (t, y) = (dop.clock.t, dop.y.clone());
+        let broken = [f64::NAN, 1.0, 1.0, 1.0];
+        assert!(dop
+            .restart_at(&system, t, &broken, tol, f64::INFINITY, None)
+            .is_err());
+        assert_eq!((dop.clock.t, &dop.y), (t, &y));
     }
 }

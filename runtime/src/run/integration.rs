@@ -897,9 +897,10 @@ impl<'m> Integration<'m> {
                 let mut kept = Ok(());
                 if let Some(keeper) = self.keeper.as_mut() {
                     // A state off its constraint near a pole or an end
-                    // of one is named after it.
-                    let x_b = solver.state().to_vec();
-                    kept = match keeper.after_step(model, regime.mode, tb, &x_b) {
+                    // of one is named after it. The state is read in
+                    // place (a copy a step was most of a constrained
+                    // run's allocations, docs/BENCHMARKS.md §10f).
+                    kept = match keeper.after_step(model, regime.mode, tb, solver.state()) {
                         Ok(Some(x)) => solver.project(model, tb, x),
                         Ok(None) => Ok(()),
                         Err(f) => Err(f),

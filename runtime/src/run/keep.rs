@@ -22,7 +22,7 @@
 //! knife edge 3× less accurate than leaving it.
 
 use crate::failure::{Failure, FailureKind};
-use crate::linalg::{solve_dense, Matrix};
+use crate::linalg::{Lu, Matrix};
 use crate::model::{DynModel, Initial};
 use crate::ode::tolerance::Tolerance;
 
@@ -55,27 +55,27 @@ pub struct Keeper {
     fixed: Vec<usize>,
     /// The velocity block `q^(u−1)` (state indices), which projections move.
     velocities: std::ops::Range<usize>,
-    kept: Vec<f64>,
+    /// The constrained values, then the last projection's result (one
+    /// buffer of two states: a small model's solve is a few microseconds,
+    /// and each allocation and free in it about 1 % of the paper's,
+    /// docs/BENCHMARKS.md §10f).
+    states: Vec<f64>,
     gradient: Matrix,
-    /// The last projection's result.
-    projected: Vec<f64>,
-    /// The two projected states of [`Keeper::kept_part`].
-    probe: (Vec<f64>, Vec<f64>),
-    /// Buffers of a projection (one per constraint, and the Gram matrix),
-    /// kept from step to step: most steps only measure the residual, and
-    /// allocations were a third of a small model's cost of keeping.
-    scratch: Scratch,
+    /// The two projected states of [`Keeper::kept_part`], one after the
+    /// other.
+    probe: Vec<f64>,
+    /// Buffers of a projection (residual and multipliers, one per
+    /// constraint, then the Gram matrix), kept from step to step: most
+    /// steps only measure the residual, and allocations were a third of a
+    /// small model's cost of keeping.
+    scratch: Vec<f64>,
+    /// The Gram matrix's factorisation, in storage kept from step to step
+    /// (a solve of two or more constraints allocated two buffers).
+    lu: Lu,
     largest: f64,
     largest_absolute: f64,
     largest_at: f64,
     projections: usize,
-}
-
-#[derive(Clone, Debug, Default)]
-struct Scratch {
-    residual: Vec<f64>,
-    gram: Vec<f64>,
-    lambda: Vec<f64>,
 }
 
 /// What the summary says of the constraints kept.
@@ -101,11 +101,11 @@ impl Keeper {
             mode: None,
             fixed: Vec::new(),
             velocities: n.saturating_sub(coordinates)..n,
-            kept: vec![0.0; n],
+            states: vec![0.0; 2 * n],
             gradient: Matrix::zeros(n, n),
-            projected: vec![0.0; n],
-            probe: (Vec::with_capacity(n), Vec::with_capacity(n)),
-            scratch: Scratch::default(),
+            probe: Vec::with_capacity(2 * n),
+            scratch: Vec::new(),
+            lu: Lu::empty(),
             largest: 0.0,
             largest_absolute: 0.0,
             largest_at: f64::NAN,
@@ -124,7 +124,7 @@ impl Keeper {
     ) -> Result<Option<&[f64]>, Failure> {
         if self.project_from(model, mode, t, x, true, true)? > PROJECT_ABOVE {
             self.projections += 1;
-            Ok(Some(&self.projected))
+            Ok(Some(self.projected()))
         } else {
             Ok(None)
         }
@@ -164,8 +164,13 @@ impl Keeper {
         judged: bool,
     ) -> Result<(), Failure> {
         self.project_from(model, mode, t, x, judged, false)?;
-        x.copy_from_slice(&self.projected);
+        x.copy_from_slice(self.projected());
         Ok(())
+    }
+
+    /// The last projection's result.
+    fn projected(&self) -> &[f64] {
+        &self.states[self.states.len() / 2..]
     }
 
     /// Replaces `d`, a small change of the state `x` (a step's local
@@ -207,20 +212,20 @@ impl Keeper {
             return Ok(());
         }
         let s = f64::EPSILON.sqrt() / size;
-        let (mut plus, mut minus) = std::mem::take(&mut self.probe);
-        plus.clear();
-        plus.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
-        minus.clear();
-        minus.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
+        let mut probe = std::mem::take(&mut self.probe);
+        probe.clear();
+        probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
+        probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
+        let (plus, minus) = probe.split_at_mut(x.len());
         let result = model
-            .project_closure(t, &mut plus)
-            .and_then(|_| model.project_closure(t, &mut minus));
+            .project_closure(t, plus)
+            .and_then(|_| model.project_closure(t, minus));
         if result.is_ok() {
-            for ((d, p), m) in d.iter_mut().zip(&plus).zip(&minus) {
+            for ((d, p), m) in d.iter_mut().zip(&*plus).zip(&*minus) {
                 *d = (p - m) / (2.0 * s);
             }
         }
-        self.probe = (plus, minus);
+        self.probe = probe;
         result
     }
 
@@ -252,20 +257,20 @@ impl Keeper {
         let s = f64::EPSILON.sqrt() / size;
         // The probe buffers of `kept_part`, taken out while the
         // projections borrow the keeper.
-        let (mut plus, mut minus) = std::mem::take(&mut self.probe);
-        plus.clear();
-        plus.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
-        minus.clear();
-        minus.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
+        let mut probe = std::mem::take(&mut self.probe);
+        probe.clear();
+        probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
+        probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
+        let (plus, minus) = probe.split_at_mut(x.len());
         let result = self
-            .project_in_place(model, mode, t, &mut plus, false)
-            .and_then(|_| self.project_in_place(model, mode, t, &mut minus, false));
+            .project_in_place(model, mode, t, plus, false)
+            .and_then(|_| self.project_in_place(model, mode, t, minus, false));
         if result.is_ok() {
-            for ((d, p), m) in d.iter_mut().zip(&plus).zip(&minus) {
+            for ((d, p), m) in d.iter_mut().zip(&*plus).zip(&*minus) {
                 *d = (p - m) / (2.0 * s);
             }
         }
-        self.probe = (plus, minus);
+        self.probe = probe;
         result
     }
 
@@ -278,7 +283,7 @@ impl Keeper {
         }
     }
 
-    /// `x` projected onto the constraints, into `self.projected`; the
+    /// `x` projected onto the constraints, into [`Keeper::projected`]; the
     /// distance (the first correction) relative to the tolerance, recorded
     /// and judged when `judged` (a state the integration carried). With
     /// `bounded`, a state whose residual bounds its distance below
@@ -299,7 +304,9 @@ impl Keeper {
             self.fixed = fixed_components(model, mode);
             self.mode = Some(mode);
         }
-        self.projected.copy_from_slice(x);
+        let half = self.states.len() / 2;
+        let (kept, projected) = self.states.split_at_mut(half);
+        projected.copy_from_slice(x);
         // Holonomic constraints first: the positions and their derivatives
         // along the constraints' normals (the same in every mode).
         let mut closure = (0.0_f64, 0.0_f64);
@@ -309,9 +316,9 @@ impl Keeper {
             // derivative, whose size is no distance from the constraints,
             // and which is worth its cost only where the state is moved.
             let motion = model.motion_dim();
-            model.project_closure(t, &mut self.projected[..motion])?;
+            model.project_closure(t, &mut projected[..motion])?;
             let mut worst = 0;
-            for (i, (&before, &after)) in x.iter().zip(&self.projected).take(motion).enumerate() {
+            for (i, (&before, &after)) in x.iter().zip(&*projected).take(motion).enumerate() {
                 let delta = (after - before).abs();
                 let scale = self.tol.atol + self.tol.rtol * before.abs().max(after.abs());
                 if delta / scale > closure.0 {
@@ -319,7 +326,7 @@ impl Keeper {
                 }
                 closure = (closure.0.max(delta / scale), closure.1.max(delta));
             }
-            let size = x[worst].abs().max(self.projected[worst].abs()).max(1.0);
+            let size = x[worst].abs().max(projected[worst].abs()).max(1.0);
             if judged && closure.0 > BROKEN_TIMES_TOLERANCE && closure.1 > BROKEN_ABOVE * size {
                 return Err(Failure::new(
                     t,
@@ -330,27 +337,39 @@ impl Keeper {
                 ));
             }
             if motion < x.len() && !(bounded && closure.0 <= PROJECT_ABOVE) {
-                self.projected.copy_from_slice(x);
-                model.project_closure(t, &mut self.projected)?;
+                projected.copy_from_slice(x);
+                model.project_closure(t, projected)?;
             }
         }
         let m = self.fixed.len();
-        let mut scratch = std::mem::take(&mut self.scratch);
-        scratch.residual.resize(m, 0.0);
-        scratch.gram.resize(m * m, 0.0);
-        scratch.lambda.resize(m, 0.0);
-        let Scratch {
-            residual,
-            gram: normal_gram,
-            lambda,
-        } = &mut scratch;
+        if self.scratch.len() != m * (m + 2) {
+            self.scratch.resize(m * (m + 2), 0.0);
+        }
+        // The fields borrowed apart, the scratch buffers in place (taking
+        // them out and back, and the closure over the whole keeper, were a
+        // tenth of a measuring call, docs/BENCHMARKS.md §10f).
+        let Keeper {
+            tol,
+            fixed,
+            velocities,
+            gradient,
+            scratch,
+            lu,
+            largest,
+            largest_absolute,
+            largest_at,
+            ..
+        } = self;
+        let fixed: &[usize] = fixed;
+        let (residual, rest) = scratch.split_at_mut(m);
+        let (lambda, normal_gram) = rest.split_at_mut(m);
         let mut distance: Option<(f64, f64)> = None;
         let mut last = (0.0_f64, 0.0_f64);
         for _ in 0..ITERATIONS {
-            self.kept.copy_from_slice(&self.projected);
-            model.constrained(t, &self.projected, &mut self.kept)?;
-            for (c, &j) in self.fixed.iter().enumerate() {
-                if !self.kept[j].is_finite() {
+            kept.copy_from_slice(projected);
+            model.constrained(t, projected, kept)?;
+            for (c, &j) in fixed.iter().enumerate() {
+                if !kept[j].is_finite() {
                     return Err(Failure::new(
                         t,
                         FailureKind::ConstraintUndefined {
@@ -358,14 +377,13 @@ impl Keeper {
                         },
                     ));
                 }
-                residual[c] = self.projected[j] - self.kept[j];
+                residual[c] = projected[j] - kept[j];
             }
             if bounded && distance.is_none() {
                 let norm = residual.iter().map(|h| h * h).sum::<f64>().sqrt();
-                let smallest = self
-                    .velocities
+                let smallest = velocities
                     .clone()
-                    .map(|i| self.tol.atol + self.tol.rtol * x[i].abs())
+                    .map(|i| tol.atol + tol.rtol * x[i].abs())
                     .fold(f64::INFINITY, f64::min);
                 if norm <= PROJECT_ABOVE * smallest {
                     // The holonomic constraints' correction (already in
@@ -375,28 +393,25 @@ impl Keeper {
                     } else {
                         (norm / smallest, norm)
                     };
-                    if relative > self.largest {
-                        (self.largest, self.largest_absolute, self.largest_at) =
-                            (relative, absolute, t);
+                    if relative > *largest {
+                        (*largest, *largest_absolute, *largest_at) = (relative, absolute, t);
                     }
-                    self.scratch = scratch;
                     return Ok(relative);
                 }
             }
-            self.gradient.fill(0.0);
-            model.kept_gradient(t, &self.projected, &mut self.gradient)?;
+            gradient.fill(0.0);
+            model.kept_gradient(t, projected, gradient)?;
             // The normals J_c = e_{d_c} − ∂φ_c/∂v over the velocities; the
             // smallest correction is Δv = −Jᵀ (J Jᵀ)⁻¹ h.
-            let normal = |keeper: &Keeper, c: usize, i: usize| -> f64 {
-                let j = keeper.fixed[c];
-                f64::from(u8::from(i == j)) - keeper.gradient[(j, i)]
+            let normal = |c: usize, i: usize| -> f64 {
+                let j = fixed[c];
+                f64::from(u8::from(i == j)) - gradient[(j, i)]
             };
             for a in 0..m {
                 for b in 0..m {
-                    normal_gram[a * m + b] = self
-                        .velocities
+                    normal_gram[a * m + b] = velocities
                         .clone()
-                        .map(|i| normal(self, a, i) * normal(self, b, i))
+                        .map(|i| normal(a, i) * normal(b, i))
                         .sum();
                 }
             }
@@ -405,24 +420,32 @@ impl Keeper {
                 lambda[0] /= normal_gram[0];
                 lambda[0].is_finite()
             } else {
-                solve_dense(m, normal_gram, lambda)
+                // What `linalg::solve_dense` does, in kept storage.
+                lu.refactor(m, |a| {
+                    for i in 0..m {
+                        for j in 0..m {
+                            a[(i, j)] = normal_gram[i * m + j];
+                        }
+                    }
+                });
+                lu.solve_in_place(lambda) && lambda.iter().all(|v| v.is_finite())
             };
             let (mut relative, mut absolute) = (0.0_f64, 0.0_f64);
-            let mut worst = self.fixed.first().copied().unwrap_or(0);
-            for i in self.velocities.clone() {
+            let mut worst = fixed.first().copied().unwrap_or(0);
+            for i in velocities.clone() {
                 let delta = if solved {
-                    -(0..m).map(|c| normal(self, c, i) * lambda[c]).sum::<f64>()
+                    -(0..m).map(|c| normal(c, i) * lambda[c]).sum::<f64>()
                 } else {
                     // Normals that are not independent: the dependent
                     // components take their values.
-                    match self.fixed.iter().position(|&j| j == i) {
+                    match fixed.iter().position(|&j| j == i) {
                         Some(c) => -residual[c],
                         None => 0.0,
                     }
                 };
-                let v = self.projected[i];
-                self.projected[i] = v + delta;
-                let scale = self.tol.atol + self.tol.rtol * v.abs().max(self.projected[i].abs());
+                let v = projected[i];
+                projected[i] = v + delta;
+                let scale = tol.atol + tol.rtol * v.abs().max(projected[i].abs());
                 if delta.abs() / scale > relative {
                     worst = i;
                 }
@@ -430,9 +453,9 @@ impl Keeper {
                 absolute = absolute.max(delta.abs());
             }
             if distance.is_none() {
-                let size = x[worst].abs().max(self.projected[worst].abs()).max(1.0);
+                let size = x[worst].abs().max(projected[worst].abs()).max(1.0);
                 if judged && relative > BROKEN_TIMES_TOLERANCE && absolute > BROKEN_ABOVE * size {
-                    return Err(self.left(model, t, residual, absolute));
+                    return Err(left(model, fixed, t, residual, absolute));
                 }
                 distance = Some((relative, absolute));
             }
@@ -444,37 +467,36 @@ impl Keeper {
         // Gauss–Newton that does not settle within the tolerance: no point
         // of the constraints near the state (a branch that ends).
         if last.0 > 1.0 {
-            return Err(self.left(model, t, residual, last.1));
+            return Err(left(model, fixed, t, residual, last.1));
         }
-        self.scratch = scratch;
         let (relative, absolute) = distance.unwrap_or((0.0, 0.0));
         let (relative, absolute) = if closure.0 > relative {
             closure
         } else {
             (relative, absolute)
         };
-        if judged && relative > self.largest {
-            self.largest = relative;
-            self.largest_absolute = absolute;
-            self.largest_at = t;
+        if judged && relative > *largest {
+            *largest = relative;
+            *largest_absolute = absolute;
+            *largest_at = t;
         }
         Ok(relative)
     }
+}
 
-    /// The failure of a state that has left the constraints, naming the
-    /// fixed component with the largest residual.
-    fn left(&self, model: &dyn DynModel, t: f64, residual: &[f64], distance: f64) -> Failure {
-        let c = (0..residual.len())
-            .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
-            .unwrap_or(0);
-        Failure::new(
-            t,
-            FailureKind::ConstraintLeft {
-                component: model.state_names()[self.fixed[c]].to_string(),
-                residual: distance,
-            },
-        )
-    }
+/// The failure of a state that has left the constraints, naming the
+/// fixed component (of `fixed`) with the largest residual.
+fn left(model: &dyn DynModel, fixed: &[usize], t: f64, residual: &[f64], distance: f64) -> Failure {
+    let c = (0..residual.len())
+        .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
+        .unwrap_or(0);
+    Failure::new(
+        t,
+        FailureKind::ConstraintLeft {
+            component: model.state_names()[fixed[c]].to_string(),
+            residual: distance,
+        },
+    )
 }
 
 /// Checks the components that mode 0 fixes but the initial values give
