@@ -32,6 +32,7 @@ pub mod ensemble;
 pub mod failure;
 pub mod highest;
 pub mod io;
+pub mod lanes;
 pub mod linalg;
 pub mod math;
 pub mod method;
