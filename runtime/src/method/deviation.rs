@@ -213,6 +213,9 @@ pub fn follow(
             h: h_try,
             tol,
             lanes: lanes.as_mut(),
+            // The stages between the ends are read only by the continuous
+            // extension, on a step that holds a sample before its end.
+            inner: next < times.len() && times[next] < t_new,
             x: &mut x,
             scratch: [&mut e3, &mut e5, &mut x0, &mut x1],
         };
@@ -367,6 +370,8 @@ struct Stepping<'a> {
     h: f64,
     tol: Tolerance,
     lanes: Option<&'a mut LaneBuffers>,
+    /// The members' inner stages are kept (for the continuous extension).
+    inner: bool,
     x: &'a mut [f64],
     scratch: [&'a mut Vec<f64>; 4],
 }
@@ -421,7 +426,7 @@ impl Stepping<'_> {
                     match result {
                         Ok(found) => {
                             for (l, &m) in group.iter().enumerate().take(count) {
-                                buffers.scatter(l, m, n, d1, k);
+                                buffers.scatter(l, m, n, (d1, k), self.inner);
                                 if found[l].is_finite() {
                                     errs[m] = found[l];
                                 } else {
@@ -495,13 +500,23 @@ impl LaneBuffers {
     }
 
     /// Lane `l`'s step back into member `m`'s places: its end into `d1`,
-    /// its stages after the first into `k` (the first is already there).
-    fn scatter(&self, l: usize, m: usize, n: usize, d1: &mut [f64], k: &mut [f64]) {
+    /// its end rate into `k` and, with `inner`, the stages between (the
+    /// first is already there; the others are only read by the continuous
+    /// extension).
+    fn scatter(
+        &self,
+        l: usize,
+        m: usize,
+        n: usize,
+        (d1, k): (&mut [f64], &mut [f64]),
+        inner: bool,
+    ) {
         for (o, v) in d1[m * n..(m + 1) * n].iter_mut().zip(&self.d1) {
             *o = v.0[l];
         }
-        let km = &mut k[m * (STAGES + 1) * n + n..(m + 1) * (STAGES + 1) * n];
-        for (o, v) in km.iter_mut().zip(&self.k[n..]) {
+        let from = if inner { 1 } else { STAGES };
+        let km = &mut k[m * (STAGES + 1) * n..(m + 1) * (STAGES + 1) * n];
+        for (o, v) in km[from * n..].iter_mut().zip(&self.k[from * n..]) {
             *o = v.0[l];
         }
     }
@@ -1046,7 +1061,7 @@ mod tests {
         .unwrap();
         let (mut lane_d1, mut lane_k) = (vec![0.0; count * n], k.clone());
         for (l, &m) in group.iter().enumerate() {
-            buffers.scatter(l, m, n, &mut lane_d1, &mut lane_k);
+            buffers.scatter(l, m, n, (&mut lane_d1, &mut lane_k), true);
         }
         for (l, &m) in group.iter().enumerate() {
             let mut km = k[m * (STAGES + 1) * n..][..(STAGES + 1) * n].to_vec();
@@ -1071,5 +1086,16 @@ mod tests {
         }
         // Member 3, not in the group, is untouched.
         assert!(lane_d1[3 * n..][..n].iter().all(|&v| v == 0.0));
+        // Without the inner stages (no sample inside the step): the end
+        // and the end rate, the stages between left as they were.
+        let (mut d1, mut k2) = (vec![0.0; count * n], k.clone());
+        buffers.scatter(0, 4, n, (&mut d1, &mut k2), false);
+        let block = 4 * (STAGES + 1) * n;
+        assert_eq!(&d1[4 * n..][..n], &lane_d1[4 * n..][..n]);
+        assert_eq!(&k2[..block + STAGES * n], &k[..block + STAGES * n]);
+        assert_eq!(
+            &k2[block + STAGES * n..][..n],
+            &lane_k[block + STAGES * n..][..n]
+        );
     }
 }
