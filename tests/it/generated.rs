@@ -305,6 +305,11 @@ fn generated_code_holds_only_what_the_system_needs() {
     assert!(implicit.contains("highest::newton") && !implicit.contains("fn coefficients"));
     // Non-affine systems have no coefficient system.
     assert!(!lib_rs("knife_edge").contains("const AFFINE"));
+    // A right side over lanes only where a non-affine ensemble can run
+    // (one mode, no switches, not affine).
+    assert!(lib_rs("knife_edge").contains("fn rhs_lanes("));
+    assert!(!paper.contains("rhs_lanes") && !implicit.contains("rhs_lanes"));
+    assert!(!lib_rs("coulomb_friction").contains("rhs_lanes"));
     // Exact-solution code only with `exact`.
     assert!(paper.contains("fn exact("));
     // Impact code only with `when`; the derivatives the constraints fix
