@@ -171,7 +171,9 @@ mod tests {
         let a = lanes_of(|i| 0.37 + 1.3 * i as f64);
         let b = lanes_of(|i| -2.1 + 0.77 * i as f64);
         let s = 1.618;
-        let checks: [(Lanes, fn(f64, f64, f64) -> f64); 10] = [
+        // Each lane value against the same expression on one lane's f64s.
+        type Scalar = fn(f64, f64, f64) -> f64;
+        let checks: [(Lanes, Scalar); 10] = [
             (a + b, |x, y, _| x + y),
             (a - b, |x, y, _| x - y),
             (a * b, |x, y, _| x * y),

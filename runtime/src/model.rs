@@ -220,7 +220,7 @@ pub trait Model: Clone {
     /// state, each lane's values bit for bit `rhs`'s. Generated for models
     /// that can run an ensemble; this default calls `rhs` once per lane.
     fn rhs_lanes(&self, t: f64, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure> {
-        lane_by_lane(&|x: &[f64], dx: &mut [f64]| self.rhs(t, x, dx), x, dx)
+        lane_by_lane(|x: &[f64], dx: &mut [f64]| self.rhs(t, x, dx), x, dx)
     }
 
     /// `jac = ∂X/∂x (t, x)`, exact.
@@ -346,11 +346,10 @@ pub trait Model: Clone {
 
 /// A right side over lanes by `rhs` once per lane (the default of
 /// [`Model::rhs_lanes`]).
-fn lane_by_lane(
-    rhs: &dyn Fn(&[f64], &mut [f64]) -> Result<(), Failure>,
-    x: &[Lanes],
-    dx: &mut [Lanes],
-) -> Result<(), Failure> {
+fn lane_by_lane<F>(rhs: F, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure>
+where
+    F: Fn(&[f64], &mut [f64]) -> Result<(), Failure>,
+{
     let n = x.len();
     let (mut xl, mut dl) = (vec![0.0; n], vec![0.0; n]);
     for l in 0..WIDTH {
@@ -513,7 +512,7 @@ pub trait DynModel {
     }
     /// [`Model::rhs_lanes`].
     fn rhs_lanes(&self, t: f64, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure> {
-        lane_by_lane(&|x: &[f64], dx: &mut [f64]| self.rhs(t, x, dx), x, dx)
+        lane_by_lane(|x: &[f64], dx: &mut [f64]| self.rhs(t, x, dx), x, dx)
     }
     /// [`Model::jacobian`].
     fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
