@@ -310,13 +310,19 @@ fn explicit(
     }
 }
 
-/// Whether an expression reachable from `roots` is a `Select` (an `if`
-/// over the state: not printable over lanes).
+/// Whether `roots` need what the lane type does not print: a `Select`
+/// (an `if` over the state), or a power with an exponent that is not a
+/// number (`f64::powf` of a lane value would not type-check when the
+/// base is a param).
 fn selects(arena: &crate::ir::Arena, roots: &[ExprId]) -> bool {
     arena
         .reachable(roots)
         .into_iter()
-        .any(|e| matches!(arena.node(e), crate::ir::Node::Select(..)))
+        .any(|e| match arena.node(e) {
+            crate::ir::Node::Select(..) => true,
+            crate::ir::Node::Pow(_, x) => arena.as_const(*x).is_none(),
+            _ => false,
+        })
 }
 
 /// `rhs_lanes`: the right side's body printed again with the state and

@@ -333,6 +333,35 @@ fn generated_code_holds_only_what_the_system_needs() {
     );
 }
 
+/// A power whose exponent is the state (`f64::powf` of a param by a
+/// lane value would not type-check): no right side over lanes, and the
+/// crate builds warning-free (its ensemble steps members one at a time).
+#[test]
+fn a_power_of_the_state_builds_without_a_right_side_over_lanes() {
+    let dir = std::env::temp_dir().join(format!("lagc-power-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("power_of_the_state.lag");
+    std::fs::write(
+        &path,
+        "param a = 2;\ncoord x;\nlagrangian = x'^2 / 2;\nforce x = -a^x - x';\n\
+         initial x = 0.5, x' = 0;\ntime 0 .. 1;\n",
+    )
+    .unwrap();
+    let lib = generate_file(&path).file("src/lib.rs").unwrap().to_string();
+    assert!(lib.contains(".powf("), "{lib}");
+    assert!(!lib.contains("rhs_lanes"));
+    let binary = build_file(&path);
+    let out = std::process::Command::new(binary)
+        .args(["--ensemble", "8", "--spread", "1e-2"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// The generated item `fn NAME(` of `lib`, up to its end.
 fn item(lib: &str, name: &str) -> String {
     let start = lib
