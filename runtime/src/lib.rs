@@ -11,7 +11,7 @@
 //!
 //! | layer | modules |
 //! |---|---|
-//! | the root | `model` (the trait generated code implements, and `DynModel`, its object-safe face), `choice` (the user's method and integrator), `failure`, `quantity` (what a failure is about), `domain`, `linalg` (matrices, LU, `L D Lᵀ`, `expm`), `math` (`sin_cos`), `highest` (the highest derivatives' solves), `closure` (Newton on holonomic constraints), `ensemble` (members' states) |
+//! | the root | `model` (the trait generated code implements, and `DynModel`, its object-safe face), `choice` (the user's method and integrator), `failure`, `quantity` (what a failure is about), `domain`, `linalg` (matrices, LU, `L D Lᵀ`, `expm`), `math` (`sin_cos`), `lanes` (four members' values computed together, each lane bit for bit the `f64` arithmetic), `highest` (the highest derivatives' solves), `closure` (Newton on holonomic constraints), `ensemble` (members' states) |
 //! | `ode/` | the one-step integrators: `stepper` (the object-safe `Stepper<S>`, `Clock`, error measures), `dense` (a step's extension as a value), `dop853`, `rodas4`, `magnus`, `controller`, `tolerance`, `budget`, `system`; `ode/mod.rs` registers the integrators, one line each |
 //! | `method/` | the methods behind `solver::Solver`: `direct`, `field/`; `segment`, a step's motion for a `Solution` |
 //! | `run/` | the run: `integration` (a run as an object: `advance_to(t)`, the state, a restart), `options`, `regime` (branches, candidates), `diagnosis`, `solution`, `events`, `impacts` (`when`), `keep` (constraints kept), `watch` (the constraints as written), `progress`, `inputs`, `sensitivity`; the loops (`run::run`, `run::solve`) |
@@ -32,6 +32,7 @@ pub mod ensemble;
 pub mod failure;
 pub mod highest;
 pub mod io;
+pub mod lanes;
 pub mod linalg;
 pub mod math;
 pub mod method;

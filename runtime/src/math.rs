@@ -5,7 +5,36 @@
 /// argument reduction; glibc computes both with the routines of `sin` and
 /// `cos`, so the values are theirs); elsewhere the two calls.
 #[inline]
-pub fn sin_cos(x: f64) -> (f64, f64) {
+pub fn sin_cos<T: SinCos>(x: T) -> (T, T) {
+    x.sin_cos_of()
+}
+
+/// A value [`sin_cos`] takes: an `f64`, or four lanes of them (each lane
+/// the `f64`'s call: the same values).
+pub trait SinCos: Sized {
+    fn sin_cos_of(self) -> (Self, Self);
+}
+
+impl SinCos for f64 {
+    #[inline]
+    fn sin_cos_of(self) -> (f64, f64) {
+        scalar_sin_cos(self)
+    }
+}
+
+impl SinCos for crate::lanes::Lanes {
+    #[inline]
+    fn sin_cos_of(self) -> (Self, Self) {
+        let (mut s, mut c) = ([0.0; 4], [0.0; 4]);
+        for (i, &v) in self.0.iter().enumerate() {
+            (s[i], c[i]) = scalar_sin_cos(v);
+        }
+        (crate::lanes::Lanes(s), crate::lanes::Lanes(c))
+    }
+}
+
+#[inline]
+fn scalar_sin_cos(x: f64) -> (f64, f64) {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         extern "C" {

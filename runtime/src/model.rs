@@ -10,6 +10,7 @@
 
 use crate::choice::IntegratorChoice;
 use crate::failure::Failure;
+use crate::lanes::{Lanes, WIDTH};
 use crate::linalg::Matrix;
 
 /// How a state component's initial value is found (SPEC §1.4).
@@ -211,6 +212,17 @@ pub trait Model: Clone {
     /// `dx = X(t, x)`, the right side of the reduced system (7).
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure>;
 
+    /// [`Model::rhs_lanes`] is the right side's own body over lanes (not
+    /// the default's loop): an ensemble steps its members four at a time.
+    const LANES: bool = false;
+
+    /// [`Model::rhs`] of four states at once, lane `l` of `x` the `l`-th
+    /// state, each lane's values bit for bit `rhs`'s. Generated for models
+    /// that can run an ensemble; this default calls `rhs` once per lane.
+    fn rhs_lanes(&self, t: f64, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure> {
+        lane_by_lane(|x: &[f64], dx: &mut [f64]| self.rhs(t, x, dx), x, dx)
+    }
+
     /// `jac = ∂X/∂x (t, x)`, exact.
     fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
 
@@ -330,6 +342,26 @@ pub trait Model: Clone {
     fn mass_matrix(&self, _t: f64, _x: &[f64]) -> Option<Matrix> {
         None
     }
+}
+
+/// A right side over lanes by `rhs` once per lane (the default of
+/// [`Model::rhs_lanes`]).
+fn lane_by_lane<F>(rhs: F, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure>
+where
+    F: Fn(&[f64], &mut [f64]) -> Result<(), Failure>,
+{
+    let n = x.len();
+    let (mut xl, mut dl) = (vec![0.0; n], vec![0.0; n]);
+    for l in 0..WIDTH {
+        for (v, x) in xl.iter_mut().zip(x) {
+            *v = x.0[l];
+        }
+        rhs(&xl, &mut dl)?;
+        for (d, v) in dx.iter_mut().zip(&dl) {
+            d.0[l] = *v;
+        }
+    }
+    Ok(())
 }
 
 /// Checks a value the model states for a component the constraints fix
@@ -474,6 +506,14 @@ pub trait DynModel {
     fn set_inputs(&mut self, _inputs: &Inputs) {}
     /// [`Model::rhs`].
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure>;
+    /// [`Model::LANES`].
+    fn has_lanes(&self) -> bool {
+        false
+    }
+    /// [`Model::rhs_lanes`].
+    fn rhs_lanes(&self, t: f64, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure> {
+        lane_by_lane(|x: &[f64], dx: &mut [f64]| self.rhs(t, x, dx), x, dx)
+    }
     /// [`Model::jacobian`].
     fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure>;
     /// [`Model::time_partial`].
@@ -659,6 +699,12 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
         Model::rhs(self, t, x, dx)
+    }
+    fn has_lanes(&self) -> bool {
+        M::LANES
+    }
+    fn rhs_lanes(&self, t: f64, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure> {
+        Model::rhs_lanes(self, t, x, dx)
     }
     fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
         Model::jacobian(self, t, x, jac)?;

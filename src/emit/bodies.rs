@@ -31,6 +31,8 @@ pub struct Body {
     pub statements: TokenStream,
     /// One `out[row] = value;` (or `out[(r, c)] = value;`) per entry.
     pub assignments: Vec<TokenStream>,
+    /// The printed value of each entry, in order.
+    pub values: Vec<TokenStream>,
     /// The time argument (`t`, or `_t` when unused).
     pub t: TokenStream,
     /// The source argument (`x`, or `_x` when unused).
@@ -89,6 +91,7 @@ pub fn body(
         t: code.time_arg(),
         source: arg(code.uses_source, source_name),
         out: arg(!roots.is_empty(), out_name),
+        values: code.roots,
     }
 }
 

@@ -64,6 +64,7 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/io/table.rs"),
     ),
     ("src/lib.rs", include_str!("../../runtime/src/lib.rs")),
+    ("src/lanes.rs", include_str!("../../runtime/src/lanes.rs")),
     ("src/linalg.rs", include_str!("../../runtime/src/linalg.rs")),
     ("src/math.rs", include_str!("../../runtime/src/math.rs")),
     (

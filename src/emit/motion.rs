@@ -30,7 +30,12 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
             quote! { x[#i] }
         })
     };
-    let (trait_items, inherent) = motion_of(kernel, names, &from_x);
+    // A second right side over lanes for the models that can run a
+    // non-affine ensemble (one mode, no switches, not affine).
+    let lanes = kernel.modes.is_empty()
+        && kernel.coefficients.is_none()
+        && kernel.switches.functions.is_empty();
+    let (trait_items, inherent) = motion_of(kernel, names, &from_x, lanes);
     let condition = mass_condition(kernel, names, &from_x);
     let events = super::events::items(kernel, names, &from_x);
     // The same in every mode: one trait item.
@@ -52,7 +57,7 @@ pub fn motion_code(kernel: &Kernel, names: &mut SymbolNames) -> (TokenStream, To
     for mode in &kernel.modes {
         let mut mode_names = SymbolNames::new(&mode.arena, &mode.state);
         mode_names.branches = super::modes::shared_branches(kernel, mode);
-        let (items, helpers) = motion_of(mode, &mut mode_names, &from_x);
+        let (items, helpers) = motion_of(mode, &mut mode_names, &from_x, false);
         let params = super::sensitivity::param_jacobian_method(mode, &mut mode_names, &from_x);
         modes.push((items, helpers, params));
     }
@@ -91,6 +96,7 @@ fn motion_of(
     kernel: &Kernel,
     names: &mut SymbolNames,
     from_x: Source,
+    lanes: bool,
 ) -> (TokenStream, TokenStream) {
     let n = kernel.state.len();
     let c = kernel.coordinates;
@@ -102,7 +108,7 @@ fn motion_of(
     let kept = kept_code(kernel, names, from_x);
     let (items, helpers) = match &kernel.motion {
         Motion::Explicit(e) => (
-            explicit(kernel, names, e, from_x, &shifts, &shift_jacobian),
+            explicit(kernel, names, e, from_x, &shifts, &shift_jacobian, lanes),
             TokenStream::new(),
         ),
         Motion::Implicit(i) => implicit(kernel, names, i, from_x, &shifts, &shift_jacobian),
@@ -239,6 +245,7 @@ fn explicit(
     from_x: Source,
     shifts: &TokenStream,
     shift_jacobian: &TokenStream,
+    lanes: bool,
 ) -> TokenStream {
     let arena = &kernel.arena;
     let rows: Vec<usize> = (0..e.rhs.len())
@@ -264,7 +271,14 @@ fn explicit(
     let (lin_rhs, lin_jac) = lin.roots.split_at(e.rhs.len());
     let lin_cells = bodies::assignments(&quote! { jac }, &e.jacobian, lin_jac);
     let lin_t = lin.time_arg();
+    let rhs_lanes = if lanes && !selects(arena, &e.rhs) {
+        rhs_over_lanes(&rhs, &rows, shifts)
+    } else {
+        TokenStream::new()
+    };
     quote! {
+        #rhs_lanes
+
         fn rhs(&self, #rhs_t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
             #rhs_statements
             #shifts
@@ -291,6 +305,45 @@ fn explicit(
             #(dx[#rows] = #lin_rhs;)*
             #shift_jacobian
             #(#lin_cells)*
+            Ok(())
+        }
+    }
+}
+
+/// Whether `roots` need what the lane type does not print: a `Select`
+/// (an `if` over the state), or a power with an exponent that is not a
+/// number (`f64::powf` of a lane value would not type-check when the
+/// base is a param).
+fn selects(arena: &crate::ir::Arena, roots: &[ExprId]) -> bool {
+    arena
+        .reachable(roots)
+        .into_iter()
+        .any(|e| match arena.node(e) {
+            crate::ir::Node::Select(..) => true,
+            crate::ir::Node::Pow(_, x) => arena.as_const(*x).is_none(),
+            _ => false,
+        })
+}
+
+/// `rhs_lanes`: the right side's body printed again with the state and
+/// its temporaries as lanes (`lagc_runtime::lanes::Lanes`: each operation
+/// the `f64` one lane by lane, so each lane is bit for bit `rhs`), a row
+/// that reads no state splatted.
+fn rhs_over_lanes(rhs: &bodies::Body, rows: &[Literal], shifts: &TokenStream) -> TokenStream {
+    let (t, statements) = (&rhs.t, &rhs.statements);
+    let values = &rhs.values;
+    quote! {
+        const LANES: bool = true;
+
+        fn rhs_lanes(
+            &self,
+            #t: f64,
+            x: &[lagc_runtime::lanes::Lanes],
+            dx: &mut [lagc_runtime::lanes::Lanes],
+        ) -> Result<(), Failure> {
+            #statements
+            #shifts
+            #(dx[#rows] = lagc_runtime::lanes::lanes(#values);)*
             Ok(())
         }
     }

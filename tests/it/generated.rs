@@ -305,6 +305,11 @@ fn generated_code_holds_only_what_the_system_needs() {
     assert!(implicit.contains("highest::newton") && !implicit.contains("fn coefficients"));
     // Non-affine systems have no coefficient system.
     assert!(!lib_rs("knife_edge").contains("const AFFINE"));
+    // A right side over lanes only where a non-affine ensemble can run
+    // (one mode, no switches, not affine).
+    assert!(lib_rs("knife_edge").contains("fn rhs_lanes("));
+    assert!(!paper.contains("rhs_lanes") && !implicit.contains("rhs_lanes"));
+    assert!(!lib_rs("coulomb_friction").contains("rhs_lanes"));
     // Exact-solution code only with `exact`.
     assert!(paper.contains("fn exact("));
     // Impact code only with `when`; the derivatives the constraints fix
@@ -325,6 +330,35 @@ fn generated_code_holds_only_what_the_system_needs() {
             .filter(|l| l.contains(';') || l.contains("::main"))
             .count(),
         1
+    );
+}
+
+/// A power whose exponent is the state (`f64::powf` of a param by a
+/// lane value would not type-check): no right side over lanes, and the
+/// crate builds warning-free (its ensemble steps members one at a time).
+#[test]
+fn a_power_of_the_state_builds_without_a_right_side_over_lanes() {
+    let dir = std::env::temp_dir().join(format!("lagc-power-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("power_of_the_state.lag");
+    std::fs::write(
+        &path,
+        "param a = 2;\ncoord x;\nlagrangian = x'^2 / 2;\nforce x = -a^x - x';\n\
+         initial x = 0.5, x' = 0;\ntime 0 .. 1;\n",
+    )
+    .unwrap();
+    let lib = generate_file(&path).file("src/lib.rs").unwrap().to_string();
+    assert!(lib.contains(".powf("), "{lib}");
+    assert!(!lib.contains("rhs_lanes"));
+    let binary = build_file(&path);
+    let out = std::process::Command::new(binary)
+        .args(["--ensemble", "8", "--spread", "1e-2"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
     );
 }
 

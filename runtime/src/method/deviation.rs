@@ -33,6 +33,7 @@
 
 use crate::ensemble::States;
 use crate::failure::Failure;
+use crate::lanes::{Lanes, WIDTH};
 use crate::model::DynModel;
 use crate::ode::dop853::hairer_error;
 use crate::ode::dop853::tableau::{A, A_EXTRA, B, BHH, C, C_EXTRA, D, ER, STAGES};
@@ -175,6 +176,9 @@ pub fn follow(
     let mut order: Vec<usize> = (0..count).filter(|&m| estimates[m].is_finite()).collect();
     let mut cont = vec![0.0; count * 8 * n];
     let mut ks = vec![0.0; 3 * n];
+    // Members four at a time through the model's right side over lanes,
+    // when it has one (its default loop over lanes would gain nothing).
+    let mut lanes = model.has_lanes().then(|| LaneBuffers::new(n));
     let span = t1 - t0;
     // The base's typical step (the controller takes it from there; a
     // first try too long is rejected after the first few members).
@@ -194,41 +198,44 @@ pub fn follow(
             point.set(model, base, ts)?;
         }
         errs.fill(0.0);
+        // The members that were worst last step, first: when one of them
+        // fails (and would not leave), the step is rejected without
+        // stepping the others. (Rejecting at the first member that
+        // fails, wherever it is, took 9 % fewer member steps on the
+        // double pendulum but longer accepted steps, its factor set by
+        // that member rather than the worst: 1.05-3.6x farther from tight
+        // runs, BENCHMARKS §4a.)
+        let (head, tail) = order.split_at(order.len().min(FIRST));
+        let mut ctx = Stepping {
+            model,
+            stages: &stages,
+            start: &start,
+            h: h_try,
+            tol,
+            lanes: lanes.as_mut(),
+            // The stages between the ends are read only by the continuous
+            // extension, on a step that holds a sample before its end.
+            inner: next < times.len() && times[next] < t_new,
+            x: &mut x,
+            scratch: [&mut e3, &mut e5, &mut x0, &mut x1],
+        };
+        member_steps += ctx.step(
+            head,
+            (&d, &mut d1, &mut k),
+            &mut errs,
+            (&mut estimates, &mut left),
+        );
         let mut early = false;
-        for (i, &m) in order.iter().enumerate() {
-            if i == FIRST {
-                // The members that were worst last step, first: when one
-                // of them fails (and would not leave), the step is
-                // rejected without stepping the others. (Rejecting at
-                // the first member that fails, wherever it is, took 9 %
-                // fewer member steps on the double pendulum but longer
-                // accepted steps, its factor set by that member rather
-                // than the worst: 1.05-3.6x farther from tight runs,
-                // BENCHMARKS §4a.)
-                let first = live_max(&errs, &estimates);
-                if first > 1.0 && first <= LEAVE {
-                    early = true;
-                    break;
-                }
-            }
-            if !estimates[m].is_finite() {
-                continue;
-            }
-            let r = m * n..(m + 1) * n;
-            let km = &mut k[m * (STAGES + 1) * n..(m + 1) * (STAGES + 1) * n];
-            member_steps += 1;
-            match member_step(
-                model,
-                (&stages, &start.x),
-                (h_try, tol),
-                &d[r.clone()],
-                km,
-                &mut d1[r],
-                &mut x,
-                [&mut e3, &mut e5, &mut x0, &mut x1],
-            ) {
-                Ok(err) if err.is_finite() => errs[m] = err,
-                _ => leave(&mut estimates, &mut left, m, &start, &d),
+        if !tail.is_empty() {
+            let first = live_max(&errs, &estimates);
+            early = first > 1.0 && first <= LEAVE;
+            if !early {
+                member_steps += ctx.step(
+                    tail,
+                    (&d, &mut d1, &mut k),
+                    &mut errs,
+                    (&mut estimates, &mut left),
+                );
             }
         }
         let mut worst = live_max(&errs, &estimates);
@@ -352,6 +359,297 @@ pub fn follow(
         rejected,
         member_steps,
     })
+}
+
+/// One shared step's work on the members: the base's points and the
+/// step, and the scratch the members' steps share.
+struct Stepping<'a> {
+    model: &'a dyn DynModel,
+    stages: &'a [Point],
+    start: &'a Point,
+    h: f64,
+    tol: Tolerance,
+    lanes: Option<&'a mut LaneBuffers>,
+    /// The members' inner stages are kept (for the continuous extension).
+    inner: bool,
+    x: &'a mut [f64],
+    scratch: [&'a mut Vec<f64>; 4],
+}
+
+impl Stepping<'_> {
+    /// Steps the members of `list` still on the shared steps (deviations
+    /// `d`, stages `k`, ends into `d1`), their errors into `errs`; a
+    /// member whose step fails or is not finite leaves. Returns how many
+    /// members were stepped. With lanes, four at a time (a last one alone
+    /// by the scalar step): each member's numbers are those of its scalar
+    /// step, whatever its group.
+    fn step(
+        &mut self,
+        list: &[usize],
+        (d, d1, k): (&[f64], &mut [f64], &mut [f64]),
+        errs: &mut [f64],
+        (estimates, left): (&mut [f64], &mut [Left]),
+    ) -> usize {
+        let n = self.start.x.len();
+        let mut at = 0;
+        let mut stepped = 0;
+        loop {
+            let mut group = [0; WIDTH];
+            let mut count = 0;
+            while count < WIDTH && at < list.len() {
+                let m = list[at];
+                at += 1;
+                if estimates[m].is_finite() {
+                    group[count] = m;
+                    count += 1;
+                }
+            }
+            if count == 0 {
+                return stepped;
+            }
+            stepped += count;
+            let grouped = match self.lanes.as_deref_mut() {
+                Some(buffers) if count > 1 => {
+                    // Lanes past the group's members repeat its first (their
+                    // results are not kept).
+                    for l in count..WIDTH {
+                        group[l] = group[0];
+                    }
+                    let result = group_step(
+                        self.model,
+                        (self.stages, &self.start.x),
+                        (self.h, self.tol),
+                        &group,
+                        (d, &mut *k),
+                        buffers,
+                    );
+                    match result {
+                        Ok(found) => {
+                            for (l, &m) in group.iter().enumerate().take(count) {
+                                buffers.scatter(l, m, n, (d1, k), self.inner);
+                                if found[l].is_finite() {
+                                    errs[m] = found[l];
+                                } else {
+                                    leave(estimates, left, m, self.start, d);
+                                }
+                            }
+                            true
+                        }
+                        // A failure in one lane: each member by its scalar
+                        // step, which fails for that member alone.
+                        Err(_) => false,
+                    }
+                }
+                _ => false,
+            };
+            if grouped {
+                continue;
+            }
+            for &m in &group[..count] {
+                let r = m * n..(m + 1) * n;
+                let km = &mut k[m * (STAGES + 1) * n..(m + 1) * (STAGES + 1) * n];
+                let [a, b, c, e] = &mut self.scratch;
+                match member_step(
+                    self.model,
+                    (self.stages, &self.start.x),
+                    (self.h, self.tol),
+                    &d[r.clone()],
+                    km,
+                    &mut d1[r],
+                    self.x,
+                    [&mut a[..], &mut b[..], &mut c[..], &mut e[..]],
+                ) {
+                    Ok(err) if err.is_finite() => errs[m] = err,
+                    _ => leave(estimates, left, m, self.start, d),
+                }
+            }
+        }
+    }
+}
+
+/// A group's members side by side, one lane each: the deviation at the
+/// step's start, the stages (Hairer's numbering, as `k`), the shifted
+/// state, the end, and the end's terms of the error.
+struct LaneBuffers {
+    d0: Vec<Lanes>,
+    k: Vec<Lanes>,
+    x: Vec<Lanes>,
+    d1: Vec<Lanes>,
+    e3: Vec<Lanes>,
+    e5: Vec<Lanes>,
+    y0: Vec<Lanes>,
+    y1: Vec<Lanes>,
+    /// One lane's `y0, y1, e3, e5` for [`hairer_error`].
+    lane: [Vec<f64>; 4],
+}
+
+impl LaneBuffers {
+    fn new(n: usize) -> LaneBuffers {
+        let v = || vec![Lanes::default(); n];
+        LaneBuffers {
+            d0: v(),
+            k: vec![Lanes::default(); (STAGES + 1) * n],
+            x: v(),
+            d1: v(),
+            e3: v(),
+            e5: v(),
+            y0: v(),
+            y1: v(),
+            lane: std::array::from_fn(|_| vec![0.0; n]),
+        }
+    }
+
+    /// Lane `l`'s step back into member `m`'s places: its end into `d1`,
+    /// its end rate into `k` and, with `inner`, the stages between (the
+    /// first is already there; the others are only read by the continuous
+    /// extension).
+    fn scatter(
+        &self,
+        l: usize,
+        m: usize,
+        n: usize,
+        (d1, k): (&mut [f64], &mut [f64]),
+        inner: bool,
+    ) {
+        for (o, v) in d1[m * n..(m + 1) * n].iter_mut().zip(&self.d1) {
+            *o = v.0[l];
+        }
+        let from = if inner { 1 } else { STAGES };
+        let km = &mut k[m * (STAGES + 1) * n..(m + 1) * (STAGES + 1) * n];
+        for (o, v) in km[from * n..].iter_mut().zip(&self.k[from * n..]) {
+            *o = v.0[l];
+        }
+    }
+}
+
+/// [`member_step`] of the four members `group` at once (their deviations
+/// in `d`, their start rates in `k`), in `buffers`; returns each lane's
+/// error (`scatter` moves the results into the members' places).
+/// Dispatched on the state's size as `member_step` is.
+fn group_step(
+    model: &dyn DynModel,
+    (stages, x0): (&[Point], &[f64]),
+    (h, tol): (f64, Tolerance),
+    group: &[usize; WIDTH],
+    (d, k): (&[f64], &[f64]),
+    buffers: &mut LaneBuffers,
+) -> Result<[f64; WIDTH], Failure> {
+    macro_rules! sized {
+        ($($n:literal)*) => {
+            match x0.len() {
+                $($n => lanes_of(Fixed::<$n>, model, (stages, x0), (h, tol), group, (d, k), buffers),)*
+                n => lanes_of(Any(n), model, (stages, x0), (h, tol), group, (d, k), buffers),
+            }
+        };
+    }
+    sized!(2 4 6 8 10 12)
+}
+
+/// [`group_step`] for `dim` components: [`step_of`]'s arithmetic, each
+/// operation lane by lane in the same order (so each lane's numbers are
+/// its member's scalar step's, bit for bit).
+#[inline(always)]
+fn lanes_of<D: Dim>(
+    dim: D,
+    model: &dyn DynModel,
+    (stages, x0): (&[Point], &[f64]),
+    (h, tol): (f64, Tolerance),
+    group: &[usize; WIDTH],
+    (d, k): (&[f64], &[f64]),
+    buffers: &mut LaneBuffers,
+) -> Result<[f64; WIDTH], Failure> {
+    let n = dim.n();
+    let LaneBuffers {
+        d0,
+        k: kl,
+        x,
+        d1,
+        e3,
+        e5,
+        y0,
+        y1,
+        lane,
+    } = buffers;
+    let (d0, x, d1, x0) = (&mut d0[..n], &mut x[..n], &mut d1[..n], &x0[..n]);
+    let kl = &mut kl[..(STAGES + 1) * n];
+    for (l, &m) in group.iter().enumerate() {
+        let (dm, km) = (&d[m * n..][..n], &k[m * (STAGES + 1) * n..][..n]);
+        for i in 0..n {
+            d0[i].0[l] = dm[i];
+            kl[i].0[l] = km[i];
+        }
+    }
+    macro_rules! stage {
+        ($s:literal) => {{
+            let point = &stages[$s];
+            let b = &point.x[..n];
+            for i in 0..n {
+                let mut acc = Lanes::splat(0.0);
+                for &(j, a) in A[$s] {
+                    acc = acc + a * kl[j * n + i];
+                }
+                x[i] = b[i] + (d0[i] + h * acc);
+            }
+            let (_, rest) = kl.split_at_mut($s * n);
+            let (g, r) = (&mut rest[..n], &point.rate[..n]);
+            model.rhs_lanes(point.t, x, g)?;
+            for i in 0..n {
+                g[i] = g[i] - r[i];
+            }
+        }};
+    }
+    stage!(1);
+    stage!(2);
+    stage!(3);
+    stage!(4);
+    stage!(5);
+    stage!(6);
+    stage!(7);
+    stage!(8);
+    stage!(9);
+    stage!(10);
+    stage!(11);
+    let end = &stages[STAGES - 1].x[..n];
+    let (e3, e5, y0, y1) = (&mut e3[..n], &mut e5[..n], &mut y0[..n], &mut y1[..n]);
+    for i in 0..n {
+        let (mut b, mut e) = (Lanes::splat(0.0), Lanes::splat(0.0));
+        for &(l, c) in &B {
+            b = b + c * kl[l * n + i];
+        }
+        for &(l, c) in &ER {
+            e = e + c * kl[l * n + i];
+        }
+        let mut b3 = b;
+        for &(l, c) in &BHH {
+            b3 = b3 - c * kl[l * n + i];
+        }
+        e3[i] = b3;
+        e5[i] = e;
+        d1[i] = d0[i] + h * b;
+        y0[i] = x0[i] + d0[i];
+        y1[i] = end[i] + d1[i];
+    }
+    let (_, last) = kl.split_at_mut(STAGES * n);
+    let (g, point) = (&mut last[..n], &stages[STAGES - 1]);
+    for i in 0..n {
+        x[i] = end[i] + d1[i];
+    }
+    model.rhs_lanes(point.t, x, g)?;
+    for i in 0..n {
+        g[i] = g[i] - point.rate[i];
+    }
+    let mut errs = [0.0; WIDTH];
+    let [ly0, ly1, le3, le5] = lane;
+    for (l, err) in errs.iter_mut().enumerate() {
+        for i in 0..n {
+            ly0[i] = y0[i].0[l];
+            ly1[i] = y1[i].0[l];
+            le3[i] = e3[i].0[l];
+            le5[i] = e5[i].0[l];
+        }
+        *err = hairer_error(tol, h, &ly0[..n], &ly1[..n], &le3[..n], &le5[..n]);
+    }
+    Ok(errs)
 }
 
 /// Member `m` leaves the shared steps at `start` with deviation
@@ -635,6 +933,15 @@ mod tests {
             dx[3] = -x[1].sin() * x[0] - 0.1 * x[3];
             Ok(())
         }
+        const LANES: bool = true;
+        /// `rhs` over lanes, written as the emitter prints it.
+        fn rhs_lanes(&self, t: f64, x: &[Lanes], dx: &mut [Lanes]) -> Result<(), Failure> {
+            dx[0] = x[2];
+            dx[1] = x[3];
+            dx[2] = -x[0].sin() + 0.3 * (x[1] - x[0]) * t.cos();
+            dx[3] = -x[1].sin() * x[0] - 0.1 * x[3];
+            Ok(())
+        }
         fn jacobian(&self, _: f64, _: &[f64], _: &mut Matrix) -> Result<(), Failure> {
             unreachable!("not used by the member step")
         }
@@ -707,5 +1014,88 @@ mod tests {
         assert_eq!(fixed.2.to_bits(), any.2.to_bits());
         // And the step moved the deviation.
         assert!(fixed.1.iter().zip(&d0).any(|(a, b)| a != b));
+    }
+
+    /// Four members stepped in lanes give each member's scalar step, bit
+    /// for bit: its stages, its end and its error (the ensemble's CSVs do
+    /// not depend on whether the model has a right side over lanes).
+    #[test]
+    fn a_group_in_lanes_is_each_members_scalar_step() {
+        let model = Coupled;
+        let n = 4;
+        let h = 0.07;
+        let tol = Tolerance {
+            rtol: 1e-8,
+            atol: 1e-10,
+        };
+        let mut stages: Vec<Point> = (0..STAGES).map(|_| Point::new(n)).collect();
+        for (s, point) in stages.iter_mut().enumerate() {
+            point.t = 0.2 + C[s] * h;
+            point.x = (0..n).map(|i| 0.3 * i as f64 + point.t.sin()).collect();
+            Model::rhs(&model, point.t, &point.x, &mut point.rate).unwrap();
+        }
+        let x0 = stages[0].x.clone();
+        // Five members; the group holds 4, 0, 2 and 1 (any order).
+        let count = 5;
+        let d: Vec<f64> = (0..count * n)
+            .map(|i| 0.01 * ((i * 7 % 11) as f64 - 5.0))
+            .collect();
+        let mut k = vec![0.0; count * (STAGES + 1) * n];
+        let mut x = vec![0.0; n];
+        for m in 0..count {
+            let km = &mut k[m * (STAGES + 1) * n..][..n];
+            stages[0]
+                .rate(&model, &d[m * n..][..n], &mut x, km)
+                .unwrap();
+        }
+        let group = [4, 0, 2, 1];
+        let mut buffers = LaneBuffers::new(n);
+        let errs = group_step(
+            &model,
+            (&stages, &x0),
+            (h, tol),
+            &group,
+            (&d, &k),
+            &mut buffers,
+        )
+        .unwrap();
+        let (mut lane_d1, mut lane_k) = (vec![0.0; count * n], k.clone());
+        for (l, &m) in group.iter().enumerate() {
+            buffers.scatter(l, m, n, (&mut lane_d1, &mut lane_k), true);
+        }
+        for (l, &m) in group.iter().enumerate() {
+            let mut km = k[m * (STAGES + 1) * n..][..(STAGES + 1) * n].to_vec();
+            let mut d1 = vec![0.0; n];
+            let mut s: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; n]);
+            let [a, b, c, e] = &mut s;
+            let err = member_step(
+                &model,
+                (&stages, &x0),
+                (h, tol),
+                &d[m * n..][..n],
+                &mut km,
+                &mut d1,
+                &mut x,
+                [&mut a[..], &mut b[..], &mut c[..], &mut e[..]],
+            )
+            .unwrap();
+            assert!(err > 0.0 && err.is_finite(), "{err}");
+            assert_eq!(errs[l].to_bits(), err.to_bits(), "member {m}");
+            assert_eq!(&lane_d1[m * n..][..n], &d1[..], "member {m}");
+            assert_eq!(&lane_k[m * (STAGES + 1) * n..][..(STAGES + 1) * n], &km[..]);
+        }
+        // Member 3, not in the group, is untouched.
+        assert!(lane_d1[3 * n..][..n].iter().all(|&v| v == 0.0));
+        // Without the inner stages (no sample inside the step): the end
+        // and the end rate, the stages between left as they were.
+        let (mut d1, mut k2) = (vec![0.0; count * n], k.clone());
+        buffers.scatter(0, 4, n, (&mut d1, &mut k2), false);
+        let block = 4 * (STAGES + 1) * n;
+        assert_eq!(&d1[4 * n..][..n], &lane_d1[4 * n..][..n]);
+        assert_eq!(&k2[..block + STAGES * n], &k[..block + STAGES * n]);
+        assert_eq!(
+            &k2[block + STAGES * n..][..n],
+            &lane_k[block + STAGES * n..][..n]
+        );
     }
 }
