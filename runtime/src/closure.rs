@@ -153,7 +153,7 @@ pub fn project(
 /// The buffers of [`project`], kept on the thread from call to call: the
 /// keeper projects a holonomic model's state after every step and at
 /// every output, and these were four allocations a call and two more a
-/// correction (docs/BENCHMARKS.md §10f). Taken out of the cell for a call
+/// correction (docs/BENCHMARKS.md §10h). Taken out of the cell for a call
 /// and put back after it (a call that never returns them leaves `None`,
 /// and the next makes new ones).
 #[derive(Debug)]

@@ -2,7 +2,7 @@
 //! keeper measuring the residual after every step, projecting after some,
 //! projecting every sample) allocates its buffers when it starts and none
 //! per step (a copy of the state a step was a tenth of the paper's
-//! instructions with malloc and free, docs/BENCHMARKS.md §10f).
+//! instructions with malloc and free, docs/BENCHMARKS.md §10h).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;

@@ -154,7 +154,7 @@ impl Dop853 {
     /// the same right side evaluated into the first stage), its buffers
     /// and its box reused. A projection after a step restarts the
     /// integrator, and five allocations a restart were all a drifting
-    /// constrained run allocated per step (docs/BENCHMARKS.md §10f). A
+    /// constrained run allocated per step (docs/BENCHMARKS.md §10h). A
     /// failing start changes only the trial state, scratch that a step
     /// writes before it reads.
     pub fn restart_at<S: System + ?Sized>(

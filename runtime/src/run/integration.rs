@@ -899,7 +899,7 @@ impl<'m> Integration<'m> {
                     // A state off its constraint near a pole or an end
                     // of one is named after it. The state is read in
                     // place (a copy a step was most of a constrained
-                    // run's allocations, docs/BENCHMARKS.md §10f).
+                    // run's allocations, docs/BENCHMARKS.md §10h).
                     kept = match keeper.after_step(model, regime.mode, tb, solver.state()) {
                         Ok(Some(x)) => solver.project(model, tb, x),
                         Ok(None) => Ok(()),

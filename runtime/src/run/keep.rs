@@ -58,7 +58,7 @@ pub struct Keeper {
     /// The constrained values, then the last projection's result (one
     /// buffer of two states: a small model's solve is a few microseconds,
     /// and each allocation and free in it about 1 % of the paper's,
-    /// docs/BENCHMARKS.md §10f).
+    /// docs/BENCHMARKS.md §10h).
     states: Vec<f64>,
     gradient: Matrix,
     /// The two projected states of [`Keeper::kept_part`], one after the
@@ -347,7 +347,7 @@ impl Keeper {
         }
         // The fields borrowed apart, the scratch buffers in place (taking
         // them out and back, and the closure over the whole keeper, were a
-        // tenth of a measuring call, docs/BENCHMARKS.md §10f).
+        // tenth of a measuring call, docs/BENCHMARKS.md §10h).
         let Keeper {
             tol,
             fixed,
