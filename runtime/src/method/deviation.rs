@@ -950,12 +950,9 @@ mod tests {
         }
     }
 
-    /// The unrolled member step (a size known at compile time) and the
-    /// one for any size give the same numbers, bit for bit: the sizes the
-    /// dispatch does not unroll run the same arithmetic.
-    #[test]
-    fn the_unrolled_member_step_is_the_step_for_any_size() {
-        let model = Coupled;
+    /// The base at a step's stage times (4 components, a step of 0.07
+    /// from t = 0.2) and the tolerance, for the member step's tests.
+    fn base_stages(model: &Coupled) -> (usize, f64, Tolerance, Vec<Point>) {
         let n = 4;
         let h = 0.07;
         let tol = Tolerance {
@@ -966,8 +963,18 @@ mod tests {
         for (s, point) in stages.iter_mut().enumerate() {
             point.t = 0.2 + C[s] * h;
             point.x = (0..n).map(|i| 0.3 * i as f64 + point.t.sin()).collect();
-            Model::rhs(&model, point.t, &point.x, &mut point.rate).unwrap();
+            Model::rhs(model, point.t, &point.x, &mut point.rate).unwrap();
         }
+        (n, h, tol, stages)
+    }
+
+    /// The unrolled member step (a size known at compile time) and the
+    /// one for any size give the same numbers, bit for bit: the sizes the
+    /// dispatch does not unroll run the same arithmetic.
+    #[test]
+    fn the_unrolled_member_step_is_the_step_for_any_size() {
+        let model = Coupled;
+        let (n, h, tol, stages) = base_stages(&model);
         let x0 = stages[0].x.clone();
         let d0 = [0.01, -0.02, 0.03, 0.005];
         let run = |fixed: bool| {
@@ -1022,18 +1029,7 @@ mod tests {
     #[test]
     fn a_group_in_lanes_is_each_members_scalar_step() {
         let model = Coupled;
-        let n = 4;
-        let h = 0.07;
-        let tol = Tolerance {
-            rtol: 1e-8,
-            atol: 1e-10,
-        };
-        let mut stages: Vec<Point> = (0..STAGES).map(|_| Point::new(n)).collect();
-        for (s, point) in stages.iter_mut().enumerate() {
-            point.t = 0.2 + C[s] * h;
-            point.x = (0..n).map(|i| 0.3 * i as f64 + point.t.sin()).collect();
-            Model::rhs(&model, point.t, &point.x, &mut point.rate).unwrap();
-        }
+        let (n, h, tol, stages) = base_stages(&model);
         let x0 = stages[0].x.clone();
         // Five members; the group holds 4, 0, 2 and 1 (any order).
         let count = 5;
