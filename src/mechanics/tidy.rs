@@ -464,13 +464,7 @@ mod tests {
     /// The rule as first written: rescan every pair of jets after each
     /// drop, dropping the last end of the last dependence.
     fn affine_jets_by_pairs(arena: &mut Arena, e: ExprId) -> Vec<Symbol> {
-        let mut vars: Vec<Symbol> = arena
-            .free_symbols(e)
-            .into_iter()
-            .filter(|s| matches!(s, Symbol::Jet { .. }))
-            .filter(|&s| !arena.switches_on(e, s))
-            .collect();
-        vars.sort_by_key(|&s| priority(s));
+        let mut vars = crate::mechanics::jet_coefficients::candidate_jets(arena, e);
         loop {
             let mut drop: Option<usize> = None;
             for (a, &v) in vars.iter().enumerate() {
