@@ -112,6 +112,24 @@ pub trait Solver {
     fn cut(&mut self, _model: &dyn DynModel, _t: f64, _x: &[f64]) {}
     /// Starts afresh from `(t, x)` (after an event changed the regime).
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
+    /// Starts again from `(t, x)`, the start of the last advance, whose
+    /// step is not the motion (a constraint's pivot crossed zero or became
+    /// poor within it, `run::regime::pivot_crossed`): a method that
+    /// carries a global error estimate drops that step's error.
+    fn retake(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        self.restart(model, t, x)
+    }
+    /// Whether a step that took a constraint's pivot from good to poor is
+    /// taken again from its start with the better candidate
+    /// (`run::regime::pivot_crossed`): where the method's error estimate
+    /// cannot see such a step's error. DOP853's embedded estimate cannot
+    /// (the rate divides by the falling pivot); the field measures each
+    /// window's error against a reference step, and a window retaken
+    /// whole restarts its step sizes (a particle on a circle at rtol 1e-10
+    /// retaken at every quarter turn ended on a step underflow).
+    fn retakes_steps_into_poor_pivots(&self) -> bool {
+        false
+    }
     /// [`Solver::restart`] after an event that left the state where it was
     /// and the rate's scale (its Jacobian's norm) within twice the old: a
     /// method may keep the step sizes it had learnt.

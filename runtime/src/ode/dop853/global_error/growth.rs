@@ -236,6 +236,12 @@ impl Growth {
         }
     }
 
+    /// The pending step is not the motion (taken again from its start,
+    /// `Solver::retake`): it is neither propagated over nor added.
+    pub fn discard_pending(&mut self) {
+        self.pending = None;
+    }
+
     /// The model may have changed since the pending step was taken (a
     /// regime switch, which restarts the run without an event's cut): its
     /// derivative is then taken by two new steps in the model as it is
