@@ -241,11 +241,12 @@ fn direct_integration_does_not_count_an_error_across_a_holonomic_constraint() {
     }
     // A velocity constraint's error across it is counted: it integrates
     // into the positions before a projection removes it (the circling
-    // knife edge at rtol 1e-10 ends 10.5 rtol off, and is warned).
+    // knife edge at rtol 1e-10 ends 9.5 rtol off, 10.5 before its steps
+    // into a poor pivot were taken again, and is warned).
     let binary = build("knife_edge_circling");
     let (error, estimate, warned) = estimate_at(&binary, "direct", 1e-10);
     assert!(
-        error > 1e-9 && estimate >= error && warned,
+        error > 5e-10 && estimate >= error && warned,
         "error {error:e}, estimate {estimate:e}, warned {warned}"
     );
 }
