@@ -318,6 +318,13 @@ pub struct LinearizedCoefficients<'a, I: Iterate + ?Sized> {
     iterate: &'a I,
     scratch: Scratch<'a>,
     evaluations: std::cell::Cell<usize>,
+    /// The linearisation is the same at every time: an autonomous model
+    /// ([`crate::model::Model::AUTONOMOUS`]) linearised at the origin at
+    /// every time (an affine motion's iterate). Its `A` and `b` are then
+    /// evaluated once per system rather than at every stage (the same
+    /// numbers: the model's `linearize` does not read `t`); 10 of the
+    /// 12 evaluations of a DOP853 step of an oscillator's field.
+    frozen: bool,
 }
 
 impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
@@ -327,6 +334,7 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
             iterate,
             scratch: Scratch::Owned(LinearizationScratch::new(model.dim())),
             evaluations: std::cell::Cell::new(0),
+            frozen: model.autonomous() && iterate.is_origin(),
         }
     }
 
@@ -338,7 +346,7 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
     /// The iterate `x0`, `X(t, x0)` and `A = ∂X/∂x (t, x0)` at `t`, into
     /// the scratch.
     fn evaluate(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
-        if sc.evaluated_at == Some(t.to_bits()) {
+        if sc.evaluated_at == Some(t.to_bits()) || (self.frozen && sc.evaluated_at.is_some()) {
             return Ok(());
         }
         sc.evaluated_at = None;
@@ -357,7 +365,7 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
     /// `A` and `b` at `t`, into the scratch.
     fn linearize(&self, t: f64, sc: &mut LinearizationScratch) -> Result<(), Failure> {
         self.evaluate(t, sc)?;
-        if sc.formed_at == Some(t.to_bits()) {
+        if sc.formed_at == Some(t.to_bits()) || (self.frozen && sc.formed_at.is_some()) {
             return Ok(());
         }
         if self.iterate.is_origin() {
@@ -583,6 +591,7 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
                 iterate,
                 scratch: Scratch::Lent(scratch),
                 evaluations: std::cell::Cell::new(0),
+                frozen: model.autonomous() && iterate.is_origin(),
             },
             dim: model.dim(),
             shift: model.coordinates(),
