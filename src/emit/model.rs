@@ -271,9 +271,10 @@ fn autonomous(kernel: &Kernel) -> bool {
     let arena = &kernel.arena;
     let roots = e.rhs.iter().chain(e.jacobian.iter().map(|(_, _, d)| d));
     roots.into_iter().all(|&r| {
-        arena.free_symbols(r).iter().all(|s| {
-            matches!(s, Symbol::Param(_) | Symbol::Jet { .. })
-        })
+        arena
+            .free_symbols(r)
+            .iter()
+            .all(|s| matches!(s, Symbol::Param(_) | Symbol::Jet { .. }))
     })
 }
 

@@ -797,7 +797,11 @@ impl<I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, I> {
         let (n, shift) = (self.dim, self.shift);
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
-        self.linear.linearize(t, sc)?;
+        // Frozen and formed: nothing to ask of `linearize` (a call and two
+        // checks at every stage).
+        if !(self.linear.frozen && sc.formed_at.is_some()) {
+            self.linear.linearize(t, sc)?;
+        }
         let (rows, sums) = sc.batch.split_at_mut(n * n);
         adjoint_rates(&sc.a, &sc.b, shift, y, dy, rows, sums);
         Ok(())
