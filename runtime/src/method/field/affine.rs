@@ -435,7 +435,7 @@ fn advance_window(
                     *anchors = ends;
                 }
                 *done += window.stats();
-                *window = Window::open(system, options, t, &x, Some(h), h_max, kind)?;
+                window.reopen(system, options, t, &x, Some(h), h_max, kind)?;
                 *reanchorings += 1;
             }
         }
