@@ -478,7 +478,7 @@ impl FieldError {
                 continue;
             };
             let h = step.t1 - step.t0;
-            let estimated = relative(&local, &step.x1);
+            let estimated = relative(local, &step.x1);
             let carried = self.growth.started() || past_bound(&self.global, self.rtol);
             // The step's error against the reference, where asked for; a
             // reference that fails leaves the estimate as it is (the
@@ -506,7 +506,7 @@ impl FieldError {
             if carried {
                 // The measured error with its sign, at most the estimate.
                 let local: Vec<f64> = match measured {
-                    Some(m) => at_most_estimated(&m, &local, &step.x1),
+                    Some(m) => at_most_estimated(&m, local, &step.x1),
                     None => {
                         let k = if estimated > 0.0 {
                             added / estimated
