@@ -165,6 +165,13 @@ pub trait Model: Clone {
     /// The coefficient system is linear in the coefficients (no `X_A`
     /// depends on `x_1`); otherwise it is of Riccati type.
     const COEFFICIENTS_LINEAR: bool = false;
+    /// The reduced system's right side and its Jacobian do not depend on
+    /// time (no `t`, mass law or input in them): [`Model::linearize`] at a
+    /// state gives the same numbers at every time, so the affine field,
+    /// which linearises at the origin, needs it once per system built
+    /// rather than at every stage. Set only for affine models; `false`
+    /// is always safe.
+    const AUTONOMOUS: bool = false;
     /// The model states exact solutions (`exact` lines).
     const EXACT: bool = false;
     /// Constraints fix some state components (the dependent velocities of
@@ -462,6 +469,10 @@ pub trait DynModel {
     fn coefficients_linear(&self) -> bool {
         false
     }
+    /// [`Model::AUTONOMOUS`].
+    fn autonomous(&self) -> bool {
+        false
+    }
     /// [`Model::EXACT`].
     fn states_exact(&self) -> bool {
         false
@@ -654,6 +665,9 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn coefficients_linear(&self) -> bool {
         M::COEFFICIENTS_LINEAR
+    }
+    fn autonomous(&self) -> bool {
+        M::AUTONOMOUS
     }
     fn states_exact(&self) -> bool {
         M::EXACT

@@ -255,6 +255,29 @@ fn closure_newton(
     }
 }
 
+/// Whether the reduced system's right side and its Jacobian (what
+/// `linearize` computes) read nothing that moves with time: no `t`, no
+/// mass law, no input. One mode only (a model with candidates dispatches
+/// `linearize` on its mode) and an explicit motion; anything else is
+/// reported as not autonomous, which costs only speed
+/// (the runtime's `Model::AUTONOMOUS`).
+fn autonomous(kernel: &Kernel) -> bool {
+    let crate::kernel::Motion::Explicit(e) = &kernel.motion else {
+        return false;
+    };
+    if !kernel.modes.is_empty() {
+        return false;
+    }
+    let arena = &kernel.arena;
+    let roots = e.rhs.iter().chain(e.jacobian.iter().map(|(_, _, d)| d));
+    roots.into_iter().all(|&r| {
+        arena
+            .free_symbols(r)
+            .iter()
+            .all(|s| matches!(s, Symbol::Param(_) | Symbol::Jet { .. }))
+    })
+}
+
 /// The consts of the trait impl.
 pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStream {
     let arena = &kernel.arena;
@@ -292,9 +315,15 @@ pub fn consts(kernel: &Kernel, model_name: &str, source_hash: &str) -> TokenStre
     let affine = match &kernel.coefficients {
         Some(c) => {
             let linear = c.linear;
+            let autonomous = if autonomous(kernel) {
+                quote! { const AUTONOMOUS: bool = true; }
+            } else {
+                TokenStream::new()
+            };
             quote! {
                 const AFFINE: bool = true;
                 const COEFFICIENTS_LINEAR: bool = #linear;
+                #autonomous
             }
         }
         None => TokenStream::new(),

@@ -960,12 +960,13 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
     let mut k = vec![0.0; (STAGES + 1) * n];
     system.rhs(t_old, y_old, &mut k[..n])?;
     let mut stage_state = vec![0.0; n];
-    for s in 1..STAGES {
-        stage_state.copy_from_slice(y_old);
-        for &(j, a) in A[s] {
-            axpy(h * a, &k[j * n..(j + 1) * n], &mut stage_state);
-        }
-        system.rhs(t_old + C[s] * h, &stage_state, &mut k[s * n..(s + 1) * n])?;
+    // The sizes of small models known at compile time (the field's output
+    // between steps takes one such step a sample): the same operations.
+    match n {
+        2 => between_stages::<S, 2>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
+        3 => between_stages::<S, 3>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
+        4 => between_stages::<S, 4>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
+        _ => between_stages::<S, 0>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
     }
     let miss = match tol {
         Some(tol) => {
@@ -998,6 +999,39 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
         return Err(Failure::non_finite(t_old, system.component_name(0)));
     }
     Ok((DenseStep::dop853(t_old, t_old + h, h, cont), miss))
+}
+
+/// The stages 1..12 of [`dense_step_between_measured`] into `k` (its
+/// stage 0 given), for `N` components (`N = 0`: any number, read at run
+/// time): `y_old + Σ (h a_j) k_j` summed in `A`'s order, as `axpy` does,
+/// with every index a constant when `N` is known (the loops' counting was
+/// half of the step's instructions at `N = 2`).
+#[inline(always)]
+fn between_stages<S: System + ?Sized, const N: usize>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    k: &mut [f64],
+    stage_state: &mut [f64],
+) -> Result<(), Failure> {
+    let n = if N == 0 { y_old.len() } else { N };
+    for s in 1..STAGES {
+        stage_state.copy_from_slice(y_old);
+        for &(j, a) in A[s] {
+            if N == 0 {
+                axpy(h * a, &k[j * n..(j + 1) * n], stage_state);
+            } else {
+                let ha = h * a;
+                let (x, y) = (&k[j * N..(j + 1) * N], &mut stage_state[..N]);
+                for i in 0..N {
+                    y[i] += ha * x[i];
+                }
+            }
+        }
+        system.rhs(t_old + C[s] * h, stage_state, &mut k[s * n..(s + 1) * n])?;
+    }
+    Ok(())
 }
 
 /// An accepted step as data (see [`Dop853::raw_step`]): one buffer of

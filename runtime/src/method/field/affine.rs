@@ -42,6 +42,10 @@ pub struct AffineField {
     between: Option<Between>,
     /// The global error estimate carried along the run.
     error: FieldError,
+    /// Storage of `advance`: the state before the step, and the step's
+    /// local error.
+    x_old: Vec<f64>,
+    local: Vec<f64>,
 }
 
 /// [`AffineField`]'s output for the step `[t_old, t_new]`.
@@ -115,6 +119,8 @@ impl AffineField {
             scratch,
             between: None,
             error: FieldError::new(x0.len(), options_rtol),
+            x_old: Vec::new(),
+            local: Vec::new(),
         })
     }
 }
@@ -139,7 +145,11 @@ impl Solver for AffineField {
         budget: &Budget,
     ) -> Result<(), Failure> {
         self.error.feed(model, f64::INFINITY);
-        let (t_old, x_old) = (self.window.time(), self.window.state().to_vec());
+        // The state before, in storage kept from advance to advance.
+        let mut x_old = std::mem::take(&mut self.x_old);
+        x_old.clear();
+        x_old.extend_from_slice(self.window.state());
+        let t_old = self.window.time();
         let (window, options, h_max) = (&mut self.window, &self.options, self.h_max);
         let (mut done, mut reanchorings, mut largest) =
             (Stats::default(), 0, self.largest_condition);
@@ -162,16 +172,17 @@ impl Solver for AffineField {
         self.reanchorings += reanchorings;
         self.largest_condition = largest;
         if result.is_ok() {
-            let mut local = vec![0.0; x_old.len()];
-            let estimated = self.window.local_error(self.options.tol, &mut local);
-            self.error.window(
+            let local = &mut self.local;
+            local.resize(x_old.len(), 0.0);
+            let estimated = self.window.local_error(self.options.tol, local);
+            self.error.step(
                 model,
                 (t_old, &x_old),
-                &[self.window.time()],
-                &[self.window.state().to_vec()],
-                &[estimated.then_some(local)],
+                (self.window.time(), self.window.state()),
+                estimated.then_some(&local[..]),
             );
         }
+        self.x_old = x_old;
         result.map_err(|f| super::explain(model, f, self.window.time(), self.window.state()))
     }
 
@@ -424,7 +435,7 @@ fn advance_window(
                     *anchors = ends;
                 }
                 *done += window.stats();
-                *window = Window::open(system, options, t, &x, Some(h), h_max, kind)?;
+                window.reopen(system, options, t, &x, Some(h), h_max, kind)?;
                 *reanchorings += 1;
             }
         }

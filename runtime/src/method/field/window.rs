@@ -399,6 +399,81 @@ impl Window {
         })
     }
 
+    /// [`Window::open`] in this window's storage: afterwards the window is
+    /// the one `open` would make from the same arguments (its DOP853
+    /// restarted in its own buffers, `Dop853::restart_at`, the anchor's
+    /// recovery in the spare `Recovered`), without a box, a stepper and a
+    /// dozen vectors allocated and freed at every re-anchoring (a third
+    /// of mass_gain_1000's field, whose windows hold one step or two).
+    /// Only an explicit window continued explicitly; any other is opened
+    /// anew. On failure the window is left at its end, as it was, but for
+    /// its integrator's scratch (the run stops there).
+    #[allow(clippy::too_many_arguments)]
+    pub fn reopen(
+        &mut self,
+        system: &dyn FieldSystem,
+        options: &FieldOptions,
+        t: f64,
+        x: &[f64],
+        h0: Option<f64>,
+        h_max: f64,
+        kind: StepperKind,
+    ) -> Result<(), Failure> {
+        let n = x.len();
+        let reusable = kind == StepperKind::Explicit
+            && self.kind == StepperKind::Explicit
+            && self.anchor_x.len() == n
+            && self.stepper.as_any().is::<Dop853>();
+        if !reusable {
+            *self = Window::open(system, options, t, x, h0, h_max, kind)?;
+            return Ok(());
+        }
+        // As `open`, step by step.
+        let c = anchor_values(&options.anchor, x);
+        let y = system.anchored(&c);
+        let b = &mut self.buffers;
+        b.s.fill(0.0);
+        for i in 0..n {
+            b.s[i * n + i] = 1.0;
+        }
+        if !recover_into(&c, &b.s, x, &mut self.spare) {
+            return Err(Failure::new(
+                t,
+                FailureKind::SingularConditionMatrix {
+                    condition: f64::INFINITY,
+                },
+            ));
+        }
+        let typical = x.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        b.f.clear();
+        b.f.extend(x.iter().map(|v| v.abs().max(typical)));
+        let moved = &b.f;
+        let lost = cancellation(&c, moved, options.tol)
+            * (options.tol.atol + options.tol.rtol * moved[0])
+            / (options.tol.atol + options.tol.rtol * x[0].abs());
+        if lost > 0.1 {
+            return Err(Failure::new(
+                t,
+                FailureKind::AnchorCancels {
+                    digits: (lost / 0.1).log10().max(0.0),
+                },
+            ));
+        }
+        let dop853 = self
+            .stepper
+            .as_any_mut()
+            .downcast_mut::<Dop853>()
+            .expect("checked above");
+        dop853.restart_at(system, t, &y, options.tol, h_max, h0)?;
+        std::mem::swap(&mut self.current, &mut self.spare);
+        self.anchor_t = t;
+        self.anchor_x.copy_from_slice(x);
+        self.previous_state.copy_from_slice(x);
+        self.steps = 0;
+        self.declined = None;
+        Ok(())
+    }
+
     pub fn time(&self) -> f64 {
         self.stepper.time()
     }
