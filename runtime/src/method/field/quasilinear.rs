@@ -969,16 +969,6 @@ impl QuasilinearField {
                             .then_some(local),
                     );
                     kept_at = (t, budget.used());
-                    // The step was the shorter retry of one the conditions
-                    // declined: they are at their limit, and the next step,
-                    // of the length the error allows, would be declined
-                    // again (the gravity-turn rocket at rtol 1e-9, every
-                    // decline the rounding watch's: after such a retry the
-                    // next attempt and its own retry were declined in most
-                    // of its 21 windows, two attempts wasted at each).
-                    if window.at_limit() {
-                        break WindowEnd::Conditioning;
-                    }
                 }
                 WindowStep::Ended if window.steps() == 0 => {
                     shortenings += 1;
@@ -998,20 +988,6 @@ impl QuasilinearField {
         if self.options.auto_stiff && window.stiffness_detected() {
             self.found_stiff(model);
         }
-        // After the conditions ended the window, the error control's last
-        // proposal without the decline's retry cut to a quarter: a fresh
-        // anchor's conditions are well conditioned again, and the error
-        // allows that step (the gravity-turn rocket at rtol 1e-9: each
-        // window's first step, that quarter, had an error of 1e-7
-        // tolerances, and the next three steps grew back to the old
-        // length). After an accepted retry, the proposal that followed it
-        // (never more than the declined step): the declined step itself
-        // put a sample inside the next window's first step 9e-7 off at
-        // rtol 1e-6 (3e-8 before).
-        let field_h = match (end, window.controlled_step()) {
-            (WindowEnd::Conditioning, Some(h)) if !steps.is_empty() => h,
-            _ => window.proposed_step(),
-        };
         Ok(Pass {
             steps,
             states,
@@ -1019,7 +995,7 @@ impl QuasilinearField {
             end,
             stats: window.stats(),
             largest_condition,
-            field_h,
+            field_h: window.proposed_step(),
             start_failed,
         })
     }

@@ -304,13 +304,6 @@ pub struct Window {
     steps: usize,
     buffers: Buffers,
     declined: Option<Decline>,
-    /// The error control's last proposal when the conditions declined a
-    /// step (the declined step, or, if its shorter retry was accepted,
-    /// the proposal after the retry but never more): the step the error
-    /// allows, which the conditions, not the error, cut.
-    controlled_step: Option<f64>,
-    /// The last accepted step was the shorter retry of a declined one.
-    retried: bool,
 }
 
 impl Window {
@@ -403,8 +396,6 @@ impl Window {
             steps: 0,
             buffers: Buffers::new(n),
             declined: None,
-            controlled_step: None,
-            retried: false,
         })
     }
 
@@ -499,19 +490,6 @@ impl Window {
         self.stepper.propose_step(h)
     }
 
-    /// The error control's last proposal when the conditions last
-    /// declined a step, without the retry's cut to a quarter (`None` if
-    /// none was declined after the first step).
-    pub fn controlled_step(&self) -> Option<f64> {
-        self.controlled_step
-    }
-
-    /// The last accepted step was the shorter retry of a step the
-    /// conditions declined: the window is at their limit.
-    pub fn at_limit(&self) -> bool {
-        self.retried
-    }
-
     pub fn stats(&self) -> Stats {
         self.stepper.stats()
     }
@@ -542,23 +520,12 @@ impl Window {
         // A step the conditions decline may fit shorter (the sensitivities'
         // growth rises with the step): try a quarter of it once before
         // ending the window, whose fresh start costs more.
-        self.retried = false;
         if outcome == StepOutcome::Declined && self.steps > 0 {
-            let h = self.stepper.proposed_step();
-            self.stepper.propose_step(0.25 * h);
+            let h = 0.25 * self.stepper.proposed_step();
+            self.stepper.propose_step(h);
             outcome = self
                 .stepper
                 .step_measured(system, t_limit, budget, &mut measure)?;
-            // For explicit windows only (`controlled_step`, `at_limit`):
-            // measured there (BENCHMARKS §0, h-rocket); RODAS4's and
-            // Magnus' windows keep their old ends and first steps.
-            if self.kind == StepperKind::Explicit {
-                self.retried = true;
-                self.controlled_step = Some(match outcome {
-                    StepOutcome::Accepted => h.min(self.stepper.proposed_step()),
-                    StepOutcome::Declined => h,
-                });
-            }
         }
         self.declined = measure.declined;
         let trial_ok = measure.trial_ok;
