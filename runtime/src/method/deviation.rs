@@ -30,6 +30,9 @@
 //! Samples between the shared steps come from DOP853's continuous
 //! extension (`contd8`) of `d`, three more right sides a member on the steps
 //! that hold a sample, not extra steps.
+//!
+//! A member's step on the shared steps is `deviation/member.rs`'s, one
+//! member at a time or four in SIMD lanes (one step over either number).
 
 mod member;
 

@@ -44,31 +44,14 @@ impl Dim for Any {
 /// loops unrolled, [`Any`] for the rest (the same code).
 macro_rules! by_size {
     ($n:expr, $dim:ident => $body:expr) => {
+        by_size!($n, $dim => $body; 2 4 6 8 10 12)
+    };
+    ($n:expr, $dim:ident => $body:expr; $($size:literal)*) => {
         match $n {
-            2 => {
-                let $dim = Fixed::<2>;
+            $($size => {
+                let $dim = Fixed::<$size>;
                 $body
-            }
-            4 => {
-                let $dim = Fixed::<4>;
-                $body
-            }
-            6 => {
-                let $dim = Fixed::<6>;
-                $body
-            }
-            8 => {
-                let $dim = Fixed::<8>;
-                $body
-            }
-            10 => {
-                let $dim = Fixed::<10>;
-                $body
-            }
-            12 => {
-                let $dim = Fixed::<12>;
-                $body
-            }
+            })*
             n => {
                 let $dim = Any(n);
                 $body
@@ -412,49 +395,34 @@ mod tests {
     #[test]
     fn the_unrolled_member_step_is_the_step_for_any_size() {
         let model = Coupled;
-        let (n, h, tol, stages) = base_stages(&model);
-        let x0 = stages[0].x.clone();
+        let (_, h, tol, stages) = base_stages(&model);
         let d0 = [0.01, -0.02, 0.03, 0.005];
-        let run = |fixed: bool| {
+        // The step from `d0` (the base's start `stages[0].x`): its stages,
+        // its end, its error's terms and its error.
+        type Step = (Vec<f64>, Vec<f64>, [Vec<f64>; 4], f64);
+        fn run<D: Dim>(
+            dim: D,
+            model: &Coupled,
+            stages: &[Point],
+            (h, tol): (f64, Tolerance),
+            d0: &[f64],
+        ) -> Step {
+            let n = d0.len();
             let mut k = vec![0.0; (STAGES + 1) * n];
             let mut x = vec![0.0; n];
-            stages[0].rate(&model, &d0, &mut x, &mut k[..n]).unwrap();
+            stages[0].rate(model, d0, &mut x, &mut k[..n]).unwrap();
             let mut d1 = vec![0.0; n];
             let mut terms: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; n]);
             let [a, b, c, e] = &mut terms;
             let scratch = [&mut a[..], &mut b[..], &mut c[..], &mut e[..]];
-            let args = (&stages[..], &x0[..]);
-            if fixed {
-                dop853_step(
-                    Fixed::<4>,
-                    &model,
-                    args,
-                    h,
-                    &d0[..],
-                    &mut k,
-                    &mut d1,
-                    &mut x,
-                    scratch,
-                )
-            } else {
-                dop853_step(
-                    Any(4),
-                    &model,
-                    args,
-                    h,
-                    &d0[..],
-                    &mut k,
-                    &mut d1,
-                    &mut x,
-                    scratch,
-                )
-            }
-            .unwrap();
+            let args = (stages, &stages[0].x[..]);
+            dop853_step(dim, model, args, h, d0, &mut k, &mut d1, &mut x, scratch).unwrap();
             let [e3, e5, y0, y1] = &terms;
             let err = hairer_error(tol, h, y0, y1, e3, e5);
             (k, d1, terms, err)
-        };
-        let (fixed, any) = (run(true), run(false));
+        }
+        let fixed = run(Fixed::<4>, &model, &stages, (h, tol), &d0);
+        let any = run(Any(4), &model, &stages, (h, tol), &d0);
         assert!(fixed.3 > 0.0 && fixed.3.is_finite(), "{}", fixed.3);
         assert_eq!(fixed.0, any.0);
         assert_eq!(fixed.1, any.1);
