@@ -72,6 +72,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/method/deviation.rs"),
     ),
     (
+        "src/method/deviation/member.rs",
+        include_str!("../../runtime/src/method/deviation/member.rs"),
+    ),
+    (
         "src/method/direct.rs",
         include_str!("../../runtime/src/method/direct.rs"),
     ),

@@ -1144,23 +1144,7 @@ pub fn step_derivative<S: System + ?Sized>(
     d: &[f64],
     out: &mut [f64],
 ) -> Result<bool, Failure> {
-    let n = y.len();
-    let Some(eps) = difference_size(y, d) else {
-        out[..n].fill(0.0);
-        return Ok(d.iter().all(|&v| v == 0.0));
-    };
-    let mut k = vec![0.0; STAGES * n];
-    let mut stage_state = vec![0.0; n];
-    let mut base = vec![0.0; n];
-    system.rhs(t, y, &mut k[..n])?;
-    plain_step(system, t, y, h, &mut k, &mut stage_state, &mut base)?;
-    let moved: Vec<f64> = y.iter().zip(d).map(|(y, d)| y + eps * d).collect();
-    system.rhs(t, &moved, &mut k[..n])?;
-    plain_step(system, t, &moved, h, &mut k, &mut stage_state, out)?;
-    for (o, b) in out[..n].iter_mut().zip(&base) {
-        *o = (*o - b) / eps;
-    }
-    Ok(first_non_finite(&out[..n]).is_none())
+    step_difference(system, (t, y), h, (plain_step, None), d, out)
 }
 
 /// One DOP853 step of length `h` from `(t, y)` into `out` with the
@@ -1214,6 +1198,27 @@ pub fn step_derivative_from_accepted<S: System + ?Sized>(
     d: &[f64],
     out: &mut [f64],
 ) -> Result<bool, Failure> {
+    step_difference(system, (t, y), h, (step_as_accepted, Some(y_end)), d, out)
+}
+
+/// `(step(y + ε d) − step(y)) / ε` into `out`, `ε` from
+/// [`difference_size`], `step` one step of length `h` from `(t, ·)` by
+/// `arithmetic` ([`plain_step`] or [`step_as_accepted`]: `k[..n]` the
+/// rate at its start, `k` and the stage state its scratch), `step(y)`
+/// taken here unless `end` gives it (the step already taken): the
+/// two derivatives above. `Ok(false)` when a value was not finite.
+fn step_difference<S, F>(
+    system: &S,
+    (t, y): (f64, &[f64]),
+    h: f64,
+    (arithmetic, end): (F, Option<&[f64]>),
+    d: &[f64],
+    out: &mut [f64],
+) -> Result<bool, Failure>
+where
+    S: System + ?Sized,
+    F: Fn(&S, f64, &[f64], f64, &mut [f64], &mut [f64], &mut [f64]) -> Result<(), Failure>,
+{
     let n = y.len();
     let Some(eps) = difference_size(y, d) else {
         out[..n].fill(0.0);
@@ -1221,10 +1226,21 @@ pub fn step_derivative_from_accepted<S: System + ?Sized>(
     };
     let mut k = vec![0.0; STAGES * n];
     let mut stage_state = vec![0.0; n];
+    let own;
+    let end = match end {
+        Some(end) => end,
+        None => {
+            let mut base = vec![0.0; n];
+            system.rhs(t, y, &mut k[..n])?;
+            arithmetic(system, t, y, h, &mut k, &mut stage_state, &mut base)?;
+            own = base;
+            &own[..]
+        }
+    };
     let moved: Vec<f64> = y.iter().zip(d).map(|(y, d)| y + eps * d).collect();
     system.rhs(t, &moved, &mut k[..n])?;
-    step_as_accepted(system, t, &moved, h, &mut k, &mut stage_state, out)?;
-    for (o, b) in out[..n].iter_mut().zip(y_end) {
+    arithmetic(system, t, &moved, h, &mut k, &mut stage_state, out)?;
+    for (o, b) in out[..n].iter_mut().zip(end) {
         *o = (*o - b) / eps;
     }
     Ok(first_non_finite(&out[..n]).is_none())
