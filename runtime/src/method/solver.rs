@@ -174,4 +174,11 @@ pub trait Solver {
     ) -> Result<(), Failure> {
         Err(Failure::new(t, crate::failure::FailureKind::NotAffine))
     }
+
+    /// The solver as direct integration, whose storage a later solve may
+    /// reuse ([`crate::method::direct::Direct::renew`]); `None` for
+    /// the other methods.
+    fn into_direct(self: Box<Self>) -> Option<Box<crate::method::direct::Direct>> {
+        None
+    }
 }
