@@ -98,21 +98,10 @@ impl StepError {
         if !std::mem::take(&mut self.waiting) {
             return;
         }
-        let estimated = relative(&self.estimated, &self.x);
         let propagate = growth
             .as_ref()
             .is_some_and(|(g, _)| carries(global, rtol, g));
-        // The sum is calibrated as before: a measure every
-        // `CALIBRATION_STRIDE` steps scales the estimates between (one at
-        // every step would add, at tight tolerances, the rounding the
-        // differences measure: rocket_near_burnout at rtol 1e-12, 2.1e-12
-        // → 1.7e-11).
-        let added = match (&self.measured, self.calibrates) {
-            (Some(measured), true) => {
-                global.add_measured(estimated, relative(measured, &self.x), self.h)
-            }
-            _ => global.add(estimated, self.h),
-        };
+        let (estimated, added) = self.sum_into(global);
         // Past the bound every step's error is measured (see
         // `carry_global_error`) and carried along the motion with its
         // sign, at most Hairer's estimate (the calibration's bound).
@@ -151,6 +140,27 @@ impl StepError {
                 Some(accepted),
             );
         }
+    }
+}
+
+impl StepError {
+    /// The step's error added to the sum `global` (what
+    /// [`StepError::add_to`] does to it): its relative estimate, and what
+    /// was added.
+    fn sum_into(&self, global: &mut GlobalError) -> (f64, f64) {
+        let estimated = relative(&self.estimated, &self.x);
+        // The sum is calibrated as before: a measure every
+        // `CALIBRATION_STRIDE` steps scales the estimates between (one at
+        // every step would add, at tight tolerances, the rounding the
+        // differences measure: rocket_near_burnout at rtol 1e-12, 2.1e-12
+        // → 1.7e-11).
+        let added = match (&self.measured, self.calibrates) {
+            (Some(measured), true) => {
+                global.add_measured(estimated, relative(measured, &self.x), self.h)
+            }
+            _ => global.add(estimated, self.h),
+        };
+        (estimated, added)
     }
 }
 
@@ -460,10 +470,13 @@ impl Solver for Direct {
 
     fn report(&self) -> Report {
         let mut global = self.global.clone();
-        // The last step's error, should no projection have come for it.
-        self.step_error
-            .clone()
-            .add_to(&mut global, self.tol.rtol, None, None);
+        // The last step's error, should no projection have come for it
+        // (what `add_to` without a carried error does to the sum, without
+        // the copy of the step error's four vectors that every solve's
+        // report made).
+        if self.step_error.waiting {
+            self.step_error.sum_into(&mut global);
+        }
         let carried = self.growth.largest();
         let mut notes = Vec::new();
         if let Some(t) = self.switched_back_at {
