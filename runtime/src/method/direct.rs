@@ -382,7 +382,7 @@ impl Solver for Direct {
         self.stepper.dense(&ModelSystem(model), t, out)
     }
 
-    fn into_direct(self: Box<Self>) -> Option<Box<Direct>> {
+    fn into_reusable(self: Box<Self>) -> Option<Box<dyn std::any::Any>> {
         Some(self)
     }
 

@@ -175,10 +175,10 @@ pub trait Solver {
         Err(Failure::new(t, crate::failure::FailureKind::NotAffine))
     }
 
-    /// The solver as direct integration, whose storage a later solve may
-    /// reuse ([`crate::method::direct::Direct::renew`]); `None` for
-    /// the other methods.
-    fn into_direct(self: Box<Self>) -> Option<Box<crate::method::direct::Direct>> {
+    /// The solver as a value whose storage a later solve may reuse (the
+    /// run downcasts it to the solvers it can renew: direct integration's);
+    /// `None` for the methods that are made anew.
+    fn into_reusable(self: Box<Self>) -> Option<Box<dyn std::any::Any>> {
         None
     }
 }

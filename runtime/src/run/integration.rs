@@ -227,7 +227,13 @@ impl<'m> Integration<'m> {
     /// ([`Integration::new_reusing`]).
     pub fn into_spare(mut self) -> Spare {
         let (solver, x_event, g_quarters) = match self.stepping.take() {
-            Some(s) => (s.solver.into_direct(), s.x_event, s.g_quarters),
+            Some(s) => (
+                s.solver
+                    .into_reusable()
+                    .and_then(|solver| solver.downcast::<Direct>().ok()),
+                s.x_event,
+                s.g_quarters,
+            ),
             None => (None, Vec::new(), Vec::new()),
         };
         Spare {
