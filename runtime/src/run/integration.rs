@@ -106,8 +106,8 @@ struct Stepping {
 /// storage, not its state. A solve made in it is the solve
 /// [`Integration::new`] makes, bit for bit; a short solve (the paper's 6
 /// steps and 11 samples at rtol 1e-3) spent about a sixth of its
-/// instructions making and freeing this storage (docs/BENCHMARKS.md
-/// §10i).
+/// instructions setting up and dropping, more than half of that making
+/// and freeing this storage (docs/BENCHMARKS.md §10i).
 #[derive(Default)]
 pub struct Spare {
     keeper: Option<Keeper>,
