@@ -4,8 +4,9 @@
 
 pub use crate::run::diagnosis::{diagnose, MassScale};
 pub use crate::run::integration::make_solver;
+pub use crate::run::integration::Spare;
 pub use crate::run::options::{Ending, Options, Outcome};
 pub use crate::run::regime::{
     best_mode, check_initial_candidates, initial_branches, mode_index, pivot_volumes,
 };
-pub use crate::run::{run, run_ensemble, solve, EnsembleOutcome};
+pub use crate::run::{run, run_ensemble, run_reusing, solve, EnsembleOutcome};

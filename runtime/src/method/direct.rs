@@ -101,21 +101,10 @@ impl StepError {
         if !std::mem::take(&mut self.waiting) {
             return;
         }
-        let estimated = relative(&self.estimated, &self.x);
         let propagate = growth
             .as_ref()
             .is_some_and(|(g, _)| carries(global, rtol, g));
-        // The sum is calibrated as before: a measure every
-        // `CALIBRATION_STRIDE` steps scales the estimates between (one at
-        // every step would add, at tight tolerances, the rounding the
-        // differences measure: rocket_near_burnout at rtol 1e-12, 2.1e-12
-        // → 1.7e-11).
-        let added = match (&self.measured, self.calibrates) {
-            (Some(measured), true) => {
-                global.add_measured(estimated, relative(measured, &self.x), self.h)
-            }
-            _ => global.add(estimated, self.h),
-        };
+        let (estimated, added) = self.sum_into(global);
         // Past the bound every step's error is measured (see
         // `carry_global_error`) and carried along the motion with its
         // sign, at most Hairer's estimate (the calibration's bound).
@@ -157,10 +146,39 @@ impl StepError {
     }
 }
 
+impl StepError {
+    /// The step's error added to the sum `global` (what
+    /// [`StepError::add_to`] does to it): its relative estimate, and what
+    /// was added.
+    fn sum_into(&self, global: &mut GlobalError) -> (f64, f64) {
+        let estimated = relative(&self.estimated, &self.x);
+        // The sum is calibrated as before: a measure every
+        // `CALIBRATION_STRIDE` steps scales the estimates between (one at
+        // every step would add, at tight tolerances, the rounding the
+        // differences measure: rocket_near_burnout at rtol 1e-12, 2.1e-12
+        // → 1.7e-11).
+        let added = match (&self.measured, self.calibrates) {
+            (Some(measured), true) => {
+                global.add_measured(estimated, relative(measured, &self.x), self.h)
+            }
+            _ => global.add(estimated, self.h),
+        };
+        (estimated, added)
+    }
+}
+
 /// Whether a step's error is measured and carried along the motion: from
 /// where the calibrated sum passes [`FROM_DIRECT`]`·rtol` on (once
 /// started, every step is), until the carried error passes the state's
 /// own size ([`Growth::saturated`]: nothing more is learned there).
+/// The integrator a run starts with.
+fn first_integrator(choice: IntegratorChoice) -> Integrator {
+    match choice {
+        IntegratorChoice::Stiff => Integrator::Stiff,
+        _ => Integrator::Explicit,
+    }
+}
+
 fn carries(global: &GlobalError, rtol: f64, growth: &Growth) -> bool {
     (growth.started() || past(global, rtol, FROM_DIRECT)) && !growth.saturated()
 }
@@ -174,11 +192,9 @@ impl Direct {
         x0: &[f64],
         h_max: f64,
     ) -> Result<Direct, Failure> {
-        let first = match choice {
-            IntegratorChoice::Stiff => Integrator::Stiff,
-            _ => Integrator::Explicit,
-        };
+        let first = first_integrator(choice);
         let stepper = first.start::<OfModel>(&ModelSystem(model), t0, x0, tol, h_max, None)?;
+        // Every field set here is set again by `renew`.
         Ok(Direct {
             choice,
             tol,
@@ -212,11 +228,93 @@ impl Direct {
         })
     }
 
+    /// Makes this solver, an earlier solve's, the one [`Direct::new`]
+    /// makes from these arguments, in its own storage: DOP853 restarted
+    /// in its buffers ([`Dop853::restart_at`], the stepper `new` makes bit
+    /// for bit; another integrator is made anew), the carried error's and
+    /// the step error's vectors reused, every other field set as `new`
+    /// sets it. A short solve (the paper's 6 steps at rtol 1e-3) spent
+    /// about a tenth of its instructions allocating and freeing these
+    /// (docs/BENCHMARKS.md §10i). On failure the solver is left unusable
+    /// (as `new` makes none).
+    pub fn renew(
+        &mut self,
+        model: &dyn DynModel,
+        choice: IntegratorChoice,
+        tol: Tolerance,
+        t0: f64,
+        x0: &[f64],
+        h_max: f64,
+    ) -> Result<(), Failure> {
+        let first = first_integrator(choice);
+        let n = x0.len();
+        let system = ModelSystem(model);
+        let in_place = first == Integrator::Explicit && self.stepper.state().len() == n;
+        match self.stepper.as_any_mut().downcast_mut::<Dop853>() {
+            Some(dop) if in_place => dop.restart_at(&system, t0, x0, tol, h_max, None)?,
+            _ => self.stepper = first.start::<OfModel>(&system, t0, x0, tol, h_max, None)?,
+        }
+        // Every field named: one added to `Direct` must be renewed too.
+        let Direct {
+            choice: choice_now,
+            tol: tol_now,
+            h_max: h_max_now,
+            integrator,
+            stepper: _,
+            done,
+            first: first_now,
+            stiffness_detected_at,
+            switched_at,
+            explicit_step,
+            stiff_steps,
+            stiff_distance,
+            switched_back_at,
+            global,
+            global_before_step,
+            step_error,
+            growth,
+            keeps,
+            kept_ratio,
+            estimates,
+        } = self;
+        *choice_now = choice;
+        *tol_now = tol;
+        *h_max_now = h_max;
+        *integrator = first;
+        *done = Stats::default();
+        *first_now = first;
+        *stiffness_detected_at = None;
+        *switched_at = None;
+        *explicit_step = 0.0;
+        *stiff_steps = 0;
+        *stiff_distance = 0.0;
+        *switched_back_at = None;
+        *global = GlobalError::new();
+        *global_before_step = GlobalError::new();
+        let mut estimated = std::mem::take(&mut step_error.estimated);
+        estimated.clear();
+        estimated.resize(n, 0.0);
+        *step_error = StepError {
+            estimated,
+            ..StepError::default()
+        };
+        growth.renew(n);
+        *keeps = model.keeps_positions() || model.keeps_constraints();
+        *kept_ratio = None;
+        *estimates = true;
+        Ok(())
+    }
+
     /// A run whose global error is not estimated: no measures, no
     /// carried error (`Options::global_error`).
     pub fn without_global_error(mut self) -> Direct {
-        self.estimates = false;
+        self.drop_global_error();
         self
+    }
+
+    /// [`Direct::without_global_error`] in place.
+    pub fn drop_global_error(&mut self) {
+        self.estimates = false;
     }
 
     /// The integrator finishing the run.
@@ -288,6 +386,10 @@ impl Solver for Direct {
 
     fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure> {
         self.stepper.dense(&ModelSystem(model), t, out)
+    }
+
+    fn into_reusable(self: Box<Self>) -> Option<Box<dyn std::any::Any>> {
+        Some(self)
     }
 
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
@@ -391,10 +493,13 @@ impl Solver for Direct {
 
     fn report(&self) -> Report {
         let mut global = self.global.clone();
-        // The last step's error, should no projection have come for it.
-        self.step_error
-            .clone()
-            .add_to(&mut global, self.tol.rtol, None, None);
+        // The last step's error, should no projection have come for it
+        // (what `add_to` without a carried error does to the sum, without
+        // the copy of the step error's four vectors that every solve's
+        // report made).
+        if self.step_error.waiting {
+            self.step_error.sum_into(&mut global);
+        }
         let carried = self.growth.largest();
         let mut notes = Vec::new();
         if let Some(t) = self.switched_back_at {

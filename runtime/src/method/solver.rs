@@ -192,4 +192,11 @@ pub trait Solver {
     ) -> Result<(), Failure> {
         Err(Failure::new(t, crate::failure::FailureKind::NotAffine))
     }
+
+    /// The solver as a value whose storage a later solve may reuse (the
+    /// run downcasts it to the solvers it can renew: direct integration's);
+    /// `None` for the methods that are made anew.
+    fn into_reusable(self: Box<Self>) -> Option<Box<dyn std::any::Any>> {
+        None
+    }
 }

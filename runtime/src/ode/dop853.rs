@@ -750,12 +750,34 @@ impl Extension for Contd8 {
     }
 }
 
-/// Hairer's `contd8`: the continuous extension at `θ = (t − t_old)/h`.
+/// Hairer's `contd8`: the continuous extension at `θ = (t − t_old)/h`,
+/// into the first `n` components of `out`. Compiled for the small models'
+/// sizes as the step is (`step_sized`): at n = 4 the loop's indexing and
+/// bounds checks were two thirds of a sample's instructions (callgrind on
+/// the paper, docs/BENCHMARKS.md §10i). The same operations in the same
+/// order at every size: the values are bit-identical.
 fn contd8(c: &[f64], n: usize, s: f64, out: &mut [f64]) {
+    match n {
+        2 => contd8_sized::<2>(c, n, s, out),
+        3 => contd8_sized::<3>(c, n, s, out),
+        4 => contd8_sized::<4>(c, n, s, out),
+        6 => contd8_sized::<6>(c, n, s, out),
+        8 => contd8_sized::<8>(c, n, s, out),
+        _ => contd8_sized::<0>(c, n, s, out),
+    }
+}
+
+/// [`contd8`] for `n = N` known at compile time (`N = 0`: any `n`).
+#[inline(always)]
+fn contd8_sized<const N: usize>(c: &[f64], n: usize, s: f64, out: &mut [f64]) {
+    let n = if N == 0 { n } else { N };
     let s1 = 1.0 - s;
+    let block = |b: usize| &c[b * n..(b + 1) * n];
+    let (c0, c1, c2, c3) = (block(0), block(1), block(2), block(3));
+    let (c4, c5, c6, c7) = (block(4), block(5), block(6), block(7));
     for (i, o) in out.iter_mut().enumerate().take(n) {
-        let conf1 = c[4 * n + i] + s * (c[5 * n + i] + s1 * (c[6 * n + i] + s * c[7 * n + i]));
-        *o = c[i] + s * (c[n + i] + s1 * (c[2 * n + i] + s * (c[3 * n + i] + s1 * conf1)));
+        let conf1 = c4[i] + s * (c5[i] + s1 * (c6[i] + s * c7[i]));
+        *o = c0[i] + s * (c1[i] + s1 * (c2[i] + s * (c3[i] + s1 * conf1)));
     }
 }
 

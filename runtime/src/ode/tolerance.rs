@@ -120,9 +120,18 @@ pub fn initial_step<S: System + ?Sized>(
     };
     h0 = h0.min(h_max);
     // One buffer: the Euler step's state, then the slope there (a small
-    // model's whole solve costs a few microseconds).
+    // model's whole solve costs a few microseconds), on the stack up to
+    // 16 components (an allocation and its free were about 1 % of the
+    // paper's 6-step solve, docs/BENCHMARKS.md §10i).
     let n = y0.len();
-    let mut work = vec![0.0; 2 * n];
+    let mut small = [0.0; 32];
+    let mut large = Vec::new();
+    let work: &mut [f64] = if 2 * n <= small.len() {
+        &mut small[..2 * n]
+    } else {
+        large.resize(2 * n, 0.0);
+        &mut large
+    };
     let (y1, f1) = work.split_at_mut(n);
     for ((y1, y), f) in y1.iter_mut().zip(y0).zip(f0) {
         *y1 = y + h0 * f;

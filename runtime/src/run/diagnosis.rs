@@ -51,8 +51,19 @@ pub fn check_masses(model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failu
     if model.mass_names().is_empty() {
         return Ok(());
     }
-    let mut masses = vec![0.0; model.mass_names().len()];
-    model.masses(t, x, &mut masses);
+    // On the stack for the usual few masses: every solve checks them, and
+    // an allocation is about 1 % of a short solve (docs/BENCHMARKS.md
+    // §10i).
+    let count = model.mass_names().len();
+    let mut small = [0.0; 8];
+    let mut large = Vec::new();
+    let masses: &mut [f64] = if count <= small.len() {
+        &mut small[..count]
+    } else {
+        large.resize(count, 0.0);
+        &mut large
+    };
+    model.masses(t, x, masses);
     match masses.iter().position(|&m| !(m > 0.0)) {
         Some(i) => Err(Failure::new(
             t,

@@ -14,7 +14,6 @@ use crate::failure::Failure;
 use crate::model::{DynModel, Inputs};
 use crate::run::integration::{Advance, Integration};
 use crate::run::options::{Ending, Options, Outcome};
-use crate::run::run;
 
 /// How a signal goes between its samples.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -255,8 +254,29 @@ pub fn drive(
     times: &[f64],
     sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
 ) -> Result<Outcome, Failure> {
+    let mut spare = crate::run::integration::Spare::default();
+    drive_reusing(
+        model, options, schedule, t0, t1, x0, times, sample, &mut spare,
+    )
+}
+
+/// [`drive`] in the storage of an earlier run on the same model
+/// ([`crate::run::run_reusing`]; a driven run, with a schedule, makes its
+/// own): the same run. Solves repeated on one model go through it.
+#[allow(clippy::too_many_arguments)]
+pub fn drive_reusing(
+    model: &mut dyn DynModel,
+    options: &Options,
+    schedule: Option<&Schedule>,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+    sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
+    spare: &mut crate::run::integration::Spare,
+) -> Result<Outcome, Failure> {
     let Some(schedule) = schedule else {
-        return run(model, options, t0, t1, x0, times, sample);
+        return crate::run::run_reusing(model, options, t0, t1, x0, times, sample, spare);
     };
     let driven = run_driven(model, options, schedule, t0, t1, x0, times, sample)?;
     let mut outcome = driven.outcome;

@@ -101,6 +101,31 @@ struct Stepping {
     impacts: Impacts,
 }
 
+/// What a finished integration leaves for the next solve of the same
+/// model ([`Integration::into_spare`], [`Integration::new_reusing`]): its
+/// storage, not its state. A solve made in it is the solve
+/// [`Integration::new`] makes, bit for bit; a short solve (the paper's 6
+/// steps and 11 samples at rtol 1e-3) spent about a sixth of its
+/// instructions setting up and dropping, more than half of that making
+/// and freeing this storage (docs/BENCHMARKS.md §10i).
+#[derive(Default)]
+pub struct Spare {
+    keeper: Option<Keeper>,
+    solver: Option<Box<Direct>>,
+    x_start: Vec<f64>,
+    x: Vec<f64>,
+    x_event: Vec<f64>,
+    g_quarters: Vec<Vec<f64>>,
+}
+
+/// The parts of [`Spare`] that [`Integration::start`] makes anew.
+#[derive(Default)]
+struct SpareStepping {
+    solver: Option<Box<Direct>>,
+    x_event: Vec<f64>,
+    g_quarters: Vec<Vec<f64>>,
+}
+
 /// What the second half of a step does.
 enum Then {
     /// The event located at `t_event` (searched from `t_from`).
@@ -173,20 +198,81 @@ impl<'m> Integration<'m> {
         end: f64,
         x0: &[f64],
     ) -> Integration<'m> {
-        Integration::with(Held::Borrowed(model), options, t0, end, x0)
+        Integration::with(
+            Held::Borrowed(model),
+            options,
+            t0,
+            end,
+            x0,
+            Spare::default(),
+        )
     }
 
-    fn with(model: Held<'m>, options: &Options, t0: f64, end: f64, x0: &[f64]) -> Integration<'m> {
+    /// [`Integration::new`] in the storage an earlier integration left
+    /// ([`Integration::into_spare`]): the same integration, its buffers
+    /// (the solver's, the keeper's, the states') reused instead of
+    /// allocated. For solves repeated on one model.
+    pub fn new_reusing(
+        model: &'m mut dyn DynModel,
+        options: &Options,
+        t0: f64,
+        end: f64,
+        x0: &[f64],
+        spare: Spare,
+    ) -> Integration<'m> {
+        Integration::with(Held::Borrowed(model), options, t0, end, x0, spare)
+    }
+
+    /// The storage this integration holds, for the next solve
+    /// ([`Integration::new_reusing`]).
+    pub fn into_spare(mut self) -> Spare {
+        let (solver, x_event, g_quarters) = match self.stepping.take() {
+            Some(s) => (
+                s.solver
+                    .into_reusable()
+                    .and_then(|solver| solver.downcast::<Direct>().ok()),
+                s.x_event,
+                s.g_quarters,
+            ),
+            None => (None, Vec::new(), Vec::new()),
+        };
+        Spare {
+            keeper: self.keeper.take(),
+            solver,
+            x_start: std::mem::take(&mut self.x_start),
+            x: std::mem::take(&mut self.x),
+            x_event,
+            g_quarters,
+        }
+    }
+
+    fn with(
+        model: Held<'m>,
+        options: &Options,
+        t0: f64,
+        end: f64,
+        x0: &[f64],
+        spare: Spare,
+    ) -> Integration<'m> {
         let budget = Budget::new(options.max_steps);
         budget.accepted_to(t0);
+        let Spare {
+            keeper,
+            solver,
+            x_start,
+            x,
+            x_event,
+            g_quarters,
+        } = spare;
         let mut integration = Integration {
-            keeper: Keeper::new(model.get(), options.tol),
+            keeper: Keeper::new_reusing(model.get(), options.tol, keeper),
             model,
             options: options.clone(),
             end,
             t_start: t0,
             t_first: t0,
-            x_start: x0.to_vec(),
+            // Both set by `start`.
+            x_start,
             budget,
             regime: Regime::default(),
             volumes: Vec::new(),
@@ -195,18 +281,32 @@ impl<'m> Integration<'m> {
             done: None,
             events: 0,
             t: t0,
-            x: x0.to_vec(),
+            x,
             progress: Progress::new(false, t0, end),
             target: end,
             pieces: None,
             earlier: None,
         };
-        integration.start(t0, x0);
+        integration.start_in(
+            t0,
+            x0,
+            SpareStepping {
+                solver,
+                x_event,
+                g_quarters,
+            },
+        );
         integration
     }
 
     /// Sets the regime at `(t0, x0)` and makes the method's solver there.
     fn start(&mut self, t0: f64, x0: &[f64]) {
+        self.start_in(t0, x0, SpareStepping::default());
+    }
+
+    /// [`Integration::start`], its solver and buffers made in `spare`'s
+    /// storage (the same values).
+    fn start_in(&mut self, t0: f64, x0: &[f64], spare: SpareStepping) {
         let model = self.model.get_mut();
         let span = self.end - t0;
         let h_max = if span > 0.0 { span } else { 1.0 };
@@ -217,8 +317,10 @@ impl<'m> Integration<'m> {
         model.set_regime(&self.regime);
         self.volumes = pivot_volumes(model, t0, x0);
         (self.t_start, self.t) = (t0, t0);
-        self.x_start = x0.to_vec();
-        self.x = x0.to_vec();
+        self.x_start.clear();
+        self.x_start.extend_from_slice(x0);
+        self.x.clear();
+        self.x.extend_from_slice(x0);
         self.pending = None;
         self.done = None;
         self.stepping = None;
@@ -237,20 +339,34 @@ impl<'m> Integration<'m> {
             // failure asks for it (a tenth of a small model's solve).
             let regime_may_change = model.switches() > 0 || !model.constraints().is_empty();
             let early_scale = regime_may_change.then(|| MassScale::at(model, t0, x0));
-            let solver = make_solver(model, &self.options, t0, x0, h_max).map_err(|f| {
+            let SpareStepping {
+                solver,
+                mut x_event,
+                mut g_quarters,
+            } = spare;
+            let solver = make_solver_reusing(model, &self.options, t0, x0, h_max, solver);
+            let solver = solver.map_err(|f| {
                 let scale = early_scale.unwrap_or_else(|| MassScale::at(model, t0, x0));
                 watch.diagnose(model, diagnose(model, f, x0, &scale), t0, x0)
             })?;
             let mut pace = SwitchPace::default();
             probe_pace(model, t0, x0, self.end - t0, &mut pace);
             let g_now = vec![0.0; model.switches()];
+            // `vec![g_now.clone(); 4]` and `vec![0.0; n]`, in storage kept.
+            g_quarters.resize_with(4, Vec::new);
+            for g in &mut g_quarters {
+                g.clear();
+                g.resize(g_now.len(), 0.0);
+            }
+            x_event.clear();
+            x_event.resize(x0.len(), 0.0);
             Ok(Stepping {
                 solver,
                 watch,
                 early_scale,
-                g_quarters: vec![g_now.clone(); 4],
+                g_quarters,
                 g_now,
-                x_event: vec![0.0; x0.len()],
+                x_event,
                 step_ends: Vec::new(),
                 pace,
                 pivot_limit: None,
@@ -936,7 +1052,7 @@ impl Integration<'static> {
         end: f64,
         x0: &[f64],
     ) -> Integration<'static> {
-        Integration::with(Held::Owned(model), options, t0, end, x0)
+        Integration::with(Held::Owned(model), options, t0, end, x0, Spare::default())
     }
 }
 
@@ -989,15 +1105,33 @@ pub fn make_solver(
     x0: &[f64],
     h_max: f64,
 ) -> Result<Box<dyn Solver>, Failure> {
+    make_solver_reusing(model, options, t0, x0, h_max, None)
+}
+
+/// [`make_solver`], direct integration's solver made in the storage of
+/// `spare` (an earlier solve's, [`Direct::renew`]).
+fn make_solver_reusing(
+    model: &dyn DynModel,
+    options: &Options,
+    t0: f64,
+    x0: &[f64],
+    h_max: f64,
+    spare: Option<Box<Direct>>,
+) -> Result<Box<dyn Solver>, Failure> {
     let choice = options.integrator_choice(model);
     Ok(match options.method {
         Method::Direct => {
-            let direct = Direct::new(model, choice, options.tol, t0, x0, h_max)?;
-            Box::new(if options.global_error {
-                direct
-            } else {
-                direct.without_global_error()
-            })
+            let mut direct = match spare {
+                Some(mut direct) => {
+                    direct.renew(model, choice, options.tol, t0, x0, h_max)?;
+                    direct
+                }
+                None => Box::new(Direct::new(model, choice, options.tol, t0, x0, h_max)?),
+            };
+            if !options.global_error {
+                direct.drop_global_error();
+            }
+            direct
         }
         Method::Field => {
             let field = FieldOptions {

@@ -94,18 +94,55 @@ pub struct Kept {
 impl Keeper {
     /// `None` for a model that fixes no state component.
     pub fn new(model: &dyn DynModel, tol: Tolerance) -> Option<Keeper> {
+        Keeper::new_reusing(model, tol, None)
+    }
+
+    /// [`Keeper::new`] in the storage of `spare`, an earlier solve's
+    /// keeper: the same keeper (its buffers are scratch, written before
+    /// they are read, and cleared or zeroed here as `new` makes them), no
+    /// allocation when the sizes are the same (docs/BENCHMARKS.md §10i).
+    pub fn new_reusing(
+        model: &dyn DynModel,
+        tol: Tolerance,
+        spare: Option<Keeper>,
+    ) -> Option<Keeper> {
         let n = model.dim();
         let coordinates = model.coordinates();
-        (model.keeps_constraints() || model.keeps_positions()).then(|| Keeper {
+        if !(model.keeps_constraints() || model.keeps_positions()) {
+            return None;
+        }
+        let (mut fixed, mut states, mut gradient, mut probe, mut scratch, lu) = match spare {
+            Some(k) => (k.fixed, k.states, k.gradient, k.probe, k.scratch, k.lu),
+            None => (
+                Vec::new(),
+                Vec::new(),
+                Matrix::zeros(0, 0),
+                Vec::new(),
+                Vec::new(),
+                Lu::empty(),
+            ),
+        };
+        fixed.clear();
+        states.clear();
+        states.resize(2 * n, 0.0);
+        if gradient.rows() != n || gradient.cols() != n {
+            gradient = Matrix::zeros(n, n);
+        }
+        gradient.fill(0.0);
+        probe.clear();
+        probe.reserve(2 * n);
+        scratch.clear();
+        Some(Keeper {
             tol,
             mode: None,
-            fixed: Vec::new(),
+            fixed,
             velocities: n.saturating_sub(coordinates)..n,
-            states: vec![0.0; 2 * n],
-            gradient: Matrix::zeros(n, n),
-            probe: Vec::with_capacity(2 * n),
-            scratch: Vec::new(),
-            lu: Lu::empty(),
+            states,
+            gradient,
+            probe,
+            scratch,
+            // Refactored from scratch at every use (`Lu::refactor`).
+            lu,
             largest: 0.0,
             largest_absolute: 0.0,
             largest_at: f64::NAN,
@@ -301,7 +338,7 @@ impl Keeper {
         bounded: bool,
     ) -> Result<f64, Failure> {
         if self.mode != Some(mode) {
-            self.fixed = fixed_components(model, mode);
+            fixed_components(model, mode, &mut self.fixed);
             self.mode = Some(mode);
         }
         let half = self.states.len() / 2;
@@ -540,11 +577,12 @@ pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<()
 /// The state components the constraints fix in `mode`: the generated
 /// table's (a crate of several modes has one for each), else those the
 /// initial values take as fixed (a single mode).
-fn fixed_components(model: &dyn DynModel, mode: usize) -> Vec<usize> {
+/// Into `out` (cleared first; its storage kept from solve to solve).
+fn fixed_components(model: &dyn DynModel, mode: usize, out: &mut Vec<usize>) {
+    out.clear();
     if let Some(fixed) = model.fixed_components().get(mode) {
-        return fixed.to_vec();
+        out.extend_from_slice(fixed);
+        return;
     }
-    (0..model.dim())
-        .filter(|&j| model.initial_kinds()[j] == Initial::Constraint)
-        .collect()
+    out.extend((0..model.dim()).filter(|&j| model.initial_kinds()[j] == Initial::Constraint));
 }

@@ -36,7 +36,7 @@ use crate::failure::{Failure, FailureKind};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
 use crate::ode::tolerance::Tolerance;
-use integration::{make_solver, Advance, Integration};
+use integration::{make_solver, Advance, Integration, Spare};
 use options::{Ending, Options, Outcome};
 use solution::Solution;
 
@@ -51,9 +51,37 @@ pub fn run(
     t1: f64,
     x0: &[f64],
     times: &[f64],
-    mut sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
+    sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
 ) -> Result<Outcome, Failure> {
-    let mut integration = Integration::new(model, options, t0, t1, x0);
+    run_reusing(
+        model,
+        options,
+        t0,
+        t1,
+        x0,
+        times,
+        sample,
+        &mut Spare::default(),
+    )
+}
+
+/// [`run`] in the storage `spare` holds (an earlier run's on the same
+/// model, or empty), leaving this run's there for the next: the same
+/// run, without allocating its solver, keeper and states again. Solves
+/// repeated on one model (`--repeat`, a benchmark's loop) go through it.
+#[allow(clippy::too_many_arguments)]
+pub fn run_reusing(
+    model: &mut dyn DynModel,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+    mut sample: impl FnMut(&dyn DynModel, f64, &[f64]) -> Result<(), Failure>,
+    spare: &mut Spare,
+) -> Result<Outcome, Failure> {
+    let taken = std::mem::take(spare);
+    let mut integration = Integration::new_reusing(model, options, t0, t1, x0, taken);
     // The last sample's time: a run that ends where a sample was written
     // does not write that row twice.
     let mut last: Option<f64> = None;
@@ -72,6 +100,7 @@ pub fn run(
             sample(integration.model(), at, integration.state())?;
         }
     }
+    *spare = integration.into_spare();
     Ok(outcome)
 }
 

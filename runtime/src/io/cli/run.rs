@@ -12,7 +12,8 @@ use crate::io::output::{sample_times, write_header, write_row};
 use crate::io::plot::write_plot;
 use crate::io::summary::Summary;
 use crate::model::{DynModel, Initial};
-use crate::run::inputs::{drive, Schedule, Signal};
+use crate::run::inputs::{drive, drive_reusing, Schedule, Signal};
+use crate::run::integration::Spare;
 use crate::run::options::{Ending, Options};
 use std::io::Write;
 use std::process::ExitCode;
@@ -245,6 +246,10 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     let mut fastest = first_time;
     if inv.repeat > 1 {
         fastest = Duration::MAX;
+        // Each solve in the storage the one before left (the same solve:
+        // `drive_reusing`), as a program solving one model repeatedly
+        // through the library would keep it.
+        let mut spare = Spare::default();
         for _ in 0..inv.repeat {
             let start = Instant::now();
             let quiet = Options {
@@ -252,8 +257,18 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
                 ..inv.options.clone()
             };
             let quietly = |_: &dyn DynModel, _, _: &[f64]| Ok(());
-            if let Err(failure) = drive(&mut *model, &quiet, schedule, t0, t1, &x0, &times, quietly)
-            {
+            let solved = drive_reusing(
+                &mut *model,
+                &quiet,
+                schedule,
+                t0,
+                t1,
+                &x0,
+                &times,
+                quietly,
+                &mut spare,
+            );
+            if let Err(failure) = solved {
                 return fail(inv.json, &failure);
             }
             // With `--sensitivity` a solve is both runs: the time is what

@@ -149,6 +149,27 @@ impl Growth {
         }
     }
 
+    /// Makes this one [`Growth::new`]`(n)` (an earlier solve's, its
+    /// storage reused): every field named, as `new` sets it.
+    pub fn renew(&mut self, n: usize) {
+        let Growth {
+            e,
+            pending,
+            largest,
+            moved,
+            evaluations,
+            started,
+        } = self;
+        for v in [e, moved] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+        *pending = None;
+        *largest = 0.0;
+        *evaluations = 0;
+        *started = false;
+    }
+
     /// The largest carried error over the run, relative to `max(|x|, 1)`
     /// component by component.
     pub fn largest(&self) -> f64 {

@@ -1,0 +1,40 @@
+#!/usr/bin/env python3
+"""Instructions per solve by part of a generated binary's direct run, from
+callgrind_annotate --inclusive=yes (BENCHMARKS §10i). Usage:
+  valgrind --tool=callgrind --callgrind-out-file=OUT BIN --method direct \
+      --integrator explicit --rtol R --atol R/100 --samples 11 --repeat 2000 --quiet
+  python3 scripts/callgrind_parts.py OUT [OUT...]
+Inclusive counts of the functions named (the crate built with line tables:
+CARGO_PROFILE_RELEASE_DEBUG=line-tables-only); per solve = total / 2001."""
+import re, subprocess, sys
+PARTS = [
+    ("set-up", [r"Integration::with \[", r"drop_in_place<lagc_runtime::run::integration::Integration> \[", r"Integration::into_spare \[", r"drop_in_place<lagc_runtime::run::integration::Spare> \["]),
+    ("report", [r"Integration::finish \["]),
+    ("steps (DOP853)", [r"Dop853 as lagc_runtime::ode::stepper::Stepper<S>>::step \["]),
+    ("steps (bookkeeping)", [r"Direct as lagc_runtime::method::solver::Solver>::advance \["]),
+    ("after steps (keeper)", [r"Integration::finish_step \["]),
+    ("dense output", [r"Direct as lagc_runtime::method::solver::Solver>::dense \["]),
+    ("samples' projection", [r"=> .*Keeper::project_from \(20,010x\)|Keeper::project \["]),
+]
+def inclusive(path):
+    out = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", path], capture_output=True, text=True).stdout
+    rows = []
+    for line in out.splitlines():
+        m = re.match(r"\s*([\d,]+) \(", line)
+        if m:
+            rows.append((int(m.group(1).replace(",", "")), line))
+    return rows
+for path in sys.argv[1:]:
+    rows = inclusive(path)
+    total = rows[0][0]
+    got = {}
+    for name, pats in PARTS:
+        v = 0
+        for p in pats:
+            hits = [n for n, l in rows if re.search(p, l)]
+            if hits:
+                v += max(hits)
+        got[name] = v
+    got["steps (bookkeeping)"] -= got["steps (DOP853)"]
+    per = lambda v: v / 2001
+    print(path, f"total/solve {per(total):.0f}", " | ".join(f"{k} {per(v):.0f} ({100*v/total:.1f}%)" for k, v in got.items()))
