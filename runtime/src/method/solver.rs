@@ -75,6 +75,11 @@ pub trait Keeping {
     /// velocity constraints included (`run::keep::Keeper::tangent`): what
     /// of an error carried to `x` survives the projections.
     fn tangent(&mut self, t: f64, x: &[f64], d: &mut [f64]) -> Result<(), Failure>;
+    /// Projects `x` at `t` onto the constraints in place, as the run's
+    /// state is projected (`run::keep::Keeper::put_on`: no distance
+    /// recorded): the field's reference carried alongside the run
+    /// (`global_error::growth::Growth::step_alongside`).
+    fn project(&mut self, t: f64, x: &mut [f64]) -> Result<(), Failure>;
 }
 
 /// A method advancing a model's motion step by step.

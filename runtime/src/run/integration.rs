@@ -1256,4 +1256,7 @@ impl Keeping for Kept<'_> {
     fn tangent(&mut self, t: f64, x: &[f64], d: &mut [f64]) -> Result<(), Failure> {
         self.keeper.tangent(self.model, self.mode, t, x, d)
     }
+    fn project(&mut self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        self.keeper.put_on(self.model, self.mode, t, x)
+    }
 }

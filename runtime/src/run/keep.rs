@@ -180,8 +180,9 @@ impl Keeper {
     }
 
     /// Puts a state that was made, not integrated (an ensemble's member
-    /// moved off the model's initial state), on the constraints: no
-    /// distance is recorded or judged.
+    /// moved off the model's initial state, the field's reference carried
+    /// alongside its run), on the constraints: no distance is recorded or
+    /// judged.
     pub fn put_on(
         &mut self,
         model: &dyn DynModel,

@@ -41,6 +41,19 @@
 //! error grows with time), and the same four-bar loop kept by velocity
 //! constraints (`four_bar_velocity`) was estimated 100× below its error.
 //!
+//! How a model without switches carries them: by a reference stepped
+//! alongside the run from `x − e` (two DOP853 half-steps a step, 24
+//! evaluations) and put on the constraints at each window's anchor as the
+//! state is, the carried error being the run's state less the reference
+//! (`Growth::step_alongside`): the measure and the propagation in one,
+//! where a step measured from its start and differenced costs 48. Once
+//! carried, such a model's windows are not measured any more (their
+//! measures scale sums the estimate no longer reads). A model with
+//! switches measures each step and differences it (`measure_signed`,
+//! `carry`): its window's steps after the first are carried when added,
+//! after the driver may have changed its regime, while the measure must
+//! be the window's (see `alongside`).
+//!
 //! Once carried, a constrained model's estimate is the sum at the start
 //! of the carrying (the errors before it, not carried) plus the largest
 //! carried error, no longer the sum of the windows' errors: that sum is a
@@ -50,7 +63,7 @@
 
 use crate::method::solver::{GlobalErrorEstimate, Keeping};
 use crate::model::DynModel;
-use crate::ode::dop853::global_error::growth::{past_bound, Growth, Keep, FROM_DIRECT};
+use crate::ode::dop853::global_error::growth::{past_bound, Growth, Keep, Project, FROM_DIRECT};
 use crate::ode::dop853::global_error::{relative, GlobalError, CALIBRATION_STRIDE};
 use crate::ode::dop853::step_by_halves;
 use crate::ode::system::ModelSystem;
@@ -80,6 +93,10 @@ struct Unfed {
     /// Constrained models: the step was carried already (a window's
     /// first, at the projection before it: `FieldError::keep`).
     carried: bool,
+    /// Constrained models without switches, once their errors are
+    /// carried: the step is carried by a reference alongside the run
+    /// (`alongside`), not measured apart.
+    reference: bool,
 }
 
 /// A constrained model's step, measured (relative errors).
@@ -271,6 +288,7 @@ impl FieldError {
             alone: false,
             signed: None,
             carried: false,
+            reference: false,
         });
         step.t0 = t0;
         step.x0.clear();
@@ -288,6 +306,7 @@ impl FieldError {
         step.alone = false;
         step.signed = None;
         step.carried = false;
+        step.reference = false;
         self.unfed.push(step);
     }
 
@@ -301,6 +320,16 @@ impl FieldError {
             return;
         }
         let system = ModelSystem(model);
+        let alongside = alongside(model);
+        if alongside && self.growth.started() {
+            // Carried by the reference from here on: the measures below
+            // would only scale sums the estimate no longer reads (it is
+            // the sum when the carrying started plus the carried error).
+            for step in &mut self.unfed[first..] {
+                step.reference = true;
+            }
+            return;
+        }
         let count = self.unfed.len() - first;
         if count > CALIBRATION_STRIDE {
             for step in &mut self.unfed[first..] {
@@ -313,7 +342,13 @@ impl FieldError {
             self.window_end = measure_window(&system, &mut self.unfed[first..]).map(|e| (end, e));
         }
         if self.carries_constrained(first) {
-            self.measure_signed(&system, first);
+            if alongside {
+                for step in &mut self.unfed[first..] {
+                    step.reference = true;
+                }
+            } else {
+                self.measure_signed(&system, first);
+            }
         }
     }
 
@@ -393,21 +428,30 @@ impl FieldError {
         if !self.constrained(model) {
             return;
         }
-        let mut keep = |t: f64, x: &[f64], d: &mut [f64]| keeping.tangent(t, x, d);
-        self.carry_steps(model, f64::INFINITY, model.switches() > 0, Some(&mut keep));
+        self.carry_steps(model, f64::INFINITY, model.switches() > 0, Some(keeping));
     }
 
     /// Carries the steps not yet carried that start before `t` (only the
     /// first of them if `first_only`), the error before them projected at
-    /// the first's start by `keep`.
+    /// the first's start as `keeping` projects the state (a model carried
+    /// by a reference alongside: the reference put on the constraints;
+    /// otherwise the projection's derivative applied to the error).
     fn carry_steps(
         &mut self,
         model: &dyn DynModel,
         t: f64,
         first_only: bool,
-        mut keep: Option<&mut Keep<'_>>,
+        keeping: Option<&mut dyn Keeping>,
     ) {
         let system = ModelSystem(model);
+        let alongside = alongside(model);
+        if alongside {
+            let mut project = keeping.map(|k| move |t: f64, x: &mut [f64]| k.project(t, x));
+            let project = project.as_mut().map(|p| p as &mut Project<'_>);
+            return self.carry_steps_alongside(&system, t, project);
+        }
+        let mut keep = keeping.map(|k| move |t: f64, x: &[f64], d: &mut [f64]| k.tangent(t, x, d));
+        let mut keep = keep.as_mut().map(|k| k as &mut Keep<'_>);
         let summed = self.summed();
         let (growth, window_end) = (&mut self.growth, &self.window_end);
         for step in self.unfed.iter_mut().filter(|s| s.t0 < t && !s.carried) {
@@ -429,6 +473,43 @@ impl FieldError {
             if first_only {
                 break;
             }
+        }
+        self.note_start(summed);
+    }
+
+    /// [`FieldError::carry_steps`] of a model without switches (all the
+    /// steps not yet carried), by a reference alongside the run
+    /// (`Growth::step_alongside`), put on the constraints at the first
+    /// step's start by `project`; from the step that starts the carrying
+    /// on, every step (a step not estimated too: its error is in the
+    /// reference's difference).
+    fn carry_steps_alongside(
+        &mut self,
+        system: &ModelSystem<'_>,
+        t: f64,
+        mut project: Option<&mut Project<'_>>,
+    ) {
+        let summed = self.summed();
+        let (growth, window_end) = (&mut self.growth, &self.window_end);
+        for step in self.unfed.iter_mut().filter(|s| s.t0 < t && !s.carried) {
+            step.carried = true;
+            if !step.reference && !growth.started() {
+                continue;
+            }
+            if let (false, Some((end, error))) = (growth.started(), window_end) {
+                if *end == step.t0 {
+                    // As in `carry_steps`: the error at a measured
+                    // window's end where the carrying starts.
+                    let project = project.as_mut().map(|p| (&mut **p, step.t0, &step.x0[..]));
+                    growth.seed_alongside(error, project);
+                }
+            }
+            growth.step_alongside(
+                system,
+                (step.t0, &step.x0),
+                (step.t1, &step.x1),
+                project.take(),
+            );
         }
         self.note_start(summed);
     }
@@ -693,6 +774,20 @@ fn carry(growth: &mut Growth, system: &ModelSystem<'_>, step: &Unfed, keep: Opti
         _ => vec![0.0; step.x1.len()],
     };
     growth.step_kept(system, (step.t0, &step.x0), step.t1, &local, keep, None);
+}
+
+/// Whether a constrained model's errors, once carried, are carried by a
+/// reference alongside the run (`Growth::step_alongside`: 24 evaluations
+/// a step, where a step measured and differenced costs 48): a model
+/// without switching functions, whose steps are all carried right after
+/// their window was taken (`FieldError::keep`), in the window's regime
+/// (the driver changes a constraint's candidate after that: the knife
+/// edges' pivots). A model with switching functions has its window's
+/// steps after the first carried when they are added, after the driver
+/// may have changed its regime: its steps are measured when their window
+/// is taken (`measure_signed`) and differenced when carried, as before.
+fn alongside(model: &dyn DynModel) -> bool {
+    model.switches() == 0
 }
 
 /// A step's measured error `measured` (with its sign), scaled down to
