@@ -219,13 +219,10 @@ pub fn pivot_crossed(
     let mut at = 0;
     for (index, (c, &digit)) in model.constraints().iter().zip(&digits).enumerate() {
         let (a, b) = (p_a[at + digit], p_b[at + digit]);
+        let candidates_a = &p_a[at..at + c.names.len()];
         if a * b < 0.0 {
-            let (best, best_pivot) = largest_pivot(&p_a[at..at + c.names.len()]);
-            if best != digit && best_pivot > a.abs() {
-                let (mode, _, _) = best_mode(model, ta, &x_a);
-                regime.mode = mode;
-                model.set_regime(regime);
-                solver.retake(model, ta, &x_a)?;
+            if retake_with_better_candidate(model, regime, solver, (ta, &x_a), candidates_a, digit)?
+            {
                 return Ok(PivotCrossing::Switched);
             }
             // The pivot's zero, by linear interpolation within the step.
@@ -276,19 +273,36 @@ pub fn pivot_crossed(
         if solver.retakes_steps_into_poor_pivots()
             && best_b != digit
             && b.abs() < POOR_PIVOT * best_b_pivot
+            && retake_with_better_candidate(model, regime, solver, (ta, &x_a), candidates_a, digit)?
         {
-            let (best, best_pivot) = largest_pivot(&p_a[at..at + c.names.len()]);
-            if best != digit && best_pivot > a.abs() {
-                let (mode, _, _) = best_mode(model, ta, &x_a);
-                regime.mode = mode;
-                model.set_regime(regime);
-                solver.retake(model, ta, &x_a)?;
-                return Ok(PivotCrossing::Switched);
-            }
+            return Ok(PivotCrossing::Switched);
         }
         at += c.names.len();
     }
     Ok(PivotCrossing::None)
+}
+
+/// When a candidate of the constraint (pivots `candidates_a` at the
+/// step's start `(ta, x_a)`) is better there than the current one
+/// (`digit`), the run goes back to `ta` in the best mode and the step is
+/// taken again (`Solver::retake`): true.
+fn retake_with_better_candidate(
+    model: &mut dyn DynModel,
+    regime: &mut Regime,
+    solver: &mut dyn Solver,
+    (ta, x_a): (f64, &[f64]),
+    candidates_a: &[f64],
+    digit: usize,
+) -> Result<bool, Failure> {
+    let (best, best_pivot) = largest_pivot(candidates_a);
+    if best == digit || best_pivot <= candidates_a[digit].abs() {
+        return Ok(false);
+    }
+    let (mode, _, _) = best_mode(model, ta, x_a);
+    regime.mode = mode;
+    model.set_regime(regime);
+    solver.retake(model, ta, x_a)?;
+    Ok(true)
 }
 
 /// Bisection on the solver's dense output for the sign change of pivot
