@@ -1347,25 +1347,7 @@ mod tests {
         }
     }
 
-    /// `x'' = −ω² x`.
-    struct Spring(f64);
-
-    impl System for Spring {
-        fn dim(&self) -> usize {
-            2
-        }
-        fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
-            dy[0] = y[1];
-            dy[1] = -self.0 * self.0 * y[0];
-            Ok(())
-        }
-        fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
-            unreachable!()
-        }
-        fn time_partial(&self, _t: f64, _y: &[f64], _d: &mut [f64]) -> Result<(), Failure> {
-            unreachable!()
-        }
-    }
+    use crate::ode::test_systems::Spring;
 
     /// A step over three periods of a spring is cut into pieces until the
     /// chain meets the given end; a short step stays one piece.

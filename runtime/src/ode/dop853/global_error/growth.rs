@@ -490,27 +490,9 @@ impl Growth {
 mod tests {
     use super::*;
     use crate::failure::Failure;
-    use crate::linalg::Matrix;
 
     /// `x' = v, v' = −ω² x` (ω = 0 is the soft walls' free flight).
-    struct Oscillator(f64);
-
-    impl System for Oscillator {
-        fn dim(&self) -> usize {
-            2
-        }
-        fn rhs(&self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
-            dy[0] = y[1];
-            dy[1] = -self.0 * self.0 * y[0];
-            Ok(())
-        }
-        fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
-            unreachable!()
-        }
-        fn time_partial(&self, _t: f64, _y: &[f64], _d: &mut [f64]) -> Result<(), Failure> {
-            unreachable!()
-        }
-    }
+    use crate::ode::test_systems::Spring as Oscillator;
 
     #[test]
     fn a_velocity_error_grows_into_a_position_error_and_errors_add_with_their_signs() {
