@@ -81,7 +81,9 @@ def main():
     ref_lagc = args.reference_lagc or args.lagc
     os.makedirs(args.cache, exist_ok=True)
     results = {}
-    out = os.path.join(args.cache, 'run.csv')
+    # The run's output, one file a process: scans sharing a cache ran
+    # at once and read each other's runs.
+    out = os.path.join(args.cache, f'run-{os.getpid()}.csv')
     for f in args.files or sorted(glob.glob(os.path.join(ROOT, 'examples', '*.lag'))):
         name = os.path.basename(f)[:-4]
         key = hashlib.md5((os.path.abspath(f) + args.samples).encode()).hexdigest()[:10]

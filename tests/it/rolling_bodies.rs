@@ -42,3 +42,43 @@ fn a_tilting_rolling_disk_keeps_its_energy_and_both_methods_agree() {
         "field and direct differ by {difference:e}"
     );
 }
+
+#[test]
+fn a_rolling_disk_s_amplified_early_errors_are_carried_by_the_field() {
+    // This motion amplifies an error about 5,000-fold over its 10 s: at
+    // rtol 1e-11 the field's first window's 0.006 rtol ended as most of
+    // its 43 rtol, and the field, which carried its errors only once
+    // their sum passed rtol, said "within" (0.8 rtol). Carried from the
+    // first step: a run over 10·rtol says so, with an estimate of its
+    // size (every column against direct integration at rtol 1e-13).
+    let binary = build("rolling_disk_3d");
+    let samples = ["--samples", "201"];
+    let tight = ["--method", "direct", "--rtol", "1e-13", "--atol", "1e-15"];
+    let (reference, _) = run(&binary, &[&tight[..], &samples[..]].concat());
+    for rtol in [1e-11, 2e-12] {
+        let (r, a) = (format!("{rtol:e}"), format!("{:e}", rtol / 100.0));
+        let args = ["--method", "field", "--rtol", &r, "--atol", &a];
+        let json = ["--summary", "json"];
+        let (rows, stderr) = run(&binary, &[&args[..], &samples[..], &json[..]].concat());
+        let error = rows
+            .iter()
+            .zip(&reference)
+            .flat_map(|(a, b)| {
+                a[1..]
+                    .iter()
+                    .zip(&b[1..])
+                    .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
+            })
+            .fold(0.0, f64::max);
+        let line = stderr.lines().find(|l| l.starts_with('{')).unwrap();
+        let (_, rest) = line.split_once("\"global_error_estimate\":").unwrap();
+        let estimate: f64 = rest.split([',', '}']).next().unwrap().parse().unwrap();
+        let warned = stderr.contains("passes 10·rtol");
+        assert!(
+            error <= 10.0 * rtol || (warned && estimate >= 0.5 * error),
+            "rtol {rtol:e}: error {:.1} rtol, estimate {:.1} rtol, warned {warned}",
+            error / rtol,
+            estimate / rtol
+        );
+    }
+}

@@ -283,6 +283,12 @@ impl Solver for AffineField {
         self.error.cut(model, t, x);
     }
 
+    fn retake(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        // The window from `t` is not the motion's (`FieldError::retake`).
+        self.error.retake(t);
+        self.restart(model, t, x)
+    }
+
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         // The steps before (all of them but after an event's cut).
         self.error.feed(model, f64::INFINITY);

@@ -24,16 +24,9 @@
 //! stiff and Magnus windows are not counted (the estimate then says it is
 //! partial).
 //!
-//! A model with constraints: a window of at most `CALIBRATION_STRIDE`
-//! steps is added to the sum as one, its error at its end measured
-//! against a reference carried along it from its anchor
-//! (`FieldError::feed_window`), and a longer window's steps as above.
-//! A constrained model carries its errors along the motion too, from
-//! the window in which the calibrated sum passes `FROM_DIRECT`·rtol (as
-//! direct integration's): every step's error measured with its sign,
-//! propagated step by step through the window, and the carried error
-//! projected at each window's anchor as the run projects the state there
-//! (`FieldError::keep`, the projection's derivative). Without the
+//! A model with constraints carries its errors along the motion, each
+//! step's with its sign, propagated through the window and projected at
+//! each window's anchor as the run projects the state there. Without the
 //! projection the reduced system's drift off the constraints grows the
 //! carried error without bound; without the carrying, a slider-crank
 //! whose period depends on its energy ended 154 rtol off at rtol 1e-6
@@ -41,25 +34,41 @@
 //! error grows with time), and the same four-bar loop kept by velocity
 //! constraints (`four_bar_velocity`) was estimated 100× below its error.
 //!
-//! How a model without switches carries them: by a reference stepped
-//! alongside the run from `x − e` (two DOP853 half-steps a step, 24
-//! evaluations) and put on the constraints at each window's anchor as the
-//! state is, the carried error being the run's state less the reference
-//! (`Growth::step_alongside`): the measure and the propagation in one,
-//! where a step measured from its start and differenced costs 48. Once
-//! carried, such a model's windows are not measured any more (their
-//! measures scale sums the estimate no longer reads). A model with
-//! switches measures each step and differences it (`measure_signed`,
-//! `carry`): its window's steps after the first are carried when added,
-//! after the driver may have changed its regime, while the measure must
-//! be the window's (see `alongside`).
+//! A model without switches carries them from its first step, by a
+//! reference stepped alongside the run from `x − e` (two DOP853
+//! half-steps a step, 24 evaluations) and put on the constraints at each
+//! window's anchor as the state is, the carried error being the run's
+//! state less the reference (`Growth::step_alongside`): the measure and
+//! the propagation in one. From the first step, not from a threshold of
+//! the windows' summed errors (as before, and as a model with switches
+//! still does): errors made before a threshold are not carried, and a
+//! motion that amplifies them leaves the sum far below the error. A 3-D
+//! rolling disk at rtol 1e-11 ended 43 rtol off saying "within" (0.8):
+//! its first window's 0.006 rtol, amplified about 5,000-fold over 9 s,
+//! was most of it, and the sum (its unmeasured windows scaled by the
+//! first's ratio of measure to estimate, 0.005) never reached the
+//! threshold; carried from the first step, estimated 43 rtol. The cost:
+//! 24 evaluations of the reduced system a step, on the runs that
+//! carried nothing before (those whose sum stayed under the threshold).
+//!
+//! A model with switches measures its errors on windows first: a window
+//! of at most `CALIBRATION_STRIDE` steps is added to the sum as one, its
+//! error at its end measured against a reference carried along it from
+//! its anchor (`FieldError::feed_window`), and a longer window's steps as
+//! above; it carries them from the window in which the calibrated sum
+//! passes `FROM_DIRECT`·rtol (as direct integration's), each step
+//! measured when its window is taken (`measure_signed`) and differenced
+//! when carried (`carry`): its window's steps after the first are carried
+//! when added, after the driver may have changed its regime, while the
+//! measure must be the window's (see `alongside`).
 //!
 //! Once carried, a constrained model's estimate is the sum at the start
-//! of the carrying (the errors before it, not carried) plus the largest
-//! carried error, no longer the sum of the windows' errors: that sum is a
-//! bound only where errors neither cancel nor grow, and a knife edge
-//! circling at constant speed (whose errors of position go round with it
-//! and cancel) summed 22 rtol against an error of 1.0 rtol at rtol 1e-6.
+//! of the carrying (the errors before it, not carried; none for a model
+//! without switches) plus the largest carried error, no longer the sum of
+//! the windows' errors: that sum is a bound only where errors neither
+//! cancel nor grow, and a knife edge circling at constant speed (whose
+//! errors of position go round with it and cancel) summed 22 rtol
+//! against an error of 1.0 rtol at rtol 1e-6.
 
 use crate::method::solver::{GlobalErrorEstimate, Keeping};
 use crate::model::DynModel;
@@ -93,10 +102,6 @@ struct Unfed {
     /// Constrained models: the step was carried already (a window's
     /// first, at the projection before it: `FieldError::keep`).
     carried: bool,
-    /// Constrained models without switches, once their errors are
-    /// carried: the step is carried by a reference alongside the run
-    /// (`alongside`), not measured apart.
-    reference: bool,
 }
 
 /// A constrained model's step, measured (relative errors).
@@ -136,6 +141,10 @@ pub struct FieldError {
     /// The last measured window's end and its error there, with its sign:
     /// where the carrying starts at that end, the error it starts from.
     window_end: Option<(f64, Vec<f64>)>,
+    /// Where the last window's carrying began: its first step's start,
+    /// the carried error and the estimate before it, for a window taken
+    /// again from there ([`FieldError::retake`]).
+    before_window: Option<(f64, Growth, Option<f64>)>,
 }
 
 /// A constrained model's windows, each added as one (`feed_window`).
@@ -191,6 +200,7 @@ impl FieldError {
             windows: Windows::default(),
             before_carrying: None,
             window_end: None,
+            before_window: None,
         }
     }
 
@@ -288,7 +298,6 @@ impl FieldError {
             alone: false,
             signed: None,
             carried: false,
-            reference: false,
         });
         step.t0 = t0;
         step.x0.clear();
@@ -306,7 +315,6 @@ impl FieldError {
         step.alone = false;
         step.signed = None;
         step.carried = false;
-        step.reference = false;
         self.unfed.push(step);
     }
 
@@ -319,17 +327,13 @@ impl FieldError {
         if !self.constrained(model) {
             return;
         }
-        let system = ModelSystem(model);
-        let alongside = alongside(model);
-        if alongside && self.growth.started() {
-            // Carried by the reference from here on: the measures below
-            // would only scale sums the estimate no longer reads (it is
-            // the sum when the carrying started plus the carried error).
-            for step in &mut self.unfed[first..] {
-                step.reference = true;
-            }
+        if alongside(model) {
+            // Carried by a reference alongside the run from the first
+            // step (the module's comment: why not from a threshold of the
+            // sum): no window is measured, nothing would read its measure.
             return;
         }
+        let system = ModelSystem(model);
         let count = self.unfed.len() - first;
         if count > CALIBRATION_STRIDE {
             for step in &mut self.unfed[first..] {
@@ -342,13 +346,7 @@ impl FieldError {
             self.window_end = measure_window(&system, &mut self.unfed[first..]).map(|e| (end, e));
         }
         if self.carries_constrained(first) {
-            if alongside {
-                for step in &mut self.unfed[first..] {
-                    step.reference = true;
-                }
-            } else {
-                self.measure_signed(&system, first);
-            }
+            self.measure_signed(&system, first);
         }
     }
 
@@ -443,6 +441,12 @@ impl FieldError {
         first_only: bool,
         keeping: Option<&mut dyn Keeping>,
     ) {
+        if let Some(first) = self.unfed.iter().find(|s| s.t0 < t && !s.carried) {
+            // A window is taken again from its start where it crossed a
+            // constraint's pivot (`retake`): what is carried before it.
+            let before = (first.t0, self.growth.clone(), self.before_carrying);
+            self.before_window = Some(before);
+        }
         let system = ModelSystem(model);
         let alongside = alongside(model);
         if alongside {
@@ -480,9 +484,8 @@ impl FieldError {
     /// [`FieldError::carry_steps`] of a model without switches (all the
     /// steps not yet carried), by a reference alongside the run
     /// (`Growth::step_alongside`), put on the constraints at the first
-    /// step's start by `project`; from the step that starts the carrying
-    /// on, every step (a step not estimated too: its error is in the
-    /// reference's difference).
+    /// step's start by `project`: every step from the run's first (a step
+    /// not estimated too: its error is in the reference's difference).
     fn carry_steps_alongside(
         &mut self,
         system: &ModelSystem<'_>,
@@ -490,20 +493,9 @@ impl FieldError {
         mut project: Option<&mut Project<'_>>,
     ) {
         let summed = self.summed();
-        let (growth, window_end) = (&mut self.growth, &self.window_end);
+        let growth = &mut self.growth;
         for step in self.unfed.iter_mut().filter(|s| s.t0 < t && !s.carried) {
             step.carried = true;
-            if !step.reference && !growth.started() {
-                continue;
-            }
-            if let (false, Some((end, error))) = (growth.started(), window_end) {
-                if *end == step.t0 {
-                    // As in `carry_steps`: the error at a measured
-                    // window's end where the carrying starts.
-                    let project = project.as_mut().map(|p| (&mut **p, step.t0, &step.x0[..]));
-                    growth.seed_alongside(error, project);
-                }
-            }
             growth.step_alongside(
                 system,
                 (step.t0, &step.x0),
@@ -687,11 +679,57 @@ impl FieldError {
         }
     }
 
+    /// The window from `t` is taken again (the driver went back to its
+    /// start, in a better mode: `run::regime::pivot_crossed`): its steps
+    /// are not the motion's, neither added nor carried. Without this a
+    /// constant-speed particle's window across its apex, carried and then
+    /// taken again, was carried twice, its reference restarted from the
+    /// window's start with the error of its end: an estimate of 1.8
+    /// (absolute) for an error of 3e-9.
+    pub fn retake(&mut self, t: f64) {
+        if let Some((start, growth, before)) = self.before_window.take() {
+            if start == t {
+                self.growth = growth;
+                self.before_carrying = before;
+            }
+        }
+        let (mut kept, mut dropped): (Vec<Unfed>, Vec<Unfed>) =
+            self.unfed.drain(..).partition(|s| s.t0 < t);
+        self.spare.append(&mut dropped);
+        self.unfed.append(&mut kept);
+        if self.window_end.as_ref().is_some_and(|(end, _)| *end > t) {
+            self.window_end = None;
+        }
+    }
+
     /// An event at `t`, the run going on from `x`: the steps before it
     /// are the motion's.
     pub fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
+        self.uncarry_past(t);
         self.feed(model, t);
         self.growth.cut(&ModelSystem(model), t, x);
+    }
+
+    /// Before an event at `t` inside a window whose steps were carried
+    /// already (at `keep`, after the advance): the carried error goes back
+    /// to where that window's carrying began, for its steps before `t` to
+    /// be carried again, the last one only to `t` (`Growth::cut` takes
+    /// back the last step alone: a particle on a circle whose window was
+    /// carried whole, 4.25 to 6.16, and then cut at its start, compared
+    /// the state at 4.25 with the reference at 6.16, found by h-stephalf).
+    fn uncarry_past(&mut self, t: f64) {
+        if !self.unfed.iter().any(|s| s.carried && s.t1 > t) {
+            return;
+        }
+        if let Some((start, growth, before)) = self.before_window.take() {
+            if start <= t {
+                self.growth = growth;
+                self.before_carrying = before;
+                for step in self.unfed.iter_mut().filter(|s| s.t0 >= start) {
+                    step.carried = false;
+                }
+            }
+        }
     }
 
     /// The right-side evaluations the estimate cost.

@@ -735,6 +735,12 @@ impl Solver for QuasilinearField {
         Ok(())
     }
 
+    fn retake(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
+        // The window from `t` is not the motion's (`FieldError::retake`).
+        self.error.retake(t);
+        self.restart(model, t, x)
+    }
+
     fn restart_smooth(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         // The new regime's rate varies on no shorter scale than the old
         // one's, and the state did not jump: the steps learnt on the old

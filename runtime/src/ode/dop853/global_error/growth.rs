@@ -353,24 +353,6 @@ impl Growth {
         self.pending = None;
     }
 
-    /// [`Growth::seed`] for [`Growth::step_alongside`]: the reference
-    /// starts at `x − e` at `(t, x)`, put on the constraints by `project`
-    /// as the run's state is there.
-    pub fn seed_alongside(&mut self, e: &[f64], project: Option<(&mut Project<'_>, f64, &[f64])>) {
-        if self.started || self.pending.is_some() {
-            return;
-        }
-        self.e.copy_from_slice(e);
-        if let Some((project, t, x)) = project {
-            let mut reference: Vec<f64> = x.iter().zip(e).map(|(x, e)| x - e).collect();
-            if project(t, &mut reference).is_ok() {
-                for ((e, x), r) in self.e.iter_mut().zip(x).zip(&reference) {
-                    *e = x - r;
-                }
-            }
-        }
-    }
-
     /// The model may have changed since the pending step was taken (a
     /// regime switch, which restarts the run without an event's cut): its
     /// derivative is then taken by two new steps in the model as it is
@@ -615,11 +597,6 @@ mod tests {
         let kept = [1.0, 1.0];
         g.step_alongside(&free, (1.0, &kept), (2.0, &[2.0, 1.0]), Some(&mut project));
         assert!(g.e[0].abs() < 1e-15 && g.e[1] == 0.0, "{:?}", g.e);
-        // A seed before the first step: the reference put on the
-        // constraints, the velocity error gone, the position's kept.
-        let mut h = Growth::new(2);
-        h.seed_alongside(&[1e-10, 1e-10], Some((&mut project, 1.0, &kept)));
-        assert!((h.e[0] - 1e-10).abs() < 1e-15 && h.e[1] == 0.0, "{:?}", h.e);
     }
 
     #[test]
