@@ -988,26 +988,6 @@ impl QuasilinearField {
         if self.options.auto_stiff && window.stiffness_detected() {
             self.found_stiff(model);
         }
-        // A window the conditions ended after declining a step and its
-        // quarter retry: the next window starts from the step the error
-        // control had proposed, not from that quarter. A fresh anchor's
-        // conditions start well again, and the error allowed that step
-        // (the gravity-turn rocket at rtol 1e-9, 16 of its 21 windows
-        // ended so by the rounding watch: each next window's first step,
-        // the quarter, had an error of about 1e-7 tolerances and the
-        // next three regrew to the old length; BENCHMARKS §0, h-rocket
-        // and h-stephalf). Explicit windows followed by explicit ones
-        // only: RODAS4's and Magnus' were not measured.
-        let field_h = match window.declined_step() {
-            Some(h)
-                if end == WindowEnd::Conditioning
-                    && window.kind() == StepperKind::Explicit
-                    && self.window_kind() == StepperKind::Explicit =>
-            {
-                h
-            }
-            _ => window.proposed_step(),
-        };
         Ok(Pass {
             steps,
             states,
@@ -1015,7 +995,7 @@ impl QuasilinearField {
             end,
             stats: window.stats(),
             largest_condition,
-            field_h,
+            field_h: window.proposed_step(),
             start_failed,
         })
     }

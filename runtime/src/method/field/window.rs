@@ -304,11 +304,6 @@ pub struct Window {
     steps: usize,
     buffers: Buffers,
     declined: Option<Decline>,
-    /// The error control's step when the conditions declined the last
-    /// attempt and its quarter retry as well (the window ends there):
-    /// the step the error allows, which the conditions, not the error,
-    /// cut. `None` after any other outcome.
-    declined_step: Option<f64>,
 }
 
 impl Window {
@@ -401,7 +396,6 @@ impl Window {
             steps: 0,
             buffers: Buffers::new(n),
             declined: None,
-            declined_step: None,
         })
     }
 
@@ -477,7 +471,6 @@ impl Window {
         self.previous_state.copy_from_slice(x);
         self.steps = 0;
         self.declined = None;
-        self.declined_step = None;
         Ok(())
     }
 
@@ -572,13 +565,6 @@ impl Window {
         self.stepper.propose_step(h)
     }
 
-    /// The error control's step before the cut to a quarter, when the
-    /// last call of [`Window::step`] ended the window because the
-    /// conditions declined that step and its quarter retry.
-    pub fn declined_step(&self) -> Option<f64> {
-        self.declined_step
-    }
-
     pub fn stats(&self) -> Stats {
         self.stepper.stats()
     }
@@ -609,16 +595,12 @@ impl Window {
         // A step the conditions decline may fit shorter (the sensitivities'
         // growth rises with the step): try a quarter of it once before
         // ending the window, whose fresh start costs more.
-        self.declined_step = None;
         if outcome == StepOutcome::Declined && self.steps > 0 {
-            let h = self.stepper.proposed_step();
-            self.stepper.propose_step(0.25 * h);
+            let h = 0.25 * self.stepper.proposed_step();
+            self.stepper.propose_step(h);
             outcome = self
                 .stepper
                 .step_measured(system, t_limit, budget, &mut measure)?;
-            if outcome == StepOutcome::Declined {
-                self.declined_step = Some(h);
-            }
         }
         self.declined = measure.declined;
         let trial_ok = measure.trial_ok;
