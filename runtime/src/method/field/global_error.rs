@@ -589,17 +589,17 @@ impl FieldError {
                 // Carried by a reference stepped alongside the run from
                 // `x0 − e` (`Growth::step_alongside`, 24 evaluations): the
                 // step's error with its sign and the error before it
-                // carried by the flow, in one. Measured from `x0` and
-                // propagated by the step's derivative (two new DOP853
-                // steps), the same cost 48 evaluations a step: an
-                // undamped oscillator over 159 periods at rtol 1e-8 spent
-                // 49 % of its field's instructions there, 3.6x plain
-                // DOP853's whole run (docs/BENCHMARKS.md §0, h-affine2).
-                // For an affine motion the two are the same propagation
-                // (the flow of `x0 − e` is the flow of `x0` less the
-                // linear flow of `e`) but for the measure's cap at the
-                // step's estimate (`at_most_estimated`), which the
-                // reference's difference does not apply.
+                // carried by the flow, in one. A measure from `x0` and
+                // the step's derivative (two new DOP853 steps) took 48
+                // evaluations a step for the same: an undamped
+                // oscillator over 159 periods at rtol 1e-8 spent 49 % of
+                // its field's instructions there, 3.6x plain DOP853's
+                // whole run (docs/BENCHMARKS.md §0, h-affine2). For an
+                // affine motion the two differ only by the propagators'
+                // own truncation (the flow of `x0 − e` is the flow of
+                // `x0` less the linear flow of `e`) and by the measure's
+                // cap at the step's estimate (`at_most_estimated`), which
+                // the reference's difference does not apply.
                 self.growth
                     .step_alongside(&system, (step.t0, &step.x0), (step.t1, &step.x1), None);
             }
