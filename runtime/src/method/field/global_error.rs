@@ -19,10 +19,13 @@
 //! whole DOP853 step's), and the ratio scales the estimates as direct
 //! integration's Richardson measure does (`GlobalError::add_measured`);
 //! the measure sees all of the step's error, the Newton iteration's
-//! included. Past the bound every step's error is measured, and carried
-//! along the motion with its sign (`global_error::growth`). The steps of
-//! stiff and Magnus windows are not counted (the estimate then says it is
-//! partial).
+//! included. Past the bound every step's error is carried along the
+//! motion with its sign (`global_error::growth`), by a reference stepped
+//! alongside the run from `x − e` (`Growth::step_alongside`, 24
+//! evaluations a step: the step's error and the propagation of the error
+//! before it in one, where a measure from the step's start and the
+//! step's derivative cost 48). The steps of stiff and Magnus windows are
+//! not counted (the estimate then says it is partial).
 //!
 //! A model with constraints carries its errors along the motion, each
 //! step's with its sign, propagated through the window and projected at
@@ -553,44 +556,44 @@ impl FieldError {
             let h = step.t1 - step.t0;
             let estimated = relative(local, &step.x1);
             let carried = self.growth.started() || past_bound(&self.global, self.rtol);
-            // The step's error against the reference, where asked for; a
+            // The step's error against the reference, where the sum is
+            // calibrated (every `CALIBRATION_STRIDE` steps, as direct
+            // integration's: see there why not at every step); a
             // reference that fails leaves the estimate as it is (the
             // estimate never fails the run).
-            let mut measured = None;
             let calibrates = self.global.wants_measure(self.rtol);
-            if carried || calibrates {
+            let mut measured = None;
+            if calibrates {
                 self.evaluations += 24;
                 let mut reference = vec![0.0; step.x1.len()];
                 if let Ok(true) = step_by_halves(&system, step.t0, &step.x0, h, &mut reference) {
                     for (r, x) in reference.iter_mut().zip(&step.x1) {
                         *r = x - *r;
                     }
-                    measured = Some(reference);
+                    measured = Some(relative(&reference, &step.x1));
                 }
             }
-            // The sum is calibrated every `CALIBRATION_STRIDE` steps, as
-            // direct integration's (see there why not at every step).
-            let added = match (&measured, calibrates) {
-                (Some(m), true) => self
-                    .global
-                    .add_measured(estimated, relative(m, &step.x1), h),
-                _ => self.global.add(estimated, h),
+            match measured {
+                Some(m) => self.global.add_measured(estimated, m, h),
+                None => self.global.add(estimated, h),
             };
             if carried {
-                // The measured error with its sign, at most the estimate.
-                let local: Vec<f64> = match measured {
-                    Some(m) => at_most_estimated(&m, local, &step.x1),
-                    None => {
-                        let k = if estimated > 0.0 {
-                            added / estimated
-                        } else {
-                            0.0
-                        };
-                        local.iter().map(|v| k * v).collect()
-                    }
-                };
+                // Carried by a reference stepped alongside the run from
+                // `x0 − e` (`Growth::step_alongside`, 24 evaluations): the
+                // step's error with its sign and the error before it
+                // carried by the flow, in one. A measure from `x0` and
+                // the step's derivative (two new DOP853 steps) took 48
+                // evaluations a step for the same: an undamped
+                // oscillator over 159 periods at rtol 1e-8 spent 49 % of
+                // its field's instructions there, 3.6x plain DOP853's
+                // whole run (docs/BENCHMARKS.md §0, h-affine2). For an
+                // affine motion the two differ only by the propagators'
+                // own truncation (the flow of `x0 − e` is the flow of
+                // `x0` less the linear flow of `e`) and by the measure's
+                // cap at the step's estimate (`at_most_estimated`), which
+                // the reference's difference does not apply.
                 self.growth
-                    .step(&system, (step.t0, &step.x0), step.t1, &local);
+                    .step_alongside(&system, (step.t0, &step.x0), (step.t1, &step.x1), None);
             }
         }
         // All of them added or dropped (those from `t` on are not the
