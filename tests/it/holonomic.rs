@@ -335,3 +335,35 @@ fn a_cartesian_pendulum_released_level_with_its_pivot_reaches_the_other_side_at_
         );
     }
 }
+
+#[test]
+fn a_field_window_taken_again_across_a_pivot_is_carried_once() {
+    // The constant-speed particle's field window across its apex (where
+    // the constraint's candidate changes) is taken again from its start.
+    // Its steps had been carried already, and were carried a second time
+    // from the window's start with the error of its end: an estimate of
+    // 1.8 (absolute) at every rtol. At the run's end, a step's end, the
+    // estimate is the error's size.
+    let binary = build("constant_speed_implicit");
+    for rtol in [1e-6, 1e-8, 1e-10] {
+        let (r, a) = (format!("{rtol:e}"), format!("{:e}", rtol / 100.0));
+        let args = [
+            "--method",
+            "field",
+            "--rtol",
+            &r,
+            "--atol",
+            &a,
+            "--samples",
+            "2",
+            "--summary",
+            "json",
+        ];
+        let (_, stderr) = run(&binary, &args);
+        let (error, estimate) = error_and_estimate(&stderr);
+        assert!(
+            estimate < rtol && error < 3.0 * estimate && estimate < 10.0 * error.max(1e-15),
+            "rtol {rtol:e}: error {error:e}, estimate {estimate:e}"
+        );
+    }
+}
