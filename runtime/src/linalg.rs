@@ -229,6 +229,22 @@ impl Lu {
 
     /// Factors `self.factors` in place.
     fn factor(&mut self) {
+        // The small sizes with the loops' bounds known (the same
+        // operations in the same order: the same bits), as in
+        // `solve_in_place`.
+        match self.factors.rows {
+            2 => return self.factor_small::<2>(),
+            3 => return self.factor_small::<3>(),
+            4 => return self.factor_small::<4>(),
+            5 => return self.factor_small::<5>(),
+            6 => return self.factor_small::<6>(),
+            _ => {}
+        }
+        self.factor_general();
+    }
+
+    /// [`Lu::factor`]'s loops for any size.
+    fn factor_general(&mut self) {
         let a = &mut self.factors;
         let n = a.rows;
         debug_assert_eq!(n, a.cols);
@@ -263,6 +279,49 @@ impl Lu {
                 for i in k + 1..n {
                     let l = a[(i, k)];
                     a[(i, j)] -= l * u;
+                }
+            }
+        }
+        self.sign = sign;
+        self.singular = singular;
+    }
+
+    /// [`Lu::factor`]'s loops for `n = N`.
+    #[inline(always)]
+    fn factor_small<const N: usize>(&mut self) {
+        debug_assert_eq!(N, self.factors.cols);
+        let a = &mut self.factors.data[..N * N];
+        let pivots = &mut self.pivots;
+        pivots.clear();
+        let mut sign = 1.0;
+        let mut singular = false;
+        for k in 0..N {
+            let (p, largest) = (k..N)
+                .map(|i| (i, a[k * N + i].abs()))
+                .fold((k, -1.0), |best, c| if c.1 > best.1 { c } else { best });
+            pivots.push(p);
+            if p != k {
+                sign = -sign;
+                for j in 0..N {
+                    a.swap(j * N + k, j * N + p);
+                }
+            }
+            if largest == 0.0 || !largest.is_finite() {
+                singular = true;
+                continue;
+            }
+            let pivot = a[k * N + k];
+            for i in k + 1..N {
+                a[k * N + i] /= pivot;
+            }
+            for j in k + 1..N {
+                let u = a[j * N + k];
+                if u == 0.0 {
+                    continue;
+                }
+                for i in k + 1..N {
+                    let l = a[k * N + i];
+                    a[j * N + i] -= l * u;
                 }
             }
         }
@@ -319,6 +378,27 @@ impl Lu {
             b[0] /= f.data[0];
             return true;
         }
+        // The small sizes with the loops' bounds known: the same
+        // operations in the same order (the same bits), without the
+        // general loops' set-up and bounds checks, which were most of a
+        // 3 × 3 solve (about 480 instructions; an implicit model's
+        // Jacobian solves once per column at every linearisation).
+        match n {
+            2 => return self.solve_small::<2>(b),
+            3 => return self.solve_small::<3>(b),
+            4 => return self.solve_small::<4>(b),
+            5 => return self.solve_small::<5>(b),
+            6 => return self.solve_small::<6>(b),
+            _ => {}
+        }
+        self.solve_general(b)
+    }
+
+    /// [`Lu::solve_in_place`]'s loops for any size (factors not singular,
+    /// `n > 1`).
+    fn solve_general(&self, b: &mut [f64]) -> bool {
+        let n = self.dim();
+        let f = &self.factors;
         for k in 0..n {
             b.swap(k, self.pivots[k]);
         }
@@ -336,6 +416,35 @@ impl Lu {
             if bj != 0.0 {
                 for i in 0..j {
                     b[i] -= f[(i, j)] * bj;
+                }
+            }
+        }
+        true
+    }
+
+    /// [`Lu::solve_in_place`]'s loops for `n = N` (factors not singular).
+    #[inline(always)]
+    fn solve_small<const N: usize>(&self, b: &mut [f64]) -> bool {
+        let f = &self.factors.data[..N * N];
+        let pivots = &self.pivots[..N];
+        let b = &mut b[..N];
+        for (k, &p) in pivots.iter().enumerate() {
+            b.swap(k, p);
+        }
+        for j in 0..N {
+            let bj = b[j];
+            if bj != 0.0 {
+                for i in j + 1..N {
+                    b[i] -= f[j * N + i] * bj;
+                }
+            }
+        }
+        for j in (0..N).rev() {
+            b[j] /= f[j * N + j];
+            let bj = b[j];
+            if bj != 0.0 {
+                for i in 0..j {
+                    b[i] -= f[j * N + i] * bj;
                 }
             }
         }
@@ -668,6 +777,72 @@ mod tests {
         // Nearly singular: the pivot ratio says so.
         let (_, ratio) = ldlt_fixed([[1.0, 1.0], [1.0, 1.0 + 1e-12]], [1.0, 1.0]).unwrap();
         assert!(ratio < 1e-11, "{ratio}");
+    }
+
+    /// The small sizes' factors and solves are the general loops', bit
+    /// for bit: pivoting, exact zeros skipped, a singular matrix.
+    #[test]
+    fn small_lu_is_the_general_loops_bit_for_bit() {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for n in 2..=6 {
+            for case in 0..4 {
+                let mut a = Matrix::zeros(n, n);
+                for c in 0..n {
+                    for r in 0..n {
+                        a[(r, c)] = match case {
+                            // Dense, pivoting on every column.
+                            0 => ((r * 7 + c * 3) as f64 * 0.91).sin() * (1.0 + r as f64),
+                            // Sparse: zeros in the factors and the solve.
+                            1 if (r + 2 * c) % 3 == 0 => 0.0,
+                            1 => (r as f64 + 1.0) / (c as f64 + 2.0),
+                            // Symmetric positive definite (a mass matrix).
+                            2 => 1.0 / (r + c + 1) as f64 + if r == c { 1.0 } else { 0.0 },
+                            // Singular: a column of zeros.
+                            _ if c == 1 => 0.0,
+                            _ => ((r * 3 + c) as f64 * 0.37).cos(),
+                        };
+                    }
+                }
+                let small = Lu::new(&a);
+                let mut general = Lu {
+                    factors: a.clone(),
+                    pivots: Vec::new(),
+                    sign: 1.0,
+                    singular: false,
+                };
+                general.factor_general();
+                assert_eq!(
+                    bits(&small.factors.data),
+                    bits(&general.factors.data),
+                    "n {n} case {case}"
+                );
+                assert_eq!(small.pivots, general.pivots, "n {n} case {case}");
+                assert_eq!(
+                    (small.sign, small.singular),
+                    (general.sign, general.singular)
+                );
+                // (The sparse case is singular too at some sizes.)
+                assert!(small.singular || case != 3, "n {n} case {case}");
+                if small.singular {
+                    continue;
+                }
+                for rhs in 0..2 {
+                    let b: Vec<f64> = (0..n)
+                        .map(|i| {
+                            if rhs == 1 && i % 2 == 0 {
+                                0.0
+                            } else {
+                                (i as f64 * 1.3).cos()
+                            }
+                        })
+                        .collect();
+                    let (mut x, mut y) = (b.clone(), b.clone());
+                    assert!(small.solve_in_place(&mut x));
+                    assert!(general.solve_general(&mut y));
+                    assert_eq!(bits(&x), bits(&y), "n {n} case {case} rhs {rhs}");
+                }
+            }
+        }
     }
 
     #[test]
