@@ -205,6 +205,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/run/keep.rs"),
     ),
     (
+        "src/run/keep/one.rs",
+        include_str!("../../runtime/src/run/keep/one.rs"),
+    ),
+    (
         "src/run/mod.rs",
         include_str!("../../runtime/src/run/mod.rs"),
     ),

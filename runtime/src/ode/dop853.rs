@@ -832,7 +832,72 @@ fn continuous_extension<S: System + ?Sized, K: Stages + ?Sized>(
     stage_state: &mut [f64],
     cont: &mut [f64],
 ) -> Result<(), Failure> {
-    let n = y.len();
+    macro_rules! sized {
+        ($n:literal) => {
+            continuous_extension_sized::<S, K, $n>(
+                system,
+                t_old,
+                h,
+                y_old,
+                y,
+                k,
+                extra,
+                stage_state,
+                cont,
+            )
+        };
+    }
+    // Compiled for the smallest sizes, where the coefficients' sums are
+    // taken a stage at a time over the components: at n = 4 the general
+    // loop's multiply-adds were about 530 of a sampled step's
+    // instructions (callgrind on the paper, docs/BENCHMARKS.md §10m); at
+    // n = 6 that order cost more than the general loop (the knife edge).
+    // The same operations in the same order at every size: the values are
+    // bit-identical.
+    match y.len() {
+        2 => sized!(2),
+        3 => sized!(3),
+        4 => sized!(4),
+        _ => continuous_extension_any(system, t_old, h, y_old, y, k, extra, stage_state, cont),
+    }
+}
+
+/// [`continuous_extension_sized`] for any `n`, out of line: inlined into
+/// the dispatch beside the sized copies it cost the knife edge (n = 6)
+/// about 340 more instructions a sampled step than as a function of its
+/// own (callgrind, docs/BENCHMARKS.md §10m).
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn continuous_extension_any<S: System + ?Sized, K: Stages + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y: &[f64],
+    k: &K,
+    extra: &mut [f64],
+    stage_state: &mut [f64],
+    cont: &mut [f64],
+) -> Result<(), Failure> {
+    continuous_extension_sized::<S, K, 0>(system, t_old, h, y_old, y, k, extra, stage_state, cont)
+}
+
+/// [`continuous_extension`] for `n = N` known at compile time (`N = 0`:
+/// any `n`).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn continuous_extension_sized<S: System + ?Sized, K: Stages + ?Sized, const N: usize>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y: &[f64],
+    k: &K,
+    extra: &mut [f64],
+    stage_state: &mut [f64],
+    cont: &mut [f64],
+) -> Result<(), Failure> {
+    let n = if N == 0 { y.len() } else { N };
     let (y, y_old) = (&y[..n], &y_old[..n]);
     let stage_state = &mut stage_state[..n];
     let extra = &mut extra[..3 * n];
@@ -868,6 +933,35 @@ fn continuous_extension<S: System + ?Sized, K: Stages + ?Sized>(
     let (c5, rest) = rest.split_at_mut(n);
     let (c6, c7) = rest.split_at_mut(n);
     let c7 = &mut c7[..n];
+    if N != 0 {
+        for i in 0..N {
+            let y_diff = y[i] - y_old[i];
+            let bspl = h * start_rate[i] - y_diff;
+            c0[i] = y_old[i];
+            c1[i] = y_diff;
+            c2[i] = bspl;
+            c3[i] = y_diff - h * end_rate[i] - bspl;
+        }
+        // A stage at a time over the components (so that they vectorise,
+        // the 4·N sums held in registers): each component's four sums in
+        // the order of the loop below.
+        let mut d = [[0.0; N]; 4];
+        for (m, stage) in used.iter().enumerate() {
+            for (r, d) in d.iter_mut().enumerate() {
+                let a = D[r][USED[m]];
+                for i in 0..N {
+                    d[i] += a * stage[i];
+                }
+            }
+        }
+        for i in 0..N {
+            c4[i] = h * d[0][i];
+            c5[i] = h * d[1][i];
+            c6[i] = h * d[2][i];
+            c7[i] = h * d[3][i];
+        }
+        return Ok(());
+    }
     for i in 0..n {
         let y_diff = y[i] - y_old[i];
         let bspl = h * start_rate[i] - y_diff;

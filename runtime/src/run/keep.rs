@@ -21,6 +21,8 @@
 //! multiplies the error of `x'`, and moving `y'` onto it made the circling
 //! knife edge 3× less accurate than leaving it.
 
+mod one;
+
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{Lu, Matrix};
 use crate::model::{DynModel, Initial};
@@ -342,6 +344,22 @@ impl Keeper {
             fixed_components(model, mode, &mut self.fixed);
             self.mode = Some(mode);
         }
+        if one::applies(self, model) {
+            return self.project_one(model, t, x, judged, bounded);
+        }
+        self.project_general(model, t, x, judged, bounded)
+    }
+
+    /// [`Keeper::project_from`] for any constraints (the mode's fixed
+    /// components known).
+    fn project_general(
+        &mut self,
+        model: &dyn DynModel,
+        t: f64,
+        x: &[f64],
+        judged: bool,
+        bounded: bool,
+    ) -> Result<f64, Failure> {
         let half = self.states.len() / 2;
         let (kept, projected) = self.states.split_at_mut(half);
         projected.copy_from_slice(x);
