@@ -19,7 +19,9 @@
 //! where the conditions (13) degrade, or at the end of the span; the next
 //! window is anchored at its end.
 
-use super::coefficients::{FieldSystem, Iterate, LinearizedMotion, ProjectiveCoefficients};
+use super::coefficients::{
+    FieldSystem, Iterate, LinearizationScratch, LinearizedMotion, ProjectiveCoefficients,
+};
 use super::conditions::recover_state;
 use super::global_error::FieldError;
 use super::window::{StepperKind, StoredStep, Window, WindowStep};
@@ -252,6 +254,7 @@ impl AcceptedWindow {
         model: &dyn DynModel,
         i: usize,
         tol: Tolerance,
+        scratch: &RefCell<LinearizationScratch>,
     ) -> Result<usize, Failure> {
         if self.outputs[i].is_some() {
             return Ok(0);
@@ -263,7 +266,7 @@ impl AcceptedWindow {
         } else {
             &self.states[i - 1]
         };
-        let motion = LinearizedMotion::new(model, &self.path);
+        let motion = LinearizedMotion::with_scratch(model, &self.path, scratch);
         let dense = dense_steps_between(&motion, t_old, h, x_old, &self.states[i], tol);
         let used = motion.linearizations();
         self.outputs[i] = Some(dense?.0);
@@ -312,6 +315,9 @@ pub struct QuasilinearField {
     pending: Option<Failure>,
     /// The global error estimate carried along the run.
     error: FieldError,
+    /// The linearisation's buffers of the output between steps
+    /// (`AcceptedWindow::build_output`), lent to each step's motion.
+    output_scratch: RefCell<LinearizationScratch>,
 }
 
 impl QuasilinearField {
@@ -344,6 +350,7 @@ impl QuasilinearField {
             stiff,
             oscillatory: false,
             error,
+            output_scratch: LinearizationScratch::new(x0.len()),
         }
     }
 
@@ -698,7 +705,8 @@ impl Solver for QuasilinearField {
             // (the rocket with drag at rtol 1e-9, 101 samples: 1.8e-9 →
             // 3.3e-10, direct 1.2e-10). A stiff window's steps are too long
             // for an explicit step: there the coefficients' extension.
-            self.linearizations += window.build_output(model, i, self.options.tol)?;
+            self.linearizations +=
+                window.build_output(model, i, self.options.tol, &self.output_scratch)?;
             if let Some(pieces) = &window.outputs[i] {
                 let piece = pieces
                     .iter()
@@ -773,7 +781,8 @@ impl Solver for QuasilinearField {
             // The same output as `dense`: the state's own extension over
             // explicit steps, the coefficients' over stiff ones.
             if window.steps[i].is_explicit() {
-                self.linearizations += window.build_output(model, i, self.options.tol)?;
+                self.linearizations +=
+                    window.build_output(model, i, self.options.tol, &self.output_scratch)?;
                 if let Some(pieces) = &window.outputs[i] {
                     out.extend(
                         pieces
