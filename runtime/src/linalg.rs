@@ -274,38 +274,15 @@ impl Lu {
         debug_assert_eq!(n, a.cols);
         let pivots = &mut self.pivots;
         pivots.clear();
-        let mut sign = 1.0;
-        let mut singular = false;
-        for k in 0..n {
-            let (p, largest) = (k..n)
-                .map(|i| (i, a[(i, k)].abs()))
-                .fold((k, -1.0), |best, c| if c.1 > best.1 { c } else { best });
-            pivots.push(p);
-            if p != k {
-                sign = -sign;
-                for j in 0..n {
-                    a.data.swap(j * n + k, j * n + p);
-                }
-            }
-            if largest == 0.0 || !largest.is_finite() {
-                singular = true;
-                continue;
-            }
-            let pivot = a[(k, k)];
-            for i in k + 1..n {
-                a[(i, k)] /= pivot;
-            }
-            for j in k + 1..n {
-                let u = a[(k, j)];
-                if u == 0.0 {
-                    continue;
-                }
-                for i in k + 1..n {
-                    let l = a[(i, k)];
-                    a[(i, j)] -= l * u;
-                }
-            }
-        }
+        // The conditions of two, three and five degrees of freedom are
+        // factored at every field step: their sizes known, the same
+        // operations.
+        let (sign, singular) = match n {
+            2 => factor_sized::<2>(&mut a.data, n, pivots),
+            3 => factor_sized::<3>(&mut a.data, n, pivots),
+            5 => factor_sized::<5>(&mut a.data, n, pivots),
+            _ => factor_sized::<0>(&mut a.data, n, pivots),
+        };
         self.sign = sign;
         self.singular = singular;
     }
@@ -353,11 +330,20 @@ impl Lu {
         }
         let n = self.dim();
         let f = &self.factors;
-        if n == 1 {
-            // What the loops below do for one unknown (the conditions of
-            // one degree of freedom, three solves a field step).
-            b[0] /= f.data[0];
-            return true;
+        match n {
+            1 => {
+                // What the loops below do for one unknown (the conditions
+                // of one degree of freedom, three solves a field step).
+                b[0] /= f.data[0];
+                return true;
+            }
+            // The conditions of two, three and five degrees of freedom
+            // (N = 3, 4, 6), at every field step and in every condition
+            // estimate: the same loops with their bounds known.
+            2 => return lu_solve_sized::<2>(&f.data, &self.pivots, b),
+            3 => return lu_solve_sized::<3>(&f.data, &self.pivots, b),
+            5 => return lu_solve_sized::<5>(&f.data, &self.pivots, b),
+            _ => {}
         }
         for k in 0..n {
             b.swap(k, self.pivots[k]);
@@ -389,6 +375,13 @@ impl Lu {
         }
         let n = self.dim();
         let f = &self.factors;
+        // As `solve_in_place`: the small conditions' sizes known.
+        match n {
+            2 => return lu_solve_transpose_sized::<2>(&f.data, &self.pivots, b),
+            3 => return lu_solve_transpose_sized::<3>(&f.data, &self.pivots, b),
+            5 => return lu_solve_transpose_sized::<5>(&f.data, &self.pivots, b),
+            _ => {}
+        }
         // Aᵀ = Uᵀ Lᵀ P: solve Uᵀ y = b, Lᵀ z = y, then x = Pᵀ z.
         for j in 0..n {
             let mut s = b[j];
@@ -489,6 +482,103 @@ impl Lu {
         }
         Some(inv)
     }
+}
+
+/// [`Lu::factor`] of the `n × n` matrix `a` (column by column) in place,
+/// with `n = N` known at compile time (`N = 0`: read at run time): the
+/// pivots into `pivots`; returns the permutation's sign and whether a
+/// pivot was zero.
+#[inline(always)]
+fn factor_sized<const N: usize>(a: &mut [f64], n: usize, pivots: &mut Vec<usize>) -> (f64, bool) {
+    let n = if N == 0 { n } else { N };
+    let a = &mut a[..n * n];
+    let mut sign = 1.0;
+    let mut singular = false;
+    for k in 0..n {
+        let (p, largest) = (k..n)
+            .map(|i| (i, a[k * n + i].abs()))
+            .fold((k, -1.0), |best, c| if c.1 > best.1 { c } else { best });
+        pivots.push(p);
+        if p != k {
+            sign = -sign;
+            for j in 0..n {
+                a.swap(j * n + k, j * n + p);
+            }
+        }
+        if largest == 0.0 || !largest.is_finite() {
+            singular = true;
+            continue;
+        }
+        let pivot = a[k * n + k];
+        for i in k + 1..n {
+            a[k * n + i] /= pivot;
+        }
+        for j in k + 1..n {
+            let u = a[j * n + k];
+            if u == 0.0 {
+                continue;
+            }
+            for i in k + 1..n {
+                let l = a[k * n + i];
+                a[j * n + i] -= l * u;
+            }
+        }
+    }
+    (sign, singular)
+}
+
+/// [`Lu::solve_in_place`] for `N` unknowns known at compile time (`f` the
+/// factors column by column): the general loops' operations in their
+/// order, so the same bits.
+#[inline(always)]
+fn lu_solve_sized<const N: usize>(f: &[f64], pivots: &[usize], b: &mut [f64]) -> bool {
+    let (f, pivots, b) = (&f[..N * N], &pivots[..N], &mut b[..N]);
+    for k in 0..N {
+        b.swap(k, pivots[k]);
+    }
+    for j in 0..N {
+        let bj = b[j];
+        if bj != 0.0 {
+            for i in j + 1..N {
+                b[i] -= f[j * N + i] * bj;
+            }
+        }
+    }
+    for j in (0..N).rev() {
+        b[j] /= f[j * N + j];
+        let bj = b[j];
+        if bj != 0.0 {
+            for i in 0..j {
+                b[i] -= f[j * N + i] * bj;
+            }
+        }
+    }
+    true
+}
+
+/// [`Lu::solve_transpose_in_place`] for `N` unknowns known at compile
+/// time: the general loops' operations in their order.
+#[inline(always)]
+fn lu_solve_transpose_sized<const N: usize>(f: &[f64], pivots: &[usize], b: &mut [f64]) -> bool {
+    let (f, pivots, b) = (&f[..N * N], &pivots[..N], &mut b[..N]);
+    for j in 0..N {
+        let mut s = b[j];
+        for i in 0..j {
+            s -= f[j * N + i] * b[i];
+        }
+        b[j] = s / f[j * N + j];
+    }
+    for j in (0..N).rev() {
+        let mut s = b[j];
+        for i in j + 1..N {
+            s -= f[j * N + i] * b[i];
+        }
+        b[j] = s;
+    }
+    for k in (0..N).rev() {
+        b.swap(k, pivots[k]);
+    }
+    true
 }
 
 /// The 1-norm condition number of `a` estimated from its factors.
