@@ -340,30 +340,10 @@ impl Lu {
             // The conditions of two, three and five degrees of freedom
             // (N = 3, 4, 6), at every field step and in every condition
             // estimate: the same loops with their bounds known.
-            2 => return lu_solve_sized::<2>(&f.data, &self.pivots, b),
-            3 => return lu_solve_sized::<3>(&f.data, &self.pivots, b),
-            5 => return lu_solve_sized::<5>(&f.data, &self.pivots, b),
-            _ => {}
-        }
-        for k in 0..n {
-            b.swap(k, self.pivots[k]);
-        }
-        for j in 0..n {
-            let bj = b[j];
-            if bj != 0.0 {
-                for i in j + 1..n {
-                    b[i] -= f[(i, j)] * bj;
-                }
-            }
-        }
-        for j in (0..n).rev() {
-            b[j] /= f[(j, j)];
-            let bj = b[j];
-            if bj != 0.0 {
-                for i in 0..j {
-                    b[i] -= f[(i, j)] * bj;
-                }
-            }
+            2 => lu_solve_sized::<2>(&f.data, n, &self.pivots, b),
+            3 => lu_solve_sized::<3>(&f.data, n, &self.pivots, b),
+            5 => lu_solve_sized::<5>(&f.data, n, &self.pivots, b),
+            _ => lu_solve_sized::<0>(&f.data, n, &self.pivots, b),
         }
         true
     }
@@ -377,28 +357,10 @@ impl Lu {
         let f = &self.factors;
         // As `solve_in_place`: the small conditions' sizes known.
         match n {
-            2 => return lu_solve_transpose_sized::<2>(&f.data, &self.pivots, b),
-            3 => return lu_solve_transpose_sized::<3>(&f.data, &self.pivots, b),
-            5 => return lu_solve_transpose_sized::<5>(&f.data, &self.pivots, b),
-            _ => {}
-        }
-        // Aᵀ = Uᵀ Lᵀ P: solve Uᵀ y = b, Lᵀ z = y, then x = Pᵀ z.
-        for j in 0..n {
-            let mut s = b[j];
-            for i in 0..j {
-                s -= f[(i, j)] * b[i];
-            }
-            b[j] = s / f[(j, j)];
-        }
-        for j in (0..n).rev() {
-            let mut s = b[j];
-            for i in j + 1..n {
-                s -= f[(i, j)] * b[i];
-            }
-            b[j] = s;
-        }
-        for k in (0..n).rev() {
-            b.swap(k, self.pivots[k]);
+            2 => lu_solve_transpose_sized::<2>(&f.data, n, &self.pivots, b),
+            3 => lu_solve_transpose_sized::<3>(&f.data, n, &self.pivots, b),
+            5 => lu_solve_transpose_sized::<5>(&f.data, n, &self.pivots, b),
+            _ => lu_solve_transpose_sized::<0>(&f.data, n, &self.pivots, b),
         }
         true
     }
@@ -527,58 +489,59 @@ fn factor_sized<const N: usize>(a: &mut [f64], n: usize, pivots: &mut Vec<usize>
     (sign, singular)
 }
 
-/// [`Lu::solve_in_place`] for `N` unknowns known at compile time (`f` the
-/// factors column by column): the general loops' operations in their
-/// order, so the same bits.
+/// [`Lu::solve_in_place`] of the regular factors `f` (column by column) of
+/// an `n × n` matrix, with `n = N` known at compile time (`N = 0`: read at
+/// run time): the same operations in the same order either way, so the
+/// same bits.
 #[inline(always)]
-fn lu_solve_sized<const N: usize>(f: &[f64], pivots: &[usize], b: &mut [f64]) -> bool {
-    let (f, pivots, b) = (&f[..N * N], &pivots[..N], &mut b[..N]);
-    for k in 0..N {
+fn lu_solve_sized<const N: usize>(f: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
+    let n = if N == 0 { n } else { N };
+    let (f, pivots, b) = (&f[..n * n], &pivots[..n], &mut b[..n]);
+    for k in 0..n {
         b.swap(k, pivots[k]);
     }
-    for j in 0..N {
+    for j in 0..n {
         let bj = b[j];
         if bj != 0.0 {
-            for i in j + 1..N {
-                b[i] -= f[j * N + i] * bj;
+            for i in j + 1..n {
+                b[i] -= f[j * n + i] * bj;
             }
         }
     }
-    for j in (0..N).rev() {
-        b[j] /= f[j * N + j];
+    for j in (0..n).rev() {
+        b[j] /= f[j * n + j];
         let bj = b[j];
         if bj != 0.0 {
             for i in 0..j {
-                b[i] -= f[j * N + i] * bj;
+                b[i] -= f[j * n + i] * bj;
             }
         }
     }
-    true
 }
 
-/// [`Lu::solve_transpose_in_place`] for `N` unknowns known at compile
-/// time: the general loops' operations in their order.
+/// [`Lu::solve_transpose_in_place`] as [`lu_solve_sized`]: `Aᵀ = Uᵀ Lᵀ P`,
+/// solve `Uᵀ y = b`, `Lᵀ z = y`, then `x = Pᵀ z`.
 #[inline(always)]
-fn lu_solve_transpose_sized<const N: usize>(f: &[f64], pivots: &[usize], b: &mut [f64]) -> bool {
-    let (f, pivots, b) = (&f[..N * N], &pivots[..N], &mut b[..N]);
-    for j in 0..N {
+fn lu_solve_transpose_sized<const N: usize>(f: &[f64], n: usize, pivots: &[usize], b: &mut [f64]) {
+    let n = if N == 0 { n } else { N };
+    let (f, pivots, b) = (&f[..n * n], &pivots[..n], &mut b[..n]);
+    for j in 0..n {
         let mut s = b[j];
         for i in 0..j {
-            s -= f[j * N + i] * b[i];
+            s -= f[j * n + i] * b[i];
         }
-        b[j] = s / f[j * N + j];
+        b[j] = s / f[j * n + j];
     }
-    for j in (0..N).rev() {
+    for j in (0..n).rev() {
         let mut s = b[j];
-        for i in j + 1..N {
-            s -= f[j * N + i] * b[i];
+        for i in j + 1..n {
+            s -= f[j * n + i] * b[i];
         }
         b[j] = s;
     }
-    for k in (0..N).rev() {
+    for k in (0..n).rev() {
         b.swap(k, pivots[k]);
     }
-    true
 }
 
 /// The 1-norm condition number of `a` estimated from its factors.
@@ -756,6 +719,92 @@ mod tests {
 
     fn close(a: f64, b: f64, tol: f64) -> bool {
         (a - b).abs() <= tol * (1.0 + b.abs())
+    }
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    /// A matrix with pivoting, zeros (the skipped updates) and rounding.
+    fn awkward(n: usize) -> Matrix {
+        let data = (0..n * n)
+            .map(|k| {
+                if k % (n + 2) == 1 {
+                    0.0
+                } else {
+                    ((k * 7 + 3) % 11) as f64 / 3.0 - 1.7 + (k as f64 * 0.31).sin()
+                }
+            })
+            .collect();
+        Matrix::from_column_major(n, n, data)
+    }
+
+    /// The factors and both solves compiled for a size (n = 2, 3, 5) are
+    /// the loops that read the size at run time, bit for bit.
+    #[test]
+    fn lu_compiled_for_a_size_is_the_general_lu_bit_for_bit() {
+        for n in 1..=7 {
+            let a = awkward(n);
+            let lu = Lu::new(&a);
+            let mut general = a.data.clone();
+            let mut pivots = Vec::new();
+            let (sign, singular) = factor_sized::<0>(&mut general, n, &mut pivots);
+            assert_eq!(bits(&lu.factors.data), bits(&general), "n = {n}");
+            assert_eq!(
+                (lu.pivots.clone(), lu.sign, lu.singular),
+                (pivots, sign, singular)
+            );
+            assert!(!singular, "n = {n}");
+            let rhs: Vec<f64> = (0..n)
+                .map(|i| if i == 1 { 0.0 } else { 1.0 / (i + 1) as f64 })
+                .collect();
+            let (mut fast, mut slow) = (rhs.clone(), rhs.clone());
+            assert!(lu.solve_in_place(&mut fast));
+            lu_solve_sized::<0>(&general, n, &lu.pivots, &mut slow);
+            assert_eq!(bits(&fast), bits(&slow), "n = {n}");
+            let (mut fast, mut slow) = (rhs.clone(), rhs);
+            assert!(lu.solve_transpose_in_place(&mut fast));
+            lu_solve_transpose_sized::<0>(&general, n, &lu.pivots, &mut slow);
+            assert_eq!(bits(&fast), bits(&slow), "n = {n}");
+        }
+    }
+
+    /// The product compiled for a square size is the general loop's, bit
+    /// for bit: an extra zero column (skipped, as zero entries of `x`
+    /// are) sends the same numbers through the general loop.
+    #[test]
+    fn mul_vec_compiled_for_a_size_is_the_general_product_bit_for_bit() {
+        for n in 1..=7 {
+            let a = awkward(n);
+            let mut wide = a.data.clone();
+            wide.extend(std::iter::repeat_n(5.0, n));
+            let wide = Matrix::from_column_major(n, n + 1, wide);
+            let x: Vec<f64> = (0..n)
+                .map(|i| if i == 2 { 0.0 } else { 0.3 - i as f64 })
+                .collect();
+            let mut x_wide = x.clone();
+            x_wide.push(0.0);
+            let (mut fast, mut slow) = (vec![0.0; n], vec![0.0; n]);
+            a.mul_vec(&x, &mut fast);
+            wide.mul_vec(&x_wide, &mut slow);
+            assert_eq!(bits(&fast), bits(&slow), "n = {n}");
+        }
+    }
+
+    /// Finite exactly when every entry is, at every length.
+    #[test]
+    fn is_finite_finds_a_non_finite_entry_anywhere() {
+        for n in 1..=5 {
+            let a = awkward(n);
+            assert!(a.is_finite());
+            for k in 0..n * n {
+                for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                    let mut b = a.clone();
+                    b.data[k] = bad;
+                    assert!(!b.is_finite(), "n = {n}, entry {k}, {bad}");
+                }
+            }
+        }
     }
 
     #[test]

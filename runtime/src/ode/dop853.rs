@@ -237,6 +237,10 @@ impl Dop853 {
             4 => self.step_sized::<S, E, 4>(system, t_limit, budget, measure),
             6 => self.step_sized::<S, E, 6>(system, t_limit, budget, measure),
             8 => self.step_sized::<S, E, 8>(system, t_limit, budget, measure),
+            // The quasilinear field's projective coefficients of N = 3
+            // and 4, N(N + 1) numbers.
+            12 => self.step_sized::<S, E, 12>(system, t_limit, budget, measure),
+            20 => self.step_sized::<S, E, 20>(system, t_limit, budget, measure),
             _ => self.step_sized::<S, E, 0>(system, t_limit, budget, measure),
         }
     }
@@ -1408,7 +1412,7 @@ mod tests {
     }
 
     /// The step compiled for a size (`step_sized::<N>`, what
-    /// `step_measured` runs for n ∈ {2, 3, 4, 6, 8}) is the step that
+    /// `step_measured` runs for n ∈ {2, 3, 4, 6, 8, 12, 20}) is the step that
     /// reads the size at run time, bit for bit: states, step sizes,
     /// rejections and error estimates.
     #[test]
@@ -1441,7 +1445,7 @@ mod tests {
             bits.push(dop.clock.stats.rhs_evaluations as u64);
             bits
         }
-        for n in [1, 2, 3, 4, 5, 6, 8] {
+        for n in [1, 2, 3, 4, 5, 6, 8, 12, 20] {
             let general = run(n, false);
             assert!(general.len() > 50, "n = {n}: {} numbers", general.len());
             assert_eq!(run(n, true), general, "n = {n}");
