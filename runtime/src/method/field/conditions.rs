@@ -362,12 +362,37 @@ impl Recovered {
     /// The first-order change of the recovered state when `(f, S)` change
     /// by `(df, ds)` (same layouts), into `dx`.
     pub fn map_error(&self, f: &[f64], x0: &[f64], df: &[f64], ds: &[f64], dx: &mut [f64]) {
-        let n = f.len();
+        // Twice at every field step: two degrees of freedom (N = 4) with
+        // the size known, the same operations in the same order.
+        if f.len() == 4 {
+            self.map_error_sized::<4>(f, x0, df, ds, dx)
+        } else {
+            self.map_error_sized::<0>(f, x0, df, ds, dx)
+        }
+    }
+
+    /// [`Recovered::map_error`] for `N` coefficients (`N = 0`: read at
+    /// run time).
+    #[inline(always)]
+    fn map_error_sized<const N: usize>(
+        &self,
+        f: &[f64],
+        x0: &[f64],
+        df: &[f64],
+        ds: &[f64],
+        dx: &mut [f64],
+    ) {
+        let (f, x0, df, ds, dx) = if N == 0 {
+            (f, x0, df, ds, dx)
+        } else {
+            (&f[..N], &x0[..N], &df[..N], &ds[..N * N], &mut dx[..N])
+        };
+        let n = if N == 0 { f.len() } else { N };
         let Some(lu) = &self.lu else {
             dx[0] = df[0];
             return;
         };
-        let z = &self.state[1..];
+        let z = &self.state[1..n];
         // δz = M⁻¹ (δr − δM z), δr_A = −(δS_1A − δS_11 x_A0),
         // (δM z)_A = Σ_B (δS_BA − δS_B1 x_A0) z_B; into dx[1..].
         let (dx0, dz) = dx.split_at_mut(1);
@@ -472,6 +497,13 @@ mod tests {
                     );
                     assert!(ok, "n = {n}, case {case}");
                     assert_eq!(bits(&fast), bits(&slow), "n = {n}, case {case}");
+                    let df: Vec<f64> = (0..n).map(|i| 1e-9 * (i as f64 - 1.5)).collect();
+                    let ds: Vec<f64> = s.iter().map(|v| 1e-8 * (v * 3.1).cos()).collect();
+                    let (mut dx_fast, mut dx_slow) = (vec![0.0; n], vec![0.0; n]);
+                    fast.map_error(&f, &x0, &df, &ds, &mut dx_fast);
+                    slow.map_error_sized::<0>(&f, &x0, &df, &ds, &mut dx_slow);
+                    let raw = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(raw(&dx_fast), raw(&dx_slow), "n = {n}, case {case}");
                     let (mut sized, mut general) =
                         (EquilibratedLu::empty(), EquilibratedLu::empty());
                     let c = sized.refactor_general(&s, n, &x0, estimate);

@@ -68,6 +68,10 @@ struct Predictor<'a> {
     stepper: RefCell<StepperOf<OfModel>>,
     steps: RefCell<Vec<DenseStep>>,
     cursor: Cell<usize>,
+    /// The time the predictor has reached: asked at every stage of the
+    /// field, it spares the stepper's borrow and two dynamic calls where
+    /// no step is needed (most stages).
+    reached: Cell<f64>,
     /// The first failure of the predictor (reported by the window).
     failure: RefCell<Option<Failure>>,
 }
@@ -93,15 +97,21 @@ impl<'a> Predictor<'a> {
             stepper: RefCell::new(stepper),
             steps: RefCell::new(Vec::new()),
             cursor: Cell::new(0),
+            reached: Cell::new(t0),
             failure: RefCell::new(None),
         })
     }
 
     fn extend_to(&self, t: f64, t_limit: f64) -> Result<(), Failure> {
+        if t <= self.reached.get() {
+            // Reached already: the loop below would not step.
+            return Ok(());
+        }
         let mut stepper = self.stepper.borrow_mut();
         let system = ModelSystem(self.model);
         while stepper.time() < t && stepper.time() < t_limit {
             stepper.step(&system, t_limit, self.budget)?;
+            self.reached.set(stepper.time());
             // Every registered integrator has a continuous extension of
             // its own (only Magnus, which is not registered, has none).
             if let Some(dense) = stepper.dense_step(&system)? {
