@@ -237,6 +237,10 @@ impl Dop853 {
             4 => self.step_sized::<S, E, 4>(system, t_limit, budget, measure),
             6 => self.step_sized::<S, E, 6>(system, t_limit, budget, measure),
             8 => self.step_sized::<S, E, 8>(system, t_limit, budget, measure),
+            // The quasilinear field's projective coefficients of N = 3
+            // and 4, N(N + 1) numbers.
+            12 => self.step_sized::<S, E, 12>(system, t_limit, budget, measure),
+            20 => self.step_sized::<S, E, 20>(system, t_limit, budget, measure),
             _ => self.step_sized::<S, E, 0>(system, t_limit, budget, measure),
         }
     }
@@ -1001,6 +1005,10 @@ pub fn dense_step_between<S: System + ?Sized>(
     dense_step_between_measured(system, t_old, h, y_old, y_new, None).map(|(step, _)| step)
 }
 
+/// The working buffers of [`dense_step_between_measured`] on the stack up
+/// to this many numbers (`18 n`: up to `n` = 8).
+const SMALL_BETWEEN: usize = 18 * 8;
+
 /// The most pieces [`dense_steps_between`] cuts a step into.
 pub const MOST_PIECES: usize = 64;
 
@@ -1026,6 +1034,11 @@ pub fn dense_steps_between<S: System + ?Sized>(
     let n = y_old.len();
     let (one, mut miss) = dense_step_between_measured(system, t_old, h, y_old, y_new, Some(tol))?;
     let mut pieces = vec![one];
+    if miss <= 1.0 {
+        // One piece meets the later state (most steps): no buffers for
+        // the chains below.
+        return Ok((pieces, miss));
+    }
     let mut count = 1;
     let mut k = vec![0.0; STAGES * n];
     let (mut stage_state, mut start, mut end) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -1072,25 +1085,40 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
     tol: Option<Tolerance>,
 ) -> Result<(DenseStep, f64), Failure> {
     let n = y_old.len();
+    // The working buffers (the stages, a stage's state, the extension's
+    // three extra stages, the miss): on the stack for the small models,
+    // whose output between steps takes one such step a sample, else on
+    // the heap. Every entry is written before it is read.
+    let need = (STAGES + 1) * n + n + 3 * n + n;
+    let mut small = [0.0; SMALL_BETWEEN];
+    let mut large = Vec::new();
+    let buffers: &mut [f64] = if need <= SMALL_BETWEEN {
+        &mut small[..need]
+    } else {
+        large.resize(need, 0.0);
+        &mut large
+    };
     // Hairer's stage numbering: k[0] the start rate, k[1..12] the stages.
-    let mut k = vec![0.0; (STAGES + 1) * n];
+    let (k, rest) = buffers.split_at_mut((STAGES + 1) * n);
+    let (stage_state, rest) = rest.split_at_mut(n);
+    let (extra, miss_buffer) = rest.split_at_mut(3 * n);
     system.rhs(t_old, y_old, &mut k[..n])?;
-    let mut stage_state = vec![0.0; n];
     // The sizes of small models known at compile time (the field's output
     // between steps takes one such step a sample): the same operations.
     match n {
-        2 => between_stages::<S, 2>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
-        3 => between_stages::<S, 3>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
-        4 => between_stages::<S, 4>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
-        _ => between_stages::<S, 0>(system, t_old, h, y_old, &mut k, &mut stage_state)?,
+        2 => between_stages::<S, 2>(system, t_old, h, y_old, k, stage_state)?,
+        3 => between_stages::<S, 3>(system, t_old, h, y_old, k, stage_state)?,
+        4 => between_stages::<S, 4>(system, t_old, h, y_old, k, stage_state)?,
+        _ => between_stages::<S, 0>(system, t_old, h, y_old, k, stage_state)?,
     }
     let miss = match tol {
         Some(tol) => {
-            let own_end: Vec<f64> = (0..n)
-                .map(|i| y_old[i] + h * B.iter().map(|&(j, w)| w * k[j * n + i]).sum::<f64>())
-                .collect();
-            let miss: Vec<f64> = own_end.iter().zip(y_new).map(|(a, b)| a - b).collect();
-            crate::ode::tolerance::rms_norm(&miss, y_old, y_new, tol)
+            // The step's own end, less `y_new`.
+            for (i, m) in miss_buffer.iter_mut().enumerate() {
+                let own_end = y_old[i] + h * B.iter().map(|&(j, w)| w * k[j * n + i]).sum::<f64>();
+                *m = own_end - y_new[i];
+            }
+            crate::ode::tolerance::rms_norm(miss_buffer, y_old, y_new, tol)
         }
         None => 0.0,
     };
@@ -1098,7 +1126,6 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
     // This module's storage: k[0] the end rate, k[12] the start rate.
     let (start, rest) = k.split_at_mut(STAGES * n);
     start[..n].swap_with_slice(&mut rest[..n]);
-    let mut extra = vec![0.0; 3 * n];
     let mut cont = vec![0.0; 8 * n];
     continuous_extension(
         system,
@@ -1106,9 +1133,9 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
         h,
         y_old,
         y_new,
-        &FlatStages { data: &k, n },
-        &mut extra,
-        &mut stage_state,
+        &FlatStages { data: k, n },
+        extra,
+        stage_state,
         &mut cont,
     )?;
     if first_non_finite(&cont).is_some() {
@@ -1599,7 +1626,7 @@ mod tests {
     }
 
     /// The step compiled for a size (`step_sized::<N>`, what
-    /// `step_measured` runs for n ∈ {2, 3, 4, 6, 8}) is the step that
+    /// `step_measured` runs for n ∈ {2, 3, 4, 6, 8, 12, 20}) is the step that
     /// reads the size at run time, bit for bit: states, step sizes,
     /// rejections and error estimates.
     #[test]
@@ -1632,7 +1659,7 @@ mod tests {
             bits.push(dop.clock.stats.rhs_evaluations as u64);
             bits
         }
-        for n in [1, 2, 3, 4, 5, 6, 8] {
+        for n in [1, 2, 3, 4, 5, 6, 8, 12, 20] {
             let general = run(n, false);
             assert!(general.len() > 50, "n = {n}: {} numbers", general.len());
             assert_eq!(run(n, true), general, "n = {n}");

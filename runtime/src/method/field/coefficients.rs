@@ -338,6 +338,28 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
         }
     }
 
+    /// [`LinearizedCoefficients::new`] on lent buffers (of the model's
+    /// size). Another system (iterate) on the same buffers: nothing in
+    /// them holds for it.
+    fn lent(
+        model: &'a dyn DynModel,
+        iterate: &'a I,
+        scratch: &'a RefCell<LinearizationScratch>,
+    ) -> Self {
+        {
+            let mut sc = scratch.borrow_mut();
+            sc.evaluated_at = None;
+            sc.formed_at = None;
+        }
+        LinearizedCoefficients {
+            model,
+            iterate,
+            scratch: Scratch::Lent(scratch),
+            evaluations: std::cell::Cell::new(0),
+            frozen: model.autonomous() && iterate.is_origin(),
+        }
+    }
+
     /// How many linearisations (`X` with `∂X/∂x`) were evaluated.
     pub fn linearizations(&self) -> usize {
         self.evaluations.get()
@@ -492,6 +514,19 @@ impl<'a, I: Iterate + ?Sized> LinearizedMotion<'a, I> {
         }
     }
 
+    /// [`LinearizedMotion::new`] on lent buffers (of the model's size):
+    /// the field's output between steps builds one at every step output
+    /// asks for.
+    pub fn with_scratch(
+        model: &'a dyn DynModel,
+        iterate: &'a I,
+        scratch: &'a RefCell<LinearizationScratch>,
+    ) -> Self {
+        LinearizedMotion {
+            linear: LinearizedCoefficients::lent(model, iterate, scratch),
+        }
+    }
+
     pub fn linearizations(&self) -> usize {
         self.linear.linearizations()
     }
@@ -578,21 +613,8 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
         iterate: &'a I,
         scratch: &'a RefCell<LinearizationScratch>,
     ) -> Self {
-        // Another system (iterate) on the same buffers: nothing in them
-        // holds for it.
-        {
-            let mut sc = scratch.borrow_mut();
-            sc.evaluated_at = None;
-            sc.formed_at = None;
-        }
         ProjectiveCoefficients {
-            linear: LinearizedCoefficients {
-                model,
-                iterate,
-                scratch: Scratch::Lent(scratch),
-                evaluations: std::cell::Cell::new(0),
-                frozen: model.autonomous() && iterate.is_origin(),
-            },
+            linear: LinearizedCoefficients::lent(model, iterate, scratch),
             dim: model.dim(),
             shift: model.coordinates(),
         }
@@ -632,10 +654,16 @@ fn adjoint_rates(
 ) {
     let n = b.len();
     if y.len() == n * (n + 1) {
-        match n {
-            2 => return adjoint_rates_small::<2>(a.as_slice(), b, shift, y, dy),
-            3 => return adjoint_rates_small::<3>(a.as_slice(), b, shift, y, dy),
-            4 => return adjoint_rates_small::<4>(a.as_slice(), b, shift, y, dy),
+        // The coordinates' count known too where it is the usual half of
+        // the state (second-order equations): the loop over `A`'s rows
+        // below the shifts then has constant bounds and unrolls fully.
+        let a = a.as_slice();
+        match (n, shift) {
+            (2, 1) => return adjoint_rates_small::<2, 1>(a, b, shift, y, dy),
+            (4, 2) => return adjoint_rates_small::<4, 2>(a, b, shift, y, dy),
+            (2, _) => return adjoint_rates_small::<2, ANY>(a, b, shift, y, dy),
+            (3, _) => return adjoint_rates_small::<3, ANY>(a, b, shift, y, dy),
+            (4, _) => return adjoint_rates_small::<4, ANY>(a, b, shift, y, dy),
             _ => {}
         }
     }
@@ -706,18 +734,24 @@ fn adjoint_rates_large(
     }
 }
 
+/// `SHIFT` of [`adjoint_rates_small`] read at run time.
+const ANY: usize = usize::MAX;
+
 /// [`adjoint_rates`] for `N` vectors of `N + 1`, `N` ≤ 4: one vector at a
 /// time, every slice's length known, so that nothing is checked or
 /// gathered at run time (one degree of freedom: 130 instructions a call
-/// before, the same sums in the same order).
+/// before, the same sums in the same order). `SHIFT` is the coordinates'
+/// count `shift` when known at compile time ([`ANY`]: read at run time);
+/// the same sums in the same order either way.
 #[inline(never)]
-fn adjoint_rates_small<const N: usize>(
+fn adjoint_rates_small<const N: usize, const SHIFT: usize>(
     a: &[f64],
     b: &[f64],
     shift: usize,
     y: &[f64],
     dy: &mut [f64],
 ) {
+    let shift = if SHIFT == ANY { shift } else { SHIFT };
     let (a, b) = (&a[..N * N], &b[..N]);
     let (y, dy) = (&y[..N * (N + 1)], &mut dy[..N * (N + 1)]);
     let shifted = N - shift;

@@ -11,7 +11,7 @@
 //!
 //! Layout: `S` is column-major, `s[j·N + i] = S_ij = ∂f_i/∂c_j`.
 
-use crate::linalg::{Lu, Matrix};
+use crate::linalg::Lu;
 
 /// The state recovered from a field, and how trustworthy it is.
 #[derive(Clone, Debug)]
@@ -91,7 +91,7 @@ impl EquilibratedLu {
     /// condition number when `estimate` (else 1).
     fn refactor(&mut self, s: &[f64], n: usize, x0: &[f64], estimate: bool) -> f64 {
         if n == 2 {
-            // `condition_matrix_into`'s one entry.
+            // The condition matrix's one entry (as `refactor_sized` forms it).
             return self.refactor_scalar(s[3] - s[1] * x0[1], estimate);
         }
         self.refactor_general(s, n, x0, estimate)
@@ -123,25 +123,59 @@ impl EquilibratedLu {
         }
     }
 
-    /// [`EquilibratedLu::refactor`] of any size.
+    /// [`EquilibratedLu::refactor`] of any size: the conditions of three
+    /// and four degrees of freedom (N = 4, 6: 2 and 3 unknowns, at every
+    /// field step) with their size known at compile time, the same
+    /// operations in the same order.
     fn refactor_general(&mut self, s: &[f64], n: usize, x0: &[f64], estimate: bool) -> f64 {
-        let size = n - 1;
+        match n {
+            4 => self.refactor_sized::<3>(s, n, x0, estimate),
+            6 => self.refactor_sized::<5>(s, n, x0, estimate),
+            _ => self.refactor_sized::<0>(s, n, x0, estimate),
+        }
+    }
+
+    /// [`EquilibratedLu::refactor_general`] for `M = n − 1` unknowns
+    /// (`M = 0`: read at run time).
+    #[inline(always)]
+    fn refactor_sized<const M: usize>(
+        &mut self,
+        s: &[f64],
+        n: usize,
+        x0: &[f64],
+        estimate: bool,
+    ) -> f64 {
+        let size = if M == 0 { n - 1 } else { M };
+        let n = size + 1;
+        let (s, x0) = (&s[..n * n], &x0[..n]);
         let (rows, columns) = (&mut self.rows, &mut self.columns);
         let mut norm = 0.0;
         self.lu.refactor(size, |m| {
-            condition_matrix_into(s, n, x0, m);
+            let data = &mut m.as_mut_slice()[..size * size];
+            // The condition matrix `M` at `(S, x0)`, entry (row, col) at
+            // col·size + row: `S_BA − S_B1 x_A0` (column A of S holds
+            // ∂f/∂c_A), A = row + 1, B = col + 1.
+            for col in 0..size {
+                let b = col + 1;
+                for row in 0..size {
+                    let a = row + 1;
+                    data[col * size + row] = s[a * n + b] - s[b] * x0[a];
+                }
+            }
             rows.clear();
-            rows.extend(
-                (0..size)
-                    .map(|r| power_of_two((0..size).fold(0.0_f64, |a, c| a.max(m[(r, c)].abs())))),
-            );
+            rows.extend((0..size).map(|r| {
+                power_of_two((0..size).fold(0.0_f64, |a, c| a.max(data[c * size + r].abs())))
+            }));
             columns.clear();
             columns.extend((0..size).map(|c| {
-                power_of_two((0..size).fold(0.0_f64, |a, r| a.max((rows[r] * m[(r, c)]).abs())))
+                power_of_two(
+                    (0..size).fold(0.0_f64, |a, r| a.max((rows[r] * data[c * size + r]).abs())),
+                )
             }));
+            let (rows, columns) = (&rows[..size], &columns[..size]);
             for c in 0..size {
                 for r in 0..size {
-                    m[(r, c)] *= rows[r] * columns[c];
+                    data[c * size + r] *= rows[r] * columns[c];
                 }
             }
             if estimate {
@@ -184,19 +218,6 @@ impl EquilibratedLu {
     }
 }
 
-/// The condition matrix `M` at `(S, x0)`, into `matrix` (`N − 1` square).
-fn condition_matrix_into(s: &[f64], n: usize, x0: &[f64], matrix: &mut Matrix) {
-    let m = n - 1;
-    for col in 0..m {
-        let b = col + 1;
-        for row in 0..m {
-            let a = row + 1;
-            // S_BA − S_B1 x_A0: column A of S holds ∂f/∂c_A.
-            matrix[(row, col)] = s[a * n + b] - s[b] * x0[a];
-        }
-    }
-}
-
 /// Solves the conditions for the state; `None` when they are singular or
 /// the result is not finite.
 pub fn recover(f: &[f64], s: &[f64], x0: &[f64]) -> Option<Recovered> {
@@ -226,7 +247,31 @@ pub fn recover_state_into(f: &[f64], s: &[f64], x0: &[f64], out: &mut Recovered)
 /// [`recover`] into `out`, with the condition estimate only when
 /// `estimate` (else `condition` is 1).
 fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool, out: &mut Recovered) -> bool {
+    // Two degrees of freedom (N = 4) with the size known at compile time
+    // (at every field step): the same operations in the same order.
     let n = f.len();
+    if n == 4 && s.len() == n * n && x0.len() == n {
+        return solve_conditions_sized::<4>(f, s, x0, estimate, out);
+    }
+    solve_conditions_sized::<0>(f, s, x0, estimate, out)
+}
+
+/// [`solve_conditions`] for `N` coefficients (`N = 0`: read at run time,
+/// `s` and `x0` read as given).
+#[inline(always)]
+fn solve_conditions_sized<const N: usize>(
+    f: &[f64],
+    s: &[f64],
+    x0: &[f64],
+    estimate: bool,
+    out: &mut Recovered,
+) -> bool {
+    let (f, s, x0) = if N == 0 {
+        (f, s, x0)
+    } else {
+        (&f[..N], &s[..N * N], &x0[..N])
+    };
+    let n = if N == 0 { f.len() } else { N };
     let growth = s.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
     if !growth.is_finite() || f.iter().any(|v| !v.is_finite()) {
         return false;
@@ -251,7 +296,7 @@ fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool, out: &mut 
         *v = -(s[a * n] - s[0] * x0[a]);
     }
     // Magnitudes of the terms of each entry against the entries (the
-    // entries as `condition_matrix_into` forms them).
+    // entries as `refactor_sized` forms them).
     let (mut terms, mut entries) = (0.0_f64, 0.0_f64);
     for col in 0..m {
         let b = col + 1;
@@ -317,12 +362,37 @@ impl Recovered {
     /// The first-order change of the recovered state when `(f, S)` change
     /// by `(df, ds)` (same layouts), into `dx`.
     pub fn map_error(&self, f: &[f64], x0: &[f64], df: &[f64], ds: &[f64], dx: &mut [f64]) {
-        let n = f.len();
+        // Twice at every field step: two degrees of freedom (N = 4) with
+        // the size known, the same operations in the same order.
+        if f.len() == 4 {
+            self.map_error_sized::<4>(f, x0, df, ds, dx)
+        } else {
+            self.map_error_sized::<0>(f, x0, df, ds, dx)
+        }
+    }
+
+    /// [`Recovered::map_error`] for `N` coefficients (`N = 0`: read at
+    /// run time).
+    #[inline(always)]
+    fn map_error_sized<const N: usize>(
+        &self,
+        f: &[f64],
+        x0: &[f64],
+        df: &[f64],
+        ds: &[f64],
+        dx: &mut [f64],
+    ) {
+        let (f, x0, df, ds, dx) = if N == 0 {
+            (f, x0, df, ds, dx)
+        } else {
+            (&f[..N], &x0[..N], &df[..N], &ds[..N * N], &mut dx[..N])
+        };
+        let n = if N == 0 { f.len() } else { N };
         let Some(lu) = &self.lu else {
             dx[0] = df[0];
             return;
         };
-        let z = &self.state[1..];
+        let z = &self.state[1..n];
         // δz = M⁻¹ (δr − δM z), δr_A = −(δS_1A − δS_11 x_A0),
         // (δM z)_A = Σ_B (δS_BA − δS_B1 x_A0) z_B; into dx[1..].
         let (dx0, dz) = dx.split_at_mut(1);
@@ -392,6 +462,70 @@ mod tests {
     /// The `1 × 1` conditions' own path factors, scales and estimates as
     /// the general loops do, to the bit: over entries of every magnitude,
     /// zero, subnormal, infinite and NaN.
+    /// The conditions compiled for a size (the solve at N = 4, the
+    /// equilibrated factors at N = 4 and 6) are the loops that read the
+    /// size at run time, bit for bit: state, condition, determinant,
+    /// growth and formation, with and without the estimate.
+    #[test]
+    fn conditions_compiled_for_a_size_are_the_general_loops() {
+        let bits = |r: &Recovered| {
+            let mut v: Vec<u64> = r.state.iter().map(|x| x.to_bits()).collect();
+            v.extend([r.condition, r.determinant, r.growth, r.formation].map(f64::to_bits));
+            v
+        };
+        for n in [3, 4, 5, 6] {
+            for case in 0..4 {
+                let f: Vec<f64> = (0..n)
+                    .map(|i| 0.5 - 0.37 * i as f64 + case as f64)
+                    .collect();
+                let s: Vec<f64> = (0..n * n)
+                    .map(|k| {
+                        let diagonal = if k % (n + 1) == 0 { 1.0 } else { 0.0 };
+                        diagonal
+                            + 0.3
+                                * ((k * 7 + case * 3) as f64 * 0.71).sin()
+                                * 10f64.powi(case as i32 - 1)
+                    })
+                    .collect();
+                let x0: Vec<f64> = (0..n).map(|i| 1.3 - 0.6 * i as f64).collect();
+                for estimate in [true, false] {
+                    let (mut fast, mut slow) = (Recovered::empty(), Recovered::empty());
+                    let ok = solve_conditions(&f, &s, &x0, estimate, &mut fast);
+                    assert_eq!(
+                        ok,
+                        solve_conditions_sized::<0>(&f, &s, &x0, estimate, &mut slow)
+                    );
+                    assert!(ok, "n = {n}, case {case}");
+                    assert_eq!(bits(&fast), bits(&slow), "n = {n}, case {case}");
+                    let df: Vec<f64> = (0..n).map(|i| 1e-9 * (i as f64 - 1.5)).collect();
+                    let ds: Vec<f64> = s.iter().map(|v| 1e-8 * (v * 3.1).cos()).collect();
+                    let (mut dx_fast, mut dx_slow) = (vec![0.0; n], vec![0.0; n]);
+                    fast.map_error(&f, &x0, &df, &ds, &mut dx_fast);
+                    slow.map_error_sized::<0>(&f, &x0, &df, &ds, &mut dx_slow);
+                    let raw = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(raw(&dx_fast), raw(&dx_slow), "n = {n}, case {case}");
+                    let (mut sized, mut general) =
+                        (EquilibratedLu::empty(), EquilibratedLu::empty());
+                    let c = sized.refactor_general(&s, n, &x0, estimate);
+                    let d = general.refactor_sized::<0>(&s, n, &x0, estimate);
+                    assert_eq!(c.to_bits(), d.to_bits(), "n = {n}, case {case}");
+                    assert_eq!(
+                        sized.determinant().to_bits(),
+                        general.determinant().to_bits()
+                    );
+                    let mut z: Vec<f64> = (1..n).map(|i| i as f64 - 0.5).collect();
+                    let mut w = z.clone();
+                    sized.solve_in_place(&mut z);
+                    general.solve_in_place(&mut w);
+                    assert_eq!(
+                        z.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                        w.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn scalar_conditions_are_the_general_loops() {
         let mut values = vec![

@@ -19,7 +19,9 @@
 //! where the conditions (13) degrade, or at the end of the span; the next
 //! window is anchored at its end.
 
-use super::coefficients::{FieldSystem, Iterate, LinearizedMotion, ProjectiveCoefficients};
+use super::coefficients::{
+    FieldSystem, Iterate, LinearizationScratch, LinearizedMotion, ProjectiveCoefficients,
+};
 use super::conditions::recover_state;
 use super::global_error::FieldError;
 use super::window::{StepperKind, StoredStep, Window, WindowStep};
@@ -66,6 +68,10 @@ struct Predictor<'a> {
     stepper: RefCell<StepperOf<OfModel>>,
     steps: RefCell<Vec<DenseStep>>,
     cursor: Cell<usize>,
+    /// The time the predictor has reached: asked at every stage of the
+    /// field, it spares the stepper's borrow and two dynamic calls where
+    /// no step is needed (most stages).
+    reached: Cell<f64>,
     /// The first failure of the predictor (reported by the window).
     failure: RefCell<Option<Failure>>,
 }
@@ -91,15 +97,21 @@ impl<'a> Predictor<'a> {
             stepper: RefCell::new(stepper),
             steps: RefCell::new(Vec::new()),
             cursor: Cell::new(0),
+            reached: Cell::new(t0),
             failure: RefCell::new(None),
         })
     }
 
     fn extend_to(&self, t: f64, t_limit: f64) -> Result<(), Failure> {
+        if t <= self.reached.get() {
+            // Reached already: the loop below would not step.
+            return Ok(());
+        }
         let mut stepper = self.stepper.borrow_mut();
         let system = ModelSystem(self.model);
         while stepper.time() < t && stepper.time() < t_limit {
             stepper.step(&system, t_limit, self.budget)?;
+            self.reached.set(stepper.time());
             // Every registered integrator has a continuous extension of
             // its own (only Magnus, which is not registered, has none).
             if let Some(dense) = stepper.dense_step(&system)? {
@@ -252,6 +264,7 @@ impl AcceptedWindow {
         model: &dyn DynModel,
         i: usize,
         tol: Tolerance,
+        scratch: &RefCell<LinearizationScratch>,
     ) -> Result<usize, Failure> {
         if self.outputs[i].is_some() {
             return Ok(0);
@@ -263,7 +276,7 @@ impl AcceptedWindow {
         } else {
             &self.states[i - 1]
         };
-        let motion = LinearizedMotion::new(model, &self.path);
+        let motion = LinearizedMotion::with_scratch(model, &self.path, scratch);
         let dense = dense_steps_between(&motion, t_old, h, x_old, &self.states[i], tol);
         let used = motion.linearizations();
         self.outputs[i] = Some(dense?.0);
@@ -312,6 +325,9 @@ pub struct QuasilinearField {
     pending: Option<Failure>,
     /// The global error estimate carried along the run.
     error: FieldError,
+    /// The linearisation's buffers of the output between steps
+    /// (`AcceptedWindow::build_output`), lent to each step's motion.
+    output_scratch: RefCell<LinearizationScratch>,
 }
 
 impl QuasilinearField {
@@ -344,6 +360,7 @@ impl QuasilinearField {
             stiff,
             oscillatory: false,
             error,
+            output_scratch: LinearizationScratch::new(x0.len()),
         }
     }
 
@@ -698,7 +715,8 @@ impl Solver for QuasilinearField {
             // (the rocket with drag at rtol 1e-9, 101 samples: 1.8e-9 →
             // 3.3e-10, direct 1.2e-10). A stiff window's steps are too long
             // for an explicit step: there the coefficients' extension.
-            self.linearizations += window.build_output(model, i, self.options.tol)?;
+            self.linearizations +=
+                window.build_output(model, i, self.options.tol, &self.output_scratch)?;
             if let Some(pieces) = &window.outputs[i] {
                 let piece = pieces
                     .iter()
@@ -779,7 +797,8 @@ impl Solver for QuasilinearField {
             // The same output as `dense`: the state's own extension over
             // explicit steps, the coefficients' over stiff ones.
             if window.steps[i].is_explicit() {
-                self.linearizations += window.build_output(model, i, self.options.tol)?;
+                self.linearizations +=
+                    window.build_output(model, i, self.options.tol, &self.output_scratch)?;
                 if let Some(pieces) = &window.outputs[i] {
                     out.extend(
                         pieces
