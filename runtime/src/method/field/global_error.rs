@@ -444,9 +444,17 @@ impl FieldError {
         first_only: bool,
         keeping: Option<&mut dyn Keeping>,
     ) {
-        if let Some(first) = self.unfed.iter().find(|s| s.t0 < t && !s.carried) {
-            // A window is taken again from its start where it crossed a
-            // constraint's pivot (`retake`): what is carried before it.
+        // A window is taken again from its start where it crossed a
+        // constraint's pivot (`retake`: a constraint of several
+        // candidates), or cut at an event (switches): what is carried
+        // before it, kept (a copy of the carried error a window, which
+        // the other models, the affine field's a step, need not pay).
+        let taken_again =
+            model.switches() > 0 || model.constraints().iter().any(|c| c.names.len() > 1);
+        if let (true, Some(first)) = (
+            taken_again,
+            self.unfed.iter().find(|s| s.t0 < t && !s.carried),
+        ) {
             let before = (first.t0, self.growth.clone(), self.before_carrying);
             self.before_window = Some(before);
         }
