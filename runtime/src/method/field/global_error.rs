@@ -698,16 +698,12 @@ impl FieldError {
     /// window's start with the error of its end: an estimate of 1.8
     /// (absolute) for an error of 3e-9.
     pub fn retake(&mut self, t: f64) {
-        if let Some((start, growth, before)) = self.before_window.take() {
-            if start == t {
-                self.growth = growth;
-                self.before_carrying = before;
-            }
+        self.back_to_window_start(|start| start == t);
+        // The steps are in time order: the window's are the last ones.
+        let from = self.unfed.iter().position(|s| s.t0 >= t);
+        if let Some(from) = from {
+            self.spare.extend(self.unfed.drain(from..));
         }
-        let (mut kept, mut dropped): (Vec<Unfed>, Vec<Unfed>) =
-            self.unfed.drain(..).partition(|s| s.t0 < t);
-        self.spare.append(&mut dropped);
-        self.unfed.append(&mut kept);
         if self.window_end.as_ref().is_some_and(|(end, _)| *end > t) {
             self.window_end = None;
         }
@@ -732,15 +728,24 @@ impl FieldError {
         if !self.unfed.iter().any(|s| s.carried && s.t1 > t) {
             return;
         }
-        if let Some((start, growth, before)) = self.before_window.take() {
-            if start <= t {
-                self.growth = growth;
-                self.before_carrying = before;
-                for step in self.unfed.iter_mut().filter(|s| s.t0 >= start) {
-                    step.carried = false;
-                }
+        if let Some(start) = self.back_to_window_start(|start| start <= t) {
+            for step in self.unfed.iter_mut().filter(|s| s.t0 >= start) {
+                step.carried = false;
             }
         }
+    }
+
+    /// The carried error and the estimate before it as they were where
+    /// the last window's carrying began, if that start is `wanted`: the
+    /// start, then.
+    fn back_to_window_start(&mut self, wanted: impl Fn(f64) -> bool) -> Option<f64> {
+        let (start, growth, before) = self.before_window.take()?;
+        if !wanted(start) {
+            return None;
+        }
+        self.growth = growth;
+        self.before_carrying = before;
+        Some(start)
     }
 
     /// The right-side evaluations the estimate cost.
