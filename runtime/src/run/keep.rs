@@ -436,22 +436,10 @@ impl Keeper {
                 residual[c] = projected[j] - kept[j];
             }
             if bounded && distance.is_none() {
-                let norm = residual.iter().map(|h| h * h).sum::<f64>().sqrt();
-                let smallest = velocities
-                    .clone()
-                    .map(|i| tol.atol + tol.rtol * x[i].abs())
-                    .fold(f64::INFINITY, f64::min);
-                if norm <= PROJECT_ABOVE * smallest {
-                    // The holonomic constraints' correction (already in
-                    // `projected`) counts too.
-                    let (relative, absolute) = if closure.0 > norm / smallest {
-                        closure
-                    } else {
-                        (norm / smallest, norm)
-                    };
-                    if relative > *largest {
-                        (*largest, *largest_absolute, *largest_at) = (relative, absolute, t);
-                    }
+                let record = (&mut *largest, &mut *largest_absolute, &mut *largest_at);
+                if let Some(relative) =
+                    settled(residual, velocities.clone(), x, tol, closure, t, record)
+                {
                     return Ok(relative);
                 }
             }
@@ -604,4 +592,38 @@ fn fixed_components(model: &dyn DynModel, mode: usize, out: &mut Vec<usize>) {
         return;
     }
     out.extend((0..model.dim()).filter(|&j| model.initial_kinds()[j] == Initial::Constraint));
+}
+
+/// Whether a state whose constraints' residual is `residual` is on them
+/// already, within `PROJECT_ABOVE` of the smallest of its velocities'
+/// tolerances: then its distance relative to that tolerance (or the
+/// holonomic constraints' correction `closure`, already in the state, if
+/// larger), recorded in `(largest, largest_absolute, largest_at)` where it
+/// is the largest so far. The general projection's and the one
+/// constraint's (`one.rs`).
+pub(super) fn settled(
+    residual: &[f64],
+    velocities: std::ops::Range<usize>,
+    x: &[f64],
+    tol: &Tolerance,
+    closure: (f64, f64),
+    t: f64,
+    (largest, largest_absolute, largest_at): (&mut f64, &mut f64, &mut f64),
+) -> Option<f64> {
+    let norm = residual.iter().map(|h| h * h).sum::<f64>().sqrt();
+    let smallest = velocities
+        .map(|i| tol.atol + tol.rtol * x[i].abs())
+        .fold(f64::INFINITY, f64::min);
+    if norm > PROJECT_ABOVE * smallest {
+        return None;
+    }
+    let (relative, absolute) = if closure.0 > norm / smallest {
+        closure
+    } else {
+        (norm / smallest, norm)
+    };
+    if relative > *largest {
+        (*largest, *largest_absolute, *largest_at) = (relative, absolute, t);
+    }
+    Some(relative)
 }

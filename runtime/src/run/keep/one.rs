@@ -9,7 +9,7 @@
 //! `the projection onto one constraint is the general one bit for bit`
 //! checks the two against each other.
 
-use super::{left, Keeper, BROKEN_ABOVE, BROKEN_TIMES_TOLERANCE, ITERATIONS, PROJECT_ABOVE};
+use super::{left, settled, Keeper, BROKEN_ABOVE, BROKEN_TIMES_TOLERANCE, ITERATIONS};
 use crate::failure::{Failure, FailureKind};
 use crate::model::DynModel;
 
@@ -68,20 +68,10 @@ impl Keeper {
             }
             residual[0] = projected[j] - kept[j];
             if bounded && distance.is_none() {
-                let norm = residual.iter().map(|h| h * h).sum::<f64>().sqrt();
-                let smallest = velocities
-                    .clone()
-                    .map(|i| tol.atol + tol.rtol * x[i].abs())
-                    .fold(f64::INFINITY, f64::min);
-                if norm <= PROJECT_ABOVE * smallest {
-                    let (relative, absolute) = if closure.0 > norm / smallest {
-                        closure
-                    } else {
-                        (norm / smallest, norm)
-                    };
-                    if relative > *largest {
-                        (*largest, *largest_absolute, *largest_at) = (relative, absolute, t);
-                    }
+                let record = (&mut *largest, &mut *largest_absolute, &mut *largest_at);
+                if let Some(relative) =
+                    settled(&residual, velocities.clone(), x, tol, closure, t, record)
+                {
                     return Ok(relative);
                 }
             }
