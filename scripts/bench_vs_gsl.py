@@ -34,12 +34,14 @@ below the tightest run's error, nothing: no extrapolation); ratio = lagc
 time / peer time (< 1: lagc faster).
 
 Usage: python3 scripts/bench_vs_gsl.py [--quick] [--json OUT] [--models a,b]
-       [--step-to-times] [--samples N] [--baseline LAGC]
+       [--step-to-times] [--no-global-error] [--samples N] [--baseline LAGC]
 --baseline LAGC: another lagc binary (main's) builds the same crates, which
   run as method "lagc-base" alternated with this tree's at every rtol (each
   rtol runs every method in turn), and a second table compares it.
 --step-to-times: lagc steps onto the sample times too (as rk8pd, rkf78 do);
 --samples 2: the final time only, a step end for every method.
+--no-global-error: lagc without its global-error estimate (the peers
+  estimate nothing): DOP853 alone.
 """
 
 import json
@@ -69,6 +71,9 @@ SAMPLES = 11
 # rk8pd and rkf78 do (issue 29); `--samples 2`: only the final time, where
 # every method's sample is a step end.
 STEP_TO_TIMES = False
+# `--no-global-error`: lagc's runs without the summary's global-error
+# estimate, which the peers do not make.
+NO_GLOBAL_ERROR = False
 # `--baseline LAGC`: the crates built by that lagc too, run as "lagc-base".
 BASELINE = None
 LEVELS = [10.0 ** -k for k in range(4, 12)]
@@ -153,7 +158,8 @@ def solve(binary, model, method, rtol, atol, repeat):
             binary, "--method", "direct", "--integrator", "explicit",
             "--rtol", repr(rtol), "--atol", repr(atol), "--samples", str(SAMPLES),
             "--repeat", str(repeat), "--summary", "json",
-        ] + (["--step-to-times"] if STEP_TO_TIMES else [])
+        ] + (["--step-to-times"] if STEP_TO_TIMES else []) + (
+            ["--no-global-error"] if NO_GLOBAL_ERROR else [])
     else:
         cmd = [PEERS, model, method, repr(rtol), repr(atol), str(SAMPLES), str(repeat)]
     p = subprocess.run(cmd, capture_output=True, text=True)
@@ -205,9 +211,10 @@ def cost_at(points, level):
 
 
 def main():
-    global SAMPLES, STEP_TO_TIMES, BASELINE
+    global SAMPLES, STEP_TO_TIMES, BASELINE, NO_GLOBAL_ERROR
     quick = "--quick" in sys.argv
     STEP_TO_TIMES = "--step-to-times" in sys.argv
+    NO_GLOBAL_ERROR = "--no-global-error" in sys.argv
     out_json = None
     models = list(MODELS)
     args = sys.argv[1:]

@@ -17,7 +17,9 @@ Usage (from the repository root):
 REUSE=1 re-reads the last reports' CSV instead of running them again.
 LAGC=<path> runs another lagc binary (an older runtime, side by side) and
 OUT=<dir> keeps its reports apart; RUNS=<k> times each run as the smallest
-of k solves (default 3; more on a loaded machine).
+of k solves (default 3; more on a loaded machine). NO_GLOBAL_ERROR=1 times
+both methods without their global-error estimates (`lagc report
+--no-global-error`): the integrators alone.
 
 Writes the reports' CSV and SVG into target/field-vs-direct/, and there
 field-vs-direct.svg: every model's field/direct time at equal error over
@@ -55,7 +57,8 @@ def rows(model):
     if os.environ.get("REUSE") != "1":
         subprocess.run(
             [LAGC, "report", model, "--tolerances", TOLERANCES,
-             "--runs", os.environ.get("RUNS", "3"), "--out", OUT],
+             "--runs", os.environ.get("RUNS", "3"), "--out", OUT]
+            + (["--no-global-error"] if os.environ.get("NO_GLOBAL_ERROR") == "1" else []),
             check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(OUT, f"{name}.work-precision.csv")) as f:
         return name, [r for r in csv.DictReader(f) if r["status"] == "ok"]

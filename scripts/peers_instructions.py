@@ -12,7 +12,9 @@ of (error, instructions), interpolated as `bench_vs_gsl.cost_at` does.
 
 Usage: python3 scripts/peers_instructions.py --peers PEERS_BIN
          --lagc NAME=DIR [--lagc NAME=DIR ...] [--models a,b] [--json OUT]
-         [--from EARLIER.json]
+         [--from EARLIER.json] [--no-global-error]
+--no-global-error: lagc's runs without their global-error estimate (as
+  bench_vs_gsl.py's flag; the peers estimate nothing).
 --from: the points of every method that file holds are taken from it, not
   run again (the peers, or a baseline, measured once: instruction counts
   do not depend on the machine's load).
@@ -49,7 +51,7 @@ def command(binary, model, method, rtol, repeat):
         binary, "--method", "direct", "--integrator", "explicit", "--rtol", repr(rtol),
         "--atol", repr(atol), "--samples", str(B.SAMPLES), "--repeat", str(repeat),
         "--quiet",
-    ]
+    ] + (["--no-global-error"] if B.NO_GLOBAL_ERROR else [])
 
 
 def instructions(cmd):
@@ -66,6 +68,7 @@ def instructions(cmd):
 
 def main():
     args = sys.argv[1:]
+    B.NO_GLOBAL_ERROR = "--no-global-error" in args
     compilers, models, out_json, earlier = [], list(BINARY), None, None
     for i, a in enumerate(args):
         if a == "--peers":

@@ -172,6 +172,11 @@ pub struct ReportArgs {
     /// Override a param: `--param NAME=VALUE` (repeatable).
     #[arg(long = "param", value_name = "NAME=VALUE")]
     pub params: Vec<String>,
+    /// Time the methods without their global-error estimates (each run's
+    /// `--no-global-error`): the integrators' own cost, as compiled peers
+    /// that estimate nothing measure theirs.
+    #[arg(long)]
+    pub no_global_error: bool,
 }
 
 #[derive(Debug, Args)]
@@ -217,7 +222,8 @@ pub struct RunArgs {
     /// (`lagc run FILE --help` lists them): `--method field|direct`,
     /// `--integrator auto|explicit|stiff|magnus`, `--param NAME=VALUE`,
     /// `--init NAME=VALUE`, `--rtol R`, `--atol A`, `--samples N`,
-    /// `--times T1,T2,…`, `--step-to-times`, `--estimate-error`,
+    /// `--times T1,T2,…`, `--step-to-times`, `--no-global-error`,
+    /// `--estimate-error`,
     /// `--plot FILE.svg [--phase X,Y]`, `--ensemble K`, `--sensitivity`,
     /// `--repeat N`, `--quiet`, `--summary text|json`, …;
     /// and lagc's own `--verbose`: the model's notes (N0001) on every run,

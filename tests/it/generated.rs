@@ -257,6 +257,57 @@ fn stepping_onto_the_output_times_makes_the_samples_as_accurate_as_the_steps() {
     }
 }
 
+/// `--no-global-error`: the run without its estimate (the peers' and a
+/// sweep's measure) prints the same states byte for byte, by both methods,
+/// on an affine constrained model, a non-affine constrained one, an affine
+/// one, a non-affine free one and one with impacts; the summary has no
+/// estimate, and the run costs no more evaluations.
+#[test]
+fn a_run_without_its_global_error_estimate_has_the_same_states() {
+    let evaluations = |stderr: &str| -> f64 {
+        let json = stderr.lines().last().unwrap();
+        let key = "\"rhs_evaluations\":";
+        let from = json.find(key).unwrap() + key.len();
+        json[from..].split(',').next().unwrap().parse().unwrap()
+    };
+    for name in [
+        "paper",
+        "knife_edge",
+        "damped_oscillator",
+        "double_pendulum_energy",
+        "bouncing_ball",
+    ] {
+        let binary = build(name);
+        for method in ["field", "direct"] {
+            let args = ["--method", method, "--rtol", "1e-9", "--summary", "json"];
+            let output = |extra: &[&str]| {
+                let out = Command::new(&binary)
+                    .args(args)
+                    .args(extra)
+                    .output()
+                    .unwrap();
+                assert!(out.status.success(), "{name} {method}");
+                (out.stdout, String::from_utf8(out.stderr).unwrap())
+            };
+            let (with, with_summary) = output(&[]);
+            let (without, without_summary) = output(&["--no-global-error"]);
+            assert!(with == without, "{name} {method}: the states differ");
+            assert!(
+                !with_summary.contains("\"global_error_estimate\":null"),
+                "{name} {method}: {with_summary}"
+            );
+            assert!(
+                without_summary.contains("\"global_error_estimate\":null"),
+                "{name} {method}: {without_summary}"
+            );
+            assert!(
+                evaluations(&without_summary) <= evaluations(&with_summary),
+                "{name} {method}"
+            );
+        }
+    }
+}
+
 #[test]
 fn param_override_recomputes_later_params_and_bad_usage_exits_2() {
     // damped_oscillator: gam = c/(2m), wd from it; the exact solution uses

@@ -73,6 +73,14 @@ impl Options {
         self.max_steps = steps;
         self
     }
+
+    /// Whether the global error is estimated along the run (default
+    /// true; `Solution`'s report then has no estimate, and the run costs
+    /// what the integration alone costs).
+    pub fn global_error(mut self, estimate: bool) -> Self {
+        self.global_error = estimate;
+        self
+    }
 }
 
 /// Solves `M` with these param values (in [`Model::PARAMS`] order) and

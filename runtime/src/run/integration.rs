@@ -1141,6 +1141,7 @@ fn make_solver_reusing(
                 stiff: choice == IntegratorChoice::Stiff,
                 auto_stiff: choice == IntegratorChoice::Auto,
                 magnus: choice == IntegratorChoice::Magnus,
+                global_error: options.global_error,
                 ..FieldOptions::default()
             };
             if model.affine() {

@@ -27,11 +27,13 @@ pub struct Options {
     /// by default: output times never change the answer.
     pub step_to_times: bool,
     /// Estimate the global error along the run (the summary's line; on by
-    /// default). Off for a run whose estimate nobody reads: the
-    /// sensitivities' augmented run, where the error carried through the
-    /// projection of every column was two thirds of a holonomic model's
-    /// run at rtol 1e-12 (cartesian_pendulum, 33 ms against 2.5 ms at
-    /// 1e-11). Direct integration only.
+    /// default), by either method. Off for a run whose estimate nobody
+    /// reads (`--no-global-error`): the sensitivities' augmented run, where
+    /// the error carried through the projection of every column was two
+    /// thirds of a holonomic model's run at rtol 1e-12 (cartesian_pendulum,
+    /// 33 ms against 2.5 ms at 1e-11), or sweeps and comparisons of
+    /// integrators that read the states only. Off, the states are the
+    /// same, bit for bit: the estimate only reports.
     pub global_error: bool,
 }
 

@@ -38,6 +38,9 @@ pub(crate) fn report(args: &ReportArgs) -> ExitCode {
         common_args.extend(["--param".to_string(), param.clone()]);
     }
     common_args.extend(["--samples".to_string(), args.samples.to_string()]);
+    if args.no_global_error {
+        common_args.push("--no-global-error".to_string());
+    }
     let model = args
         .file
         .file_name()

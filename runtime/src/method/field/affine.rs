@@ -99,6 +99,7 @@ impl AffineField {
         };
         let magnus = options.magnus;
         let options_rtol = options.tol.rtol;
+        let global_error = options.global_error;
         let scratch = LinearizationScratch::new(model.dim());
         let window = with_system(model, magnus, &scratch, |system| {
             Window::open(system, &options, t0, x0, None, h_max, kind)
@@ -118,7 +119,11 @@ impl AffineField {
             members: None,
             scratch,
             between: None,
-            error: FieldError::new(x0.len(), options_rtol),
+            error: if global_error {
+                FieldError::new(x0.len(), options_rtol)
+            } else {
+                FieldError::new(x0.len(), options_rtol).off()
+            },
             x_old: Vec::new(),
             local: Vec::new(),
         })
@@ -171,7 +176,8 @@ impl Solver for AffineField {
         self.done += done;
         self.reanchorings += reanchorings;
         self.largest_condition = largest;
-        if result.is_ok() {
+        // The step's local error is read by the estimate alone.
+        if result.is_ok() && self.error.is_on() {
             let local = &mut self.local;
             local.resize(x_old.len(), 0.0);
             let estimated = self.window.local_error(self.options.tol, local);
@@ -355,7 +361,7 @@ impl Solver for AffineField {
             },
             largest_condition: Some(self.largest_condition),
             reanchorings: Some(self.reanchorings),
-            global_error: Some(self.error.estimate()),
+            global_error: self.error.report(),
             ..Report::default()
         }
     }

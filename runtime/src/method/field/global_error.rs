@@ -121,6 +121,9 @@ enum Measured {
 /// The carried estimate of one field run.
 #[derive(Clone, Debug)]
 pub struct FieldError {
+    /// Whether the estimate is made at all (`Options::global_error`):
+    /// off, every method returns at once and the report has no estimate.
+    on: bool,
     rtol: f64,
     global: GlobalError,
     /// Set at the first step from the model: whether it has constraints,
@@ -193,6 +196,7 @@ impl FieldError {
     /// For a run of `n` components at relative tolerance `rtol`.
     pub fn new(n: usize, rtol: f64) -> FieldError {
         FieldError {
+            on: true,
             rtol,
             global: GlobalError::new(),
             constrained: None,
@@ -205,6 +209,19 @@ impl FieldError {
             window_end: None,
             before_window: None,
         }
+    }
+
+    /// A run whose global error is not estimated (`Options::global_error`
+    /// off): nothing is measured, kept or carried.
+    pub fn off(mut self) -> FieldError {
+        self.on = false;
+        self
+    }
+
+    /// Whether the estimate is made: the field skips the steps' local
+    /// errors, which only it reads, when it is not.
+    pub fn is_on(&self) -> bool {
+        self.on
     }
 
     fn constrained(&mut self, model: &dyn DynModel) -> bool {
@@ -265,6 +282,9 @@ impl FieldError {
         states: &[Vec<f64>],
         errors: &[Option<Vec<f64>>],
     ) {
+        if !self.on {
+            return;
+        }
         let first = self.unfed.len();
         let (mut t0, mut x0) = (t, x);
         for ((&t1, x1), local) in ends.iter().zip(states).zip(errors) {
@@ -284,6 +304,9 @@ impl FieldError {
         (t1, x1): (f64, &[f64]),
         local: Option<&[f64]>,
     ) {
+        if !self.on {
+            return;
+        }
         let first = self.unfed.len();
         self.push((t0, x0), (t1, x1), local);
         self.added(model, first);
@@ -426,6 +449,9 @@ impl FieldError {
     /// its others when they are added (`feed`): an event found in the
     /// window cuts them.
     pub fn keep(&mut self, model: &dyn DynModel, keeping: &mut dyn Keeping) {
+        if !self.on {
+            return;
+        }
         if !self.constrained(model) {
             return;
         }
@@ -546,6 +572,9 @@ impl FieldError {
 
     /// Adds the steps that start before `t` (all: `f64::INFINITY`).
     pub fn feed(&mut self, model: &dyn DynModel, t: f64) {
+        if !self.on {
+            return;
+        }
         if self.constrained(model) {
             self.carry_steps(model, t, false, None);
             self.feed_window(t);
@@ -698,6 +727,9 @@ impl FieldError {
     /// window's start with the error of its end: an estimate of 1.8
     /// (absolute) for an error of 3e-9.
     pub fn retake(&mut self, t: f64) {
+        if !self.on {
+            return;
+        }
         self.back_to_window_start(|start| start == t);
         // The steps are in time order: the window's are the last ones.
         let from = self.unfed.iter().position(|s| s.t0 >= t);
@@ -712,6 +744,9 @@ impl FieldError {
     /// An event at `t`, the run going on from `x`: the steps before it
     /// are the motion's.
     pub fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
+        if !self.on {
+            return;
+        }
         self.uncarry_past(t);
         self.feed(model, t);
         self.growth.cut(&ModelSystem(model), t, x);
@@ -751,6 +786,11 @@ impl FieldError {
     /// The right-side evaluations the estimate cost.
     pub fn evaluations(&self) -> usize {
         self.evaluations + self.growth.evaluations()
+    }
+
+    /// For the summary: the estimate, if one is made.
+    pub fn report(&self) -> Option<GlobalErrorEstimate> {
+        self.on.then(|| self.estimate())
     }
 
     /// For the summary: the steps added so far (and those waiting,

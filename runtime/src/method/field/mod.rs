@@ -43,6 +43,8 @@ pub struct FieldOptions {
     /// Affine models: integrate the coefficients (in projective form) by
     /// the Magnus integrator.
     pub magnus: bool,
+    /// Estimate the global error along the run (`Options::global_error`).
+    pub global_error: bool,
 }
 
 impl Default for FieldOptions {
@@ -56,6 +58,7 @@ impl Default for FieldOptions {
             stiff: false,
             auto_stiff: true,
             magnus: false,
+            global_error: true,
         }
     }
 }

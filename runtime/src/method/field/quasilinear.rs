@@ -337,7 +337,10 @@ impl QuasilinearField {
         // tolerance leaves it well below the tolerance.
         let ratio = (0.1 / options.tol.rtol.sqrt()).clamp(MIN_PREDICTOR_RATIO, MAX_PREDICTOR_RATIO);
         let stiff = options.stiff;
-        let error = FieldError::new(x0.len(), options.tol.rtol);
+        let mut error = FieldError::new(x0.len(), options.tol.rtol);
+        if !options.global_error {
+            error = error.off();
+        }
         QuasilinearField {
             options,
             h_max,
@@ -862,7 +865,7 @@ impl Solver for QuasilinearField {
             passes: Some(self.passes),
             predictor: Some(self.predictor_stats),
             linearizations: self.linearizations,
-            global_error: Some(self.error.estimate()),
+            global_error: self.error.report(),
             notes: Vec::new(),
         }
     }
@@ -987,12 +990,13 @@ impl QuasilinearField {
                     state.clear();
                     state.extend_from_slice(window.state());
                     states.push(state);
-                    let mut local = vec![0.0; n];
-                    errors.push(
+                    // The local error is read by the estimate alone.
+                    errors.push(self.error.is_on().then(|| {
+                        let mut local = vec![0.0; n];
                         window
                             .local_error(self.options.tol, &mut local)
-                            .then_some(local),
-                    );
+                            .then_some(local)
+                    }).flatten());
                     kept_at = (t, budget.used());
                 }
                 WindowStep::Ended if window.steps() == 0 => {
