@@ -10,7 +10,8 @@ Per solve = (Ir of `--repeat 21` - Ir of `--repeat 1`) / 20. Error = largest
 |x - ref| / max(|ref|, 1) over the samples and components, ref = direct at
 rtol 1e-13 (atol = rtol * 1e-2 everywhere); direct's instructions over rtol
 1e-5 ... 1e-12 are interpolated log-log at each field run's error. SAMPLES
-(env, default 11, as `lagc report`) sets the sample count. Prints, per rtol
+(env, default 11, as `lagc report`) sets the sample count; ARGS (env, e.g.
+`--no-global-error`) is added to every run of both methods. Prints, per rtol
 (default 1e-6,1e-9) and binary, the field's steps, rejections, windows,
 evaluations, error, instructions, and the ratio to direct at that error.
 (h-rocket, docs/BENCHMARKS.md section 0.)
@@ -18,11 +19,12 @@ evaluations, error, instructions, and the ratio to direct at that error.
 import json, math, os, subprocess, sys, tempfile
 
 SAMPLES = os.environ.get("SAMPLES", "11")
+ARGS = os.environ.get("ARGS", "").split()
 
 
 def run(binary, method, rtol, repeat=None):
     args = [binary, "--method", method, "--rtol", str(rtol), "--atol", str(rtol * 1e-2),
-            "--samples", SAMPLES, "--summary", "json"]
+            "--samples", SAMPLES, "--summary", "json"] + ARGS
     p = subprocess.run(args, capture_output=True, text=True, check=True)
     summary = json.loads([l for l in (p.stdout + p.stderr).split("\n") if l.startswith("{")][-1])
     rows = [list(map(float, l.split(","))) for l in p.stdout.split("\n")
@@ -40,7 +42,7 @@ def instructions(binary, method, rtol, repeat):
         out = os.path.join(d, "cg")
         subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=" + out, binary,
                         "--method", method, "--rtol", str(rtol), "--atol", str(rtol * 1e-2),
-                        "--samples", SAMPLES, "--repeat", str(repeat)],
+                        "--samples", SAMPLES, "--repeat", str(repeat)] + ARGS,
                        capture_output=True, check=True)
         for line in open(out):
             if line.startswith("summary:") or line.startswith("totals:"):
