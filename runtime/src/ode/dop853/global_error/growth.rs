@@ -50,8 +50,9 @@
 //! ([`Growth::step_alongside`]: 24 a step for the measure and the
 //! propagation together). And the
 //! measure of the step's error, spent only once the calibrated sum of the local errors passes
-//! [`FROM`]`·rtol` for the field ([`past_bound`]), where the summary
-//! warns already, and [`FROM_DIRECT`]`·rtol` for direct integration,
+//! [`FROM`]`·rtol` for the field ([`past_bound`]; from the first step on
+//! a motion that is not affine, the field's `global_error`), where the
+//! summary warns already, and [`FROM_DIRECT`]`·rtol` for direct integration,
 //! where a motion that shears its errors may still take them past the
 //! bound; below it a run pays nothing. The errors before are not carried
 //! (at most that much, in the sum): the carried error starts at zero
@@ -366,6 +367,17 @@ impl Growth {
         step.accepted = None;
         step.alongside = Some(alongside);
         self.pending = Some(step);
+    }
+
+    /// At the run's end: the pending step propagated over and added, as
+    /// the next step would do (without projecting the carried error: no
+    /// state follows to be projected).
+    pub fn finish<S: System + ?Sized>(&mut self, system: &S) {
+        if self.saturated() {
+            self.pending = None;
+            return;
+        }
+        self.flush(system, f64::INFINITY, None);
     }
 
     /// Before the first step: the error the carrying starts from, `e` at
