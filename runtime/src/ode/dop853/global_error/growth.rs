@@ -631,6 +631,29 @@ mod tests {
         assert_eq!(g.evaluations(), 264);
     }
 
+    #[test]
+    fn at_the_end_the_pending_step_is_carried_without_a_new_evaluation() {
+        let free = Oscillator(0.0);
+        let delta = 1e-10;
+        let mut g = Growth::new(2);
+        g.step_alongside(&free, (0.0, &[0.0, 1.0]), (1.0, &off_by(delta, 1.0)), None);
+        g.step_alongside(
+            &free,
+            (1.0, &off_by(delta, 1.0)),
+            (3.0, &off_by(delta, 3.0)),
+            None,
+        );
+        // The last step pending: the velocity error only, not yet its 2 s
+        // in position.
+        assert!((g.largest() - delta).abs() < 1e-15, "{}", g.largest());
+        g.finish(&free);
+        assert!((g.largest() - 2.0 * delta).abs() < 1e-14, "{}", g.largest());
+        assert_eq!(g.evaluations(), 48);
+        // Nothing is left pending: a second finish changes nothing.
+        g.finish(&free);
+        assert!((g.largest() - 2.0 * delta).abs() < 1e-14, "{}", g.largest());
+    }
+
     /// The carried error, its steps in storage kept from step to step, is
     /// bit for bit the same arithmetic done in fresh storage (`e ← x1 −
     /// halves(x0 − e)`): on a spring, whose errors go round and change
