@@ -5,6 +5,7 @@ mod cache;
 mod check_build;
 mod cli;
 mod depth;
+mod early_errors;
 mod ensemble;
 mod errors;
 mod examples;

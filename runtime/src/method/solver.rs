@@ -156,6 +156,10 @@ pub trait Solver {
     /// off the constraints is projected away, not carried to the run's
     /// end.
     fn keep_on_constraints(&mut self, _model: &dyn DynModel, _keeping: &mut dyn Keeping) {}
+    /// The run reached its end (`run::integration`): a method whose
+    /// global error estimate waits for the next advance adds what it
+    /// holds.
+    fn finish(&mut self, _model: &dyn DynModel) {}
     /// The work so far.
     fn report(&self) -> Report;
 

@@ -657,7 +657,9 @@ impl<'m> Integration<'m> {
     /// The run has reached the end of its span: the state there, on the
     /// constraints.
     fn reach_end(&mut self) {
-        let s = self.stepping.as_ref().expect("a run that steps");
+        let model = self.model.get();
+        let s = self.stepping.as_mut().expect("a run that steps");
+        s.solver.finish(model);
         self.t = s.solver.time();
         self.x.copy_from_slice(s.solver.state());
         self.progress.finish();

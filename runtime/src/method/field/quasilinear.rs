@@ -737,6 +737,11 @@ impl Solver for QuasilinearField {
         self.error.cut(model, t, x);
     }
 
+    fn finish(&mut self, model: &dyn DynModel) {
+        // The last window's steps (`FieldError::finish`).
+        self.error.finish(model);
+    }
+
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         // The steps before (all of them but after an event's cut).
         self.error.feed(model, f64::INFINITY);

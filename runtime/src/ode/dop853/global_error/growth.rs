@@ -50,8 +50,9 @@
 //! ([`Growth::step_alongside`]: 24 a step for the measure and the
 //! propagation together). And the
 //! measure of the step's error, spent only once the calibrated sum of the local errors passes
-//! [`FROM`]`·rtol` for the field ([`past_bound`]), where the summary
-//! warns already, and [`FROM_DIRECT`]`·rtol` for direct integration,
+//! [`FROM`]`·rtol` for the field ([`past_bound`]; from the first step on
+//! a motion that is not affine, the field's `global_error`), where the
+//! summary warns already, and [`FROM_DIRECT`]`·rtol` for direct integration,
 //! where a motion that shears its errors may still take them past the
 //! bound; below it a run pays nothing. The errors before are not carried
 //! (at most that much, in the sum): the carried error starts at zero
@@ -368,6 +369,17 @@ impl Growth {
         self.pending = Some(step);
     }
 
+    /// At the run's end: the pending step propagated over and added, as
+    /// the next step would do (without projecting the carried error: no
+    /// state follows to be projected).
+    pub fn finish<S: System + ?Sized>(&mut self, system: &S) {
+        if self.saturated() {
+            self.pending = None;
+            return;
+        }
+        self.flush(system, f64::INFINITY, None);
+    }
+
     /// Before the first step: the error the carrying starts from, `e` at
     /// `(t, x)` (an error measured before, whose steps were not carried),
     /// projected by `keep` as the run's state is there.
@@ -617,6 +629,29 @@ mod tests {
         // (Relative to max(|x|, 1): the velocity's 1e-10 is the largest.)
         assert!((g.largest() - delta).abs() < 1e-15, "{}", g.largest());
         assert_eq!(g.evaluations(), 264);
+    }
+
+    #[test]
+    fn at_the_end_the_pending_step_is_carried_without_a_new_evaluation() {
+        let free = Oscillator(0.0);
+        let delta = 1e-10;
+        let mut g = Growth::new(2);
+        g.step_alongside(&free, (0.0, &[0.0, 1.0]), (1.0, &off_by(delta, 1.0)), None);
+        g.step_alongside(
+            &free,
+            (1.0, &off_by(delta, 1.0)),
+            (3.0, &off_by(delta, 3.0)),
+            None,
+        );
+        // The last step pending: the velocity error only, not yet its 2 s
+        // in position.
+        assert!((g.largest() - delta).abs() < 1e-15, "{}", g.largest());
+        g.finish(&free);
+        assert!((g.largest() - 2.0 * delta).abs() < 1e-14, "{}", g.largest());
+        assert_eq!(g.evaluations(), 48);
+        // Nothing is left pending: a second finish changes nothing.
+        g.finish(&free);
+        assert!((g.largest() - 2.0 * delta).abs() < 1e-14, "{}", g.largest());
     }
 
     /// The carried error, its steps in storage kept from step to step, is
