@@ -134,7 +134,10 @@ impl PyModel {
     /// are checked against them). `method` is "field" or "direct",
     /// `integrator` "auto", "explicit", "stiff" or "magnus" (default: the
     /// model's `integrator` statement, or auto), `rtol`/`atol` the per-step
-    /// tolerance (default 1e-10, 1e-12), `max_steps` the work budget.
+    /// tolerance (default 1e-10, 1e-12), `max_steps` the work budget,
+    /// `global_error=False` leaves out the global-error estimate
+    /// (`sol.stats["global_error_estimate"]` is then None; the rows are the
+    /// same bit for bit, the run cheaper: `lagc run --no-global-error`).
     /// `inputs` drives the model's inputs by name, `{"u": (times, values)}`,
     /// held between the rows or, with `input_interp="linear"`, interpolated
     /// (the others hold their defaults); each change restarts the
@@ -145,7 +148,7 @@ impl PyModel {
     /// --sensitivity` writes it (columns named by `sol.sensitivity_names`).
     /// Raises IntegrationError when the run fails, ValueError where
     /// sensitivities are not computed (with `inputs` among others).
-    #[pyo3(signature = (t=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, inputs=None, input_interp="hold", sensitivity=false))]
+    #[pyo3(signature = (t=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, inputs=None, input_interp="hold", sensitivity=false, global_error=true))]
     #[allow(clippy::too_many_arguments)]
     fn solve(
         &self,
@@ -160,6 +163,7 @@ impl PyModel {
         inputs: Option<&Bound<'_, PyDict>>,
         input_interp: &str,
         sensitivity: bool,
+        global_error: bool,
     ) -> PyResult<PySolution> {
         let kind = kind();
         let options = RunOptions {
@@ -168,6 +172,7 @@ impl PyModel {
             rtol,
             atol,
             max_steps,
+            global_error,
         }
         .options()?;
         let times = t.map(request::times).transpose()?;
@@ -194,7 +199,7 @@ impl PyModel {
     /// Solutions in order (`inputs` and `input_interp` drive every set). A failure raises the first set's
     /// IntegrationError (`errors="raise"`, after every set ran), or stands
     /// in the list in place of its Solution (`errors="return"`).
-    #[pyo3(signature = (t=None, params=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, threads=None, errors="raise", inputs=None, input_interp="hold"))]
+    #[pyo3(signature = (t=None, params=None, initial=None, method="field", integrator=None, rtol=None, atol=None, max_steps=None, threads=None, errors="raise", inputs=None, input_interp="hold", global_error=true))]
     #[allow(clippy::too_many_arguments)]
     fn solve_batch<'py>(
         &self,
@@ -211,6 +216,7 @@ impl PyModel {
         errors: &str,
         inputs: Option<&Bound<'py, PyDict>>,
         input_interp: &str,
+        global_error: bool,
     ) -> PyResult<Bound<'py, PyList>> {
         let kind = kind();
         let raise = match errors {
@@ -228,6 +234,7 @@ impl PyModel {
             rtol,
             atol,
             max_steps,
+            global_error,
         }
         .options()?;
         let times = t.map(request::times).transpose()?;
@@ -300,6 +307,7 @@ impl PyModel {
             rtol,
             atol,
             max_steps,
+            global_error: true,
         }
         .options()?;
         let inits = request::initial(kind, initial)?;

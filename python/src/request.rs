@@ -20,6 +20,8 @@ pub(crate) struct RunOptions<'a> {
     pub rtol: Option<f64>,
     pub atol: Option<f64>,
     pub max_steps: Option<usize>,
+    /// `global_error=False`: no global-error estimate (`Options::global_error`).
+    pub global_error: bool,
 }
 
 impl RunOptions<'_> {
@@ -32,6 +34,7 @@ impl RunOptions<'_> {
         })?;
         let mut options = Options {
             method,
+            global_error: self.global_error,
             ..Options::default()
         };
         if let Some(text) = self.integrator {

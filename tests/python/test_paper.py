@@ -37,6 +37,20 @@ def test_within_1e_10_of_the_exact_solution(method):
     assert sol.stats["exact_error"] <= 1e-10
 
 
+@pytest.mark.parametrize("method", ["field", "direct"])
+def test_a_solve_without_its_global_error_estimate_has_the_same_rows(method):
+    m = paper.Model()
+    with_estimate = m.solve(method=method, rtol=1e-9)
+    without = m.solve(method=method, rtol=1e-9, global_error=False)
+    assert np.array_equal(with_estimate.y, without.y)
+    assert with_estimate.stats["global_error_estimate"] is not None
+    assert without.stats["global_error_estimate"] is None
+    assert without.stats["rhs_evaluations"] <= with_estimate.stats["rhs_evaluations"]
+    batch = m.solve_batch(params=[{"alpha": 0.5}], method=method, rtol=1e-9, global_error=False)
+    assert np.array_equal(batch[0].y, without.y)
+    assert batch[0].stats["global_error_estimate"] is None
+
+
 def test_changed_params_and_initial_values_follow_the_exact_solution():
     t = np.linspace(0.0, 3.0, 31)
     sol = paper.Model(alpha=0.8).solve(t=t, initial={"q1'": 2.0}, rtol=1e-12, atol=1e-14)

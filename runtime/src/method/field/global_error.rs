@@ -744,7 +744,7 @@ impl FieldError {
     /// grew from 3 to 11 rtol in its last window said what it was before
     /// it. A constrained model's windows are left as they were.
     pub fn finish(&mut self, model: &dyn DynModel) {
-        if self.constrained(model) {
+        if !self.on || self.constrained(model) {
             return;
         }
         self.feed(model, f64::INFINITY);
