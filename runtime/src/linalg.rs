@@ -279,6 +279,9 @@ impl Lu {
         // (a ball on a turntable: 3 × 3, a solve a column, h-stiff2) at
         // every linearisation: their sizes known, the same operations.
         let (sign, singular) = match n {
+            // The 1 × 1 conditions of one degree of freedom, at every
+            // field step and every sample between steps.
+            1 => factor_sized::<1>(&mut a.data, n, pivots),
             2 => factor_sized::<2>(&mut a.data, n, pivots),
             3 => factor_sized::<3>(&mut a.data, n, pivots),
             4 => factor_sized::<4>(&mut a.data, n, pivots),

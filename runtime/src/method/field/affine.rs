@@ -292,6 +292,9 @@ impl Solver for AffineField {
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         // The steps before (all of them but after an event's cut).
         self.error.feed(model, f64::INFINITY);
+        // A restart may follow a change of the model (an input's):
+        // linearise afresh.
+        self.scratch.borrow_mut().forget();
         let h = self.window.proposed_step();
         self.done += self.window.stats();
         self.between = None;
@@ -390,7 +393,10 @@ fn with_system<R>(
         let source = SymbolicCoefficients::new(model);
         body(&Augmented(&source))
     } else {
-        let projective = ProjectiveCoefficients::with_scratch(model, &AnyState, scratch);
+        // Every system of this field is built from the same model at the
+        // origin: an autonomous model's linearisation is kept from step to
+        // step (`restart` forgets it).
+        let projective = ProjectiveCoefficients::with_kept_scratch(model, &AnyState, scratch);
         body(&projective)
     }
 }
