@@ -47,6 +47,10 @@ struct EquilibratedLu {
     lu: Lu,
     rows: Vec<f64>,
     columns: Vec<f64>,
+    /// The pivot of regular `1 × 1` factors
+    /// ([`EquilibratedLu::refactor_scalar`]): their solve and determinant
+    /// then skip the loops (the same operations on one number).
+    scalar: Option<f64>,
 }
 
 /// `2^(−round(log2 largest))`, the power of two that brings `largest` near
@@ -83,6 +87,7 @@ impl EquilibratedLu {
             lu: Lu::empty(),
             rows: Vec::new(),
             columns: Vec::new(),
+            scalar: None,
         }
     }
 
@@ -110,7 +115,8 @@ impl EquilibratedLu {
         self.rows.push(row);
         self.columns.clear();
         self.columns.push(column);
-        self.lu.refactor(1, |a| a.as_mut_slice()[0] = scaled);
+        self.lu.refactor_scalar(scaled);
+        self.scalar = (!self.lu.is_singular()).then_some(scaled);
         if !estimate || self.lu.is_singular() {
             return 1.0;
         }
@@ -128,6 +134,7 @@ impl EquilibratedLu {
     /// field step) with their size known at compile time, the same
     /// operations in the same order.
     fn refactor_general(&mut self, s: &[f64], n: usize, x0: &[f64], estimate: bool) -> f64 {
+        self.scalar = None;
         match n {
             4 => self.refactor_sized::<3>(s, n, x0, estimate),
             6 => self.refactor_sized::<5>(s, n, x0, estimate),
@@ -204,12 +211,18 @@ impl EquilibratedLu {
         } else {
             self.rows.iter().chain(&self.columns).product()
         };
+        // The factors' determinant: of regular 1 × 1 factors, the sign's
+        // (1) product with the pivot, as `Lu::determinant` folds it.
+        let factors = match self.scalar {
+            Some(pivot) => 1.0 * pivot,
+            None => self.lu.determinant(),
+        };
         if scalings.is_normal() {
-            self.lu.determinant() / scalings
+            factors / scalings
         } else {
             // Out of range: the sign, which is what the windows use, is
             // still that of det(R M C).
-            self.lu.determinant()
+            factors
         }
     }
 
@@ -224,6 +237,13 @@ impl EquilibratedLu {
     }
 
     fn solve_in_place(&self, z: &mut [f64]) {
+        if let (Some(pivot), [row], [column], [v]) =
+            (self.scalar, &self.rows[..], &self.columns[..], &mut z[..])
+        {
+            // Regular 1 × 1 factors: the loops' three operations.
+            *v = *v * row / pivot * column;
+            return;
+        }
         for (v, r) in z.iter_mut().zip(&self.rows) {
             *v *= r;
         }
