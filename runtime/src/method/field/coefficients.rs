@@ -276,10 +276,11 @@ pub struct LinearizationScratch {
     /// `x` holds the origin, written by an iterate that is the origin at
     /// every time (an affine motion's): not written again at every stage.
     x_origin: bool,
-    /// The model (its address) whose frozen linearisation (see
-    /// `LinearizedCoefficients::frozen`) the buffers hold, for a system
-    /// built on them again ([`ProjectiveCoefficients::with_kept_scratch`]).
-    frozen_model: Option<*const ()>,
+    /// The model (its address, as a number: the buffers stay `Send`)
+    /// whose frozen linearisation (see `LinearizedCoefficients::frozen`)
+    /// the buffers hold, for a system built on them again
+    /// ([`ProjectiveCoefficients::with_kept_scratch`]).
+    frozen_model: Option<usize>,
 }
 
 impl LinearizationScratch {
@@ -309,8 +310,8 @@ impl LinearizationScratch {
 }
 
 /// The address of `model`, to tell whether buffers hold its linearisation.
-fn model_address(model: &dyn DynModel) -> *const () {
-    model as *const dyn DynModel as *const ()
+fn model_address(model: &dyn DynModel) -> usize {
+    model as *const dyn DynModel as *const () as usize
 }
 
 /// A linearisation's buffers, its own or lent. Not boxed: one value per
