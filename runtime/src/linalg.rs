@@ -267,6 +267,25 @@ impl Lu {
         self.factor();
     }
 
+    /// [`Lu::refactor`] of the `1 × 1` matrix `a`: what the loops do for
+    /// one entry (no pivoting; singular where `|a|` is 0 or infinite, not
+    /// where it is NaN, as the pivot search decides), without the fill's
+    /// closure and the loops (the field's conditions of one degree of
+    /// freedom, at every step).
+    pub fn refactor_scalar(&mut self, a: f64) {
+        let m = &mut self.factors;
+        m.rows = 1;
+        m.cols = 1;
+        m.data.clear();
+        m.data.push(a);
+        self.pivots.clear();
+        self.pivots.push(0);
+        self.sign = 1.0;
+        // The pivot search's fold from −1 (`c.1 > best.1`): NaN stays −1.
+        let largest = if a.abs() > -1.0 { a.abs() } else { -1.0 };
+        self.singular = largest == 0.0 || !largest.is_finite();
+    }
+
     /// Factors `self.factors` in place.
     fn factor(&mut self) {
         let a = &mut self.factors;
@@ -279,6 +298,9 @@ impl Lu {
         // (a ball on a turntable: 3 × 3, a solve a column, h-stiff2) at
         // every linearisation: their sizes known, the same operations.
         let (sign, singular) = match n {
+            // The 1 × 1 conditions of one degree of freedom, at every
+            // field step and every sample between steps.
+            1 => factor_sized::<1>(&mut a.data, n, pivots),
             2 => factor_sized::<2>(&mut a.data, n, pivots),
             3 => factor_sized::<3>(&mut a.data, n, pivots),
             4 => factor_sized::<4>(&mut a.data, n, pivots),
@@ -722,6 +744,43 @@ pub fn expm(a: &Matrix) -> Matrix {
 
 #[cfg(test)]
 mod tests {
+    /// The `1 × 1` factors set directly are the loops' factors, bit for
+    /// bit: singular or not, determinant, solve, inverse's norm estimate.
+    #[test]
+    fn scalar_refactor_is_the_loops() {
+        use super::Lu;
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            -3.5,
+            1e-310,
+            5e-324,
+            f64::MAX,
+            1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        let (mut fast, mut slow) = (Lu::empty(), Lu::empty());
+        for &a in &values {
+            fast.refactor_scalar(a);
+            slow.refactor(1, |m| m.as_mut_slice()[0] = a);
+            assert_eq!(fast.is_singular(), slow.is_singular(), "{a:e}");
+            assert_eq!(fast.determinant().to_bits(), slow.determinant().to_bits());
+            assert_eq!(fast.pivots, slow.pivots);
+            assert_eq!(fast.sign.to_bits(), slow.sign.to_bits());
+            let (mut x, mut y) = ([0.7], [0.7]);
+            assert_eq!(fast.solve_in_place(&mut x), slow.solve_in_place(&mut y));
+            assert_eq!(x[0].to_bits(), y[0].to_bits());
+            let (e, f) = (
+                fast.inverse_one_norm_estimate(),
+                slow.inverse_one_norm_estimate(),
+            );
+            assert_eq!(e.to_bits(), f.to_bits(), "{a:e}");
+        }
+    }
+
     use super::*;
 
     fn close(a: f64, b: f64, tol: f64) -> bool {

@@ -1084,6 +1084,24 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
     y_new: &[f64],
     tol: Option<Tolerance>,
 ) -> Result<(DenseStep, f64), Failure> {
+    let mut cont = Vec::new();
+    let miss = dense_step_between_measured_into(system, t_old, h, y_old, y_new, tol, &mut cont)?;
+    Ok((DenseStep::dop853(t_old, t_old + h, h, cont), miss))
+}
+
+/// [`dense_step_between_measured`] into `cont`'s storage (resized to the
+/// extension's `8 n` coefficients): the same numbers without a vector
+/// and a shared box allocated and freed at every sample of the affine
+/// field's output ([`eval_between`] evaluates it).
+pub fn dense_step_between_measured_into<S: System + ?Sized>(
+    system: &S,
+    t_old: f64,
+    h: f64,
+    y_old: &[f64],
+    y_new: &[f64],
+    tol: Option<Tolerance>,
+    cont: &mut Vec<f64>,
+) -> Result<f64, Failure> {
     let n = y_old.len();
     // The working buffers (the stages, a stage's state, the extension's
     // three extra stages, the miss): on the stack for the small models,
@@ -1126,7 +1144,10 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
     // This module's storage: k[0] the end rate, k[12] the start rate.
     let (start, rest) = k.split_at_mut(STAGES * n);
     start[..n].swap_with_slice(&mut rest[..n]);
-    let mut cont = vec![0.0; 8 * n];
+    // Every coefficient is written by the extension (zeroed first, as a
+    // fresh vector was).
+    cont.clear();
+    cont.resize(8 * n, 0.0);
     continuous_extension(
         system,
         t_old,
@@ -1136,12 +1157,25 @@ pub fn dense_step_between_measured<S: System + ?Sized>(
         &FlatStages { data: k, n },
         extra,
         stage_state,
-        &mut cont,
+        cont,
     )?;
-    if first_non_finite(&cont).is_some() {
+    if first_non_finite(cont).is_some() {
         return Err(Failure::non_finite(t_old, system.component_name(0)));
     }
-    Ok((DenseStep::dop853(t_old, t_old + h, h, cont), miss))
+    Ok(miss)
+}
+
+/// The extension `cont` of [`dense_step_between_measured_into`] over
+/// `[t_old, t_old + h]` at `t` (clamped to the step), into `out`: what
+/// [`DenseStep::eval`] does with the step that
+/// [`dense_step_between_measured`] returns.
+pub fn eval_between(cont: &[f64], t_old: f64, h: f64, t: f64, out: &mut [f64]) {
+    let s = if h > 0.0 {
+        ((t - t_old) / h).clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    contd8(cont, cont.len() / 8, s, out);
 }
 
 /// The stages 1..12 of [`dense_step_between_measured`] into `k` (its

@@ -14,8 +14,7 @@ use crate::failure::Failure;
 use crate::method::solver::{Keeping, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
-use crate::ode::dop853::dense_step_between_measured;
-use crate::ode::stepper::DenseStep;
+use crate::ode::dop853::{dense_step_between_measured_into, eval_between};
 use crate::ode::system::ModelSystem;
 use crate::ode::tolerance::Tolerance;
 use crate::ode::tolerance::{rms_norm, underflows, Stats};
@@ -36,10 +35,16 @@ pub struct AffineField {
     /// every step.
     scratch: RefCell<LinearizationScratch>,
     /// The output between the last step's ends, once asked for: one DOP853
-    /// step of the motion between the two recovered states, or `None` in
-    /// `step` where that step is too long and the coefficients' extension
-    /// serves.
+    /// step of the motion between the two recovered states, or the
+    /// coefficients' extension where that step is too long.
     between: Option<Between>,
+    /// Storage of the output between steps, kept from sample to sample
+    /// (four allocations a sample before): the motion step's extension
+    /// (`dense_step_between_measured_into`), and the motion step and the
+    /// difference at the step's middle.
+    motion: Vec<f64>,
+    by_step: Vec<f64>,
+    difference: Vec<f64>,
     /// The global error estimate carried along the run.
     error: FieldError,
     /// Storage of `advance`: the state before the step, and the step's
@@ -52,11 +57,13 @@ pub struct AffineField {
 struct Between {
     t_old: f64,
     t_new: f64,
-    /// One DOP853 step of the motion between the step's recovered states,
-    /// if it meets the tolerance at the step's end (`miss ≤ 1`).
-    motion: Option<DenseStep>,
-    /// Whether `motion` is the output between the steps (else the
-    /// coefficients' extension, with `motion` where the conditions fail).
+    /// Whether one DOP853 step of the motion between the step's recovered
+    /// states (its extension in `AffineField::motion`) meets the tolerance
+    /// at the step's end (`miss ≤ 1`).
+    motion: bool,
+    /// Whether the motion step is the output between the steps (else the
+    /// coefficients' extension, with the motion step where the conditions
+    /// fail).
     preferred: bool,
     /// Whether `motion` was computed (in RODAS4's and Magnus' steps only
     /// where the conditions fail).
@@ -64,22 +71,25 @@ struct Between {
 }
 
 /// One DOP853 step of the motion between the window's last two recovered
-/// states, if it meets the tolerance at the step's end, and its miss.
+/// states, its extension into `cont`: whether it meets the tolerance at
+/// the step's end, and its miss.
 fn motion_step(
     model: &dyn DynModel,
     window: &Window,
     tol: Tolerance,
-) -> Result<(Option<DenseStep>, f64), Failure> {
+    cont: &mut Vec<f64>,
+) -> Result<(bool, f64), Failure> {
     let (t_old, t_new) = (window.previous_time(), window.time());
-    let (step, miss) = dense_step_between_measured(
+    let miss = dense_step_between_measured_into(
         &ModelSystem(model),
         t_old,
         t_new - t_old,
         window.previous_state(),
         window.state(),
         Some(tol),
+        cont,
     )?;
-    Ok(((miss <= 1.0).then_some(step), miss))
+    Ok((miss <= 1.0, miss))
 }
 
 impl AffineField {
@@ -119,6 +129,9 @@ impl AffineField {
             members: None,
             scratch,
             between: None,
+            motion: Vec::new(),
+            by_step: Vec::new(),
+            difference: Vec::new(),
             error: if global_error {
                 FieldError::new(x0.len(), options_rtol)
             } else {
@@ -219,9 +232,9 @@ impl Solver for AffineField {
             // steps, the coefficients' extension.
             let explicit = window.kind() == StepperKind::Explicit;
             let (motion, miss) = if explicit {
-                motion_step(model, window, self.options.tol)?
+                motion_step(model, window, self.options.tol, &mut self.motion)?
             } else {
-                (None, f64::INFINITY)
+                (false, f64::INFINITY)
             };
             // Which of the two is right between the steps: where they
             // agree at the step's middle to three tolerances, the
@@ -234,18 +247,21 @@ impl Solver for AffineField {
             // by 1e-5 … 1e-3). And the motion step where the conditions
             // fail at the middle.
             let mut preferred = false;
-            if let Some(step) = &motion {
+            if motion {
                 let t_mid = 0.5 * (t_old + t_new);
-                let mut by_step = vec![0.0; out.len()];
-                step.eval(t_mid, &mut by_step);
+                let by_step = &mut self.by_step;
+                by_step.clear();
+                by_step.resize(out.len(), 0.0);
+                eval_between(&self.motion, t_old, t_new - t_old, t_mid, by_step);
                 let extension = with_system(model, self.options.magnus, &self.scratch, |system| {
                     window.dense(system, t_mid, out)
                 });
                 preferred = match extension {
                     Ok(()) => {
-                        let difference: Vec<f64> =
-                            out.iter().zip(&by_step).map(|(a, b)| a - b).collect();
-                        let apart = rms_norm(&difference, out, &by_step, self.options.tol);
+                        let difference = &mut self.difference;
+                        difference.clear();
+                        difference.extend(out.iter().zip(by_step.iter()).map(|(a, b)| a - b));
+                        let apart = rms_norm(difference, out, by_step, self.options.tol);
                         apart > 3.0 * (20.0 * miss).max(1.0)
                     }
                     Err(_) => true,
@@ -260,8 +276,9 @@ impl Solver for AffineField {
             });
         }
         let between = self.between.as_mut().expect("made current above");
-        if let (true, Some(step)) = (between.preferred, &between.motion) {
-            step.eval(t, out);
+        let h = t_new - t_old;
+        if between.preferred && between.motion {
+            eval_between(&self.motion, t_old, h, t, out);
             return Ok(());
         }
         let extension = with_system(model, self.options.magnus, &self.scratch, |system| {
@@ -273,12 +290,12 @@ impl Solver for AffineField {
         // motion step, if it meets the tolerance. Before, the run stopped,
         // exit 3.
         if extension.is_err() && !between.motion_tried {
-            between.motion = motion_step(model, window, self.options.tol)?.0;
+            between.motion = motion_step(model, window, self.options.tol, &mut self.motion)?.0;
             between.motion_tried = true;
         }
-        match (extension, &between.motion) {
-            (Err(_), Some(step)) => {
-                step.eval(t, out);
+        match (extension, between.motion) {
+            (Err(_), true) => {
+                eval_between(&self.motion, t_old, h, t, out);
                 Ok(())
             }
             (result, _) => result,
@@ -298,6 +315,9 @@ impl Solver for AffineField {
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         // The steps before (all of them but after an event's cut).
         self.error.feed(model, f64::INFINITY);
+        // A restart may follow a change of the model (an input's):
+        // linearise afresh.
+        self.scratch.borrow_mut().forget();
         let h = self.window.proposed_step();
         self.done += self.window.stats();
         self.between = None;
@@ -396,7 +416,10 @@ fn with_system<R>(
         let source = SymbolicCoefficients::new(model);
         body(&Augmented(&source))
     } else {
-        let projective = ProjectiveCoefficients::with_scratch(model, &AnyState, scratch);
+        // Every system of this field is built from the same model at the
+        // origin: an autonomous model's linearisation is kept from step to
+        // step (`restart` forgets it).
+        let projective = ProjectiveCoefficients::with_kept_scratch(model, &AnyState, scratch);
         body(&projective)
     }
 }

@@ -276,6 +276,11 @@ pub struct LinearizationScratch {
     /// `x` holds the origin, written by an iterate that is the origin at
     /// every time (an affine motion's): not written again at every stage.
     x_origin: bool,
+    /// The model (its address, as a number: the buffers stay `Send`)
+    /// whose frozen linearisation (see `LinearizedCoefficients::frozen`)
+    /// the buffers hold, for a system built on them again
+    /// ([`ProjectiveCoefficients::with_kept_scratch`]).
+    frozen_model: Option<usize>,
 }
 
 impl LinearizationScratch {
@@ -291,8 +296,22 @@ impl LinearizationScratch {
             evaluated_at: None,
             formed_at: None,
             x_origin: false,
+            frozen_model: None,
         })
     }
+
+    /// Forgets what the buffers hold (a kept frozen linearisation
+    /// included): the next system evaluates afresh.
+    pub fn forget(&mut self) {
+        self.evaluated_at = None;
+        self.formed_at = None;
+        self.frozen_model = None;
+    }
+}
+
+/// The address of `model`, to tell whether buffers hold its linearisation.
+fn model_address(model: &dyn DynModel) -> usize {
+    model as *const dyn DynModel as *const () as usize
 }
 
 /// A linearisation's buffers, its own or lent. Not boxed: one value per
@@ -346,17 +365,33 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
         iterate: &'a I,
         scratch: &'a RefCell<LinearizationScratch>,
     ) -> Self {
+        Self::lent_keeping(model, iterate, scratch, false)
+    }
+
+    /// [`LinearizedCoefficients::lent`]; with `keep`, a frozen
+    /// linearisation of the same model that the buffers hold is kept
+    /// (the caller builds every system on them from the same model and
+    /// an iterate at the origin, and forgets them where that may change).
+    fn lent_keeping(
+        model: &'a dyn DynModel,
+        iterate: &'a I,
+        scratch: &'a RefCell<LinearizationScratch>,
+        keep: bool,
+    ) -> Self {
+        let frozen = model.autonomous() && iterate.is_origin();
         {
             let mut sc = scratch.borrow_mut();
-            sc.evaluated_at = None;
-            sc.formed_at = None;
+            let kept = keep && frozen && sc.frozen_model == Some(model_address(model));
+            if !kept {
+                sc.forget();
+            }
         }
         LinearizedCoefficients {
             model,
             iterate,
             scratch: Scratch::Lent(scratch),
             evaluations: std::cell::Cell::new(0),
-            frozen: model.autonomous() && iterate.is_origin(),
+            frozen,
         }
     }
 
@@ -381,6 +416,7 @@ impl<'a, I: Iterate + ?Sized> LinearizedCoefficients<'a, I> {
         self.model.linearize(t, &sc.x, &mut sc.rate, &mut sc.a)?;
         self.evaluations.set(self.evaluations.get() + 1);
         sc.evaluated_at = Some(t.to_bits());
+        sc.frozen_model = self.frozen.then(|| model_address(self.model));
         Ok(())
     }
 
@@ -596,6 +632,12 @@ pub struct ProjectiveCoefficients<'a, I: Iterate + ?Sized> {
     /// evaluation (two dynamic calls).
     dim: usize,
     shift: usize,
+    /// One degree of freedom's frozen `A` (its 4 numbers as the buffers
+    /// hold them) and `b` (2), copied out of the buffers where a kept
+    /// linearisation is there when the system is built
+    /// ([`ProjectiveCoefficients::with_kept_scratch`]): every stage's
+    /// rates then borrow nothing (the affine field's oscillators).
+    frozen_one: Option<[f64; 6]>,
 }
 
 impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
@@ -604,6 +646,7 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
             linear: LinearizedCoefficients::new(model, iterate),
             dim: model.dim(),
             shift: model.coordinates(),
+            frozen_one: None,
         }
     }
 
@@ -617,6 +660,39 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
             linear: LinearizedCoefficients::lent(model, iterate, scratch),
             dim: model.dim(),
             shift: model.coordinates(),
+            frozen_one: None,
+        }
+    }
+
+    /// [`ProjectiveCoefficients::with_scratch`] for a solver that builds
+    /// its system on the same buffers, model and iterate at the origin at
+    /// every step (the affine field): a frozen linearisation (an
+    /// autonomous model, `A` and `b` the same at every time) already in
+    /// the buffers is kept rather than evaluated again at every step (the
+    /// same numbers: the model's `linearize` reads no time). The lender
+    /// forgets the buffers ([`LinearizationScratch::forget`]) where the
+    /// model may have changed.
+    pub fn with_kept_scratch(
+        model: &'a dyn DynModel,
+        iterate: &'a I,
+        scratch: &'a RefCell<LinearizationScratch>,
+    ) -> Self {
+        let linear = LinearizedCoefficients::lent_keeping(model, iterate, scratch, true);
+        let (dim, shift) = (model.dim(), model.coordinates());
+        let frozen_one = if linear.frozen && (dim, shift) == (2, 1) {
+            let sc = scratch.borrow();
+            match (sc.formed_at, sc.a.as_slice(), &sc.b[..]) {
+                (Some(_), &[a0, a1, a2, a3], &[b0, b1]) => Some([a0, a1, a2, a3, b0, b1]),
+                _ => None,
+            }
+        } else {
+            None
+        };
+        ProjectiveCoefficients {
+            linear,
+            dim,
+            shift,
+            frozen_one,
         }
     }
 
@@ -751,6 +827,20 @@ fn adjoint_rates_small<const N: usize, const SHIFT: usize>(
     y: &[f64],
     dy: &mut [f64],
 ) {
+    adjoint_rates_small_inline::<N, SHIFT>(a, b, shift, y, dy)
+}
+
+/// [`adjoint_rates_small`]'s body, inlined into the right side itself for
+/// one degree of freedom (`ProjectiveCoefficients::rhs`: a call and a
+/// dispatch fewer at every stage).
+#[inline(always)]
+fn adjoint_rates_small_inline<const N: usize, const SHIFT: usize>(
+    a: &[f64],
+    b: &[f64],
+    shift: usize,
+    y: &[f64],
+    dy: &mut [f64],
+) {
     let shift = if SHIFT == ANY { shift } else { SHIFT };
     let (a, b) = (&a[..N * N], &b[..N]);
     let (y, dy) = (&y[..N * (N + 1)], &mut dy[..N * (N + 1)]);
@@ -828,6 +918,11 @@ impl<I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, I> {
     }
 
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), Failure> {
+        if let (Some(ab), 6) = (&self.frozen_one, y.len()) {
+            // `adjoint_rates`' case (2, 1) on the kept linearisation.
+            adjoint_rates_small_inline::<2, 1>(&ab[..4], &ab[4..], 1, y, dy);
+            return Ok(());
+        }
         let (n, shift) = (self.dim, self.shift);
         let mut guard = self.linear.scratch.borrow_mut();
         let sc = &mut *guard;
@@ -835,6 +930,12 @@ impl<I: Iterate + ?Sized> System for ProjectiveCoefficients<'_, I> {
         // checks at every stage).
         if !(self.linear.frozen && sc.formed_at.is_some()) {
             self.linear.linearize(t, sc)?;
+        }
+        if n == 2 && shift == 1 && y.len() == 6 {
+            // One degree of freedom, at every stage of the field's steps:
+            // `adjoint_rates`' case (2, 1), inlined here.
+            adjoint_rates_small_inline::<2, 1>(sc.a.as_slice(), &sc.b, shift, y, dy);
+            return Ok(());
         }
         let (rows, sums) = sc.batch.split_at_mut(n * n);
         adjoint_rates(&sc.a, &sc.b, shift, y, dy, rows, sums);

@@ -47,6 +47,10 @@ struct EquilibratedLu {
     lu: Lu,
     rows: Vec<f64>,
     columns: Vec<f64>,
+    /// The pivot of regular `1 × 1` factors
+    /// ([`EquilibratedLu::refactor_scalar`]): their solve and determinant
+    /// then skip the loops (the same operations on one number).
+    scalar: Option<f64>,
 }
 
 /// `2^(−round(log2 largest))`, the power of two that brings `largest` near
@@ -83,6 +87,7 @@ impl EquilibratedLu {
             lu: Lu::empty(),
             rows: Vec::new(),
             columns: Vec::new(),
+            scalar: None,
         }
     }
 
@@ -110,7 +115,8 @@ impl EquilibratedLu {
         self.rows.push(row);
         self.columns.clear();
         self.columns.push(column);
-        self.lu.refactor(1, |a| a.as_mut_slice()[0] = scaled);
+        self.lu.refactor_scalar(scaled);
+        self.scalar = (!self.lu.is_singular()).then_some(scaled);
         if !estimate || self.lu.is_singular() {
             return 1.0;
         }
@@ -128,6 +134,7 @@ impl EquilibratedLu {
     /// field step) with their size known at compile time, the same
     /// operations in the same order.
     fn refactor_general(&mut self, s: &[f64], n: usize, x0: &[f64], estimate: bool) -> f64 {
+        self.scalar = None;
         match n {
             4 => self.refactor_sized::<3>(s, n, x0, estimate),
             6 => self.refactor_sized::<5>(s, n, x0, estimate),
@@ -197,17 +204,46 @@ impl EquilibratedLu {
 
     /// `det M`: `det(R M C)` over the scalings' (exact) product.
     fn determinant(&self) -> f64 {
-        let scalings: f64 = self.rows.iter().chain(&self.columns).product();
+        let scalings: f64 = if let ([row], [column]) = (&self.rows[..], &self.columns[..]) {
+            // The 1 × 1 conditions: the product from 1 as `product` forms
+            // it, without its iterator's call.
+            1.0 * row * column
+        } else {
+            self.rows.iter().chain(&self.columns).product()
+        };
+        // The factors' determinant: of regular 1 × 1 factors, the sign's
+        // (1) product with the pivot, as `Lu::determinant` folds it.
+        let factors = match self.scalar {
+            Some(pivot) => 1.0 * pivot,
+            None => self.lu.determinant(),
+        };
         if scalings.is_normal() {
-            self.lu.determinant() / scalings
+            factors / scalings
         } else {
             // Out of range: the sign, which is what the windows use, is
             // still that of det(R M C).
-            self.lu.determinant()
+            factors
         }
     }
 
+    /// [`EquilibratedLu::solve_in_place`] of the 1 × 1 conditions
+    /// (factored by [`EquilibratedLu::refactor_scalar`]): the same
+    /// operations on one number.
+    #[inline(always)]
+    fn solve_scalar(&self, z: &mut f64) {
+        let mut one = [*z];
+        self.solve_in_place(&mut one);
+        *z = one[0];
+    }
+
     fn solve_in_place(&self, z: &mut [f64]) {
+        if let (Some(pivot), [row], [column], [v]) =
+            (self.scalar, &self.rows[..], &self.columns[..], &mut z[..])
+        {
+            // Regular 1 × 1 factors: the loops' three operations.
+            *v = *v * row / pivot * column;
+            return;
+        }
         for (v, r) in z.iter_mut().zip(&self.rows) {
             *v *= r;
         }
@@ -247,13 +283,73 @@ pub fn recover_state_into(f: &[f64], s: &[f64], x0: &[f64], out: &mut Recovered)
 /// [`recover`] into `out`, with the condition estimate only when
 /// `estimate` (else `condition` is 1).
 fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool, out: &mut Recovered) -> bool {
-    // Two degrees of freedom (N = 4) with the size known at compile time
-    // (at every field step): the same operations in the same order.
+    // One and two degrees of freedom (N = 2, 4) with the size known at
+    // compile time (at every field step, and twice at every sample
+    // between steps): the same operations in the same order. For one
+    // degree of freedom the general loops over the 1 × 1 conditions cost
+    // about 600 instructions a call (a tenth of a damped oscillator's
+    // field, h-affine3).
     let n = f.len();
-    if n == 4 && s.len() == n * n && x0.len() == n {
-        return solve_conditions_sized::<4>(f, s, x0, estimate, out);
+    if s.len() == n * n && x0.len() == n {
+        match n {
+            2 => return solve_conditions_one(f, s, x0, estimate, out),
+            4 => return solve_conditions_sized::<4>(f, s, x0, estimate, out),
+            _ => {}
+        }
     }
     solve_conditions_sized::<0>(f, s, x0, estimate, out)
+}
+
+/// [`solve_conditions_sized`] for one degree of freedom (`N = 2`, the
+/// `1 × 1` conditions `m z = r`), written out: the same operations in the
+/// same order (folds from 0 with `max`, a sum of one term from `−0.0`),
+/// without the vectors' resizing and the loops' bounds (the general code
+/// cost about 600 instructions a call at every field step and twice a
+/// sample between steps: a tenth of a damped oscillator's field,
+/// h-affine3).
+#[inline(always)]
+fn solve_conditions_one(
+    f: &[f64],
+    s: &[f64],
+    x0: &[f64],
+    estimate: bool,
+    out: &mut Recovered,
+) -> bool {
+    let (f, s, x0) = (&f[..2], &s[..4], &x0[..2]);
+    let growth = s.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if !growth.is_finite() || f.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    out.growth = growth;
+    if out.state.len() != 2 {
+        out.state.clear();
+        out.state.resize(2, 0.0);
+    }
+    // The right side `r = −(S_12 − S_11 x_20)` and the entry
+    // `m = S_22 − S_21 x_20` (column-major `S`, as the general loops index).
+    let product = s[1] * x0[1];
+    let entry = s[3] - product;
+    let mut z = -(s[2] - s[0] * x0[1]);
+    let terms = 0.0_f64
+        .max(s[3].abs() + product.abs())
+        .max(s[2].abs() + (s[0] * x0[1]).abs());
+    let entries = 0.0_f64.max(entry.abs()).max(z.abs());
+    out.formation = if entries > 0.0 {
+        (terms / entries).max(1.0)
+    } else {
+        f64::INFINITY
+    };
+    let lu = out.lu.get_or_insert_with(EquilibratedLu::empty);
+    let condition = lu.refactor_scalar(entry, estimate);
+    if lu.lu.is_singular() {
+        return false;
+    }
+    out.condition = condition;
+    out.determinant = lu.determinant();
+    lu.solve_scalar(&mut z);
+    out.state[1] = z;
+    out.state[0] = f[0] + std::iter::once(f[1] * z).sum::<f64>();
+    out.state.iter().all(|v| v.is_finite()) && condition.is_finite()
 }
 
 /// [`solve_conditions`] for `N` coefficients (`N = 0`: read at run time,
@@ -362,12 +458,13 @@ impl Recovered {
     /// The first-order change of the recovered state when `(f, S)` change
     /// by `(df, ds)` (same layouts), into `dx`.
     pub fn map_error(&self, f: &[f64], x0: &[f64], df: &[f64], ds: &[f64], dx: &mut [f64]) {
-        // Twice at every field step: two degrees of freedom (N = 4) with
-        // the size known, the same operations in the same order.
-        if f.len() == 4 {
-            self.map_error_sized::<4>(f, x0, df, ds, dx)
-        } else {
-            self.map_error_sized::<0>(f, x0, df, ds, dx)
+        // Twice at every field step: one and two degrees of freedom
+        // (N = 2, 4) with the size known, the same operations in the same
+        // order.
+        match f.len() {
+            2 => self.map_error_sized::<2>(f, x0, df, ds, dx),
+            4 => self.map_error_sized::<4>(f, x0, df, ds, dx),
+            _ => self.map_error_sized::<0>(f, x0, df, ds, dx),
         }
     }
 
@@ -462,7 +559,7 @@ mod tests {
     /// The `1 × 1` conditions' own path factors, scales and estimates as
     /// the general loops do, to the bit: over entries of every magnitude,
     /// zero, subnormal, infinite and NaN.
-    /// The conditions compiled for a size (the solve at N = 4, the
+    /// The conditions compiled for a size (the solve at N = 2 and 4, the
     /// equilibrated factors at N = 4 and 6) are the loops that read the
     /// size at run time, bit for bit: state, condition, determinant,
     /// growth and formation, with and without the estimate.
@@ -473,7 +570,7 @@ mod tests {
             v.extend([r.condition, r.determinant, r.growth, r.formation].map(f64::to_bits));
             v
         };
-        for n in [3, 4, 5, 6] {
+        for n in [2, 3, 4, 5, 6] {
             for case in 0..4 {
                 let f: Vec<f64> = (0..n)
                     .map(|i| 0.5 - 0.37 * i as f64 + case as f64)
@@ -568,6 +665,62 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The conditions of one degree of freedom written out
+    /// (`solve_conditions_one`) are the general loops, bit for bit, on
+    /// entries of every magnitude, zero, subnormal, infinite and NaN:
+    /// whether they succeed, the state, condition, determinant, growth and
+    /// formation, and the error map through their factors.
+    #[test]
+    fn one_degree_of_freedom_is_the_general_loops() {
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            -0.75,
+            3.3e-5,
+            1e200,
+            -1e-200,
+            5e-324,
+            f64::MAX,
+            std::f64::consts::SQRT_2,
+            f64::INFINITY,
+            f64::NAN,
+        ];
+        let bits = |r: &Recovered| {
+            let mut v: Vec<u64> = r.state.iter().map(|x| x.to_bits()).collect();
+            v.extend([r.condition, r.determinant, r.growth, r.formation].map(f64::to_bits));
+            v
+        };
+        let mut fast = Recovered::empty();
+        let mut cases = 0;
+        for (i, &a) in values.iter().enumerate() {
+            for (j, &b) in values.iter().enumerate() {
+                for &(c, d) in &[(0.5, 1.0), (-2.0, 0.0), (1e-300, 7.0), (f64::NAN, 1.0)] {
+                    let s = [1.0 + c, b, a, d];
+                    let f = [values[(i + j) % values.len()], 0.25 - c];
+                    let x0 = [0.3, values[(3 * i + j) % 9]];
+                    for estimate in [true, false] {
+                        let mut slow = Recovered::empty();
+                        let ok = solve_conditions(&f, &s, &x0, estimate, &mut fast);
+                        let ok_slow = solve_conditions_sized::<0>(&f, &s, &x0, estimate, &mut slow);
+                        assert_eq!(ok, ok_slow, "{s:?} {f:?} {x0:?}");
+                        if !ok {
+                            continue;
+                        }
+                        cases += 1;
+                        assert_eq!(bits(&fast), bits(&slow), "{s:?} {f:?} {x0:?}");
+                        let (df, ds) = ([1e-9, -2e-9], [3e-9, -1e-9, 2e-9, 5e-9]);
+                        let (mut dx_fast, mut dx_slow) = ([0.0; 2], [0.0; 2]);
+                        fast.map_error(&f, &x0, &df, &ds, &mut dx_fast);
+                        slow.map_error_sized::<0>(&f, &x0, &df, &ds, &mut dx_slow);
+                        assert_eq!(dx_fast.map(f64::to_bits), dx_slow.map(f64::to_bits));
+                    }
+                }
+            }
+        }
+        assert!(cases > 300, "{cases} cases solved");
     }
 
     /// Storage reused across sizes and values recovers what a fresh solve
