@@ -41,8 +41,9 @@ fn largest_difference(a: &[Vec<f64>], reference: &[Vec<f64>]) -> f64 {
 /// motion quadratic in t: the motion step is exact) that left samples 2
 /// rtol off at rtol 1e-8 where the steps' ends were 0.06 rtol off and
 /// direct DOP853's samples 3e-5 rtol; on a bead in a spinning tube 4 rtol
-/// (direct 1.1). Now the one nearer a DOP853 half step at the middle:
-/// 0.06 and 0.4 rtol. This test fails on the rule before.
+/// (direct 1.1). Now, where the two differ by more than a tenth of a
+/// tolerance, the motion step where it is twice as near a DOP853 half step
+/// at the middle: 0.06 and 0.4 rtol. This test fails on the rule before.
 #[test]
 fn the_affine_fields_samples_follow_the_better_extension() {
     let cases: &[(&str, &str, f64)] = &[
