@@ -208,7 +208,7 @@ fn global_error_line(g: &GlobalErrorEstimate) -> String {
         // The estimate is the state's at the steps' ends; a sample
         // between them is read from a continuous extension, whose own
         // error comes on top: the samples' largest error passed the ends'
-        // by up to 0.9 rtol for the field and 6.7 rtol for direct DOP853's
+        // by up to 3.0 rtol for the field and 6.7 rtol for direct DOP853's
         // order-7 extension (32 models × 4 tolerances at 1001 samples,
         // docs/BENCHMARKS.md §10p), 10–50× the ends' error on short runs.
         // Said here, so that the estimate is not read as the samples'.
