@@ -1,5 +1,6 @@
 //! The one integration-test binary.
 
+mod between_steps;
 mod bit_identity;
 mod cache;
 mod check_build;

@@ -205,9 +205,17 @@ fn global_error_line(g: &GlobalErrorEstimate) -> String {
         );
     }
     if g.largest <= bound {
+        // The estimate is the state's at the steps' ends; a sample
+        // between them is read from a continuous extension, whose own
+        // error comes on top: the samples' largest error passed the ends'
+        // by up to 3.0 rtol for the field and 6.7 rtol for direct DOP853's
+        // order-7 extension (32 models × 4 tolerances at 1001 samples,
+        // docs/BENCHMARKS.md §10p), 10–50× the ends' error on short runs.
+        // Said here, so that the estimate is not read as the samples'.
         format!(
-            "global error: within 10·rtol = {bound:.1e} (estimated {:.1e}{partial}: the \
-             steps' local errors summed)",
+            "global error: within 10·rtol = {bound:.1e} (estimated {:.1e}{partial} at the \
+             steps' ends, their local errors summed; samples between steps add the continuous \
+             extension's error, up to a few rtol)",
             g.largest
         )
     } else {

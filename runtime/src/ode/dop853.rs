@@ -1312,6 +1312,24 @@ fn plain_step_sized<S: System + ?Sized, const N: usize>(
     Ok(())
 }
 
+/// One DOP853 step of length `h` from `(t, y)` into `out`, without error
+/// control: 12 evaluations. The affine field's reference for its output
+/// between steps, a step of half the field step's length, whose own error
+/// is about 1/512 of the whole one's (`field::affine`).
+pub fn one_step<S: System + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+    h: f64,
+    out: &mut [f64],
+) -> Result<(), Failure> {
+    let n = y.len();
+    let mut k = vec![0.0; STAGES * n];
+    let mut stage_state = vec![0.0; n];
+    system.rhs(t, y, &mut k[..n])?;
+    plain_step(system, t, y, h, &mut k, &mut stage_state, out)
+}
+
 /// Two DOP853 steps of length `h/2` from `(t, y)`, into `out`: a
 /// reference for a step of length `h` of another method (the field's),
 /// whose own error is 1/256 of a whole DOP853 step's. 24 evaluations;
