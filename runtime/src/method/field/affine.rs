@@ -269,41 +269,39 @@ impl Solver for AffineField {
                 });
                 let tol = self.options.tol;
                 preferred = match extension {
-                    // The two within a tenth of a tolerance of each other:
-                    // the coefficients' extension, at most that much worse,
-                    // and no half step (with one at every output step the
-                    // paper and the vertical rocket took +4–9 % instructions
-                    // a solve at 101 samples, and event location, which
-                    // reads this output, moved bouncing_ball's events).
-                    Ok(()) if {
+                    Ok(()) => {
                         let difference = &mut self.difference;
                         difference.clear();
                         difference.extend(out.iter().zip(by_step.iter()).map(|(a, b)| a - b));
-                        rms_norm(difference, out, by_step, tol) <= 0.1
-                    } =>
-                    {
-                        false
-                    }
-                    Ok(()) => {
-                        let half = &mut self.half;
-                        half.clear();
-                        half.resize(out.len(), 0.0);
-                        let stepped = one_step(
-                            &ModelSystem(model),
-                            t_old,
-                            window.previous_state(),
-                            t_mid - t_old,
-                            half,
-                        );
-                        let difference = &mut self.difference;
-                        let mut off = |x: &[f64]| {
-                            difference.clear();
-                            difference.extend(x.iter().zip(half.iter()).map(|(a, b)| a - b));
-                            rms_norm(difference, x, half, tol)
-                        };
-                        // A half step that fails or is not finite (into a
-                        // singularity): the coefficients' extension.
-                        stepped.is_ok() && 2.0 * off(by_step) < off(out)
+                        // The two within a tenth of a tolerance of each
+                        // other: the coefficients' extension, at most that
+                        // much worse, and no half step (with one at every
+                        // output step the paper and the vertical rocket took
+                        // +4–9 % instructions a solve at 101 samples, and
+                        // event location, which reads this output, moved
+                        // bouncing_ball's events).
+                        if rms_norm(difference, out, by_step, tol) <= 0.1 {
+                            false
+                        } else {
+                            let half = &mut self.half;
+                            half.clear();
+                            half.resize(out.len(), 0.0);
+                            let stepped = one_step(
+                                &ModelSystem(model),
+                                t_old,
+                                window.previous_state(),
+                                t_mid - t_old,
+                                half,
+                            );
+                            let mut off = |x: &[f64]| {
+                                difference.clear();
+                                difference.extend(x.iter().zip(half.iter()).map(|(a, b)| a - b));
+                                rms_norm(difference, x, half, tol)
+                            };
+                            // A half step that fails or is not finite (into
+                            // a singularity): the coefficients' extension.
+                            stepped.is_ok() && 2.0 * off(by_step) < off(out)
+                        }
                     }
                     Err(_) => true,
                 };

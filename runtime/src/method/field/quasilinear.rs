@@ -996,12 +996,17 @@ impl QuasilinearField {
                     state.extend_from_slice(window.state());
                     states.push(state);
                     // The local error is read by the estimate alone.
-                    errors.push(self.error.is_on().then(|| {
-                        let mut local = vec![0.0; n];
-                        window
-                            .local_error(self.options.tol, &mut local)
-                            .then_some(local)
-                    }).flatten());
+                    errors.push(
+                        self.error
+                            .is_on()
+                            .then(|| {
+                                let mut local = vec![0.0; n];
+                                window
+                                    .local_error(self.options.tol, &mut local)
+                                    .then_some(local)
+                            })
+                            .flatten(),
+                    );
                     kept_at = (t, budget.used());
                 }
                 WindowStep::Ended if window.steps() == 0 => {
