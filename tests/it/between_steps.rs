@@ -4,33 +4,7 @@
 //! ends) does not hold.
 
 use crate::generated::build_file;
-use std::path::Path;
-use std::process::Command;
-
-/// The CSV rows of a run, and its summary (stderr).
-fn run(binary: &Path, args: &[&str]) -> (Vec<Vec<f64>>, String) {
-    let output = Command::new(binary).args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(output.status.success(), "{binary:?} {args:?}:\n{stderr}");
-    let rows = String::from_utf8(output.stdout)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (rows, stderr)
-}
-
-/// The largest difference of two runs' samples over every column,
-/// relative to `max(|reference|, 1)` (the estimate's measure).
-fn largest_difference(a: &[Vec<f64>], reference: &[Vec<f64>]) -> f64 {
-    assert_eq!(a.len(), reference.len());
-    a.iter()
-        .zip(reference)
-        .flat_map(|(r, s)| r[1..].iter().zip(&s[1..]))
-        .map(|(x, y)| (x - y).abs() / y.abs().max(1.0))
-        .fold(0.0, f64::max)
-}
+use crate::rolling_bodies::{relative_error, run};
 
 /// The affine field's samples between its steps, against direct DOP853 at
 /// rtol 1e-13 stepped onto the sample times, in units of rtol. Its output
@@ -80,7 +54,7 @@ fn the_affine_fields_samples_follow_the_better_extension() {
             ]
             .concat(),
         );
-        let error = largest_difference(&field, &reference) / rtol.parse::<f64>().unwrap();
+        let error = relative_error(&field, &reference) / rtol.parse::<f64>().unwrap();
         eprintln!("{name} at rtol {rtol}, 1001 samples: {error:.3} rtol");
         if error > bound {
             problems.push(format!(

@@ -5,7 +5,7 @@
 //! 1e-13, as `scripts/all_columns_error.py` measures it.
 
 use crate::generated::build;
-use crate::rolling_bodies::run;
+use crate::rolling_bodies::{global_error_estimate, relative_error, run};
 
 /// A field run's error against `reference` (relative to `max(|x|, 1)`),
 /// its estimate, and whether its summary warned.
@@ -14,20 +14,8 @@ fn field_run(binary: &std::path::Path, rtol: f64, reference: &[Vec<f64>]) -> (f6
     let args = ["--method", "field", "--rtol", &r, "--atol", &a];
     let rest = ["--samples", "201", "--summary", "json"];
     let (rows, stderr) = run(binary, &[&args[..], &rest[..]].concat());
-    assert_eq!(rows.len(), reference.len());
-    let error = rows
-        .iter()
-        .zip(reference)
-        .flat_map(|(a, b)| {
-            a[1..]
-                .iter()
-                .zip(&b[1..])
-                .map(|(a, b)| (a - b).abs() / b.abs().max(1.0))
-        })
-        .fold(0.0, f64::max);
-    let line = stderr.lines().find(|l| l.starts_with('{')).unwrap();
-    let (_, rest) = line.split_once("\"global_error_estimate\":").unwrap();
-    let estimate: f64 = rest.split([',', '}']).next().unwrap().parse().unwrap();
+    let error = relative_error(&rows, reference);
+    let estimate = global_error_estimate(&stderr);
     (error, estimate, estimate > 10.0 * rtol)
 }
 
