@@ -135,11 +135,7 @@ impl AffineField {
             by_step: Vec::new(),
             difference: Vec::new(),
             half: Vec::new(),
-            error: if global_error {
-                FieldError::new(x0.len(), options_rtol)
-            } else {
-                FieldError::new(x0.len(), options_rtol).off()
-            },
+            error: FieldError::new(x0.len(), options_rtol).made_if(global_error),
             x_old: Vec::new(),
             local: Vec::new(),
         })

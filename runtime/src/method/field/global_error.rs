@@ -222,10 +222,10 @@ impl FieldError {
         }
     }
 
-    /// A run whose global error is not estimated (`Options::global_error`
-    /// off): nothing is measured, kept or carried.
-    pub fn off(mut self) -> FieldError {
-        self.on = false;
+    /// The estimate made only if `on` (`Options::global_error`): off,
+    /// nothing is measured, kept or carried.
+    pub fn made_if(mut self, on: bool) -> FieldError {
+        self.on = on;
         self
     }
 

@@ -337,10 +337,7 @@ impl QuasilinearField {
         // tolerance leaves it well below the tolerance.
         let ratio = (0.1 / options.tol.rtol.sqrt()).clamp(MIN_PREDICTOR_RATIO, MAX_PREDICTOR_RATIO);
         let stiff = options.stiff;
-        let mut error = FieldError::new(x0.len(), options.tol.rtol);
-        if !options.global_error {
-            error = error.off();
-        }
+        let error = FieldError::new(x0.len(), options.tol.rtol).made_if(options.global_error);
         QuasilinearField {
             options,
             h_max,
