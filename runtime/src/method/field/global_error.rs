@@ -827,7 +827,7 @@ impl FieldError {
 
     /// For the summary: the steps added so far (and those waiting,
     /// summed).
-    pub fn estimate(&self) -> GlobalErrorEstimate {
+    fn estimate(&self) -> GlobalErrorEstimate {
         if self.constrained == Some(true) {
             let partial = self.unfed.iter().any(|s| s.local.is_none());
             let complete = self.global.complete() && !partial;
