@@ -19,7 +19,9 @@ LAGC=<path> runs another lagc binary (an older runtime, side by side) and
 OUT=<dir> keeps its reports apart; RUNS=<k> times each run as the smallest
 of k solves (default 3; more on a loaded machine). NO_GLOBAL_ERROR=1 times
 both methods without their global-error estimates (`lagc report
---no-global-error`): the integrators alone.
+--no-global-error`): the integrators alone. TOLERANCES=<list> replaces the
+ladder (e.g. `...,1e-11,3e-12,1e-12` where a model's rungs stop short of
+an error of 1e-9 and the ratio there would be extrapolated).
 
 Writes the reports' CSV and SVG into target/field-vs-direct/, and there
 field-vs-direct.svg: every model's field/direct time at equal error over
@@ -47,7 +49,7 @@ MODELS = [
     "examples/rolling_disk_3d.lag",
     "examples/ball_on_turntable.lag",
 ]
-TOLERANCES = "1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9,1e-10,1e-11"
+TOLERANCES = os.environ.get("TOLERANCES", "1e-3,1e-4,1e-5,1e-6,1e-7,1e-8,1e-9,1e-10,1e-11")
 OUT = os.environ.get("OUT", "target/field-vs-direct")
 LAGC = os.environ.get("LAGC", "target/release/lagc")
 
