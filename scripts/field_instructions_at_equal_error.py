@@ -11,7 +11,10 @@ Per solve = (Ir of `--repeat 21` - Ir of `--repeat 1`) / 20. Error = largest
 rtol 1e-13 (atol = rtol * 1e-2 everywhere); direct's instructions over rtol
 1e-5 ... 1e-12 are interpolated log-log at each field run's error. SAMPLES
 (env, default 11, as `lagc report`) sets the sample count; ARGS (env, e.g.
-`--no-global-error`) is added to every run of both methods. Prints, per rtol
+`--no-global-error`) is added to every run of both methods; REFERENCE (env, a
+CSV of the same samples with a header row, e.g. from
+scripts/ball_on_varying_turntable_reference.py) replaces direct at rtol 1e-13
+where that run is not accurate enough. Prints, per rtol
 (default 1e-6,1e-9) and binary, the field's steps, rejections, windows,
 evaluations, error, instructions, and the ratio to direct at that error.
 (h-rocket, docs/BENCHMARKS.md section 0.)
@@ -57,7 +60,11 @@ def per_solve(binary, method, rtol):
 def main():
     base, new = sys.argv[1], sys.argv[2]
     rtols = [float(x) for x in (sys.argv[3] if len(sys.argv) > 3 else "1e-6,1e-9").split(",")]
-    _, ref = run(base, "direct", 1e-13)
+    if os.environ.get("REFERENCE"):
+        with open(os.environ["REFERENCE"]) as f:
+            ref = [list(map(float, l.split(","))) for l in f.read().split("\n")[1:] if l]
+    else:
+        _, ref = run(base, "direct", 1e-13)
     direct = []
     for r in [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12]:
         _, rows = run(base, "direct", r)
