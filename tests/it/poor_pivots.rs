@@ -14,7 +14,10 @@ fn direct_run(binary: &std::path::Path, rtol: f64, reference: &[Vec<f64>]) -> (f
     let args = ["--method", "direct", "--rtol", &r, "--atol", &a];
     let rest = ["--samples", "201", "--summary", "json"];
     let (rows, stderr) = run(binary, &[&args[..], &rest[..]].concat());
-    (relative_error(&rows, reference), global_error_estimate(&stderr))
+    (
+        relative_error(&rows, reference),
+        global_error_estimate(&stderr),
+    )
 }
 
 #[test]
