@@ -434,12 +434,12 @@ impl Solver for Direct {
             // 11 rtol off saying "within" (0.32): its sum's one
             // calibration measure came at t = 15.8, on a straight run,
             // and scaled the spinning phase's errors 30-fold down; those
-            // errors, measured, sum to 2.6 rtol (steps next to its pivot
-            // switches measured 2–12× Hairer's estimate, up to 1 rtol),
-            // and the motion amplifies them about 4-fold as the spin
-            // decays into a straight run. Carried from its first step
-            // taken again (t = 0.3): 11.0 for its 10.8 at the step ends
-            // (docs/BENCHMARKS.md §10s).
+            // errors, measured, sum to 2.6 rtol (five steps around a
+            // retaken one measured 1.2–12× Hairer's estimate, up to 1
+            // rtol), and the motion amplifies them about 4-fold as the
+            // spin decays into a straight run. Carried from its first
+            // step taken again (t = 0.3): 11.0 rtol, its error at the
+            // samples 11.0 (docs/BENCHMARKS.md §10s).
             self.step_error.past_poor_pivot = true;
         }
         self.restart(model, t, x)
