@@ -26,6 +26,7 @@ mod mass_law_forms;
 mod mechanics;
 mod nonlinear;
 mod parser;
+mod poor_pivots;
 mod python;
 mod readme_program;
 mod report;

@@ -54,9 +54,10 @@
 //! a motion that is not affine, the field's `global_error`), where the
 //! summary warns already, and [`FROM_DIRECT`]`·rtol` for direct integration,
 //! where a motion that shears its errors may still take them past the
-//! bound; below it a run pays nothing. The errors before are not carried
-//! (at most that much, in the sum): the carried error starts at zero
-//! there.
+//! bound, or from its first step into a poor pivot taken again (where
+//! Hairer's estimate is blind: `method::direct`'s `retake`); below it a
+//! run pays nothing. The errors before are not carried (at most that
+//! much, in the sum): the carried error starts at zero there.
 //!
 //! Constraints: in a run that keeps them, the carried error is projected
 //! at every step as the state is ([`Growth::step_kept`]).
