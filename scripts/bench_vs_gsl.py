@@ -35,6 +35,7 @@ time / peer time (< 1: lagc faster).
 
 Usage: python3 scripts/bench_vs_gsl.py [--quick] [--json OUT] [--models a,b]
        [--step-to-times] [--no-global-error] [--samples N] [--baseline LAGC]
+       [--matched]
 --baseline LAGC: another lagc binary (main's) builds the same crates, which
   run as method "lagc-base" alternated with this tree's at every rtol (each
   rtol runs every method in turn), and a second table compares it.
@@ -42,6 +43,11 @@ Usage: python3 scripts/bench_vs_gsl.py [--quick] [--json OUT] [--models a,b]
 --samples 2: the final time only, a step end for every method.
 --no-global-error: lagc without its global-error estimate (the peers
   estimate nothing): DOP853 alone.
+--matched: lagc also runs with `--step-to-times` (method "lagc-stepped",
+  and "lagc-base-stepped" with --baseline), in turn with the others, and a
+  last table sets each peer against lagc sampling as that peer does (issue
+  29): rk8pd and rkf78, which step onto the sample times, against
+  lagc-stepped; dopri5, which interpolates, against lagc.
 """
 
 import json
@@ -76,6 +82,9 @@ STEP_TO_TIMES = False
 NO_GLOBAL_ERROR = False
 # `--baseline LAGC`: the crates built by that lagc too, run as "lagc-base".
 BASELINE = None
+# `--matched`: lagc run both ways, each peer against lagc sampling as it does.
+MATCHED = False
+STEPPING_PEERS = ["rk8pd", "rkf78"]
 LEVELS = [10.0 ** -k for k in range(4, 12)]
 
 
@@ -153,12 +162,13 @@ def parse_csv(text, n):
 def solve(binary, model, method, rtol, atol, repeat):
     """(rows, wall time, rhs evaluations)."""
     n = MODELS[model][1]
-    if method in ("lagc", "lagc-base"):
+    if method.startswith("lagc"):
+        stepped = STEP_TO_TIMES or method.endswith("-stepped")
         cmd = [
             binary, "--method", "direct", "--integrator", "explicit",
             "--rtol", repr(rtol), "--atol", repr(atol), "--samples", str(SAMPLES),
             "--repeat", str(repeat), "--summary", "json",
-        ] + (["--step-to-times"] if STEP_TO_TIMES else []) + (
+        ] + (["--step-to-times"] if stepped else []) + (
             ["--no-global-error"] if NO_GLOBAL_ERROR else [])
     else:
         cmd = [PEERS, model, method, repr(rtol), repr(atol), str(SAMPLES), str(repeat)]
@@ -211,8 +221,9 @@ def cost_at(points, level):
 
 
 def main():
-    global SAMPLES, STEP_TO_TIMES, BASELINE, NO_GLOBAL_ERROR
+    global SAMPLES, STEP_TO_TIMES, BASELINE, NO_GLOBAL_ERROR, MATCHED
     quick = "--quick" in sys.argv
+    MATCHED = "--matched" in sys.argv
     STEP_TO_TIMES = "--step-to-times" in sys.argv
     NO_GLOBAL_ERROR = "--no-global-error" in sys.argv
     out_json = None
@@ -239,14 +250,16 @@ def main():
             reference = ref[0]
             gap = error(model, check[0], reference)
             print(f"{model}: reference GSL rk8pd 1e-14 vs lagc 1e-13: {gap:.1e}", file=sys.stderr)
-        methods = ["lagc"] + (["lagc-base"] if BASELINE else []) + PEER_METHODS
+        own = ["lagc"] + (["lagc-base"] if BASELINE else [])
+        methods = [m for o in own for m in ([o, o + "-stepped"] if MATCHED else [o])]
+        methods += PEER_METHODS
         per_method = {method: [] for method in methods}
         # Every method in turn at each rtol: a drift of the machine's speed
         # reaches all of them alike.
         for rtol in ladder:
             for method in methods:
                 points = per_method[method]
-                binary = binaries["lagc-base" if method == "lagc-base" else "lagc"][model]
+                binary = binaries["lagc-base" if method.startswith("lagc-base") else "lagc"][model]
                 atol = rtol * 1e-2
                 probe = solve(binary, model, method, rtol, atol, 3)
                 if probe is None:
@@ -270,6 +283,9 @@ def main():
     tables = {"lagc": table}
     if BASELINE:
         tables["lagc-base"] = equal_error_table(models, results, "lagc-base")
+    if MATCHED:
+        for own in ["lagc"] + (["lagc-base"] if BASELINE else []):
+            tables[own + "-matched"] = matched_table(models, results, own, own + "-stepped")
     if out_json:
         with open(out_json, "w") as f:
             json.dump({"points": results, "table": table, "tables": tables}, f, indent=1)
@@ -314,6 +330,39 @@ def equal_error_table(models, results, lagc_key):
                 f"{model}: {lagc_key} / best peer at equal error: "
                 f"{min(ratios):.2f} .. {max(ratios):.2f} (worst over {len(ratios)} levels)"
             )
+    return table
+
+
+def matched_table(models, results, interpolating, stepping):
+    """Each peer against lagc sampling as that peer does: rk8pd and rkf78
+    (they step onto the sample times) against `stepping`, dopri5 (dense
+    output) against `interpolating`; per level the worst of the ratios."""
+    print()
+    print(f"{interpolating} matched ({stepping} against rk8pd, rkf78):")
+    print("| model | error | " + " | ".join(f"lagc (µs) | {m} (µs) | ratio" for m in PEER_METHODS) + " | worst |")
+    print("|---|---|" + "---|---|---|" * len(PEER_METHODS) + "---|")
+    table = {}
+    for model in models:
+        curves = {m: [(p["error"], p["time"]) for p in results[model][m]] for m in results[model]}
+        table[model] = []
+        for level in LEVELS:
+            cells, ratios = [], []
+            for m in PEER_METHODS:
+                mine = cost_at(curves[stepping if m in STEPPING_PEERS else interpolating], level)
+                peer = cost_at(curves[m], level)
+                if mine is None or peer is None:
+                    cells.append("– | – | –")
+                    continue
+                ratios.append(mine / peer)
+                cells.append(f"{mine * 1e6:.1f} | {peer * 1e6:.1f} | {mine / peer:.2f}")
+            if ratios:
+                table[model].append({"level": level, "worst": max(ratios)})
+                print(f"| {model} | {level:.0e} | " + " | ".join(cells) + f" | {max(ratios):.2f} |")
+    print()
+    for model in models:
+        worst = [r["worst"] for r in table[model]]
+        if worst:
+            print(f"{model}: {interpolating} matched / best peer: {min(worst):.2f} .. {max(worst):.2f}")
     return table
 
 

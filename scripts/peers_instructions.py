@@ -11,8 +11,14 @@ printing solve cancel. Cost at an error level: each method's lower envelope
 of (error, instructions), interpolated as `bench_vs_gsl.cost_at` does.
 
 Usage: python3 scripts/peers_instructions.py --peers PEERS_BIN
-         --lagc NAME=DIR [--lagc NAME=DIR ...] [--models a,b] [--json OUT]
-         [--from EARLIER.json] [--no-global-error]
+         --lagc NAME=DIR [--lagc NAME=DIR ...] [--stepped NAME=DIR ...]
+         [--models a,b] [--json OUT] [--from EARLIER.json] [--no-global-error]
+--stepped NAME=DIR: lagc's runs with `--step-to-times` (each step cut at the
+  sample times, as rk8pd and rkf78 do through GSL's driver). With both a
+  `--lagc` and a `--stepped` entry, a last table ("matched") sets each peer
+  against lagc in that peer's own way of sampling: rk8pd and rkf78 (they
+  step onto the times) against the stepped entry, dopri5 (dense output)
+  against the interpolating one: issue 29's criterion.
 --no-global-error: lagc's runs without their global-error estimate (as
   bench_vs_gsl.py's flag; the peers estimate nothing).
 --from: the points of every method that file holds are taken from it, not
@@ -43,7 +49,14 @@ REPEATS = {"pendulum_3": (2, 12)}
 DEFAULT_REPEATS = (20, 220)
 
 
-def command(binary, model, method, rtol, repeat):
+# lagc entries run with `--step-to-times` (`--stepped NAME=DIR`).
+STEPPED = set()
+# Peers that step onto the sample times (GSL's driver, odeint's controlled
+# rkf78); dopri5 reads its dense output.
+STEPPING_PEERS = ["rk8pd", "rkf78"]
+
+
+def command(binary, model, method, rtol, repeat, stepped=False):
     atol = rtol * 1e-2
     if method in B.PEER_METHODS:
         return [B.PEERS, model, method, repr(rtol), repr(atol), str(B.SAMPLES), str(repeat)]
@@ -51,7 +64,8 @@ def command(binary, model, method, rtol, repeat):
         binary, "--method", "direct", "--integrator", "explicit", "--rtol", repr(rtol),
         "--atol", repr(atol), "--samples", str(B.SAMPLES), "--repeat", str(repeat),
         "--quiet",
-    ] + (["--no-global-error"] if B.NO_GLOBAL_ERROR else [])
+    ] + (["--no-global-error"] if B.NO_GLOBAL_ERROR else []) + (
+        ["--step-to-times"] if stepped else [])
 
 
 def instructions(cmd):
@@ -73,9 +87,11 @@ def main():
     for i, a in enumerate(args):
         if a == "--peers":
             B.PEERS = os.path.abspath(args[i + 1])
-        if a == "--lagc":
+        if a in ("--lagc", "--stepped"):
             name, d = args[i + 1].split("=", 1)
             compilers.append((name, os.path.abspath(d)))
+            if a == "--stepped":
+                STEPPED.add(name)
         if a == "--models":
             models = args[i + 1].split(",")
         if a == "--json":
@@ -102,12 +118,15 @@ def main():
                     continue
                 binary = lagc_bin.get(method, first)
                 kind = method if method in B.PEER_METHODS else "lagc"
+                stepped = method in STEPPED
+                B.STEP_TO_TIMES = stepped
                 got = B.solve(binary, model, kind, rtol, rtol * 1e-2, 1)
+                B.STEP_TO_TIMES = False
                 if got is None:
                     continue
                 err = B.error(model, got[0], reference)
-                i1 = instructions(command(binary, model, kind, rtol, r1))
-                i2 = instructions(command(binary, model, kind, rtol, r2))
+                i1 = instructions(command(binary, model, kind, rtol, r1, stepped))
+                i2 = instructions(command(binary, model, kind, rtol, r2, stepped))
                 if i1 is None or i2 is None:
                     continue
                 per_solve = (i2 - i1) / (r2 - r1)
@@ -123,6 +142,10 @@ def main():
     tables = {}
     for name, _ in compilers:
         tables[name] = table(models, results, name)
+    interpolating = [n for n, _ in compilers if n not in STEPPED]
+    stepping = [n for n, _ in compilers if n in STEPPED]
+    if interpolating and stepping:
+        tables["matched"] = matched(models, results, interpolating[0], stepping[0])
     if out_json:
         with open(out_json, "w") as f:
             json.dump({"points": results, "tables": tables}, f, indent=1)
@@ -150,6 +173,37 @@ def table(models, results, key):
         r = [row["best_ratio"] for row in rows[model]]
         if r:
             print(f"{model}: {key} / best peer (instructions): {min(r):.2f} .. {max(r):.2f}")
+    return rows
+
+
+def matched(models, results, interpolating, stepping):
+    """Each peer against lagc sampling as that peer does (issue 29): the
+    stepping peers against `stepping`, dopri5 against `interpolating`."""
+    print(f"\nmatched: {stepping} against rk8pd, rkf78; {interpolating} against dopri5")
+    print("| model | error | " + " | ".join(f"lagc | {m} | ratio" for m in B.PEER_METHODS) + " | worst |")
+    print("|---|---|" + "---|---|---|" * len(B.PEER_METHODS) + "---|")
+    rows = {}
+    for model in models:
+        curves = {m: [(p["error"], p["instructions"]) for p in results[model][m]] for m in results[model]}
+        rows[model] = []
+        for level in B.LEVELS:
+            cells, ratios = [], []
+            for m in B.PEER_METHODS:
+                mine = B.cost_at(curves[stepping if m in STEPPING_PEERS else interpolating], level)
+                peer = B.cost_at(curves[m], level)
+                if mine is None or peer is None:
+                    cells.append("– | – | –")
+                    continue
+                ratios.append(mine / peer)
+                cells.append(f"{mine:,.0f} | {peer:,.0f} | {mine / peer:.2f}")
+            if not ratios:
+                continue
+            rows[model].append({"level": level, "best_ratio": max(ratios)})
+            print(f"| {model} | {level:.0e} | " + " | ".join(cells) + f" | {max(ratios):.2f} |")
+    for model in models:
+        r = [row["best_ratio"] for row in rows[model]]
+        if r:
+            print(f"{model}: matched lagc / best peer (instructions): {min(r):.2f} .. {max(r):.2f}")
     return rows
 
 

@@ -724,13 +724,15 @@ impl<'m> Integration<'m> {
         let regime = &mut self.regime;
         let n = self.x.len();
         // Where the solution stands: after the last step, or where an
-        // event restarted it.
-        budget.accepted_to(solver.time());
-        let mut t_limit = pace.limit(solver.time(), self.end);
+        // event restarted it. Read once (each read is two dynamic calls:
+        // the solver's and its stepper's; BENCHMARKS §10r).
+        let t_now = solver.time();
+        budget.accepted_to(t_now);
+        let mut t_limit = pace.limit(t_now, self.end);
         if let Some(t) = pivot_limit.take() {
             t_limit = t_limit.min(t);
         }
-        if self.options.step_to_times && self.target > solver.time() {
+        if self.options.step_to_times && self.target > t_now {
             t_limit = t_limit.min(self.target);
         }
         if let Err(mut failure) = solver.advance(model, t_limit, budget) {
@@ -751,8 +753,8 @@ impl<'m> Integration<'m> {
             }
             return Err(watch.diagnose(model, failure, solver.time(), &x));
         }
-        self.progress.update(solver.time());
         let (ta, tb) = (solver.previous_time(), solver.time());
+        self.progress.update(tb);
         if let Some(keeper) = self.keeper.as_mut() {
             let mut keeping = Kept {
                 keeper,

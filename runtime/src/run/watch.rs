@@ -55,6 +55,9 @@ impl ConstraintWatch {
     /// After an accepted step `[ta, tb]`: the failure where a constraint's
     /// branch ended within it (the first time the solver's dense output
     /// shows it, to rounding of the time), if one did.
+    // Inlined, the test for a model without domains (most): a call a step
+    // saved (BENCHMARKS §10r).
+    #[inline]
     pub fn step(
         &self,
         model: &dyn DynModel,
@@ -65,6 +68,16 @@ impl ConstraintWatch {
         if model.domains().is_empty() {
             return Ok(None);
         }
+        Self::step_in_domains(model, solver, ta, tb)
+    }
+
+    #[inline(never)]
+    fn step_in_domains(
+        model: &dyn DynModel,
+        solver: &mut dyn Solver,
+        ta: f64,
+        tb: f64,
+    ) -> Result<Option<Failure>, Failure> {
         let mut x = solver.state().to_vec();
         if tb != solver.time() {
             solver.dense(model, tb, &mut x)?;
