@@ -371,6 +371,42 @@ impl Lu {
     }
 
     /// Solves `A x = b` in place; `false` when `A` is singular.
+    /// [`Lu::solve_in_place`] of every column of `b` (`self.dim()`
+    /// numbers each, one after another): the same operations on each,
+    /// the size matched once rather than at every column (a mass-matrix
+    /// model's implicit Jacobian, six columns at every linearisation).
+    /// `false` when `A` is singular (`b` unchanged).
+    pub fn solve_columns_in_place(&self, b: &mut [f64]) -> bool {
+        let n = self.dim();
+        if self.singular || n == 0 || b.len() % n != 0 {
+            // Nothing to solve for, or not whole columns: untouched.
+            return n == 0 && !self.singular;
+        }
+        let (f, pivots) = (&self.factors.data, &self.pivots);
+        match n {
+            1 => b.iter_mut().for_each(|v| *v /= f[0]),
+            2 => b
+                .chunks_exact_mut(2)
+                .for_each(|c| lu_solve_sized::<2>(f, n, pivots, c)),
+            3 => b
+                .chunks_exact_mut(3)
+                .for_each(|c| lu_solve_sized::<3>(f, n, pivots, c)),
+            4 => b
+                .chunks_exact_mut(4)
+                .for_each(|c| lu_solve_sized::<4>(f, n, pivots, c)),
+            5 => b
+                .chunks_exact_mut(5)
+                .for_each(|c| lu_solve_sized::<5>(f, n, pivots, c)),
+            6 => b
+                .chunks_exact_mut(6)
+                .for_each(|c| lu_solve_sized::<6>(f, n, pivots, c)),
+            _ => b
+                .chunks_exact_mut(n)
+                .for_each(|c| lu_solve_sized::<0>(f, n, pivots, c)),
+        }
+        true
+    }
+
     pub fn solve_in_place(&self, b: &mut [f64]) -> bool {
         if self.singular {
             return false;
