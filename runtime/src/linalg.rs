@@ -378,7 +378,7 @@ impl Lu {
     /// `false` when `A` is singular (`b` unchanged).
     pub fn solve_columns_in_place(&self, b: &mut [f64]) -> bool {
         let n = self.dim();
-        if self.singular || n == 0 || b.len() % n != 0 {
+        if self.singular || n == 0 || !b.len().is_multiple_of(n) {
             // Nothing to solve for, or not whole columns: untouched.
             return n == 0 && !self.singular;
         }
