@@ -294,6 +294,8 @@ fn solve_conditions(f: &[f64], s: &[f64], x0: &[f64], estimate: bool, out: &mut 
         match n {
             2 => return solve_conditions_one(f, s, x0, estimate, out),
             4 => return solve_conditions_sized::<4>(f, s, x0, estimate, out),
+            // Three degrees of freedom (knife_edge, a triple pendulum).
+            6 => return solve_conditions_sized::<6>(f, s, x0, estimate, out),
             _ => {}
         }
     }
@@ -458,12 +460,13 @@ impl Recovered {
     /// The first-order change of the recovered state when `(f, S)` change
     /// by `(df, ds)` (same layouts), into `dx`.
     pub fn map_error(&self, f: &[f64], x0: &[f64], df: &[f64], ds: &[f64], dx: &mut [f64]) {
-        // Twice at every field step: one and two degrees of freedom
-        // (N = 2, 4) with the size known, the same operations in the same
+        // Twice at every field step: one, two and three degrees of
+        // freedom (N = 2, 4, 6) with the size known, the same operations in the same
         // order.
         match f.len() {
             2 => self.map_error_sized::<2>(f, x0, df, ds, dx),
             4 => self.map_error_sized::<4>(f, x0, df, ds, dx),
+            6 => self.map_error_sized::<6>(f, x0, df, ds, dx),
             _ => self.map_error_sized::<0>(f, x0, df, ds, dx),
         }
     }
