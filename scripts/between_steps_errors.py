@@ -29,7 +29,8 @@ PATCH = PATCH_AT + ('        // MEASUREMENT ONLY: the step ends.\n        {\n'
 
 
 def model_file(name):
-    for p in (f'examples/{name}.lag', f'tests/data/{name}.lag'):
+    for p in (f'examples/{name}.lag', f'tests/data/{name}.lag', f'benches/data/{name}.lag',
+              f'tests/data/mass_law_forms/{name}.lag'):
         if os.path.exists(os.path.join(ROOT, p)):
             return os.path.join(ROOT, p)
     raise SystemExit(f'no model {name}')

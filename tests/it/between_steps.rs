@@ -90,3 +90,61 @@ fn the_summary_says_its_estimate_is_at_the_steps_ends() {
         );
     }
 }
+
+/// The quasilinear field's samples between its steps, against direct
+/// DOP853 at rtol 1e-13 stepped onto the sample times, in units of rtol.
+/// Its output between steps is one DOP853 step of the motion linearised
+/// along the window's predictor, pinned to the two recovered states; a
+/// field step is as long as the smooth coefficients allow, and that one
+/// step's order-7 extension was up to 0.65 rtol off on
+/// raindrop_of_distance (its steps' ends 0.002–0.007) and 9 rtol on the
+/// gravity-turn rocket at rtol 1e-8 (its altitude near the ground, ends
+/// 0.13). Now each piece is halved while its middle stands more than a
+/// tenth of a tolerance off a DOP853 half step: 0.15–0.16 and 0.58 rtol.
+/// This test fails on the extension before (h-gturn2).
+#[test]
+fn the_quasilinear_fields_samples_are_halved_where_their_middle_is_off() {
+    let cases: &[(&str, &str, f64)] = &[
+        ("examples/raindrop_of_distance.lag", "1e-8", 0.3),
+        ("examples/raindrop_of_distance.lag", "1e-10", 0.3),
+        ("benches/data/rocket_planar_gravity_turn.lag", "1e-8", 2.0),
+    ];
+    let mut problems = Vec::new();
+    for &(path, rtol, bound) in cases {
+        let binary = build_file(&crate::root().join(path));
+        let samples = ["--samples", "1001"];
+        let (reference, _) = run(
+            &binary,
+            &[
+                &[
+                    "--method",
+                    "direct",
+                    "--rtol",
+                    "1e-13",
+                    "--atol",
+                    "1e-15",
+                    "--step-to-times",
+                ],
+                &samples[..],
+            ]
+            .concat(),
+        );
+        let atol = format!("{:e}", rtol.parse::<f64>().unwrap() / 100.0);
+        let (field, _) = run(
+            &binary,
+            &[
+                &["--method", "field", "--rtol", rtol, "--atol", &atol],
+                &samples[..],
+            ]
+            .concat(),
+        );
+        let error = relative_error(&field, &reference) / rtol.parse::<f64>().unwrap();
+        eprintln!("{path} at rtol {rtol}, 1001 samples: {error:.3} rtol");
+        if error > bound {
+            problems.push(format!(
+                "{path} at rtol {rtol}: samples {error:.3} rtol off, more than {bound}"
+            ));
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
