@@ -251,6 +251,38 @@ fn direct_integration_does_not_count_an_error_across_a_holonomic_constraint() {
     );
 }
 
+#[test]
+fn errors_a_holonomic_projection_moves_between_components_are_estimated() {
+    // The bead on a helix: z is integrated exactly, but keeping x and y
+    // on the wire hands z part of their truncation errors, a phase error
+    // the turning makes 500x larger, relative to their size, in x' and
+    // y' near their zeros. Direct integration summed its relative local
+    // errors and said "within" at rtol 1e-9 ... 1e-11 where it ended
+    // 11-30 rtol off; it carries a holonomic model's errors from its
+    // first step now. Every run past the bound is warned, its estimate
+    // at least half its error; no estimate is more than 10x the error
+    // (or rtol).
+    let binary = build("bead_on_helix");
+    for rtol in [1e-8, 1e-9, 1e-10, 1e-11] {
+        for method in METHODS {
+            let (error, estimate, warned) = estimate_at(&binary, method, rtol);
+            let said = format!(
+                "{method} rtol {rtol:e}: error {:.1} rtol, estimate {:.1} rtol, warned {warned}",
+                error / rtol,
+                estimate / rtol
+            );
+            assert!(
+                error <= 10.0 * rtol || (warned && estimate >= 0.5 * error),
+                "{said}"
+            );
+            assert!(estimate <= 10.0 * error.max(rtol), "{said}");
+        }
+    }
+    // The case itself: direct at rtol 1e-10 is past the bound.
+    let (error, _, warned) = estimate_at(&binary, "direct", 1e-10);
+    assert!(error > 1e-9 && warned, "error {error:e}");
+}
+
 /// The run of `binary` by `method` at `rtol` (atol rtol/100, 101
 /// samples): its error against the exact solution, its global error
 /// estimate, and whether it warned.

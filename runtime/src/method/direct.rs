@@ -82,9 +82,17 @@ struct StepError {
     /// from there every step's error is measured and carried, and not
     /// capped at Hairer's estimate (see `retake`).
     past_poor_pivot: bool,
+    /// The model keeps holonomic constraints: every step's error is
+    /// measured and carried from the first step ([`carries`]).
+    from_first_step: bool,
 }
 
 impl StepError {
+    /// Whether the errors are carried before the calibrated sum says so.
+    fn carried_early(&self) -> bool {
+        self.past_poor_pivot || self.from_first_step
+    }
+
     fn scale(&mut self, ratio: f64) {
         self.estimated.iter_mut().for_each(|v| *v *= ratio);
         if let Some(measured) = self.measured.as_mut() {
@@ -107,7 +115,7 @@ impl StepError {
         }
         let propagate = growth
             .as_ref()
-            .is_some_and(|(g, _)| carries(global, rtol, g, self.past_poor_pivot));
+            .is_some_and(|(g, _)| carries(global, rtol, g, self.carried_early()));
         let (estimated, added) = self.sum_into(global);
         // Past the bound every step's error is measured (see
         // `carry_global_error`) and carried along the motion with its
@@ -186,13 +194,26 @@ fn first_integrator(choice: IntegratorChoice) -> Integrator {
 }
 
 /// Whether a step's error is measured and carried along the motion: from
-/// where the calibrated sum passes [`FROM_DIRECT`]`·rtol` on, or from the
-/// first step into a poor pivot taken again (`past_poor_pivot`,
-/// [`Solver::retake`]); once started, every step is, until the carried
+/// where the calibrated sum passes [`FROM_DIRECT`]`·rtol` on, or (`early`)
+/// from the first step into a poor pivot taken again (`past_poor_pivot`,
+/// [`Solver::retake`]) or from the first step of a model that keeps
+/// holonomic constraints; once started, every step is, until the carried
 /// error passes the state's own size ([`Growth::saturated`]: nothing more
 /// is learned there).
-fn carries(global: &GlobalError, rtol: f64, growth: &Growth, past_poor_pivot: bool) -> bool {
-    (growth.started() || past_poor_pivot || past(global, rtol, FROM_DIRECT)) && !growth.saturated()
+///
+/// Why holonomic constraints from the first step: the projection onto
+/// them moves an error between components of different sizes, which the
+/// sum of relative local errors does not see. A bead sliding down a
+/// helix `x = R cos(z/p), y = R sin(z/p)` (R = 0.5, p = 0.2, 5 s): the
+/// height z is integrated exactly (z'' is constant) but the projection
+/// hands it part of x's and y's truncation errors, a phase error
+/// 1e-12 of z's size that the rotation turns into errors of the
+/// velocities x', y' 500× larger relative to theirs near a zero: at rtol
+/// 1e-9 … 1e-11 it ended 11–30 rtol off saying "within", the sum 10–20×
+/// low; carried from the first step, 1.2–4× its error, warned
+/// (docs/BENCHMARKS.md §10u).
+fn carries(global: &GlobalError, rtol: f64, growth: &Growth, early: bool) -> bool {
+    (growth.started() || early || past(global, rtol, FROM_DIRECT)) && !growth.saturated()
 }
 
 impl Direct {
@@ -225,6 +246,7 @@ impl Direct {
             global_before_step: GlobalError::new(),
             step_error: StepError {
                 estimated: vec![0.0; x0.len()],
+                from_first_step: model.keeps_positions(),
                 ..StepError::default()
             },
             // The reduced system of a constrained model drifts off its
@@ -308,6 +330,7 @@ impl Direct {
         estimated.resize(n, 0.0);
         *step_error = StepError {
             estimated,
+            from_first_step: model.keeps_positions(),
             ..StepError::default()
         };
         growth.renew(n);
@@ -608,7 +631,7 @@ impl Direct {
             global.skip();
             return;
         };
-        let carried = carries(global, rtol, &self.growth, e.past_poor_pivot);
+        let carried = carries(global, rtol, &self.growth, e.carried_early());
         e.calibrates = global.wants_measure(rtol);
         if !(carried || e.calibrates) {
             // A step whose error is only summed (most steps of most
