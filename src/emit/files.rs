@@ -225,6 +225,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/run/regime.rs"),
     ),
     (
+        "src/run/saltation.rs",
+        include_str!("../../runtime/src/run/saltation.rs"),
+    ),
+    (
         "src/run/sensitivity.rs",
         include_str!("../../runtime/src/run/sensitivity.rs"),
     ),

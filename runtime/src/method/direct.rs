@@ -82,8 +82,9 @@ struct StepError {
     /// from there every step's error is measured and carried, and not
     /// capped at Hairer's estimate (see `retake`).
     past_poor_pivot: bool,
-    /// The model keeps holonomic constraints: every step's error is
-    /// measured and carried from the first step ([`carries`]).
+    /// The model keeps holonomic constraints or has impacts: every step's
+    /// error is measured and carried from the first step
+    /// ([`carried_from_first_step`]).
     from_first_step: bool,
 }
 
@@ -197,7 +198,8 @@ fn first_integrator(choice: IntegratorChoice) -> Integrator {
 /// where the calibrated sum passes [`FROM_DIRECT`]`·rtol` on, or (`early`)
 /// from the first step into a poor pivot taken again (`past_poor_pivot`,
 /// [`Solver::retake`]) or from the first step of a model that keeps
-/// holonomic constraints; once started, every step is, until the carried
+/// holonomic constraints or has impacts ([`carried_from_first_step`]);
+/// once started, every step is, until the carried
 /// error passes the state's own size ([`Growth::saturated`]: nothing more
 /// is learned there).
 ///
@@ -214,6 +216,20 @@ fn first_integrator(choice: IntegratorChoice) -> Integrator {
 /// (docs/BENCHMARKS.md §10u).
 fn carries(global: &GlobalError, rtol: f64, growth: &Growth, early: bool) -> bool {
     (growth.started() || early || past(global, rtol, FROM_DIRECT)) && !growth.saturated()
+}
+
+/// Whether a model's errors are carried from the first step: where its
+/// holonomic constraints' projection, or its impacts' resets, move an
+/// error between components of different sizes ([`carries`]). An impact
+/// turns a height error into a time error and that into a velocity
+/// error, 1/v larger as the bounces shrink (`run::saltation`): a ball
+/// with quadratic drag bouncing 120 times (e = 0.8) ended 34 rtol off at
+/// rtol 1e-8 and 27 at 1e-9 saying "within" (6.5, 5.3): carried from the
+/// first step and through each bounce, 1.2× and 0.76× its error, warned;
+/// carried from the first step without the bounces' saltation, still
+/// "within".
+fn carried_from_first_step(model: &dyn DynModel) -> bool {
+    model.keeps_positions() || !model.impacts().is_empty()
 }
 
 impl Direct {
@@ -246,7 +262,7 @@ impl Direct {
             global_before_step: GlobalError::new(),
             step_error: StepError {
                 estimated: vec![0.0; x0.len()],
-                from_first_step: model.keeps_positions(),
+                from_first_step: carried_from_first_step(model),
                 ..StepError::default()
             },
             // The reduced system of a constrained model drifts off its
@@ -330,7 +346,7 @@ impl Direct {
         estimated.resize(n, 0.0);
         *step_error = StepError {
             estimated,
-            from_first_step: model.keeps_positions(),
+            from_first_step: carried_from_first_step(model),
             ..StepError::default()
         };
         growth.renew(n);
@@ -482,6 +498,15 @@ impl Solver for Direct {
             None,
         );
         self.growth.cut(&ModelSystem(model), t, x);
+    }
+
+    fn carry_error_through_event(
+        &mut self,
+        jump: &mut dyn FnMut(&mut [f64]) -> Result<(), Failure>,
+    ) {
+        if self.estimates {
+            self.growth.jump(jump);
+        }
     }
 
     fn segments(

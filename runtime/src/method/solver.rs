@@ -115,6 +115,16 @@ pub trait Solver {
     /// changes: the advance's motion ends there (a method carrying its
     /// errors along the motion propagates them to `t` only).
     fn cut(&mut self, _model: &dyn DynModel, _t: f64, _x: &[f64]) {}
+    /// After [`Solver::cut`] at an event and before the restart: the
+    /// error a method carries along the motion, if any, changed by `jump`
+    /// (the event time's saltation and an impact's reset,
+    /// `run::saltation`). A `jump` that fails leaves it as it was: the
+    /// estimate never fails a run.
+    fn carry_error_through_event(
+        &mut self,
+        _jump: &mut dyn FnMut(&mut [f64]) -> Result<(), Failure>,
+    ) {
+    }
     /// Starts afresh from `(t, x)` (after an event changed the regime).
     fn restart(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure>;
     /// Starts again from `(t, x)`, the start of the last advance, whose

@@ -988,6 +988,14 @@ impl<'m> Integration<'m> {
                         branches: before,
                     };
                     model.event_jump(&before, &switches, t_event, &x_before, x_event)?;
+                    // The error carried along the motion, through the
+                    // event's time and the impact's reset.
+                    let model = &*model;
+                    s.solver.carry_error_through_event(&mut |e| {
+                        crate::run::saltation::through_event(
+                            model, &before, &switches, t_event, &x_before, x_event, e,
+                        )
+                    });
                 }
                 if let Some(ending) = ending {
                     self.t = t_event;

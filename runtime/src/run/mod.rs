@@ -26,6 +26,7 @@ pub mod keep;
 pub mod options;
 pub mod progress;
 pub mod regime;
+pub mod saltation;
 pub mod sensitivity;
 pub mod solution;
 pub mod start;

@@ -35,9 +35,10 @@
 //! it as the motion kept: an event cuts it at its time ([`Growth::cut`],
 //! in the old regime), and the error of the state the run restarts from
 //! (read from the step's continuous extension, of order 7) is measured
-//! there. The error is carried through the event; a jump of the state (an
-//! impact's reset) and the saltation of the event's time are not
-//! accounted for.
+//! there. The error is then carried through the event by the saltation
+//! of its time and the impact's reset ([`Growth::jump`],
+//! `run::saltation`: direct integration; the field's carried error goes
+//! through unchanged).
 //!
 //! Cost: 12 evaluations a step where the step is one DOP853 took from
 //! its start to its end (direct integration's, not cut by an event): the
@@ -398,6 +399,19 @@ impl Growth {
 
     /// The pending step is not the motion (taken again from its start,
     /// `Solver::retake`): it is neither propagated over nor added.
+    /// The carried error changed by `jump` at an event (after
+    /// [`Growth::cut`], nothing pending), where one is carried: `jump`
+    /// failing leaves it as it was.
+    pub fn jump(&mut self, jump: &mut dyn FnMut(&mut [f64]) -> Result<(), Failure>) {
+        if !self.started || self.saturated() || self.pending.is_some() {
+            return;
+        }
+        let mut e = self.e.clone();
+        if jump(&mut e).is_ok() && e.iter().all(|v| v.is_finite()) {
+            self.e = e;
+        }
+    }
+
     pub fn discard_pending(&mut self) {
         self.pending = None;
     }
