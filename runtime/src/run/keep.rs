@@ -345,6 +345,14 @@ impl Keeper {
             self.mode = Some(mode);
         }
         if one::applies(self, model) {
+            // Most steps end on the constraint (the paper and the knife
+            // edge project after none of their steps): their measure
+            // alone, without the projection's copies and frame.
+            if bounded {
+                if let Some(relative) = self.settled_one(model, t, x) {
+                    return Ok(relative);
+                }
+            }
             return self.project_one(model, t, x, judged, bounded);
         }
         self.project_general(model, t, x, judged, bounded)
