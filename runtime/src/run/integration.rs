@@ -137,7 +137,7 @@ enum Then {
     /// An ordinary step: keep the constraints, change candidates.
     Step,
     /// A constraint's branch ended within the step: the run stops.
-    Fail(Failure),
+    Fail(Box<Failure>),
 }
 
 /// A step whose first half is done: its continuous extension is the
@@ -873,7 +873,7 @@ impl<'m> Integration<'m> {
                     tb,
                     diagnose: false,
                     then: match ended {
-                        Some(failure) => Then::Fail(failure),
+                        Some(failure) => Then::Fail(Box::new(failure)),
                         None => Then::Event {
                             t_from,
                             t_event,
@@ -911,7 +911,7 @@ impl<'m> Integration<'m> {
                     tb,
                     diagnose: true,
                     then: match ended {
-                        Some(failure) => Then::Fail(failure),
+                        Some(failure) => Then::Fail(Box::new(failure)),
                         None => Then::Step,
                     },
                 }
@@ -929,7 +929,7 @@ impl<'m> Integration<'m> {
         let s = self.stepping.as_mut().expect("a run that steps");
         let regime = &mut self.regime;
         match pending.then {
-            Then::Fail(failure) => Err(failure),
+            Then::Fail(failure) => Err(*failure),
             Then::Event {
                 t_from,
                 t_event,
