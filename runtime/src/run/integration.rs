@@ -137,7 +137,7 @@ enum Then {
     /// An ordinary step: keep the constraints, change candidates.
     Step,
     /// A constraint's branch ended within the step: the run stops.
-    Fail(Failure),
+    Fail(Box<Failure>),
 }
 
 /// A step whose first half is done: its continuous extension is the
@@ -873,7 +873,7 @@ impl<'m> Integration<'m> {
                     tb,
                     diagnose: false,
                     then: match ended {
-                        Some(failure) => Then::Fail(failure),
+                        Some(failure) => Then::Fail(Box::new(failure)),
                         None => Then::Event {
                             t_from,
                             t_event,
@@ -911,7 +911,7 @@ impl<'m> Integration<'m> {
                     tb,
                     diagnose: true,
                     then: match ended {
-                        Some(failure) => Then::Fail(failure),
+                        Some(failure) => Then::Fail(Box::new(failure)),
                         None => Then::Step,
                     },
                 }
@@ -929,7 +929,7 @@ impl<'m> Integration<'m> {
         let s = self.stepping.as_mut().expect("a run that steps");
         let regime = &mut self.regime;
         match pending.then {
-            Then::Fail(failure) => Err(failure),
+            Then::Fail(failure) => Err(*failure),
             Then::Event {
                 t_from,
                 t_event,
@@ -1022,28 +1022,20 @@ impl<'m> Integration<'m> {
             Then::Step => {
                 let tb = pending.tb;
                 let solver = &mut s.solver;
-                let mut kept = Ok(());
                 if let Some(keeper) = self.keeper.as_mut() {
                     // A state off its constraint near a pole or an end
                     // of one is named after it. The state is read in
                     // place (a copy a step was most of a constrained
                     // run's allocations, docs/BENCHMARKS.md §10h).
-                    kept = match keeper.after_step(model, regime.mode, tb, solver.state()) {
-                        Ok(Some(x)) => solver.project(model, tb, x),
+                    let kept = match keeper.after_step(model, regime.mode, tb, solver.state()) {
                         Ok(None) => Ok(()),
+                        Ok(Some(x)) => solver.project(model, tb, x),
                         Err(f) => Err(f),
                     };
-                }
-                if let Err(failure) = kept {
-                    // A state that cannot be kept on the constraints near
-                    // a singular configuration is named as that, else
-                    // after a pole or an end of a constraint near it.
-                    let x = solver.state().to_vec();
-                    let failure = near_singular_configuration(model, failure, &x, &self.volumes);
-                    if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
-                        return Err(failure);
+                    if let Err(failure) = kept {
+                        let (solver, watch) = (&**solver, &s.watch);
+                        return Err(not_kept(model, solver, watch, &self.volumes, failure, tb));
                     }
-                    return Err(s.watch.diagnose(model, failure, tb, &x));
                 }
                 if !model.constraints().is_empty() {
                     switch_candidates(model, regime, solver.as_mut(), tb, &self.volumes)?;
@@ -1066,6 +1058,28 @@ impl Integration<'static> {
     ) -> Integration<'static> {
         Integration::with(Held::Owned(model), options, t0, end, x0, Spare::default())
     }
+}
+
+/// A state after a step at `tb` that could not be kept on the constraints:
+/// named as a singular configuration where it is near one, else after a
+/// pole or an end of a constraint near it. Out of line and cold: the
+/// step's second half stays small (it runs at every step).
+#[cold]
+#[inline(never)]
+fn not_kept(
+    model: &dyn DynModel,
+    solver: &dyn Solver,
+    watch: &ConstraintWatch,
+    volumes: &[f64],
+    failure: Failure,
+    tb: f64,
+) -> Failure {
+    let x = solver.state().to_vec();
+    let failure = near_singular_configuration(model, failure, &x, volumes);
+    if matches!(failure.kind, FailureKind::SingularConfiguration { .. }) {
+        return failure;
+    }
+    watch.diagnose(model, failure, tb, &x)
 }
 
 /// The work of two solvers in one run (before and after a restart).

@@ -161,6 +161,19 @@ impl Keeper {
         t: f64,
         x: &[f64],
     ) -> Result<Option<&[f64]>, Failure> {
+        // Most steps end on the constraint (the paper and the knife edge
+        // project after none of their steps): with one constraint, its
+        // measure alone first, without the projection's copies and frame
+        // (the measure `project_from` starts with, the same distance
+        // recorded). Past `PROJECT_ABOVE`, `project_from` measures again
+        // and projects.
+        if self.mode == Some(mode) && one::applies(self, model) {
+            if let Some(relative) = self.settled_one(model, t, x) {
+                if relative <= PROJECT_ABOVE {
+                    return Ok(None);
+                }
+            }
+        }
         if self.project_from(model, mode, t, x, true, true)? > PROJECT_ABOVE {
             self.projections += 1;
             Ok(Some(self.projected()))

@@ -25,8 +25,87 @@ pub(super) fn applies(keeper: &Keeper, model: &dyn DynModel) -> bool {
 
 impl Keeper {
     /// [`Keeper::project_from`] when [`applies`]: the same result, distance
-    /// recorded and failures.
+    /// recorded and failures. Compiled for two and three velocities (the
+    /// paper's, the knife edge's) as DOP853's step is for small states: the
+    /// loops over the velocities unrolled, their bounds checks gone (the
+    /// same operations in the same order at every size, so the same bits).
     pub(super) fn project_one(
+        &mut self,
+        model: &dyn DynModel,
+        t: f64,
+        x: &[f64],
+        judged: bool,
+        bounded: bool,
+    ) -> Result<f64, Failure> {
+        match self.velocities.len() {
+            2 => self.project_one_sized::<2>(model, t, x, judged, bounded),
+            3 => self.project_one_sized::<3>(model, t, x, judged, bounded),
+            _ => self.project_one_sized::<0>(model, t, x, judged, bounded),
+        }
+    }
+
+    /// The first measure of [`Keeper::project_one`] with `bounded`, alone:
+    /// `Some(distance)`, recorded, when the state's residual bounds its
+    /// distance below `PROJECT_ABOVE` (`settled`), as `project_one` would
+    /// return it; else `None`, and `project_one` measures again (the same
+    /// right side of the constraint on the same state, so the same
+    /// residual) and projects, or names the failure (a constraint that
+    /// fails or is not finite here is left to it).
+    pub(super) fn settled_one(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Option<f64> {
+        match self.velocities.len() {
+            2 => self.settled_one_sized::<2>(model, t, x),
+            3 => self.settled_one_sized::<3>(model, t, x),
+            _ => self.settled_one_sized::<0>(model, t, x),
+        }
+    }
+
+    /// [`Keeper::settled_one`] for `N` velocities (`N = 0`: any number).
+    #[inline(always)]
+    fn settled_one_sized<const N: usize>(
+        &mut self,
+        model: &dyn DynModel,
+        t: f64,
+        x: &[f64],
+    ) -> Option<f64> {
+        let Keeper {
+            tol,
+            fixed,
+            velocities,
+            states,
+            largest,
+            largest_absolute,
+            largest_at,
+            ..
+        } = self;
+        let j = fixed[0];
+        let half = states.len() / 2;
+        let kept = &mut states[..half];
+        // As `project_one` starts its first iteration (its projected state
+        // is a copy of `x`).
+        kept[j] = x[j];
+        model.constrained(t, x, kept).ok()?;
+        if !kept[j].is_finite() {
+            return None;
+        }
+        let residual = [x[j] - kept[j]];
+        let record = (largest, largest_absolute, largest_at);
+        let first = velocities.start;
+        let count = if N == 0 { velocities.len() } else { N };
+        settled(
+            &residual,
+            first..first + count,
+            x,
+            tol,
+            (0.0, 0.0),
+            t,
+            record,
+        )
+    }
+
+    /// [`Keeper::project_one`] for `N` velocities (`N = 0`: any number up
+    /// to [`NORMALS`], read at run time).
+    #[inline(always)]
+    fn project_one_sized<const N: usize>(
         &mut self,
         model: &dyn DynModel,
         t: f64,
@@ -47,6 +126,8 @@ impl Keeper {
         } = self;
         let fixed: &[usize] = fixed;
         let j = fixed[0];
+        let first = velocities.start;
+        let count = if N == 0 { velocities.len() } else { N };
         let half = states.len() / 2;
         let (kept, projected) = states.split_at_mut(half);
         projected.copy_from_slice(x);
@@ -56,7 +137,11 @@ impl Keeper {
         let mut last = (0.0_f64, 0.0_f64);
         let mut residual = [0.0_f64];
         for _ in 0..ITERATIONS {
-            kept.copy_from_slice(projected);
+            // The model writes the component it fixes and leaves the
+            // others (`Model::constrained`), and only that one is read:
+            // it alone starts as the state's (the whole state was copied,
+            // a `memcpy` an iteration).
+            kept[j] = projected[j];
             model.constrained(t, projected, kept)?;
             if !kept[j].is_finite() {
                 return Err(Failure::new(
@@ -77,15 +162,16 @@ impl Keeper {
             }
             // Only the partials read below need to start at zero: a
             // model's `kept_gradient` writes its non-zero cells alone.
-            for i in velocities.clone() {
-                gradient[(j, i)] = 0.0;
+            for k in 0..count {
+                gradient[(j, first + k)] = 0.0;
             }
             model.kept_gradient(t, projected, gradient)?;
             // The normal J = e_j − ∂φ/∂v over the velocities; the smallest
             // correction is Δv = −Jᵀ h / (J Jᵀ).
             let mut normal = [0.0; NORMALS];
-            let normal = &mut normal[..velocities.len()];
-            for (a, i) in normal.iter_mut().zip(velocities.clone()) {
+            let normal = &mut normal[..count];
+            for (k, a) in normal.iter_mut().enumerate() {
+                let i = first + k;
                 *a = f64::from(u8::from(i == j)) - gradient[(j, i)];
             }
             let gram = normal.iter().map(|a| a * a).sum::<f64>();
@@ -93,7 +179,9 @@ impl Keeper {
             let solved = lambda.is_finite();
             let (mut relative, mut absolute) = (0.0_f64, 0.0_f64);
             let mut worst = j;
-            for (&a, i) in normal.iter().zip(velocities.clone()) {
+            let moved = &mut projected[first..first + count];
+            for (k, (&a, p)) in normal.iter().zip(moved.iter_mut()).enumerate() {
+                let i = first + k;
                 let delta = if solved {
                     -(a * lambda)
                 } else if i == j {
@@ -103,9 +191,9 @@ impl Keeper {
                 } else {
                     0.0
                 };
-                let v = projected[i];
-                projected[i] = v + delta;
-                let scale = tol.atol + tol.rtol * v.abs().max(projected[i].abs());
+                let v = *p;
+                *p = v + delta;
+                let scale = tol.atol + tol.rtol * v.abs().max(p.abs());
                 if delta.abs() / scale > relative {
                     worst = i;
                 }
@@ -222,7 +310,7 @@ mod tests {
     /// same failures.
     #[test]
     fn the_projection_onto_one_constraint_is_the_general_one_bit_for_bit() {
-        let mut compared = (0, 0);
+        let mut compared = (0, 0, 0);
         for c in [0.3, 40.0] {
             let model = Curved(c);
             let dyn_model: &dyn DynModel = &model;
@@ -245,30 +333,63 @@ mod tests {
                     dyn_model.constrained(t, &x, &mut on).unwrap();
                     x[4] = on[4] + off * (1.0 + u.abs());
                     for (judged, bounded) in [(true, true), (true, false), (false, false)] {
-                        let mut one = keeper.clone();
                         let mut general = keeper.clone();
-                        let a = one.project_one(dyn_model, t, &x, judged, bounded);
                         let b = general.project_general(dyn_model, t, &x, judged, bounded);
-                        match (&a, &b) {
-                            (Ok(a), Ok(b)) => {
-                                assert_eq!(a.to_bits(), b.to_bits(), "distance at {x:?}");
-                                assert_eq!(bits(one.projected()), bits(general.projected()));
-                                compared.0 += 1;
+                        // The sized path (three velocities), the path for
+                        // any number, and the measure after a step
+                        // (`settled_one` first when bounded), each against
+                        // the general projection.
+                        for path in 0..3 {
+                            let mut one = keeper.clone();
+                            let a = match path {
+                                0 => one.project_one(dyn_model, t, &x, judged, bounded),
+                                1 => one.project_one_sized::<0>(dyn_model, t, &x, judged, bounded),
+                                _ if judged && bounded => {
+                                    // What the run reads after a step:
+                                    // the projected state past
+                                    // `PROJECT_ABOVE`, else nothing.
+                                    let after =
+                                        one.after_step(dyn_model, 0, t, &x).map(|p| p.map(bits));
+                                    let expected = b.as_ref().map(|&d| {
+                                        (d > super::super::PROJECT_ABOVE)
+                                            .then(|| bits(general.projected()))
+                                    });
+                                    assert_eq!(format!("{after:?}"), format!("{expected:?}"));
+                                    let (ka, kb) = (one.kept(), general.kept());
+                                    assert_eq!(ka.largest.to_bits(), kb.largest.to_bits());
+                                    assert_eq!(ka.largest_at.to_bits(), kb.largest_at.to_bits());
+                                    compared.2 += 1;
+                                    continue;
+                                }
+                                _ => continue,
+                            };
+                            match (&a, &b) {
+                                (Ok(a), Ok(b)) => {
+                                    assert_eq!(a.to_bits(), b.to_bits(), "distance at {x:?}");
+                                    assert_eq!(bits(one.projected()), bits(general.projected()));
+                                    compared.0 += 1;
+                                }
+                                _ => {
+                                    assert_eq!(format!("{a:?}"), format!("{b:?}"), "at {x:?}");
+                                    compared.1 += 1;
+                                }
                             }
-                            _ => {
-                                assert_eq!(format!("{a:?}"), format!("{b:?}"), "at {x:?}");
-                                compared.1 += 1;
-                            }
+                            let (ka, kb) = (one.kept(), general.kept());
+                            assert_eq!(ka.largest.to_bits(), kb.largest.to_bits());
+                            assert_eq!(
+                                ka.largest_absolute.to_bits(),
+                                kb.largest_absolute.to_bits()
+                            );
+                            assert_eq!(ka.largest_at.to_bits(), kb.largest_at.to_bits());
                         }
-                        let (ka, kb) = (one.kept(), general.kept());
-                        assert_eq!(ka.largest.to_bits(), kb.largest.to_bits());
-                        assert_eq!(ka.largest_absolute.to_bits(), kb.largest_absolute.to_bits());
-                        assert_eq!(ka.largest_at.to_bits(), kb.largest_at.to_bits());
                     }
                 }
             }
         }
         // Both kinds of outcome were compared: projections and failures.
-        assert!(compared.0 > 100 && compared.1 > 5, "{compared:?}");
+        assert!(
+            compared.0 > 100 && compared.1 > 5 && compared.2 > 50,
+            "{compared:?}"
+        );
     }
 }
