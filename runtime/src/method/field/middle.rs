@@ -4,8 +4,8 @@
 //! recovered states). A piece is cut in two at its middle where it stands
 //! off a DOP853 half step from its start ([`halve`]); that half step (12
 //! evaluations of the linearised motion, each a linearisation of the
-//! model) is spared where the piece's own defect shows its middle well
-//! within the gate ([`defect_estimate`], 4 linearisations).
+//! model) is taken only where the piece's own defect shows its middle
+//! past the gate ([`defect_estimate`], 4 linearisations).
 
 use crate::linalg::Matrix;
 use crate::ode::dense::DenseStep;
@@ -44,8 +44,10 @@ const MOST_HALVINGS: usize = 3;
 /// in two at its middle while its extension there stands more than
 /// `MIDDLE_GATE` tolerances off one DOP853 step of half its length from
 /// its start (12 evaluations; that step's own error is about 1/512 of
-/// the whole piece's): the first half then ends on that state, the
-/// second starts there. Why: a field step is as long as the smooth
+/// the whole piece's) — judged first by the piece's defect
+/// ([`defect_estimate`], 4 evaluations), the half step taken only where
+/// that shows the middle past the gate: the first half then ends on the
+/// half step's state, the second starts there. Why: a field step is as long as the smooth
 /// coefficients allow, often longer than one explicit step of the
 /// motion, and the order-7 extension's error in mid-step is not bounded
 /// by its end's miss (order 8), which alone decided the pieces:
@@ -60,19 +62,21 @@ pub(super) fn refined<S: System + ?Sized>(
     pieces: Vec<DenseStep>,
     x_new: &[f64],
     tol: Tolerance,
+    scratch: &mut MiddleScratch,
 ) -> Vec<DenseStep> {
     let n = x_new.len();
-    let mut ends = vec![vec![0.0; n]; pieces.len()];
-    for (k, piece) in pieces.iter().enumerate().skip(1) {
-        piece.eval(piece.t_old, &mut ends[k - 1]);
-    }
-    if let Some(last) = ends.last_mut() {
-        last.copy_from_slice(x_new);
-    }
     let mut out = Vec::with_capacity(pieces.len());
-    for (piece, end) in pieces.into_iter().zip(&ends) {
-        halve(system, piece, end, tol, MOST_HALVINGS, &mut out);
+    let count = pieces.len();
+    let mut pieces = pieces.into_iter().peekable();
+    let mut end = vec![0.0; n];
+    while let Some(piece) = pieces.next() {
+        match pieces.peek() {
+            Some(next) => next.eval(next.t_old, &mut end),
+            None => end.copy_from_slice(x_new),
+        }
+        halve(system, piece, &end, tol, MOST_HALVINGS, scratch, &mut out);
     }
+    debug_assert!(out.len() >= count);
     out
 }
 
@@ -84,6 +88,7 @@ fn halve<S: System + ?Sized>(
     end: &[f64],
     tol: Tolerance,
     left: usize,
+    scratch: &mut MiddleScratch,
     out: &mut Vec<DenseStep>,
 ) {
     let (t_old, t_new) = (piece.t_old, piece.t_new);
@@ -93,22 +98,21 @@ fn halve<S: System + ?Sized>(
         out.push(piece);
         return;
     }
+    // Within the gate by the piece's own defect: kept, no half step (the
+    // half step is taken to cut, its state the halves' joint). The
+    // estimate stands within a few per cent of the half step's verdict
+    // where it is made, and took the same decision at every piece of
+    // eight models at rtol 1e-6 … 1e-12 (docs/BENCHMARKS.md §0, h-mid).
+    if defect_estimate(system, &piece, t_mid, tol, scratch).is_some_and(|off| off <= MIDDLE_GATE) {
+        out.push(piece);
+        return;
+    }
     let n = end.len();
     let (mut start, mut middle, mut half) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // The extension's value at its start is its first coefficient: the
     // start state exactly.
     piece.eval(t_old, &mut start);
     piece.eval(t_mid, &mut middle);
-    // Well within the gate by the piece's own defect: no half step. The
-    // estimate is within a few per cent of the half step's verdict where
-    // it is made (`SCREEN_MARGIN`), so a piece it spares is one the half
-    // step would keep: the output is the half step's alone.
-    if defect_estimate(system, &piece, t_mid, &middle, tol)
-        .is_some_and(|off| off <= MIDDLE_GATE / SCREEN_MARGIN)
-    {
-        out.push(piece);
-        return;
-    }
     // A half step that fails or is not finite (into a singularity): the
     // piece as it was.
     if one_step(system, t_old, &start, t_mid - t_old, &mut half).is_err()
@@ -140,16 +144,10 @@ fn halve<S: System + ?Sized>(
     } else {
         0
     };
-    halve(system, first, &half, tol, left, out);
-    halve(system, second, end, tol, left, out);
+    halve(system, first, &half, tol, left, scratch, out);
+    halve(system, second, end, tol, left, scratch, out);
 }
 
-/// How far below [`MIDDLE_GATE`] the defect's estimate must stand to
-/// spare the half step. The estimate stood within 0.67–1.17× the half
-/// step's verdict at every piece of eight models at rtol 1e-6 … 1e-12
-/// (within 1 % at all but 1e-12; docs/BENCHMARKS.md §0, h-mid): a factor
-/// 2 spares no piece the half step would cut.
-const SCREEN_MARGIN: f64 = 2.0;
 /// The transport over half a piece is summed as a series in `τ A` only
 /// where `τ ‖A‖₁` is at most this (else no estimate: the half step). At
 /// 4 the chaotic pendulum_3's long pieces at rtol 1e-6 had none; at 16
@@ -163,104 +161,164 @@ const GAUSS: [(f64, f64); 4] = [
     (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
 ];
 /// The extension is a polynomial of degree 7 in `θ`: its values at 8
-/// points give its derivative exactly (up to rounding).
+/// points give it, and its derivative, exactly (up to rounding).
 const POINTS: usize = 8;
+/// The Chebyshev–Lobatto points `(1 − cos(π j/7))/2` on `[0, 1]` the
+/// extension is read at.
+const LOBATTO: [f64; POINTS] = [
+    0.0,
+    0.049_515_566_048_790_43,
+    0.188_255_099_070_633_2,
+    0.388_739_533_021_842_8,
+    0.611_260_466_978_157_2,
+    0.811_744_900_929_366_7,
+    0.950_484_433_951_209_5,
+    1.0,
+];
 
-/// The Chebyshev–Lobatto points on `[0, 1]` the extension is read at.
-fn lobatto(j: usize) -> f64 {
-    0.5 - 0.5 * (std::f64::consts::PI * j as f64 / (POINTS - 1) as f64).cos()
+/// Lagrange's basis on [`LOBATTO`]'s points at the Gauss nodes of the
+/// first half (`θ = ξ/2`), and its derivative: row `k` weighs the values
+/// for node `k`.
+struct NodeWeights {
+    value: [[f64; POINTS]; 4],
+    slope: [[f64; POINTS]; 4],
 }
 
-/// `∂/∂θ` of the polynomial through the values at [`lobatto`]'s points,
-/// at the Gauss nodes of the first half (`θ = ξ/2`): row `k` weighs the
-/// values for node `k` (Lagrange's basis differentiated).
-fn derivative_weights() -> &'static [[f64; POINTS]; 4] {
-    static WEIGHTS: OnceLock<[[f64; POINTS]; 4]> = OnceLock::new();
+fn node_weights() -> &'static NodeWeights {
+    static WEIGHTS: OnceLock<NodeWeights> = OnceLock::new();
     WEIGHTS.get_or_init(|| {
-        let mut w = [[0.0; POINTS]; 4];
+        let mut w = NodeWeights {
+            value: [[0.0; POINTS]; 4],
+            slope: [[0.0; POINTS]; 4],
+        };
         for (k, &(xi, _)) in GAUSS.iter().enumerate() {
             let theta = 0.5 * xi;
-            for (j, wj) in w[k].iter_mut().enumerate() {
+            for j in 0..POINTS {
                 let (mut basis, mut sum) = (1.0, 0.0);
                 for m in (0..POINTS).filter(|&m| m != j) {
-                    basis *= (theta - lobatto(m)) / (lobatto(j) - lobatto(m));
-                    sum += 1.0 / (theta - lobatto(m));
+                    basis *= (theta - LOBATTO[m]) / (LOBATTO[j] - LOBATTO[m]);
+                    sum += 1.0 / (theta - LOBATTO[m]);
                 }
-                *wj = basis * sum;
+                w.value[k][j] = basis;
+                w.slope[k][j] = basis * sum;
             }
         }
         w
     })
 }
 
+/// The buffers of [`defect_estimate`], kept by the field across its
+/// outputs (the estimate runs at every sample-holding step: allocating
+/// them there cost a quarter of it on the small models).
+pub(super) struct MiddleScratch {
+    /// The extension at [`LOBATTO`]'s points, point by point.
+    values: Vec<f64>,
+    u: Vec<f64>,
+    slope: Vec<f64>,
+    rate: Vec<f64>,
+    term: Vec<f64>,
+    next: Vec<f64>,
+    sum: Vec<f64>,
+    error: Vec<f64>,
+    a: Matrix,
+}
+
+impl MiddleScratch {
+    pub(super) fn new(n: usize) -> MiddleScratch {
+        MiddleScratch {
+            values: vec![0.0; POINTS * n],
+            u: vec![0.0; n],
+            slope: vec![0.0; n],
+            rate: vec![0.0; n],
+            term: vec![0.0; n],
+            next: vec![0.0; n],
+            sum: vec![0.0; n],
+            error: vec![0.0; n],
+            a: Matrix::zeros(n, n),
+        }
+    }
+}
+
 /// How many tolerances (as [`tolerances_off`]) the piece's extension `u`
-/// stands off the linearised motion's solution from its start at `t_mid`,
-/// `middle` being `u(t_mid)`: from its defect `δ = u' − X(t, u)`, since
-/// the error `e = u − x` solves `e' = A e + δ` with `e(t_old) = 0`, so
-/// `e(t_mid) = ∫ Φ(t_mid, s) δ(s) ds` over the first half, summed at four
-/// Gauss nodes with `Φ(t_mid, s) ≈ exp((t_mid − s) A(s))` (its series).
-/// Four linearisations (the nodes) where the half step takes twelve; the
-/// other evaluations at a node reuse its linearisation. `None` where it
-/// is not made: an evaluation failed, or the motion moves too much over
-/// half the piece for the series (`MOST_SPREAD`).
+/// stands off the linearised motion's solution from its start at `t_mid`:
+/// from its defect `δ = u' − X(t, u)`, since the error `e = u − x` solves
+/// `e' = A e + δ` with `e(t_old) = 0`, so `e(t_mid) = ∫ Φ(t_mid, s) δ(s) ds`
+/// over the first half, summed at four Gauss nodes with `Φ(t_mid, s) ≈
+/// exp((t_mid − s) A(s))` (its series). Four linearisations (the nodes)
+/// where the half step takes twelve; the other evaluations at a node
+/// reuse its linearisation. `None` where it is not made: an evaluation
+/// failed, or the motion moves too much over half the piece for the
+/// series (`MOST_SPREAD`).
 fn defect_estimate<S: System + ?Sized>(
     system: &S,
     piece: &DenseStep,
     t_mid: f64,
-    middle: &[f64],
     tol: Tolerance,
+    sc: &mut MiddleScratch,
 ) -> Option<f64> {
-    let n = middle.len();
+    let n = sc.u.len();
     let (t_old, h) = (piece.t_old, piece.h);
-    if !(h > 0.0) {
+    if !(h > 0.0) || sc.values.len() != POINTS * n {
         return None;
     }
-    let mut values = vec![0.0; POINTS * n];
-    for (j, v) in values.chunks_exact_mut(n).enumerate() {
-        piece.eval(t_old + lobatto(j) * h, v);
+    for (v, theta) in sc.values.chunks_exact_mut(n).zip(LOBATTO) {
+        piece.eval(t_old + theta * h, v);
     }
-    let (mut u, mut rate, mut delta) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let (mut term, mut next, mut sum) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let mut error = vec![0.0; n];
-    let mut a = Matrix::zeros(n, n);
-    let weights = derivative_weights();
+    let weights = node_weights();
     let half = t_mid - t_old;
+    let values = &sc.values[..POINTS * n];
+    let (u, slope, rate) = (&mut sc.u[..n], &mut sc.slope[..n], &mut sc.rate[..n]);
+    let (term, next, sum) = (&mut sc.term[..n], &mut sc.next[..n], &mut sc.sum[..n]);
+    let error = &mut sc.error[..n];
+    error.fill(0.0);
     for (k, &(xi, weight)) in GAUSS.iter().enumerate() {
         let s = t_old + xi * half;
-        piece.eval(s, &mut u);
-        system.rhs(s, &u, &mut rate).ok()?;
-        system.jacobian(s, &u, &mut a).ok()?;
+        u.fill(0.0);
+        slope.fill(0.0);
+        for j in 0..POINTS {
+            let (wv, ws) = (weights.value[k][j], weights.slope[k][j]);
+            let v = &values[j * n..j * n + n];
+            for i in 0..n {
+                u[i] += wv * v[i];
+                slope[i] += ws * v[i];
+            }
+        }
+        system.rhs(s, u, rate).ok()?;
+        system.jacobian(s, u, &mut sc.a).ok()?;
         let tau = t_mid - s;
-        if !(tau * a.one_norm() <= MOST_SPREAD) {
+        if !(tau * sc.a.one_norm() <= MOST_SPREAD) {
             return None;
         }
+        // The defect, then exp(τ A) δ: terms (τ A)^j δ / j! until they no
+        // longer count.
         for i in 0..n {
-            let slope: f64 = (0..POINTS).map(|j| weights[k][j] * values[j * n + i]).sum();
-            delta[i] = slope / h - rate[i];
+            term[i] = slope[i] / h - rate[i];
+            sum[i] = term[i];
         }
-        // exp(τ A) δ: terms (τ A)^j δ / j! until they no longer count.
-        term.copy_from_slice(&delta);
-        sum.copy_from_slice(&delta);
         for j in 1..=80 {
-            a.mul_vec(&term, &mut next);
+            sc.a.mul_vec(term, next);
             let scale = tau / j as f64;
-            for (t, x) in term.iter_mut().zip(&next) {
-                *t = scale * x;
+            let (mut largest_term, mut largest_sum) = (0.0_f64, 0.0_f64);
+            for i in 0..n {
+                term[i] = scale * next[i];
+                sum[i] += term[i];
+                largest_term = largest_term.max(term[i].abs());
+                largest_sum = largest_sum.max(sum[i].abs());
             }
-            for (s, t) in sum.iter_mut().zip(&term) {
-                *s += t;
-            }
-            let largest = |v: &[f64]| v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-            if largest(&term) <= 1e-3 * largest(&sum) {
+            if largest_term <= 1e-3 * largest_sum {
                 break;
             }
         }
-        for (e, s) in error.iter_mut().zip(&sum) {
-            *e += weight * half * s;
+        for i in 0..n {
+            error[i] += weight * half * sum[i];
         }
     }
-    let moved: Vec<f64> = middle.iter().zip(&error).map(|(m, e)| m - e).collect();
-    Some(tolerances_off(middle, &moved, tol))
+    // The middle, and the motion's state there.
+    piece.eval(t_mid, u);
+    for i in 0..n {
+        next[i] = u[i] - error[i];
+    }
+    Some(tolerances_off(u, next, tol))
 }
 
 #[cfg(test)]
@@ -330,7 +388,9 @@ mod tests {
                 let mut half = vec![0.0; 2];
                 one_step(&Varying, t0, &y0, 0.5 * h, &mut half).unwrap();
                 let off = tolerances_off(&middle, &half, tol);
-                let estimate = defect_estimate(&Varying, &piece, t_mid, &middle, tol).unwrap();
+                let estimate =
+                    defect_estimate(&Varying, &piece, t_mid, tol, &mut MiddleScratch::new(2))
+                        .unwrap();
                 if off > 1e-3 {
                     judged += 1;
                     let ratio = estimate / off;

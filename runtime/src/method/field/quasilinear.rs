@@ -24,7 +24,7 @@ use super::coefficients::{
 };
 use super::conditions::recover_state;
 use super::global_error::FieldError;
-use super::middle::refined;
+use super::middle::{refined, MiddleScratch};
 use super::window::{StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::failure::{Failure, FailureKind};
@@ -266,6 +266,7 @@ impl AcceptedWindow {
         i: usize,
         tol: Tolerance,
         scratch: &RefCell<LinearizationScratch>,
+        middle: &mut MiddleScratch,
     ) -> Result<usize, Failure> {
         if self.outputs[i].is_some() {
             return Ok(0);
@@ -279,7 +280,7 @@ impl AcceptedWindow {
         };
         let motion = LinearizedMotion::with_scratch(model, &self.path, scratch);
         let dense = dense_steps_between(&motion, t_old, h, x_old, &self.states[i], tol)
-            .map(|(pieces, _)| refined(&motion, pieces, &self.states[i], tol));
+            .map(|(pieces, _)| refined(&motion, pieces, &self.states[i], tol, middle));
         let used = motion.linearizations();
         self.outputs[i] = Some(dense?);
         Ok(used)
@@ -330,6 +331,8 @@ pub struct QuasilinearField {
     /// The linearisation's buffers of the output between steps
     /// (`AcceptedWindow::build_output`), lent to each step's motion.
     output_scratch: RefCell<LinearizationScratch>,
+    /// The buffers of the output's middle check (`middle::refined`).
+    middle_scratch: MiddleScratch,
 }
 
 impl QuasilinearField {
@@ -363,6 +366,7 @@ impl QuasilinearField {
             oscillatory: false,
             error,
             output_scratch: LinearizationScratch::new(x0.len()),
+            middle_scratch: MiddleScratch::new(x0.len()),
         }
     }
 
@@ -717,8 +721,13 @@ impl Solver for QuasilinearField {
             // (the rocket with drag at rtol 1e-9, 101 samples: 1.8e-9 →
             // 3.3e-10, direct 1.2e-10). A stiff window's steps are too long
             // for an explicit step: there the coefficients' extension.
-            self.linearizations +=
-                window.build_output(model, i, self.options.tol, &self.output_scratch)?;
+            self.linearizations += window.build_output(
+                model,
+                i,
+                self.options.tol,
+                &self.output_scratch,
+                &mut self.middle_scratch,
+            )?;
             if let Some(pieces) = &window.outputs[i] {
                 let piece = pieces
                     .iter()
@@ -804,8 +813,13 @@ impl Solver for QuasilinearField {
             // The same output as `dense`: the state's own extension over
             // explicit steps, the coefficients' over stiff ones.
             if window.steps[i].is_explicit() {
-                self.linearizations +=
-                    window.build_output(model, i, self.options.tol, &self.output_scratch)?;
+                self.linearizations += window.build_output(
+                    model,
+                    i,
+                    self.options.tol,
+                    &self.output_scratch,
+                    &mut self.middle_scratch,
+                )?;
                 if let Some(pieces) = &window.outputs[i] {
                     out.extend(
                         pieces
