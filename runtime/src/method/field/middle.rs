@@ -110,9 +110,13 @@ fn halve<S: System + ?Sized>(
     // Within the gate by the piece's own defect: kept, no half step (the
     // half step is taken to cut, its state the halves' joint, and where
     // the defect is near the gate: `KEEP_BELOW`).
-    if defect_estimate(system, &piece, t_mid, tol, scratch)
-        .is_some_and(|off| off <= KEEP_BELOW * MIDDLE_GATE)
-    {
+    // After a cut the next piece is most likely cut too (pendulum_3 cuts
+    // 84 % of its pieces): the half step alone, no estimate spent first.
+    let kept = !scratch.last_cut
+        && defect_estimate(system, &piece, t_mid, tol, scratch)
+            .is_some_and(|off| off <= KEEP_BELOW * MIDDLE_GATE);
+    scratch.last_cut = false;
+    if kept {
         out.push(piece);
         return;
     }
@@ -135,6 +139,7 @@ fn halve<S: System + ?Sized>(
         out.push(piece);
         return;
     }
+    scratch.last_cut = true;
     // Halves that fail (not finite): the piece as it was.
     let (Ok(first), Ok(second)) = (
         dense_step_between(system, t_old, t_mid - t_old, &start, &half),
@@ -230,6 +235,8 @@ pub(super) struct MiddleScratch {
     sum: Vec<f64>,
     error: Vec<f64>,
     a: Matrix,
+    /// The last piece judged was cut by the half step.
+    last_cut: bool,
 }
 
 impl MiddleScratch {
@@ -244,6 +251,7 @@ impl MiddleScratch {
             sum: vec![0.0; n],
             error: vec![0.0; n],
             a: Matrix::zeros(n, n),
+            last_cut: false,
         }
     }
 }
