@@ -96,6 +96,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/method/field/global_error.rs"),
     ),
     (
+        "src/method/field/middle.rs",
+        include_str!("../../runtime/src/method/field/middle.rs"),
+    ),
+    (
         "src/method/field/mod.rs",
         include_str!("../../runtime/src/method/field/mod.rs"),
     ),

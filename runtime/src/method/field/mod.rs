@@ -6,6 +6,7 @@
 //! | `conditions.rs` | the conditions (13): the state from `f`, `S`; errors of `f`, `S` as errors of the state |
 //! | `window.rs` | one anchored field, stepped with the state's error controlled |
 //! | `affine.rs` | the field method proper, for affine reduced systems |
+//! | `middle.rs` | the quasilinear field's output between steps, judged at each piece's middle |
 //! | `quasilinear.rs` | non-affine systems: Newton–Kantorovich on windows, each pass an affine field |
 //! | `global_error.rs` | the global error estimate carried along the run, for the summary |
 
@@ -13,6 +14,7 @@ pub mod affine;
 pub mod coefficients;
 pub mod conditions;
 pub mod global_error;
+pub mod middle;
 pub mod quasilinear;
 pub mod window;
 

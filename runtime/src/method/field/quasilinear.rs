@@ -24,6 +24,7 @@ use super::coefficients::{
 };
 use super::conditions::recover_state;
 use super::global_error::FieldError;
+use super::middle::{refined, MiddleScratch};
 use super::window::{StepperKind, StoredStep, Window, WindowStep};
 use super::{FieldOptions, MAX_SHORTENINGS};
 use crate::failure::{Failure, FailureKind};
@@ -31,11 +32,10 @@ use crate::linalg::Matrix;
 use crate::method::solver::{Keeping, Report, Solver};
 use crate::model::{DomainKind, DynModel};
 use crate::ode::budget::Budget;
-use crate::ode::dop853::{dense_step_between, dense_steps_between, one_step};
+use crate::ode::dop853::dense_steps_between;
 use crate::ode::stepper::DenseStep;
 use crate::ode::stepper::{OfModel, StepperOf};
 use crate::ode::system::ModelSystem;
-use crate::ode::system::System;
 use crate::ode::tolerance::{underflows, Stats, Tolerance};
 use crate::ode::Integrator;
 use std::cell::{Cell, RefCell};
@@ -266,6 +266,7 @@ impl AcceptedWindow {
         i: usize,
         tol: Tolerance,
         scratch: &RefCell<LinearizationScratch>,
+        middle: &mut MiddleScratch,
     ) -> Result<usize, Failure> {
         if self.outputs[i].is_some() {
             return Ok(0);
@@ -279,131 +280,11 @@ impl AcceptedWindow {
         };
         let motion = LinearizedMotion::with_scratch(model, &self.path, scratch);
         let dense = dense_steps_between(&motion, t_old, h, x_old, &self.states[i], tol)
-            .map(|(pieces, _)| refined(&motion, pieces, &self.states[i], tol));
+            .map(|(pieces, _)| refined(&motion, pieces, &self.states[i], tol, middle));
         let used = motion.linearizations();
         self.outputs[i] = Some(dense?);
         Ok(used)
     }
-}
-
-/// How many tolerances `a` stands off `b`: the largest component's
-/// distance, not the RMS norm, since a sample is read component by
-/// component (the gravity-turn rocket's altitude near the ground was 0.27
-/// tolerances off in mid-step at rtol 1e-8, its RMS over the four
-/// components 0.06). Not finite: infinitely off.
-fn tolerances_off(a: &[f64], b: &[f64], tol: Tolerance) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| {
-            let off = (x - y).abs() / (tol.atol + tol.rtol * x.abs().max(y.abs()));
-            if off.is_nan() {
-                f64::INFINITY
-            } else {
-                off
-            }
-        })
-        .fold(0.0_f64, f64::max)
-}
-
-/// How far the output's extension may stand off a half step's state at
-/// its piece's middle, in tolerances (the largest component's), before
-/// the piece is cut in two there.
-const MIDDLE_GATE: f64 = 0.1;
-/// How many times a piece may be halved by the middle test.
-const MOST_HALVINGS: usize = 3;
-
-/// `pieces` (`dense_steps_between`'s, each pinned to its end), each cut
-/// in two at its middle while its extension there stands more than
-/// `MIDDLE_GATE` tolerances off one DOP853 step of half its length from
-/// its start (12 evaluations; that step's own error is about 1/512 of
-/// the whole piece's): the first half then ends on that state, the
-/// second starts there. Why: a field step is as long as the smooth
-/// coefficients allow, often longer than one explicit step of the
-/// motion, and the order-7 extension's error in mid-step is not bounded
-/// by its end's miss (order 8), which alone decided the pieces:
-/// raindrop_of_distance at rtol 1e-10 had ends missed by 1e-6 … 1e-2
-/// tolerances and samples 0.6 rtol off, the gravity-turn rocket's longer
-/// steps up to 6× its ends' error (docs/BENCHMARKS.md §0, h-gturn2).
-///
-/// `x_new` is the last piece's end (the recovered state); the others' ends
-/// are the next pieces' starts, which their extensions give exactly.
-fn refined<S: System + ?Sized>(
-    system: &S,
-    pieces: Vec<DenseStep>,
-    x_new: &[f64],
-    tol: Tolerance,
-) -> Vec<DenseStep> {
-    let n = x_new.len();
-    let mut ends = vec![vec![0.0; n]; pieces.len()];
-    for (k, piece) in pieces.iter().enumerate().skip(1) {
-        piece.eval(piece.t_old, &mut ends[k - 1]);
-    }
-    if let Some(last) = ends.last_mut() {
-        last.copy_from_slice(x_new);
-    }
-    let mut out = Vec::with_capacity(pieces.len());
-    for (piece, end) in pieces.into_iter().zip(&ends) {
-        halve(system, piece, end, tol, MOST_HALVINGS, &mut out);
-    }
-    out
-}
-
-/// `piece`, ending on `end`, into `out`, halved as [`refined`] says, at
-/// most `left` times.
-fn halve<S: System + ?Sized>(
-    system: &S,
-    piece: DenseStep,
-    end: &[f64],
-    tol: Tolerance,
-    left: usize,
-    out: &mut Vec<DenseStep>,
-) {
-    let (t_old, t_new) = (piece.t_old, piece.t_new);
-    let h = t_new - t_old;
-    let t_mid = t_old + 0.5 * h;
-    if left == 0 || !(t_mid > t_old && t_mid < t_new) {
-        out.push(piece);
-        return;
-    }
-    let n = end.len();
-    let (mut start, mut middle, mut half) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    // The extension's value at its start is its first coefficient: the
-    // start state exactly.
-    piece.eval(t_old, &mut start);
-    piece.eval(t_mid, &mut middle);
-    // A half step that fails or is not finite (into a singularity): the
-    // piece as it was.
-    if one_step(system, t_old, &start, t_mid - t_old, &mut half).is_err()
-        || half.iter().any(|v| !v.is_finite())
-    {
-        out.push(piece);
-        return;
-    }
-    let off = tolerances_off(&middle, &half, tol);
-    if off <= MIDDLE_GATE {
-        out.push(piece);
-        return;
-    }
-    // Halves that fail (not finite): the piece as it was.
-    let (Ok(first), Ok(second)) = (
-        dense_step_between(system, t_old, t_mid - t_old, &start, &half),
-        dense_step_between(system, t_mid, t_new - t_mid, &half, end),
-    ) else {
-        out.push(piece);
-        return;
-    };
-    // The order-7 extension's error in mid-step shrinks like `h^8`: a
-    // half is about 1/256 as far off as the whole. Its own middle is
-    // judged only where that may not be enough (by a factor 4 of margin):
-    // a judge at every half cost the chaotic pendulum_3, whose pieces are
-    // 0.1–3 tolerances off, 2.8× the instructions at 101 samples.
-    let left = if off > 64.0 * MIDDLE_GATE {
-        left - 1
-    } else {
-        0
-    };
-    halve(system, first, &half, tol, left, out);
-    halve(system, second, end, tol, left, out);
 }
 
 /// Why a window ended.
@@ -450,6 +331,8 @@ pub struct QuasilinearField {
     /// The linearisation's buffers of the output between steps
     /// (`AcceptedWindow::build_output`), lent to each step's motion.
     output_scratch: RefCell<LinearizationScratch>,
+    /// The buffers of the output's middle check (`middle::refined`).
+    middle_scratch: MiddleScratch,
 }
 
 impl QuasilinearField {
@@ -483,6 +366,7 @@ impl QuasilinearField {
             oscillatory: false,
             error,
             output_scratch: LinearizationScratch::new(x0.len()),
+            middle_scratch: MiddleScratch::new(x0.len()),
         }
     }
 
@@ -837,8 +721,13 @@ impl Solver for QuasilinearField {
             // (the rocket with drag at rtol 1e-9, 101 samples: 1.8e-9 →
             // 3.3e-10, direct 1.2e-10). A stiff window's steps are too long
             // for an explicit step: there the coefficients' extension.
-            self.linearizations +=
-                window.build_output(model, i, self.options.tol, &self.output_scratch)?;
+            self.linearizations += window.build_output(
+                model,
+                i,
+                self.options.tol,
+                &self.output_scratch,
+                &mut self.middle_scratch,
+            )?;
             if let Some(pieces) = &window.outputs[i] {
                 let piece = pieces
                     .iter()
@@ -924,8 +813,13 @@ impl Solver for QuasilinearField {
             // The same output as `dense`: the state's own extension over
             // explicit steps, the coefficients' over stiff ones.
             if window.steps[i].is_explicit() {
-                self.linearizations +=
-                    window.build_output(model, i, self.options.tol, &self.output_scratch)?;
+                self.linearizations += window.build_output(
+                    model,
+                    i,
+                    self.options.tol,
+                    &self.output_scratch,
+                    &mut self.middle_scratch,
+                )?;
                 if let Some(pieces) = &window.outputs[i] {
                     out.extend(
                         pieces
