@@ -459,10 +459,13 @@ impl Recovered {
 
     /// A bound of the recovered state's error from errors `dr[a]` (a ≥ 1,
     /// `dr[0]` not read) of the conditions' right sides alone, into `dx`:
-    /// `|M⁻¹| dr` on `x_2..x_N`, and on `x_1 = f_1 + Σ_A f_A x_A` the sum
-    /// `Σ_A |f_A| dx_A`. A bound entry by entry (one solve per nonzero
-    /// `dr[a]`, into `column`), not one solve of `dr`, whose signs would
-    /// let the columns of `M⁻¹` cancel where rounding's do not.
+    /// `|M⁻¹| dr` on `x_2..x_N`, and `|fᵀ M⁻¹| dr` on `x_1 = f_1 + Σ_A f_A
+    /// x_A` (the error `δz = M⁻¹ δr` reaches `x_1` as `fᵀ δz`, whose terms
+    /// may cancel column by column: `Σ_A |f_A| dx_A` ended a chaotic double
+    /// pendulum's windows at `x_1` near 0 for no digit lost). A bound
+    /// column by column (one solve per nonzero `dr[a]`, into `column`),
+    /// not one solve of `dr`, whose signs would let the columns of `M⁻¹`
+    /// cancel where rounding's do not.
     pub fn right_side_bound(&self, f: &[f64], dr: &[f64], dx: &mut [f64], column: &mut Vec<f64>) {
         let n = f.len();
         dx.fill(0.0);
@@ -480,8 +483,8 @@ impl Recovered {
             for (d, v) in dx[1..].iter_mut().zip(column.iter()) {
                 *d += v.abs();
             }
+            dx[0] += (1..n).map(|b| f[b] * column[b - 1]).sum::<f64>().abs();
         }
-        dx[0] = (1..n).map(|a| (f[a] * dx[a]).abs()).sum::<f64>();
     }
 
     /// The first-order change of the recovered state when `(f, S)` change
