@@ -32,19 +32,31 @@ fn a_chaotic_double_pendulum_s_early_errors_are_carried_by_the_field() {
     // about 15-fold unseen, the most in the last window (3 → 11 rtol),
     // whose steps were summed only. Carried from the first step and to
     // the last: warned, estimated near its error.
+    //
+    // Which tolerance ends past the bound moves with where the windows
+    // end (a chaotic motion): 1e-9 (11.2 rtol) before the rounding watch
+    // measured the free term's row through the conditions, 1e-10 (16.4
+    // rtol; 1e-9 then 9.99) after (docs/BENCHMARKS.md §0, h-round). Every
+    // run past the bound at either is held to the same check.
     let binary = build("double_pendulum_energy");
     let reference = reference(&binary);
-    let rtol = 1e-9;
-    let (error, estimate, warned) = field_run(&binary, rtol, &reference);
+    let mut past = 0;
+    for rtol in [1e-9, 1e-10] {
+        let (error, estimate, warned) = field_run(&binary, rtol, &reference);
+        if error <= 10.0 * rtol {
+            continue;
+        }
+        past += 1;
+        assert!(
+            warned && estimate >= 0.5 * error && estimate <= 4.0 * error,
+            "rtol {rtol:e}: error {:.2} rtol, estimate {:.2} rtol",
+            error / rtol,
+            estimate / rtol
+        );
+    }
     // The case itself: a run past the bound (it would pass with no
     // warning otherwise).
-    assert!(error > 10.0 * rtol, "error {:.2} rtol", error / rtol);
-    assert!(
-        warned && estimate >= 0.5 * error && estimate <= 4.0 * error,
-        "error {:.2} rtol, estimate {:.2} rtol",
-        error / rtol,
-        estimate / rtol
-    );
+    assert!(past >= 1, "no run past the bound at rtol 1e-9 or 1e-10");
 }
 
 #[test]

@@ -46,6 +46,15 @@ pub trait FieldSystem: System {
         }
     }
 
+    /// Bounds of the rounding of the conditions' right sides that `field`'s
+    /// factor leaves out, into `dr[a]` for `a ≥ 1` (the rounding of
+    /// `S_1A = ∂f_1/∂c_A`, A = a + 1, in the units of `x_A`; `dr[0]` is
+    /// not read), and `true`; `false` (the default) where the factor counts
+    /// every entry (`y` holds `(f, S)` directly).
+    fn free_term_rounding(&self, _y: &[f64], _dr: &mut [f64]) -> bool {
+        false
+    }
+
     /// `B(t)` of `y' = B(t) y` viewed as `Y' = B Y` (`Y` the `(N+1)²` state
     /// as a square matrix), when the representation is linear so (the
     /// projective form); `None` otherwise.
@@ -1014,6 +1023,26 @@ impl<I: Iterate + ?Sized> FieldSystem for ProjectiveCoefficients<'_, I> {
         true
     }
 
+    /// Row 0 of each `P_A`, `∂w_0/∂c_A`, is the free term's accumulator
+    /// (`w_0' = −b·w_x` enters no rate): it reaches the state only through
+    /// `S_1A = −(P_A0 w_1 − w_0 P_A1)/w_1²`, the right side of condition A,
+    /// in the units of `x_A` (at the anchor `r_A = x_A0`). Its rounding is
+    /// that of the two products, an absolute error in those units, which
+    /// the window measures through the conditions against the state's
+    /// tolerance: not as a growth from the anchor's unit vectors, which
+    /// it is not (a rocket 10 km downrange has row 0 at 1e5 where the
+    /// adjoint's rows are at 800, and no digit of the state is lost).
+    fn free_term_rounding(&self, y: &[f64], dr: &mut [f64]) -> bool {
+        let n = dr.len();
+        let (w0, w1) = (y[0], y[1]);
+        let w1_sq = w1 * w1;
+        for (a, d) in dr.iter_mut().enumerate().skip(1) {
+            let (p0, p1) = (y[a * (n + 1)], y[a * (n + 1) + 1]);
+            *d = f64::EPSILON * ((p0 * w1).abs() + (w0 * p1).abs()) / w1_sq;
+        }
+        true
+    }
+
     /// `S_ij = −(P_kj w_1 − w_k P_1j)/w_1²` is a difference: its rounding
     /// is that of its terms, which may be far larger than it where the
     /// adjoint's modes align (a fast decaying mode of the motion).
@@ -1090,14 +1119,21 @@ fn projective_field_measured<const N: usize>(
     // unit vectors: where one adjoint mode dominates they align, and
     // the state the conditions recover loses as many digits (measured:
     // without this bound the stiff x'' + 1000x' + x = 0 ended 1e-6 off
-    // at rtol 1e-8).
-    let growth = y[n + 1..].iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+    // at rtol 1e-8). The adjoint's rows only (k ≥ 1): row 0, the free
+    // term's accumulator, is no mode and is measured in the state's units
+    // (`free_term_rounding`), as are the cancellations of its entries
+    // `S_1A` (i = 0) below.
+    let growth = y[n + 1..]
+        .chunks_exact(n + 1)
+        .fold(1.0_f64, |m, p| p[1..].iter().fold(m, |m, v| m.max(v.abs())));
     for j in 0..n {
         for i in 0..n {
             let k = slot_of(i);
             let (a, b) = (sensitivity(y, n, j, k) * w1, w[k] * sensitivity(y, n, j, 1));
-            magnitude = magnitude.max(a.abs() + b.abs());
-            value = value.max((a - b).abs());
+            if i > 0 {
+                magnitude = magnitude.max(a.abs() + b.abs());
+                value = value.max((a - b).abs());
+            }
             s[j * n + i] = -(a - b) / w1_sq;
         }
     }

@@ -457,6 +457,36 @@ impl Recovered {
         state
     }
 
+    /// A bound of the recovered state's error from errors `dr[a]` (a ≥ 1,
+    /// `dr[0]` not read) of the conditions' right sides alone, into `dx`:
+    /// `|M⁻¹| dr` on `x_2..x_N`, and `|fᵀ M⁻¹| dr` on `x_1 = f_1 + Σ_A f_A
+    /// x_A` (the error `δz = M⁻¹ δr` reaches `x_1` as `fᵀ δz`, whose terms
+    /// may cancel column by column: `Σ_A |f_A| dx_A` ended a chaotic double
+    /// pendulum's windows at `x_1` near 0 for no digit lost). A bound
+    /// column by column (one solve per nonzero `dr[a]`, into `column`),
+    /// not one solve of `dr`, whose signs would let the columns of `M⁻¹`
+    /// cancel where rounding's do not.
+    pub fn right_side_bound(&self, f: &[f64], dr: &[f64], dx: &mut [f64], column: &mut Vec<f64>) {
+        let n = f.len();
+        dx.fill(0.0);
+        let Some(lu) = &self.lu else {
+            return;
+        };
+        column.resize(n - 1, 0.0);
+        for a in 1..n {
+            if dr[a] == 0.0 {
+                continue;
+            }
+            column.fill(0.0);
+            column[a - 1] = dr[a];
+            lu.solve_in_place(column);
+            for (d, v) in dx[1..].iter_mut().zip(column.iter()) {
+                *d += v.abs();
+            }
+            dx[0] += (1..n).map(|b| f[b] * column[b - 1]).sum::<f64>().abs();
+        }
+    }
+
     /// The first-order change of the recovered state when `(f, S)` change
     /// by `(df, ds)` (same layouts), into `dx`.
     pub fn map_error(&self, f: &[f64], x0: &[f64], df: &[f64], ds: &[f64], dx: &mut [f64]) {
