@@ -510,41 +510,8 @@ fn implicit(
     jac_roots.extend(&d_roots);
     let jac = names.code(arena, &jac_roots, &from_xz);
     let jac_statements = jac.statements(quote! { self.params });
-    let (gx_values, d_values) = jac.roots.split_at(gx_roots.len());
-    let gx_cells: Vec<TokenStream> = i
-        .g_x
-        .iter()
-        .zip(gx_values)
-        .map(|(&(r, c, _), v)| {
-            let (r, c) = (index(r), index(c));
-            quote! { g_x[(#r, #c)] = #v; }
-        })
-        .collect();
     let n_lit = index(n);
-    let mut dep_jac = Vec::new();
-    let mut at = 0;
-    for d in &i.dependent {
-        let row = index(kernel.highest_row(d.coord));
-        let mut d_x = vec![quote! { 0.0 }; n];
-        for &(c, _) in &d.d_x {
-            d_x[c] = d_values[at].clone();
-            at += 1;
-        }
-        let mut d_z = vec![quote! { 0.0 }; m];
-        for &(k, _) in &d.d_z {
-            d_z[k] = d_values[at].clone();
-            at += 1;
-        }
-        dep_jac.push(quote! {
-            {
-                let d_x: [f64; #n_lit] = [#(#d_x),*];
-                let d_z: [f64; #size] = [#(#d_z),*];
-                for c in 0..#n_lit {
-                    jac[(#row, c)] = d_x[c] + (0..#size).map(|k| d_z[k] * g_x[(k, c)]).sum::<f64>();
-                }
-            }
-        });
-    }
+    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, &jac.roots);
     // ∂G/∂t, then ∂z/∂t; the dependent rows'.
     let mut tp_roots: Vec<ExprId> = i.g_t.iter().map(|&(_, e)| e).collect();
     let mut dep_t_roots = Vec::new();
@@ -615,8 +582,165 @@ fn implicit(
             Ok(())
         }
     };
+    let linearize = if i.linear {
+        let ind = (&ind_rows[..], &ind_k[..]);
+        let dep = (&dep_statements, &dep_rows[..], &dep_values[..], dep.uses_source);
+        linearize_linear(
+            kernel,
+            names,
+            i,
+            from_x,
+            &jac_roots,
+            ind,
+            dep,
+            shifts,
+            shift_jacobian,
+        )
+    } else {
+        // Newton's: the trait's default, printed so that every kind of
+        // motion defines it (the modes dispatch on the first mode's items).
+        quote! {
+            fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+                self.rhs(t, x, dx)?;
+                self.jacobian(t, x, jac)
+            }
+        }
+    };
     let inherent = quote! { #solve };
-    (trait_items, inherent)
+    (quote! { #trait_items #linearize }, inherent)
+}
+
+/// `g_x[(r, c)] = …;` for each cell of `∂G/∂x`, and the dependent rows'
+/// Jacobian blocks, from the printed values of the roots `∂G/∂x`'s cells,
+/// then each dependent row's `d_x` and `d_z` (in [`implicit`]'s order).
+fn jacobian_cells(
+    kernel: &Kernel,
+    i: &Implicit,
+    values: &[TokenStream],
+) -> (Vec<TokenStream>, Vec<TokenStream>) {
+    let (n, m) = (kernel.state.len(), i.unknowns.len());
+    let (n_lit, size) = (index(n), index(m));
+    let (gx_values, d_values) = values.split_at(i.g_x.len().min(values.len()));
+    let gx_cells: Vec<TokenStream> = i
+        .g_x
+        .iter()
+        .zip(gx_values)
+        .map(|(&(r, c, _), v)| {
+            let (r, c) = (index(r), index(c));
+            quote! { g_x[(#r, #c)] = #v; }
+        })
+        .collect();
+    let mut dep_jac = Vec::new();
+    let mut values = d_values.iter();
+    let mut next = || values.next().cloned().unwrap_or_else(|| quote! { f64::NAN });
+    for d in &i.dependent {
+        let row = index(kernel.highest_row(d.coord));
+        let mut d_x = vec![quote! { 0.0 }; n];
+        for &(c, _) in &d.d_x {
+            d_x[c] = next();
+        }
+        let mut d_z = vec![quote! { 0.0 }; m];
+        for &(k, _) in &d.d_z {
+            d_z[k] = next();
+        }
+        dep_jac.push(quote! {
+            {
+                let d_x: [f64; #n_lit] = [#(#d_x),*];
+                let d_z: [f64; #size] = [#(#d_z),*];
+                for c in 0..#n_lit {
+                    jac[(#row, c)] = d_x[c] + (0..#size).map(|k| d_z[k] * g_x[(k, c)]).sum::<f64>();
+                }
+            }
+        });
+    }
+    (gx_cells, dep_jac)
+}
+
+/// `linearize` of a motion affine in its highest derivatives: what `rhs`
+/// then `jacobian` compute, with the same operations in the same order
+/// (bit for bit), but the mass system evaluated once and its common
+/// subexpressions with `∂G/∂x` and the dependent rows' partials computed
+/// once (the field linearises the motion at every stage). The right side
+/// takes its solve on the stack (`rhs`'s), the Jacobian the factored one
+/// (`jacobian`'s) from the same matrix.
+#[allow(clippy::too_many_arguments)]
+fn linearize_linear(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    i: &Implicit,
+    from_x: Source,
+    jac_roots: &[ExprId],
+    (ind_rows, ind_k): (&[Literal], &[Literal]),
+    (dep_statements, dep_rows, dep_values, dep_reads_x): (
+        &TokenStream,
+        &[Literal],
+        &[TokenStream],
+        bool,
+    ),
+    shifts: &TokenStream,
+    shift_jacobian: &TokenStream,
+) -> TokenStream {
+    let arena = &kernel.arena;
+    let (m, n) = (i.unknowns.len(), kernel.state.len());
+    let (size, n_lit) = (index(m), index(n));
+    let from_xz = from_unknowns(&i.unknowns, from_x);
+    let mut roots = i.free.clone();
+    roots.extend(i.g_z.iter().map(|&(_, _, e)| e));
+    let split = roots.len();
+    roots.extend(jac_roots);
+    let (code, at) = names.code_split(arena, &roots, split, &from_xz);
+    let (mass_statements, jac_statements) = code.split_statements(quote! { self.params }, at);
+    let (mass, jac_values) = code.roots.split_at(split);
+    let (free, cells) = mass.split_at(i.free.len());
+    let cells: Vec<TokenStream> = i
+        .g_z
+        .iter()
+        .zip(cells)
+        .map(|(&(r, c, _), v)| {
+            let (r, c) = (index(r), index(c));
+            quote! { a[#r][#c] = #v; }
+        })
+        .collect();
+    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, jac_values);
+    let solver = if i.symmetric {
+        quote! { lagc_runtime::highest::solve_symmetric_fixed_checked }
+    } else {
+        quote! { lagc_runtime::highest::solve_fixed_checked }
+    };
+    let uses_z = jac_roots
+        .iter()
+        .any(|&r| i.unknowns.iter().any(|&u| arena.depends_on(r, u)));
+    let z = arg(uses_z, "z");
+    let x = arg(
+        code.uses_source || dep_reads_x || !shifts.is_empty(),
+        "x",
+    );
+    quote! {
+        fn linearize(&self, t: f64, #x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+            #mass_statements
+            let mut a = [[0.0; #size]; #size];
+            #(#cells)*
+            let g = [#(#free),*];
+            {
+                let z = #solver(t, a, g)?;
+                #dep_statements
+                #shifts
+                #(dx[#ind_rows] = z[#ind_k];)*
+                #(dx[#dep_rows] = #dep_values;)*
+            }
+            let (#z, lu) = lagc_runtime::highest::solve_linear(t, Matrix::from_array(&a), &g)?;
+            #jac_statements
+            let mut g_x = Matrix::zeros(#size, #n_lit);
+            #(#gx_cells)*
+            lagc_runtime::highest::implicit_derivatives(&lu, &mut g_x);
+            #shift_jacobian
+            for c in 0..#n_lit {
+                #(jac[(#ind_rows, c)] = g_x[(#ind_k, c)];)*
+            }
+            #(#dep_jac)*
+            Ok(())
+        }
+    }
 }
 
 /// `mass_matrix`, for diagnosing a failure: the mass matrix is
