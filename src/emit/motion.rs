@@ -13,7 +13,7 @@ use super::names::{Source, SymbolNames};
 use crate::ir::{ExprId, Symbol};
 use crate::kernel::{Explicit, Implicit, Kernel, Motion};
 use proc_macro2::{Literal, TokenStream};
-use quote::quote;
+use quote::{quote, ToTokens};
 use std::collections::HashMap;
 
 /// `(items of the trait impl, items of the inherent impl)`.
@@ -511,7 +511,7 @@ fn implicit(
     let jac = names.code(arena, &jac_roots, &from_xz);
     let jac_statements = jac.statements(quote! { self.params });
     let n_lit = index(n);
-    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, &jac.roots);
+    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, &jac.roots, false);
     // ∂G/∂t, then ∂z/∂t; the dependent rows'.
     let mut tp_roots: Vec<ExprId> = i.g_t.iter().map(|&(_, e)| e).collect();
     let mut dep_t_roots = Vec::new();
@@ -613,11 +613,20 @@ fn implicit(
 /// `g_x[(r, c)] = …;` for each cell of `∂G/∂x`, and the dependent rows'
 /// Jacobian blocks, from the printed values of the roots `∂G/∂x`'s cells,
 /// then each dependent row's `d_x` and `d_z` (in [`implicit`]'s order).
+/// `columns`: `g_x` is an array of columns on the stack, `g_x[c][r]`.
 fn jacobian_cells(
     kernel: &Kernel,
     i: &Implicit,
     values: &[TokenStream],
+    columns: bool,
 ) -> (Vec<TokenStream>, Vec<TokenStream>) {
+    let cell = |r: TokenStream, c: TokenStream| {
+        if columns {
+            quote! { g_x[#c][#r] }
+        } else {
+            quote! { g_x[(#r, #c)] }
+        }
+    };
     let (n, m) = (kernel.state.len(), i.unknowns.len());
     let (n_lit, size) = (index(n), index(m));
     let (gx_values, d_values) = values.split_at(i.g_x.len().min(values.len()));
@@ -626,10 +635,11 @@ fn jacobian_cells(
         .iter()
         .zip(gx_values)
         .map(|(&(r, c, _), v)| {
-            let (r, c) = (index(r), index(c));
-            quote! { g_x[(#r, #c)] = #v; }
+            let g_x = cell(index(r).into_token_stream(), index(c).into_token_stream());
+            quote! { #g_x = #v; }
         })
         .collect();
+    let g_x_kc = cell(quote! { k }, quote! { c });
     let mut dep_jac = Vec::new();
     let mut values = d_values.iter();
     let mut next = || values.next().cloned().unwrap_or_else(|| quote! { f64::NAN });
@@ -648,7 +658,7 @@ fn jacobian_cells(
                 let d_x: [f64; #n_lit] = [#(#d_x),*];
                 let d_z: [f64; #size] = [#(#d_z),*];
                 for c in 0..#n_lit {
-                    jac[(#row, c)] = d_x[c] + (0..#size).map(|k| d_z[k] * g_x[(k, c)]).sum::<f64>();
+                    jac[(#row, c)] = d_x[c] + (0..#size).map(|k| d_z[k] * #g_x_kc).sum::<f64>();
                 }
             }
         });
@@ -662,7 +672,8 @@ fn jacobian_cells(
 /// subexpressions with `∂G/∂x` and the dependent rows' partials computed
 /// once (the field linearises the motion at every stage). The right side
 /// takes its solve on the stack (`rhs`'s), the Jacobian the factored one
-/// (`jacobian`'s) from the same matrix.
+/// (`jacobian`'s, here on the stack too: `highest::fixed`, the same bits
+/// without allocating) from the same matrix.
 #[allow(clippy::too_many_arguments)]
 fn linearize_linear(
     kernel: &Kernel,
@@ -701,7 +712,7 @@ fn linearize_linear(
             quote! { a[#r][#c] = #v; }
         })
         .collect();
-    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, jac_values);
+    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, jac_values, true);
     let solver = if i.symmetric {
         quote! { lagc_runtime::highest::solve_symmetric_fixed_checked }
     } else {
@@ -728,14 +739,14 @@ fn linearize_linear(
                 #(dx[#ind_rows] = z[#ind_k];)*
                 #(dx[#dep_rows] = #dep_values;)*
             }
-            let (#z, lu) = lagc_runtime::highest::solve_linear(t, Matrix::from_array(&a), &g)?;
+            let (#z, lu) = lagc_runtime::highest::solve_linear_fixed(t, &a, &g)?;
             #jac_statements
-            let mut g_x = Matrix::zeros(#size, #n_lit);
+            let mut g_x = [[0.0_f64; #size]; #n_lit];
             #(#gx_cells)*
-            lagc_runtime::highest::implicit_derivatives(&lu, &mut g_x);
+            lu.implicit_derivatives(&mut g_x);
             #shift_jacobian
             for c in 0..#n_lit {
-                #(jac[(#ind_rows, c)] = g_x[(#ind_k, c)];)*
+                #(jac[(#ind_rows, c)] = g_x[c][#ind_k];)*
             }
             #(#dep_jac)*
             Ok(())
