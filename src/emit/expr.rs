@@ -58,7 +58,12 @@ pub fn lower_exprs_split(
     let order = postorder(roots, operands, &mut HashSet::new());
     // The nodes the first roots reach: a prefix of `order` (depth first,
     // root by root).
-    let early = postorder(&roots[..split.min(roots.len())], operands, &mut HashSet::new()).len();
+    let early = postorder(
+        &roots[..split.min(roots.len())],
+        operands,
+        &mut HashSet::new(),
+    )
+    .len();
     let mut early_lets = 0;
     let mut uses: HashMap<ExprId, usize> = HashMap::new();
     for &e in &order {

@@ -584,7 +584,12 @@ fn implicit(
     };
     let linearize = if i.linear {
         let ind = (&ind_rows[..], &ind_k[..]);
-        let dep = (&dep_statements, &dep_rows[..], &dep_values[..], dep.uses_source);
+        let dep = (
+            &dep_statements,
+            &dep_rows[..],
+            &dep_values[..],
+            dep.uses_source,
+        );
         linearize_linear(
             kernel,
             names,
@@ -642,7 +647,12 @@ fn jacobian_cells(
     let g_x_kc = cell(quote! { k }, quote! { c });
     let mut dep_jac = Vec::new();
     let mut values = d_values.iter();
-    let mut next = || values.next().cloned().unwrap_or_else(|| quote! { f64::NAN });
+    let mut next = || {
+        values
+            .next()
+            .cloned()
+            .unwrap_or_else(|| quote! { f64::NAN })
+    };
     for d in &i.dependent {
         let row = index(kernel.highest_row(d.coord));
         let mut d_x = vec![quote! { 0.0 }; n];
@@ -722,10 +732,7 @@ fn linearize_linear(
         .iter()
         .any(|&r| i.unknowns.iter().any(|&u| arena.depends_on(r, u)));
     let z = arg(uses_z, "z");
-    let x = arg(
-        code.uses_source || dep_reads_x || !shifts.is_empty(),
-        "x",
-    );
+    let x = arg(code.uses_source || dep_reads_x || !shifts.is_empty(), "x");
     quote! {
         fn linearize(&self, t: f64, #x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
             #mass_statements
