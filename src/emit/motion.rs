@@ -547,6 +547,30 @@ fn implicit(
     let ind_k_t = ind_k.clone();
     let jac_z = arg(uses_unknowns(&jac_roots), "z");
     let tp_z = arg(uses_unknowns(&tp_roots), "z");
+    let jacobian_item = if i.linear {
+        // `linearized`'s, without the right side.
+        quote! {
+            fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+                self.linearized(t, x, None, jac)
+            }
+        }
+    } else {
+        quote! {
+            fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+                let (#jac_z, lu) = #factored;
+                #jac_statements
+                let mut g_x = Matrix::zeros(#size, #n_lit);
+                #(#gx_cells)*
+                lagc_runtime::highest::implicit_derivatives(&lu, &mut g_x);
+                #shift_jacobian
+                for c in 0..#n_lit {
+                    #(jac[(#ind_rows_t, c)] = g_x[(#ind_k_t, c)];)*
+                }
+                #(#dep_jac)*
+                Ok(())
+            }
+        }
+    };
     let trait_items = quote! {
         fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
             #z_binding
@@ -557,19 +581,7 @@ fn implicit(
             Ok(())
         }
 
-        fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
-            let (#jac_z, lu) = #factored;
-            #jac_statements
-            let mut g_x = Matrix::zeros(#size, #n_lit);
-            #(#gx_cells)*
-            lagc_runtime::highest::implicit_derivatives(&lu, &mut g_x);
-            #shift_jacobian
-            for c in 0..#n_lit {
-                #(jac[(#ind_rows_t, c)] = g_x[(#ind_k_t, c)];)*
-            }
-            #(#dep_jac)*
-            Ok(())
-        }
+        #jacobian_item
 
         fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
             let (#tp_z, lu) = #factored;
@@ -582,7 +594,7 @@ fn implicit(
             Ok(())
         }
     };
-    let linearize = if i.linear {
+    let (linearize, linearized) = if i.linear {
         let ind = (&ind_rows[..], &ind_k[..]);
         let dep = (
             &dep_statements,
@@ -590,7 +602,7 @@ fn implicit(
             &dep_values[..],
             dep.uses_source,
         );
-        linearize_linear(
+        let helper = linearize_linear(
             kernel,
             names,
             i,
@@ -600,18 +612,25 @@ fn implicit(
             dep,
             shifts,
             shift_jacobian,
-        )
+        );
+        let item = quote! {
+            fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+                self.linearized(t, x, Some(dx), jac)
+            }
+        };
+        (item, helper)
     } else {
         // Newton's: the trait's default, printed so that every kind of
         // motion defines it (the modes dispatch on the first mode's items).
-        quote! {
+        let item = quote! {
             fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
                 self.rhs(t, x, dx)?;
                 self.jacobian(t, x, jac)
             }
-        }
+        };
+        (item, TokenStream::new())
     };
-    let inherent = quote! { #solve };
+    let inherent = quote! { #solve #linearized };
     (quote! { #trait_items #linearize }, inherent)
 }
 
@@ -676,14 +695,16 @@ fn jacobian_cells(
     (gx_cells, dep_jac)
 }
 
-/// `linearize` of a motion affine in its highest derivatives: what `rhs`
-/// then `jacobian` compute, with the same operations in the same order
+/// `linearized`, the `jacobian` of a motion affine in its highest
+/// derivatives and with `dx` its `linearize`: what `rhs` then the heap
+/// path's `jacobian` compute, with the same operations in the same order
 /// (bit for bit), but the mass system evaluated once and its common
 /// subexpressions with `∂G/∂x` and the dependent rows' partials computed
 /// once (the field linearises the motion at every stage). The right side
-/// takes its solve on the stack (`rhs`'s), the Jacobian the factored one
-/// (`jacobian`'s, here on the stack too: `highest::fixed`, the same bits
-/// without allocating) from the same matrix.
+/// takes its solve on the stack (`rhs`'s `highest`), the Jacobian the
+/// factored one, on the stack too (`highest::fixed`: `Lu`'s bits without
+/// allocating), from the same matrix. One body for both methods: the
+/// generated crate holds `∂G/∂x`'s code once.
 #[allow(clippy::too_many_arguments)]
 fn linearize_linear(
     kernel: &Kernel,
@@ -734,12 +755,13 @@ fn linearize_linear(
     let z = arg(uses_z, "z");
     let x = arg(code.uses_source || dep_reads_x || !shifts.is_empty(), "x");
     quote! {
-        fn linearize(&self, t: f64, #x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+        /// `jacobian`, and with `dx` the right side (`linearize`).
+        fn linearized(&self, t: f64, #x: &[f64], dx: Option<&mut [f64]>, jac: &mut Matrix) -> Result<(), Failure> {
             #mass_statements
             let mut a = [[0.0; #size]; #size];
             #(#cells)*
             let g = [#(#free),*];
-            {
+            if let Some(dx) = dx {
                 let z = #solver(t, a, g)?;
                 #dep_statements
                 #shifts
