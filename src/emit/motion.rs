@@ -6,7 +6,9 @@
 //! `∂X/∂x` as one block so they share their subexpressions. Implicit ones
 //! solve `G(t, x, z) = 0` for the highest derivatives — one solve of the
 //! mass matrix on the stack when `G` is affine in `z`, Newton otherwise —
-//! and get `∂z/∂x = −G_z⁻¹ G_x` by implicit differentiation at run time.
+//! and get `∂z/∂x = −G_z⁻¹ G_x` by implicit differentiation at run time;
+//! affine ones print `jacobian` and `linearize` as one body that evaluates
+//! the mass system once and factors it on the stack.
 
 use super::bodies::{self, arg, index};
 use super::names::{Source, SymbolNames};
