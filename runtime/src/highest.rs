@@ -8,6 +8,9 @@
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{condition_estimate, Lu, Matrix};
 
+pub mod fixed;
+pub use fixed::{solve_linear_fixed, MassLu};
+
 /// A mass matrix whose pivots fall below this fraction of the largest is
 /// treated as singular: beyond it the accelerations carry no digits.
 const SINGULAR_PIVOT_RATIO: f64 = 1e-14;

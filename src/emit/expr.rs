@@ -33,12 +33,17 @@ pub struct Lowered {
 }
 
 /// Lowers `roots`; `symbol` names every free symbol's local variable.
-pub fn lower_exprs(
+/// Also how many of the `lets` the first `split` roots need: those come
+/// first (the nodes are visited root by root), so code can compute the
+/// first roots, then bind what the others alone read (an implicit model's
+/// highest derivatives, once solved from the first).
+pub fn lower_exprs_split(
     arena: &Arena,
     roots: &[ExprId],
+    split: usize,
     symbol: &dyn Fn(Symbol) -> TokenStream,
     namer: &mut Namer,
-) -> Lowered {
+) -> (Lowered, usize) {
     let prefix = sum_prefixes(arena, roots);
     let operands = |e: ExprId| -> Vec<ExprId> {
         match (prefix.get(&e), arena.node(e)) {
@@ -51,6 +56,15 @@ pub fn lower_exprs(
         }
     };
     let order = postorder(roots, operands, &mut HashSet::new());
+    // The nodes the first roots reach: a prefix of `order` (depth first,
+    // root by root).
+    let early = postorder(
+        &roots[..split.min(roots.len())],
+        operands,
+        &mut HashSet::new(),
+    )
+    .len();
+    let mut early_lets = 0;
     let mut uses: HashMap<ExprId, usize> = HashMap::new();
     for &e in &order {
         for c in operands(e) {
@@ -77,7 +91,10 @@ pub fn lower_exprs(
         }
     }
     let mut lets = Vec::new();
-    for &e in &order {
+    for (at, &e) in order.iter().enumerate() {
+        if at == early {
+            early_lets = lets.len();
+        }
         if writer.bound.contains_key(&e) {
             continue;
         }
@@ -104,8 +121,11 @@ pub fn lower_exprs(
             writer.bound.insert(e, name);
         }
     }
+    if early >= order.len() {
+        early_lets = lets.len();
+    }
     let roots = roots.iter().map(|&r| writer.expr(r).0).collect();
-    Lowered { lets, roots }
+    (Lowered { lets, roots }, early_lets)
 }
 
 /// For each sum among the nodes reachable from `roots`, the longest other

@@ -24,6 +24,10 @@ const RUNTIME: &[(&str, &str)] = &[
         "src/highest.rs",
         include_str!("../../runtime/src/highest.rs"),
     ),
+    (
+        "src/highest/fixed.rs",
+        include_str!("../../runtime/src/highest/fixed.rs"),
+    ),
     ("src/io/api.rs", include_str!("../../runtime/src/io/api.rs")),
     ("src/io/cli.rs", include_str!("../../runtime/src/io/cli.rs")),
     (

@@ -10,7 +10,7 @@ use quote::quote;
 use std::collections::HashMap;
 
 /// The motion's methods (trait items and their inherent helpers).
-const METHODS: [&str; 12] = [
+const METHODS: [&str; 13] = [
     "rhs",
     "constrained",
     "kept_gradient",
@@ -18,6 +18,7 @@ const METHODS: [&str; 12] = [
     "jacobian",
     "time_partial",
     "linearize",
+    "linearized",
     "mass_system",
     "highest",
     "highest_factored",

@@ -6,14 +6,16 @@
 //! `∂X/∂x` as one block so they share their subexpressions. Implicit ones
 //! solve `G(t, x, z) = 0` for the highest derivatives — one solve of the
 //! mass matrix on the stack when `G` is affine in `z`, Newton otherwise —
-//! and get `∂z/∂x = −G_z⁻¹ G_x` by implicit differentiation at run time.
+//! and get `∂z/∂x = −G_z⁻¹ G_x` by implicit differentiation at run time;
+//! affine ones print `jacobian` and `linearize` as one body that evaluates
+//! the mass system once and factors it on the stack.
 
 use super::bodies::{self, arg, index};
 use super::names::{Source, SymbolNames};
 use crate::ir::{ExprId, Symbol};
 use crate::kernel::{Explicit, Implicit, Kernel, Motion};
 use proc_macro2::{Literal, TokenStream};
-use quote::quote;
+use quote::{quote, ToTokens};
 use std::collections::HashMap;
 
 /// `(items of the trait impl, items of the inherent impl)`.
@@ -510,41 +512,8 @@ fn implicit(
     jac_roots.extend(&d_roots);
     let jac = names.code(arena, &jac_roots, &from_xz);
     let jac_statements = jac.statements(quote! { self.params });
-    let (gx_values, d_values) = jac.roots.split_at(gx_roots.len());
-    let gx_cells: Vec<TokenStream> = i
-        .g_x
-        .iter()
-        .zip(gx_values)
-        .map(|(&(r, c, _), v)| {
-            let (r, c) = (index(r), index(c));
-            quote! { g_x[(#r, #c)] = #v; }
-        })
-        .collect();
     let n_lit = index(n);
-    let mut dep_jac = Vec::new();
-    let mut at = 0;
-    for d in &i.dependent {
-        let row = index(kernel.highest_row(d.coord));
-        let mut d_x = vec![quote! { 0.0 }; n];
-        for &(c, _) in &d.d_x {
-            d_x[c] = d_values[at].clone();
-            at += 1;
-        }
-        let mut d_z = vec![quote! { 0.0 }; m];
-        for &(k, _) in &d.d_z {
-            d_z[k] = d_values[at].clone();
-            at += 1;
-        }
-        dep_jac.push(quote! {
-            {
-                let d_x: [f64; #n_lit] = [#(#d_x),*];
-                let d_z: [f64; #size] = [#(#d_z),*];
-                for c in 0..#n_lit {
-                    jac[(#row, c)] = d_x[c] + (0..#size).map(|k| d_z[k] * g_x[(k, c)]).sum::<f64>();
-                }
-            }
-        });
-    }
+    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, &jac.roots, false);
     // ∂G/∂t, then ∂z/∂t; the dependent rows'.
     let mut tp_roots: Vec<ExprId> = i.g_t.iter().map(|&(_, e)| e).collect();
     let mut dep_t_roots = Vec::new();
@@ -580,6 +549,30 @@ fn implicit(
     let ind_k_t = ind_k.clone();
     let jac_z = arg(uses_unknowns(&jac_roots), "z");
     let tp_z = arg(uses_unknowns(&tp_roots), "z");
+    let jacobian_item = if i.linear {
+        // `linearized`'s, without the right side.
+        quote! {
+            fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+                self.linearized(t, x, None, jac)
+            }
+        }
+    } else {
+        quote! {
+            fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
+                let (#jac_z, lu) = #factored;
+                #jac_statements
+                let mut g_x = Matrix::zeros(#size, #n_lit);
+                #(#gx_cells)*
+                lagc_runtime::highest::implicit_derivatives(&lu, &mut g_x);
+                #shift_jacobian
+                for c in 0..#n_lit {
+                    #(jac[(#ind_rows_t, c)] = g_x[(#ind_k_t, c)];)*
+                }
+                #(#dep_jac)*
+                Ok(())
+            }
+        }
+    };
     let trait_items = quote! {
         fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), Failure> {
             #z_binding
@@ -590,19 +583,7 @@ fn implicit(
             Ok(())
         }
 
-        fn jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
-            let (#jac_z, lu) = #factored;
-            #jac_statements
-            let mut g_x = Matrix::zeros(#size, #n_lit);
-            #(#gx_cells)*
-            lagc_runtime::highest::implicit_derivatives(&lu, &mut g_x);
-            #shift_jacobian
-            for c in 0..#n_lit {
-                #(jac[(#ind_rows_t, c)] = g_x[(#ind_k_t, c)];)*
-            }
-            #(#dep_jac)*
-            Ok(())
-        }
+        #jacobian_item
 
         fn time_partial(&self, t: f64, x: &[f64], dxdt: &mut [f64]) -> Result<(), Failure> {
             let (#tp_z, lu) = #factored;
@@ -615,8 +596,193 @@ fn implicit(
             Ok(())
         }
     };
-    let inherent = quote! { #solve };
-    (trait_items, inherent)
+    let (linearize, linearized) = if i.linear {
+        let ind = (&ind_rows[..], &ind_k[..]);
+        let dep = (
+            &dep_statements,
+            &dep_rows[..],
+            &dep_values[..],
+            dep.uses_source,
+        );
+        let helper = linearize_linear(
+            kernel,
+            names,
+            i,
+            from_x,
+            &jac_roots,
+            ind,
+            dep,
+            shifts,
+            shift_jacobian,
+        );
+        let item = quote! {
+            fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+                self.linearized(t, x, Some(dx), jac)
+            }
+        };
+        (item, helper)
+    } else {
+        // Newton's: the trait's default, printed so that every kind of
+        // motion defines it (the modes dispatch on the first mode's items).
+        let item = quote! {
+            fn linearize(&self, t: f64, x: &[f64], dx: &mut [f64], jac: &mut Matrix) -> Result<(), Failure> {
+                self.rhs(t, x, dx)?;
+                self.jacobian(t, x, jac)
+            }
+        };
+        (item, TokenStream::new())
+    };
+    let inherent = quote! { #solve #linearized };
+    (quote! { #trait_items #linearize }, inherent)
+}
+
+/// `g_x[(r, c)] = …;` for each cell of `∂G/∂x`, and the dependent rows'
+/// Jacobian blocks, from the printed values of the roots `∂G/∂x`'s cells,
+/// then each dependent row's `d_x` and `d_z` (in [`implicit`]'s order).
+/// `columns`: `g_x` is an array of columns on the stack, `g_x[c][r]`.
+fn jacobian_cells(
+    kernel: &Kernel,
+    i: &Implicit,
+    values: &[TokenStream],
+    columns: bool,
+) -> (Vec<TokenStream>, Vec<TokenStream>) {
+    let cell = |r: TokenStream, c: TokenStream| {
+        if columns {
+            quote! { g_x[#c][#r] }
+        } else {
+            quote! { g_x[(#r, #c)] }
+        }
+    };
+    let (n, m) = (kernel.state.len(), i.unknowns.len());
+    let (n_lit, size) = (index(n), index(m));
+    let (gx_values, d_values) = values.split_at(i.g_x.len().min(values.len()));
+    let gx_cells: Vec<TokenStream> = i
+        .g_x
+        .iter()
+        .zip(gx_values)
+        .map(|(&(r, c, _), v)| {
+            let g_x = cell(index(r).into_token_stream(), index(c).into_token_stream());
+            quote! { #g_x = #v; }
+        })
+        .collect();
+    let g_x_kc = cell(quote! { k }, quote! { c });
+    let mut dep_jac = Vec::new();
+    let mut values = d_values.iter();
+    let mut next = || {
+        values
+            .next()
+            .cloned()
+            .unwrap_or_else(|| quote! { f64::NAN })
+    };
+    for d in &i.dependent {
+        let row = index(kernel.highest_row(d.coord));
+        let mut d_x = vec![quote! { 0.0 }; n];
+        for &(c, _) in &d.d_x {
+            d_x[c] = next();
+        }
+        let mut d_z = vec![quote! { 0.0 }; m];
+        for &(k, _) in &d.d_z {
+            d_z[k] = next();
+        }
+        dep_jac.push(quote! {
+            {
+                let d_x: [f64; #n_lit] = [#(#d_x),*];
+                let d_z: [f64; #size] = [#(#d_z),*];
+                for c in 0..#n_lit {
+                    jac[(#row, c)] = d_x[c] + (0..#size).map(|k| d_z[k] * #g_x_kc).sum::<f64>();
+                }
+            }
+        });
+    }
+    (gx_cells, dep_jac)
+}
+
+/// `linearized`, the `jacobian` of a motion affine in its highest
+/// derivatives and with `dx` its `linearize`: what `rhs` then the heap
+/// path's `jacobian` compute, with the same operations in the same order
+/// (bit for bit), but the mass system evaluated once and its common
+/// subexpressions with `∂G/∂x` and the dependent rows' partials computed
+/// once (the field linearises the motion at every stage). The right side
+/// takes its solve on the stack (`rhs`'s `highest`), the Jacobian the
+/// factored one, on the stack too (`highest::fixed`: `Lu`'s bits without
+/// allocating), from the same matrix. One body for both methods: the
+/// generated crate holds `∂G/∂x`'s code once.
+#[allow(clippy::too_many_arguments)]
+fn linearize_linear(
+    kernel: &Kernel,
+    names: &mut SymbolNames,
+    i: &Implicit,
+    from_x: Source,
+    jac_roots: &[ExprId],
+    (ind_rows, ind_k): (&[Literal], &[Literal]),
+    (dep_statements, dep_rows, dep_values, dep_reads_x): (
+        &TokenStream,
+        &[Literal],
+        &[TokenStream],
+        bool,
+    ),
+    shifts: &TokenStream,
+    shift_jacobian: &TokenStream,
+) -> TokenStream {
+    let arena = &kernel.arena;
+    let (m, n) = (i.unknowns.len(), kernel.state.len());
+    let (size, n_lit) = (index(m), index(n));
+    let from_xz = from_unknowns(&i.unknowns, from_x);
+    let mut roots = i.free.clone();
+    roots.extend(i.g_z.iter().map(|&(_, _, e)| e));
+    let split = roots.len();
+    roots.extend(jac_roots);
+    let (code, at) = names.code_split(arena, &roots, split, &from_xz);
+    let (mass_statements, jac_statements) = code.split_statements(quote! { self.params }, at);
+    let (mass, jac_values) = code.roots.split_at(split);
+    let (free, cells) = mass.split_at(i.free.len());
+    let cells: Vec<TokenStream> = i
+        .g_z
+        .iter()
+        .zip(cells)
+        .map(|(&(r, c, _), v)| {
+            let (r, c) = (index(r), index(c));
+            quote! { a[#r][#c] = #v; }
+        })
+        .collect();
+    let (gx_cells, dep_jac) = jacobian_cells(kernel, i, jac_values, true);
+    let solver = if i.symmetric {
+        quote! { lagc_runtime::highest::solve_symmetric_fixed_checked }
+    } else {
+        quote! { lagc_runtime::highest::solve_fixed_checked }
+    };
+    let uses_z = jac_roots
+        .iter()
+        .any(|&r| i.unknowns.iter().any(|&u| arena.depends_on(r, u)));
+    let z = arg(uses_z, "z");
+    let x = arg(code.uses_source || dep_reads_x || !shifts.is_empty(), "x");
+    quote! {
+        /// `jacobian`, and with `dx` the right side (`linearize`).
+        fn linearized(&self, t: f64, #x: &[f64], dx: Option<&mut [f64]>, jac: &mut Matrix) -> Result<(), Failure> {
+            #mass_statements
+            let mut a = [[0.0; #size]; #size];
+            #(#cells)*
+            let g = [#(#free),*];
+            if let Some(dx) = dx {
+                let z = #solver(t, a, g)?;
+                #dep_statements
+                #shifts
+                #(dx[#ind_rows] = z[#ind_k];)*
+                #(dx[#dep_rows] = #dep_values;)*
+            }
+            let (#z, lu) = lagc_runtime::highest::solve_linear_fixed(t, &a, &g)?;
+            #jac_statements
+            let mut g_x = [[0.0_f64; #size]; #n_lit];
+            #(#gx_cells)*
+            lu.implicit_derivatives(&mut g_x);
+            #shift_jacobian
+            for c in 0..#n_lit {
+                #(jac[(#ind_rows, c)] = g_x[c][#ind_k];)*
+            }
+            #(#dep_jac)*
+            Ok(())
+        }
+    }
 }
 
 /// `mass_matrix`, for diagnosing a failure: the mass matrix is

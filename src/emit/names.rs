@@ -1,7 +1,7 @@
 //! The generated code's names for the model's symbols, and the `let`
 //! bindings that bring the symbols a function uses into scope.
 
-use super::expr::{lower_exprs, Lowered};
+use super::expr::{lower_exprs_split, Lowered};
 use super::namer::Namer;
 use crate::ir::{Arena, ExprId, Symbol};
 use proc_macro2::{Ident, TokenStream};
@@ -75,16 +75,46 @@ impl SymbolNames {
     /// (params from `p`, mass laws by their functions, state-like symbols
     /// from `source`), the shared sub-expressions, the root expressions.
     pub fn code(&mut self, arena: &Arena, roots: &[ExprId], source: Source) -> Code {
-        let mut free: BTreeSet<Symbol> = BTreeSet::new();
-        for &r in roots {
-            free.extend(arena.free_symbols(r));
+        self.code_split(arena, roots, roots.len(), source).0
+    }
+
+    /// [`SymbolNames::code`] for code that computes the first `split`
+    /// roots before it can bind some symbols the others read (an implicit
+    /// model's highest derivatives, solved from the first): the bindings
+    /// of the first roots' symbols come first in `prelude`, and with the
+    /// count of `lets` they need, the [`Split`] of the statements.
+    pub fn code_split(
+        &mut self,
+        arena: &Arena,
+        roots: &[ExprId],
+        split: usize,
+        source: Source,
+    ) -> (Code, Split) {
+        let split = split.min(roots.len());
+        let mut early_free: BTreeSet<Symbol> = BTreeSet::new();
+        for &r in &roots[..split] {
+            early_free.extend(arena.free_symbols(r));
         }
+        let mut late_free: BTreeSet<Symbol> = BTreeSet::new();
+        for &r in &roots[split..] {
+            late_free.extend(arena.free_symbols(r));
+        }
+        let early_prelude_symbols = early_free.len();
+        let free: Vec<Symbol> = early_free
+            .iter()
+            .copied()
+            .chain(late_free.difference(&early_free).copied())
+            .collect();
         let mut prelude = Vec::new();
+        let mut early_prelude = 0;
         let mut uses_params = false;
         let mut uses_time = false;
         let mut uses_source = false;
         let mut idents: HashMap<Symbol, TokenStream> = HashMap::new();
-        for &s in &free {
+        for (at, &s) in free.iter().enumerate() {
+            if at == early_prelude_symbols {
+                early_prelude = prelude.len();
+            }
             let name = self.ident(arena, s);
             idents.insert(s, name.clone());
             match s {
@@ -135,15 +165,26 @@ impl SymbolNames {
         // own (`e`, `e_2`, … in every function), so that a change in one
         // item renames nothing in another.
         let mut item_scope = self.namer.clone();
-        let Lowered { lets, roots } = lower_exprs(arena, roots, &lookup, &mut item_scope);
-        Code {
+        let (Lowered { lets, roots }, early_lets) =
+            lower_exprs_split(arena, roots, split, &lookup, &mut item_scope);
+        if early_prelude_symbols >= free.len() {
+            early_prelude = prelude.len();
+        }
+        let code = Code {
             prelude,
             lets,
             roots,
             uses_params,
             uses_time,
             uses_source,
-        }
+        };
+        (
+            code,
+            Split {
+                prelude: early_prelude,
+                lets: early_lets,
+            },
+        )
     }
 }
 
@@ -152,6 +193,14 @@ fn ident_tokens(ident: Option<&Ident>) -> TokenStream {
         Some(i) => quote! { #i },
         None => quote! { f64::NAN },
     }
+}
+
+/// Where [`SymbolNames::code_split`]'s statements divide: the first
+/// `prelude` bindings and `lets` are all the first roots need.
+#[derive(Clone, Copy)]
+pub struct Split {
+    pub prelude: usize,
+    pub lets: usize,
 }
 
 pub struct Code {
@@ -177,6 +226,23 @@ impl Code {
             TokenStream::new()
         };
         quote! { #p #(#prelude)* #(#lets)* }
+    }
+
+    /// [`Code::statements`] in two: those the first roots of a
+    /// [`SymbolNames::code_split`] need (with `let p = …;` when any
+    /// statement uses the params), and the rest.
+    pub fn split_statements(&self, params: TokenStream, at: Split) -> (TokenStream, TokenStream) {
+        let (early_prelude, late_prelude) = self.prelude.split_at(at.prelude);
+        let (early_lets, late_lets) = self.lets.split_at(at.lets);
+        let p = if self.uses_params {
+            quote! { let p = &#params; }
+        } else {
+            TokenStream::new()
+        };
+        (
+            quote! { #p #(#early_prelude)* #(#early_lets)* },
+            quote! { #(#late_prelude)* #(#late_lets)* },
+        )
     }
 
     /// The statements for a function whose params are already `p`.

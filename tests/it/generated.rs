@@ -458,8 +458,11 @@ fn generated_crates_pass_clippy() {
     // field, Newton, k = 3 consistency, impacts (with a constraint), a mass
     // law of the state; several candidates with a numeric solve of each
     // mode's mass matrix, and with every construct; holonomic constraints
-    // solved together in several modes (Newton on the closure, projection).
+    // solved together in several modes (Newton on the closure, projection);
+    // a mass matrix solved at run time with dependent rows (`linearize`
+    // on the stack).
     for name in [
+        "rolling_disk_3d",
         "paper",
         "incline_bounce",
         "constrained_wall",
