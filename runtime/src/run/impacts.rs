@@ -171,6 +171,35 @@ impl Impacts {
     }
 }
 
+/// The `when`s whose condition became true at an event where the
+/// switching functions `switched` changed sign from the branches
+/// `before` (the model in the regime before): the impacts that fire
+/// there, in declaration order.
+pub fn fired(model: &dyn DynModel, before: &[bool], switched: &[usize]) -> Vec<usize> {
+    let mut after = before.to_vec();
+    for &s in switched {
+        after[s] = !after[s];
+    }
+    (0..model.impacts().len())
+        .filter(|&w| !model.impact_holds(w, before) && model.impact_holds(w, &after))
+        .collect()
+}
+
+/// `state` with the resets of the impacts `fired` applied at `t` in
+/// order, each reading the state the previous one left (as
+/// [`Impacts::at_event`] applies them): for the derivatives of the
+/// resets (the sensitivities' jump, the carried error's saltation).
+pub fn reset(model: &dyn DynModel, fired: &[usize], t: f64, state: &[f64]) -> Vec<f64> {
+    let mut y = state.to_vec();
+    let mut out = y.clone();
+    for &w in fired {
+        out.copy_from_slice(&y);
+        model.impact_reset(w, t, &y, &mut out);
+        y.copy_from_slice(&out);
+    }
+    y
+}
+
 /// What the resets left of the functions that fired.
 struct After {
     /// A function still at zero stays on the new side although the resets

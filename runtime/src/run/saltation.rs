@@ -66,23 +66,8 @@ pub fn through_event(
     let shift = -g_e / rate;
     // The impacts that fired, their resets applied in order, as
     // `Impacts::at_event` applies them (the model in the regime before).
-    let mut mid = before.branches.clone();
-    for &j in switched {
-        mid[j] = !mid[j];
-    }
-    let fired: Vec<usize> = (0..model.impacts().len())
-        .filter(|&w| !old.impact_holds(w, &before.branches) && old.impact_holds(w, &mid))
-        .collect();
-    let reset = |state: &[f64]| -> Vec<f64> {
-        let mut y = state.to_vec();
-        let mut out = y.clone();
-        for &w in &fired {
-            out.copy_from_slice(&y);
-            old.impact_reset(w, t, &y, &mut out);
-            y.copy_from_slice(&out);
-        }
-        y
-    };
+    let fired = crate::run::impacts::fired(old, &before.branches, switched);
+    let reset = |state: &[f64]| crate::run::impacts::reset(old, &fired, t, state);
     // R_x applied to a direction: the identity where nothing fired.
     let r_x = |d: &[f64]| -> Vec<f64> {
         if fired.is_empty() {

@@ -546,22 +546,9 @@ impl Augmented {
         }
         let g_t = derivative(t, 1.0, &mut |v| Ok(vec![g_of(old, v, xm)]))?[0];
         // The impacts that fired: the resets `R`, applied in order.
-        let mut mid = before.branches.clone();
-        for &s in switched {
-            mid[s] = !mid[s];
-        }
-        let fired: Vec<usize> = (0..self.inner.impacts().len())
-            .filter(|&w| !old.impact_holds(w, &before.branches) && old.impact_holds(w, &mid))
-            .collect();
+        let fired = crate::run::impacts::fired(old, &before.branches, switched);
         let reset = |model: &dyn DynModel, state: &[f64]| -> Vec<f64> {
-            let mut y = state.to_vec();
-            let mut out = y.clone();
-            for &w in &fired {
-                out.copy_from_slice(&y);
-                model.impact_reset(w, t, &y, &mut out);
-                y.copy_from_slice(&out);
-            }
-            y
+            crate::run::impacts::reset(model, &fired, t, state)
         };
         // `∂g/∂p` and `∂R/∂p` in one pass over the models with a param
         // moved (making each is most of an event's cost on a small model).
