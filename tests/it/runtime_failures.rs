@@ -54,3 +54,24 @@ fn failing_models_stop_with_status_3_naming_time_and_quantity() {
         crate::expect::lag_files("tests/data/runtime_failures").len()
     );
 }
+
+#[test]
+fn the_field_stepping_over_a_constraint_s_pole_ends_on_the_exact_solution() {
+    // tests/data/runtime_failures/constraint_pole.lag at rtol 1e-12: the
+    // field steps over the pole of `y' = tan(th) x'` at th = pi/2, where
+    // x' = 0 keeps the product finite, as direct integration does. Not
+    // silently: the end state is the exact one (th = t, x = sin t,
+    // y = 1 - cos t), and the summary reports the residual at the pole.
+    let path = crate::root().join("tests/data/runtime_failures/constraint_pole.lag");
+    let binary = build_file(&path);
+    let args = ["--method", "field", "--rtol", "1e-12", "--samples", "11"];
+    let (rows, stderr) = crate::rolling_bodies::run(&binary, &args);
+    let last = rows.last().unwrap();
+    let t = last[0];
+    assert!((t - 3.0).abs() < 1e-12, "{stderr}");
+    let exact = [t.sin(), 1.0 - t.cos(), t, t.cos(), t.sin(), 1.0];
+    for (got, want) in last[1..].iter().zip(exact) {
+        assert!((got - want).abs() < 1e-10, "{got} against {want}: {stderr}");
+    }
+    assert!(stderr.contains("largest residual"), "{stderr}");
+}

@@ -2,10 +2,10 @@
 //! middle (`quasilinear.rs` builds the pieces: one DOP853 step of the
 //! motion linearised along the window's predictor, pinned to the two
 //! recovered states). A piece is cut in two at its middle where it stands
-//! off a DOP853 half step from its start ([`halve`]); that half step (12
+//! off a DOP853 half step from its start (`halve`); that half step (12
 //! evaluations of the linearised motion, each a linearisation of the
 //! model) is taken only where the piece's own defect shows its middle
-//! past the gate ([`defect_estimate`], 4 linearisations).
+//! past the gate (`defect_estimate`, 4 linearisations).
 
 use crate::linalg::Matrix;
 use crate::ode::dense::DenseStep;
