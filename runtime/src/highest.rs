@@ -20,20 +20,34 @@ const SINGULAR_PIVOT_RATIO: f64 = 1e-14;
 /// run.
 pub fn solve_linear(t: f64, mass: Matrix, free: &[f64]) -> Result<(Vec<f64>, Lu), Failure> {
     let lu = Lu::in_place(mass);
-    if lu.is_singular() || lu.pivot_ratio() < SINGULAR_PIVOT_RATIO {
-        return Err(Failure::new(
-            t,
-            FailureKind::SingularMassMatrix {
-                condition: if lu.is_singular() {
-                    f64::INFINITY
-                } else {
-                    1.0 / lu.pivot_ratio()
-                },
-            },
-        ));
-    }
+    check_pivots(t, lu.is_singular(), lu.pivot_ratio())?;
     let mut z: Vec<f64> = free.iter().map(|v| -v).collect();
     lu.solve_in_place(&mut z);
+    check_finite(t, &z)?;
+    Ok((z, lu))
+}
+
+/// A factored mass matrix that is singular, or whose pivots spread past
+/// [`SINGULAR_PIVOT_RATIO`], stops the run, its condition the inverse
+/// ratio (shared by the heap and the stack solves, so both name it alike).
+fn check_pivots(t: f64, singular: bool, pivot_ratio: f64) -> Result<(), Failure> {
+    if singular || pivot_ratio < SINGULAR_PIVOT_RATIO {
+        let condition = if singular {
+            f64::INFINITY
+        } else {
+            1.0 / pivot_ratio
+        };
+        return Err(Failure::new(
+            t,
+            FailureKind::SingularMassMatrix { condition },
+        ));
+    }
+    Ok(())
+}
+
+/// Accelerations that are not finite come from a mass matrix singular in
+/// all but its pivots.
+fn check_finite(t: f64, z: &[f64]) -> Result<(), Failure> {
     if z.iter().any(|v| !v.is_finite()) {
         return Err(Failure::new(
             t,
@@ -42,7 +56,7 @@ pub fn solve_linear(t: f64, mass: Matrix, free: &[f64]) -> Result<(Vec<f64>, Lu)
             },
         ));
     }
-    Ok((z, lu))
+    Ok(())
 }
 
 /// `z` from `A z = −g` for a fixed-size mass matrix on the stack (the

@@ -7,8 +7,8 @@
 //! model at every stage of every step (a triple pendulum: 34,000 times a
 //! run at rtol 1e-9), and the allocations were a quarter of it.
 
-use super::SINGULAR_PIVOT_RATIO;
-use crate::failure::{Failure, FailureKind};
+use super::{check_finite, check_pivots};
+use crate::failure::Failure;
 
 /// `PA = LU` of an `M × M` matrix, `factors[j][i]` the entry of row `i`,
 /// column `j` (as [`crate::linalg::Lu`] holds them).
@@ -136,28 +136,10 @@ pub fn solve_linear_fixed<const M: usize>(
     free: &[f64; M],
 ) -> Result<([f64; M], MassLu<M>), Failure> {
     let lu = MassLu::new(a);
-    if lu.is_singular() || lu.pivot_ratio() < SINGULAR_PIVOT_RATIO {
-        return Err(Failure::new(
-            t,
-            FailureKind::SingularMassMatrix {
-                condition: if lu.is_singular() {
-                    f64::INFINITY
-                } else {
-                    1.0 / lu.pivot_ratio()
-                },
-            },
-        ));
-    }
+    check_pivots(t, lu.is_singular(), lu.pivot_ratio())?;
     let mut z = free.map(|v| -v);
     lu.solve(&mut z);
-    if z.iter().any(|v| !v.is_finite()) {
-        return Err(Failure::new(
-            t,
-            FailureKind::SingularMassMatrix {
-                condition: f64::INFINITY,
-            },
-        ));
-    }
+    check_finite(t, &z)?;
     Ok((z, lu))
 }
 
