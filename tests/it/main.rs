@@ -5,6 +5,7 @@ mod bit_identity;
 mod cache;
 mod check_build;
 mod cli;
+mod collisions;
 mod depth;
 mod early_errors;
 mod ensemble;

@@ -88,9 +88,16 @@ impl Impacts {
 
     /// At the event at `t` where the switches `switched` changed their
     /// branches from `before` to `regime.branches`: applies the resets of
-    /// every `when` whose condition became true (in declaration order,
-    /// each reading the state the previous one left) to `x`, and sets the
+    /// every `when` whose condition became true to `x`, and sets the
     /// branches of the functions they moved.
+    ///
+    /// Every reset reads the state before the impact, as one impact's
+    /// several resets do (`when … then x1' = …, x2' = …`): two balls
+    /// colliding written as two `when`s with one condition, each
+    /// reading the state the previous one left, gave the second ball a
+    /// velocity from the first's new one (momentum 2 → −2.06, exit 0).
+    /// The components the constraints fix are recomputed from the state
+    /// every reset left (`Model::impact_reset`).
     #[allow(clippy::too_many_arguments)]
     pub fn at_event(
         &mut self,
@@ -111,13 +118,12 @@ impl Impacts {
         let x_before = x.to_vec();
         let mut out = x.to_vec();
         for &w in &fired {
-            out.copy_from_slice(x);
-            model.impact_reset(w, t, x, &mut out);
-            if let Some(i) = out.iter().position(|v| !v.is_finite()) {
-                return Err(Failure::non_finite(t, model.state_names()[i]));
-            }
-            x.copy_from_slice(&out);
+            model.impact_reset(w, t, &x_before, &mut out);
         }
+        if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+            return Err(Failure::non_finite(t, model.state_names()[i]));
+        }
+        x.copy_from_slice(&out);
         self.guards.clear();
         let after = branches_after(
             model,
@@ -185,19 +191,16 @@ pub fn fired(model: &dyn DynModel, before: &[bool], switched: &[usize]) -> Vec<u
         .collect()
 }
 
-/// `state` with the resets of the impacts `fired` applied at `t` in
-/// order, each reading the state the previous one left (as
-/// [`Impacts::at_event`] applies them): for the derivatives of the
-/// resets (the sensitivities' jump, the carried error's saltation).
+/// `state` with the resets of the impacts `fired` applied at `t`, each
+/// reading `state` (as [`Impacts::at_event`] applies them): for the
+/// derivatives of the resets (the sensitivities' jump, the carried
+/// error's saltation).
 pub fn reset(model: &dyn DynModel, fired: &[usize], t: f64, state: &[f64]) -> Vec<f64> {
-    let mut y = state.to_vec();
-    let mut out = y.clone();
+    let mut out = state.to_vec();
     for &w in fired {
-        out.copy_from_slice(&y);
-        model.impact_reset(w, t, &y, &mut out);
-        y.copy_from_slice(&out);
+        model.impact_reset(w, t, state, &mut out);
     }
-    y
+    out
 }
 
 /// What the resets left of the functions that fired.
