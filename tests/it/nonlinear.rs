@@ -240,3 +240,44 @@ fn the_constant_speed_particle_written_without_for_runs_its_circle() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A second-order constraint written with the candidate a new user names
+/// first, `y''`, whose pivot `y'` is 0 at the start (thrown level): it fixes
+/// no initial value (`y''` is not state), so the run starts on `x''`. The
+/// run stopped at t = 0 asking for a `y''` no initial value can give. With
+/// gravity the constraint's force keeps the speed v: the velocity's angle
+/// obeys φ' = −(g/v) cos φ, φ = −gd(g t / v).
+#[test]
+fn a_second_order_constraint_starts_on_its_best_candidate() {
+    let dir = std::env::temp_dir().join(format!("lagc-perpendicular-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("perpendicular_acceleration.lag");
+    std::fs::write(
+        &file,
+        "param g = 9.81; param v = 1;\ncoord x, y;\n\
+         lagrangian = (x'^2 + y'^2) / 2 - g * y;\n\
+         constraint x' * x'' + y' * y'' = 0 for y'' or x'';\n\
+         initial x = 0, y = 0, x' = v, y' = 0;\ntime 0 .. 3;\n\
+         exact x = v^2 / g * atan(sinh(g * t / v));\n\
+         exact y = -v^2 / g * ln(cosh(g * t / v));\n",
+    )
+    .unwrap();
+    let binary = build_file(&file);
+    for method in METHODS {
+        let (_, stderr) = run(
+            &binary,
+            &[
+                "--method", method, "--rtol", "1e-10", "--atol", "1e-12", "--quiet",
+            ],
+        );
+        let error: f64 = stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("largest error against the exact solution: "))
+            .unwrap_or_else(|| panic!("{method}: no error line in {stderr}"))
+            .trim()
+            .parse()
+            .unwrap();
+        assert!(error < 1e-9, "{method}: {error:e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -96,10 +96,19 @@ pub fn check_first_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Resu
     let total: usize = constraints.iter().map(|c| c.names.len()).sum();
     let mut pivots = vec![0.0; total];
     model.pivots(t0, x0, &mut pivots);
+    let state = model.state_names();
     let mut at = 0;
     for c in constraints {
         let slice = &pivots[at..at + c.names.len()];
         at += c.names.len();
+        // A constraint of order two or more fixes a derivative that is not
+        // state (`x'*x'' + y'*y'' = 0 for y'' or x''`): it fixes no initial
+        // value, and the run starts on its best candidate. Checked, a
+        // particle thrown level (y' = 0) stopped at t = 0 asking for a
+        // `y''` no initial value can give.
+        if !state.contains(&c.names[0]) {
+            continue;
+        }
         let (best, best_pivot) = largest_pivot(slice);
         let ratio = slice[0].abs() / best_pivot;
         if best != 0 && ratio < INITIAL_PIVOT_RATIO {
