@@ -419,10 +419,19 @@ fn bad_lhs(span: Span, label: &str) -> Diagnostic {
 /// At most this many constraints are solved together: the dependents of
 /// a coupled group are solved symbolically by Cramer's rule over shared
 /// minors (2^m of them), and the mechanics differentiates the solution.
-pub const MAX_COUPLED: usize = 4;
+/// Eight: a chain of eight links in Cartesian coordinates (one candidate
+/// each) builds in 15 s on a loaded machine, its crate 0.9 MB, and agrees
+/// with the chain in angles to 2e-13 (`docs/BENCHMARKS.md` §14.7); four,
+/// the bound before, refused a five-link chain written as a user first
+/// writes it.
+pub const MAX_COUPLED: usize = 8;
 /// At most this many reduced systems (modes) are derived for the choices
 /// of dependents; each is a derivation and a part of the generated crate.
 pub const MAX_MODES: usize = 64;
+/// The modes times the minors of the largest group (2^m) are at most this
+/// many: what 64 modes of groups of four cost. A group of eight with its
+/// 256 minors is derived for at most four choices of dependents.
+pub const MAX_MODE_MINORS: usize = MAX_MODES << 4;
 
 impl Checker<'_> {
     /// The candidates of a constraint that holds derivatives, written
@@ -766,6 +775,7 @@ impl Checker<'_> {
         }
         let mut groups = Vec::new();
         let mut modes: usize = 1;
+        let mut largest: usize = 0;
         for &first in &implicit {
             if find(&mut root, first) != first {
                 continue;
@@ -856,6 +866,30 @@ impl Checker<'_> {
                 continue;
             }
             modes = modes.saturating_mul(choices.len());
+            largest = largest.max(members.len());
+            if modes <= MAX_MODES && modes.saturating_mul(1 << largest) > MAX_MODE_MINORS {
+                let diagnostic = Diagnostic::error(
+                    codes::BAD_CANDIDATE,
+                    format!(
+                        "{modes} reduced systems of {largest} constraints solved together are \
+                         more than lagc derives"
+                    ),
+                )
+                .with_primary(
+                    last,
+                    format!("{} choices of dependents here", choices.len()),
+                )
+                .with_note(format!(
+                    "lagc derives one reduced system for each choice of dependent coordinates, \
+                     each solving its group by 2^m minors: at most {MAX_MODE_MINORS} minors in all"
+                ))
+                .with_help(
+                    "name fewer candidates after `for` (one each: `for y2`), or choose \
+                     coordinates that decouple the constraints (a chain's links by their angles)",
+                );
+                self.report(diagnostic);
+                continue;
+            }
             if modes > MAX_MODES {
                 let diagnostic = Diagnostic::error(
                     codes::BAD_CANDIDATE,
