@@ -47,9 +47,9 @@ fn exact(t: f64) -> [f64; 4] {
             v1 -= (1.0 + E) * M2 / (M1 + M2) * relative;
             v2 += (1.0 + E) * M1 / (M1 + M2) * relative;
         } else if dt == wall1 {
-            v1 = -EW * v1;
+            v1 *= -EW;
         } else {
-            v2 = -EW * v2;
+            v2 *= -EW;
         }
     }
 }
