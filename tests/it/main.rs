@@ -38,7 +38,6 @@ mod source_text;
 mod stages;
 mod stiff_extreme;
 mod stiff_joint;
-mod window_ends;
 
 use lagc::diagnostic::{self, Diagnostic};
 
