@@ -333,6 +333,11 @@ pub struct QuasilinearField {
     output_scratch: RefCell<LinearizationScratch>,
     /// The buffers of the output's middle check (`middle::refined`).
     middle_scratch: MiddleScratch,
+    /// The last pass's window, reopened by the next (`Window::reopen`:
+    /// its DOP853 and buffers without a dozen allocations a window).
+    spare_window: Option<Window>,
+    /// The buffers of Newton's defect (`QuasilinearField::defect`).
+    defect_scratch: Option<DefectScratch>,
 }
 
 impl QuasilinearField {
@@ -367,6 +372,8 @@ impl QuasilinearField {
             error,
             output_scratch: LinearizationScratch::new(x0.len()),
             middle_scratch: MiddleScratch::new(x0.len()),
+            spare_window: None,
+            defect_scratch: None,
         }
     }
 
@@ -947,19 +954,30 @@ impl QuasilinearField {
     ) -> Result<Pass, Failure> {
         let n = self.x.len();
         let source = ProjectiveCoefficients::new(model, iterate);
-        let mut window = Window::open(
-            &source,
-            &self.options,
-            self.t,
-            &self.x,
-            self.field_h,
-            self.h_max,
-            self.window_kind(),
-        )?;
+        let kind = self.window_kind();
+        let mut window = match self.spare_window.take() {
+            Some(mut window) => {
+                let (t, x) = (self.t, &self.x);
+                window.reopen(&source, &self.options, t, x, self.field_h, self.h_max, kind)?;
+                window
+            }
+            None => Window::open(
+                &source,
+                &self.options,
+                self.t,
+                &self.x,
+                self.field_h,
+                self.h_max,
+                kind,
+            )?,
+        };
         let mut steps: Vec<StoredStep> = Vec::new();
         let mut states: Vec<Vec<f64>> = Vec::new();
         let mut errors: Vec<Option<Vec<f64>>> = Vec::new();
-        let mut scratch = DefectScratch::new(n);
+        let mut scratch = match self.defect_scratch.take() {
+            Some(scratch) if scratch.rate0.len() == n => scratch,
+            _ => DefectScratch::new(n),
+        };
         let mut bound = 0.0;
         let (mut t_last, mut defect_last) = (self.t, 0.0);
         let mut shortenings = 0;
@@ -1040,7 +1058,7 @@ impl QuasilinearField {
         if self.options.auto_stiff && window.stiffness_detected() {
             self.found_stiff(model);
         }
-        Ok(Pass {
+        let pass = Pass {
             steps,
             states,
             errors,
@@ -1049,7 +1067,10 @@ impl QuasilinearField {
             largest_condition,
             field_h: window.proposed_step(),
             start_failed,
-        })
+        };
+        self.spare_window = Some(window);
+        self.defect_scratch = Some(scratch);
+        Ok(pass)
     }
 }
 
