@@ -167,24 +167,6 @@ struct Workspace {
 
 thread_local! {
     static WORKSPACE: Cell<Option<Workspace>> = const { Cell::new(None) };
-    static PARTITION: Cell<Option<([usize; 8], usize)>> = const { Cell::new(None) };
-}
-
-/// SCRATCH: the dependent coordinates of the current mode.
-pub fn set_partition(dependents: Option<&[usize]>) {
-    let value = dependents.filter(|d| d.len() <= 8).map(|d| {
-        let mut a = [0; 8];
-        a[..d.len()].copy_from_slice(d);
-        (a, d.len())
-    });
-    PARTITION.with(|p| p.set(value));
-}
-
-fn partition_threshold() -> Option<f64> {
-    match std::env::var("LAGC_PART") {
-        Ok(v) if v != "off" => v.parse().ok(),
-        _ => None,
-    }
 }
 
 fn project_with(
@@ -250,61 +232,10 @@ fn project_with(
         }
         Some(largest)
     };
-    let partition = PARTITION.with(Cell::get).filter(|&(_, len)| len == m);
-    let threshold = partition_threshold();
-    let mut chosen: Option<([usize; 8], usize)> = None;
-    let mut decided = false;
-    let mut dlu = Lu::empty();
-    let mut partitioned = |x: &mut [f64], r: usize, f: &[f64], normals: &Matrix, d: &[usize]| -> Option<f64> {
-        dlu.refactor(m, |a| {
-            for i in 0..m {
-                for (c, &j) in d.iter().enumerate() {
-                    a[(i, c)] = normals[(i, j)];
-                }
-            }
-        });
-        let mut delta = f.to_vec();
-        if !(dlu.solve_in_place(&mut delta) && delta.iter().all(|v| v.is_finite())) {
-            return None;
-        }
-        let mut largest = 0.0_f64;
-        for (c, &j) in d.iter().enumerate() {
-            x[r * n + j] -= delta[c];
-            largest = largest.max(delta[c].abs());
-        }
-        Some(largest)
-    };
-    let mut quality = |normals: &Matrix, d: &[usize]| -> f64 {
-        let mut g = Lu::empty();
-        g.refactor(m, |a| {
-            for i in 0..m {
-                for k in 0..m {
-                    a[(i, k)] = (0..n).map(|j| normals[(i, j)] * normals[(k, j)]).sum();
-                }
-            }
-        });
-        let mut b = Lu::empty();
-        b.refactor(m, |a| {
-            for i in 0..m {
-                for (c, &j) in d.iter().enumerate() {
-                    a[(i, c)] = normals[(i, j)];
-                }
-            }
-        });
-        b.determinant().abs() / g.determinant().abs().sqrt()
-    };
     let mut previous = f64::INFINITY;
     for step in 0..STEPS {
         normals.fill(0.0);
         eval(x, 0, f, normals);
-        if !decided {
-            decided = true;
-            if let (Some((d, len)), Some(th)) = (partition, threshold) {
-                if quality(normals, &d[..len]) >= th {
-                    chosen = Some((d, len));
-                }
-            }
-        }
         let residual = norm(f);
         if !residual.is_finite() {
             return Err(left(residual, false));
@@ -318,11 +249,7 @@ fn project_with(
             break;
         }
         previous = residual;
-        let moved = match chosen.filter(|_| std::env::var("LAGC_PARTLEVEL").map_or(true, |v| v != "vel")) {
-            Some((d, len)) => partitioned(x, 0, f, normals, &d[..len]),
-            None => correct(x, 0, f, normals),
-        };
-        let Some(moved) = moved else {
+        let Some(moved) = correct(x, 0, f, normals) else {
             return Err(left(residual, true));
         };
         if moved <= 4.0 * f64::EPSILON * magnitude {
@@ -341,11 +268,7 @@ fn project_with(
             if norm(f) == 0.0 {
                 break;
             }
-            let moved = match chosen.filter(|_| std::env::var("LAGC_PARTLEVEL").map_or(true, |v| v != "pos")) {
-                Some((d, len)) => partitioned(x, r, f, normals, &d[..len]),
-                None => correct(x, r, f, normals),
-            };
-            if moved.is_none() {
+            if correct(x, r, f, normals).is_none() {
                 return Err(left(norm(f), true));
             }
         }

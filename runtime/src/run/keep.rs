@@ -265,7 +265,6 @@ impl Keeper {
             return Ok(());
         }
         let s = f64::EPSILON.sqrt() / size;
-        self.set_partition();
         let mut probe = std::mem::take(&mut self.probe);
         probe.clear();
         probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
@@ -328,13 +327,6 @@ impl Keeper {
         result
     }
 
-    /// SCRATCH
-    fn set_partition(&self) {
-        let v = &self.velocities;
-        let d: Vec<usize> = self.fixed.iter().filter(|&&j| v.contains(&j)).map(|&j| j - v.start).collect();
-        crate::closure::set_partition(if d.len() == self.fixed.len() { Some(&d) } else { None });
-    }
-
     pub fn kept(&self) -> Kept {
         Kept {
             largest: self.largest,
@@ -365,7 +357,6 @@ impl Keeper {
             fixed_components(model, mode, &mut self.fixed);
             self.mode = Some(mode);
         }
-        self.set_partition();
         if one::applies(self, model) {
             return self.project_one(model, t, x, judged, bounded);
         }
