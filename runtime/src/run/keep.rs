@@ -20,6 +20,19 @@
 //! knife edge heading across y) the constraint's value `φ = tan θ x'`
 //! multiplies the error of `x'`, and moving `y'` onto it made the circling
 //! knife edge 3× less accurate than leaving it.
+//!
+//! The holonomic constraints' projection (`closure::project`) is along
+//! their normals too. Coordinate partitioning instead (Wehage & Haug: the
+//! independent coordinates kept as integrated, the mode's dependents solved
+//! from the constraints) was measured on every holonomic example
+//! (docs/BENCHMARKS.md §10v) and not taken: it keeps a bead sliding down a
+//! helical wire exact, where the height is integrated exactly (direct
+//! 11–30 → 0.00–4.4 rtol), but made the particle on a circle 20–550× less
+//! accurate by direct, the bead in a spinning tube 3–17×, the cycloid
+//! 1.2–2.9×; and no pivot-quality rule picks the helix out (its dependent
+//! block is the poorer: `|det J_d| / √det(J Jᵀ)` 0.37, where the circle
+//! loses 4–10× above 0.3). Which projection keeps less error depends on
+//! where the step's error lies, which the methods know, not the keeper.
 
 mod one;
 
