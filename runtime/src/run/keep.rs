@@ -22,20 +22,17 @@
 //! knife edge 3× less accurate than leaving it.
 //!
 //! The holonomic constraints' projection (`closure::project`) is along
-//! their normals too. Coordinate partitioning instead (Wehage & Haug: the
-//! independent coordinates kept as integrated, the mode's dependents solved
-//! from the constraints) was measured on every holonomic example
-//! (docs/BENCHMARKS.md §10v) and not taken: it keeps a bead sliding down a
-//! helical wire exact, where the height is integrated exactly (direct
-//! 11–30 → 0.00–4.4 rtol), but made the particle on a circle 20–550× less
-//! accurate by direct, the bead in a spinning tube 3–17×, the cycloid
-//! 1.2–2.9×; and no pivot-quality rule picks the helix out (its dependent
-//! block is the poorer: `|det J_d| / √det(J Jᵀ)` 0.37, where the circle
-//! loses 4–10× above 0.3). Which projection keeps less error depends on
-//! where the step's error lies, which the methods know, not the keeper.
+//! their normals too, except where the independent coordinates' highest
+//! derivatives are constant (a bead sliding down a helical wire): there it
+//! is partitioned, the independent coordinates kept as integrated and the
+//! mode's dependents solved from the constraints (`partition.rs`, which
+//! says why, and docs/BENCHMARKS.md §10v for the measurements: partitioned
+//! everywhere, a particle on a circle was 20–550× less accurate by direct).
 
 mod one;
+mod partition;
 
+use crate::closure::{self, Dependents};
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{Lu, Matrix};
 use crate::model::{DynModel, Initial};
@@ -68,6 +65,9 @@ pub struct Keeper {
     /// The fixed components of `mode` (state indices).
     mode: Option<usize>,
     fixed: Vec<usize>,
+    /// The holonomic projection of `mode`: partitioned by these dependents,
+    /// or along the normals (`partition::choose`).
+    partition: Option<Dependents>,
     /// The velocity block `q^(u−1)` (state indices), which projections move.
     velocities: std::ops::Range<usize>,
     /// The constrained values, then the last projection's result (one
@@ -151,6 +151,7 @@ impl Keeper {
             tol,
             mode: None,
             fixed,
+            partition: None,
             velocities: n.saturating_sub(coordinates)..n,
             states,
             gradient,
@@ -283,9 +284,11 @@ impl Keeper {
         probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
         probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
         let (plus, minus) = probe.split_at_mut(x.len());
-        let result = model
-            .project_closure(t, plus)
-            .and_then(|_| model.project_closure(t, minus));
+        let result = closure::partitioned(self.partition, || {
+            model
+                .project_closure(t, plus)
+                .and_then(|_| model.project_closure(t, minus))
+        });
         if result.is_ok() {
             for ((d, p), m) in d.iter_mut().zip(&*plus).zip(&*minus) {
                 *d = (p - m) / (2.0 * s);
@@ -369,6 +372,7 @@ impl Keeper {
         if self.mode != Some(mode) {
             fixed_components(model, mode, &mut self.fixed);
             self.mode = Some(mode);
+            self.partition = partition::choose(model, &self.fixed, self.velocities.clone(), t, x);
         }
         if one::applies(self, model) {
             return self.project_one(model, t, x, judged, bounded);
@@ -398,7 +402,10 @@ impl Keeper {
             // derivative, whose size is no distance from the constraints,
             // and which is worth its cost only where the state is moved.
             let motion = model.motion_dim();
-            model.project_closure(t, &mut projected[..motion])?;
+            let partition = self.partition;
+            closure::partitioned(partition, || {
+                model.project_closure(t, &mut projected[..motion])
+            })?;
             let mut worst = 0;
             for (i, (&before, &after)) in x.iter().zip(&*projected).take(motion).enumerate() {
                 let delta = (after - before).abs();
@@ -420,7 +427,7 @@ impl Keeper {
             }
             if motion < x.len() && !(bounded && closure.0 <= PROJECT_ABOVE) {
                 projected.copy_from_slice(x);
-                model.project_closure(t, projected)?;
+                closure::partitioned(partition, || model.project_closure(t, projected))?;
             }
         }
         let m = self.fixed.len();
