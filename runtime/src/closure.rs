@@ -129,7 +129,9 @@ pub type ProjectFn<'a> = &'a mut dyn FnMut(&[f64], usize, &mut [f64], &mut Matri
 /// `J` (one step, and one more for rounding). Moving the dependents alone
 /// instead made a particle circling at uniform speed 100× less accurate:
 /// where a dependent's pivot is poor, its correction is large and mostly
-/// along the motion. `(m, n, levels)`: the constraints, the coordinates,
+/// along the motion. Inside [`partitioned`] (the keeper's choice where the
+/// independent coordinates are integrated exactly) the dependents alone
+/// are solved for. `(m, n, levels)`: the constraints, the coordinates,
 /// the derivative blocks.
 pub fn project(
     t: f64,
