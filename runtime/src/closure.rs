@@ -129,7 +129,9 @@ pub type ProjectFn<'a> = &'a mut dyn FnMut(&[f64], usize, &mut [f64], &mut Matri
 /// `J` (one step, and one more for rounding). Moving the dependents alone
 /// instead made a particle circling at uniform speed 100× less accurate:
 /// where a dependent's pivot is poor, its correction is large and mostly
-/// along the motion. `(m, n, levels)`: the constraints, the coordinates,
+/// along the motion. Inside [`partitioned`] (the keeper's choice where the
+/// independent coordinates are integrated exactly) the dependents alone
+/// are solved for. `(m, n, levels)`: the constraints, the coordinates,
 /// the derivative blocks.
 pub fn project(
     t: f64,
@@ -167,6 +169,51 @@ struct Workspace {
 
 thread_local! {
     static WORKSPACE: Cell<Option<Workspace>> = const { Cell::new(None) };
+    /// The dependents [`project`] solves for instead of moving along the
+    /// normals, set by [`partitioned`] for the calls inside it.
+    static DEPENDENTS: Cell<Option<Dependents>> = const { Cell::new(None) };
+}
+
+/// The most dependent coordinates a partitioned projection holds.
+pub const MOST_DEPENDENTS: usize = 8;
+
+/// Dependent coordinates (indices among the coordinates) of a
+/// partitioned projection: the independent ones are kept as they are, and
+/// the dependents solved from the constraints (Wehage & Haug's coordinate
+/// partitioning), in positions and in each derivative block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Dependents {
+    indices: [usize; MOST_DEPENDENTS],
+    len: usize,
+}
+
+impl Dependents {
+    /// `None` for more than [`MOST_DEPENDENTS`].
+    pub fn new(indices: &[usize]) -> Option<Dependents> {
+        let len = indices.len();
+        (len <= MOST_DEPENDENTS).then(|| {
+            let mut all = [0; MOST_DEPENDENTS];
+            all[..len].copy_from_slice(indices);
+            Dependents { indices: all, len }
+        })
+    }
+
+    pub fn as_slice(&self) -> &[usize] {
+        &self.indices[..self.len]
+    }
+}
+
+/// Runs `f` with every [`project`] inside it partitioned by `dependents`
+/// (along the normals for `None`, or for dependents that are not one per
+/// constraint, or whose block of the normals is singular). The generated
+/// `Model::project_closure` calls [`project`] with the model's constraint
+/// functions, so the keeper chooses the projection around that call: no
+/// generated code changes.
+pub fn partitioned<R>(dependents: Option<Dependents>, f: impl FnOnce() -> R) -> R {
+    let before = DEPENDENTS.with(|d| d.replace(dependents));
+    let result = f();
+    DEPENDENTS.with(|d| d.set(before));
+    result
 }
 
 fn project_with(
@@ -203,9 +250,34 @@ fn project_with(
             },
         )
     };
+    let dependents = DEPENDENTS
+        .with(Cell::get)
+        .filter(|d| d.len == m && d.as_slice().iter().all(|&j| j < n));
     // Solves (J Jᵀ) λ = f and moves block `r` of x by −Jᵀ λ; the largest
-    // move, or None when J Jᵀ is singular.
+    // move, or None when J Jᵀ is singular. Partitioned: solves J_d δ = f
+    // over the dependents' columns and moves them alone by −δ.
     let mut correct = |x: &mut [f64], r: usize, f: &[f64], normals: &Matrix| -> Option<f64> {
+        if let Some(dependents) = &dependents {
+            let d = dependents.as_slice();
+            lambda.clear();
+            lambda.extend_from_slice(f);
+            lu.refactor(m, |a| {
+                for i in 0..m {
+                    for (c, &j) in d.iter().enumerate() {
+                        a[(i, c)] = normals[(i, j)];
+                    }
+                }
+            });
+            // A singular dependent block: along the normals, below.
+            if lu.solve_in_place(lambda) && lambda.iter().all(|v| v.is_finite()) {
+                let mut largest = 0.0_f64;
+                for (&j, delta) in d.iter().zip(lambda.iter()) {
+                    x[r * n + j] -= delta;
+                    largest = largest.max(delta.abs());
+                }
+                return Some(largest);
+            }
+        }
         for a in 0..m {
             for b in 0..m {
                 gram[a * m + b] = (0..n).map(|j| normals[(a, j)] * normals[(b, j)]).sum();
@@ -301,6 +373,54 @@ mod tests {
         })
         .unwrap_err();
         assert!(why.residual >= 1.0);
+    }
+
+    /// `x² + y² = 1` over the state `(x, y, x', y')`, and its derivative
+    /// `2 (x x' + y y') = 0`.
+    fn circle(x: &mut [f64]) -> Result<(), Failure> {
+        project(
+            0.0,
+            x,
+            (1, 2, 1),
+            "x^2 + y^2 = 1",
+            &mut |s, level, f, normals| {
+                if level == 0 {
+                    f[0] = s[0] * s[0] + s[1] * s[1] - 1.0;
+                    normals[(0, 0)] = 2.0 * s[0];
+                    normals[(0, 1)] = 2.0 * s[1];
+                } else {
+                    f[0] = 2.0 * (s[0] * s[2] + s[1] * s[3]);
+                }
+            },
+        )
+    }
+
+    #[test]
+    fn a_partitioned_projection_keeps_the_independent_coordinates() {
+        let start = [0.6, 0.81, 0.3, -0.2];
+        // Partitioned with y dependent: x and x' kept, y and y' solved.
+        let mut x = start;
+        let y = Dependents::new(&[1]);
+        partitioned(y, || circle(&mut x)).unwrap();
+        assert_eq!((x[0], x[2]), (start[0], start[2]));
+        assert!((x[1] - 0.8).abs() <= 1e-15, "{x:?}");
+        assert!((x[3] - (-0.6 * 0.3 / 0.8)).abs() <= 1e-15, "{x:?}");
+        // Outside `partitioned`, and with dependents that are not one per
+        // constraint, along the normals (every component moved), the
+        // same bits both ways.
+        let mut normal = start;
+        circle(&mut normal).unwrap();
+        assert!(normal[0] != start[0] && normal[2] != start[2]);
+        let mut two = start;
+        partitioned(Dependents::new(&[0, 1]), || circle(&mut two)).unwrap();
+        assert_eq!(two.map(f64::to_bits), normal.map(f64::to_bits));
+        // A singular dependent block (y dependent at y = 0): along the
+        // normals too.
+        let level = [1.01, 0.0, 0.0, 0.5];
+        let (mut a, mut b) = (level, level);
+        partitioned(y, || circle(&mut a)).unwrap();
+        circle(&mut b).unwrap();
+        assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
     }
 
     #[test]

@@ -217,6 +217,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/run/keep/one.rs"),
     ),
     (
+        "src/run/keep/partition.rs",
+        include_str!("../../runtime/src/run/keep/partition.rs"),
+    ),
+    (
         "src/run/mod.rs",
         include_str!("../../runtime/src/run/mod.rs"),
     ),

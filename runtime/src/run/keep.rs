@@ -20,9 +20,19 @@
 //! knife edge heading across y) the constraint's value `φ = tan θ x'`
 //! multiplies the error of `x'`, and moving `y'` onto it made the circling
 //! knife edge 3× less accurate than leaving it.
+//!
+//! The holonomic constraints' projection (`closure::project`) is along
+//! their normals too, except where the independent coordinates' highest
+//! derivatives are constant (a bead sliding down a helical wire): there it
+//! is partitioned, the independent coordinates kept as integrated and the
+//! mode's dependents solved from the constraints (`partition.rs`, which
+//! says why, and docs/BENCHMARKS.md §10v for the measurements: partitioned
+//! everywhere, a particle on a circle was 20–550× less accurate by direct).
 
 mod one;
+mod partition;
 
+use crate::closure::{self, Dependents};
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{Lu, Matrix};
 use crate::model::{DynModel, Initial};
@@ -55,6 +65,9 @@ pub struct Keeper {
     /// The fixed components of `mode` (state indices).
     mode: Option<usize>,
     fixed: Vec<usize>,
+    /// The holonomic projection of `mode`: partitioned by these dependents,
+    /// or along the normals (`partition::choose`).
+    partition: Option<Dependents>,
     /// The velocity block `q^(u−1)` (state indices), which projections move.
     velocities: std::ops::Range<usize>,
     /// The constrained values, then the last projection's result (one
@@ -138,6 +151,7 @@ impl Keeper {
             tol,
             mode: None,
             fixed,
+            partition: None,
             velocities: n.saturating_sub(coordinates)..n,
             states,
             gradient,
@@ -270,9 +284,11 @@ impl Keeper {
         probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
         probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
         let (plus, minus) = probe.split_at_mut(x.len());
-        let result = model
-            .project_closure(t, plus)
-            .and_then(|_| model.project_closure(t, minus));
+        let result = closure::partitioned(self.partition, || {
+            model
+                .project_closure(t, plus)
+                .and_then(|_| model.project_closure(t, minus))
+        });
         if result.is_ok() {
             for ((d, p), m) in d.iter_mut().zip(&*plus).zip(&*minus) {
                 *d = (p - m) / (2.0 * s);
@@ -356,6 +372,7 @@ impl Keeper {
         if self.mode != Some(mode) {
             fixed_components(model, mode, &mut self.fixed);
             self.mode = Some(mode);
+            self.partition = partition::choose(model, &self.fixed, self.velocities.clone(), t, x);
         }
         if one::applies(self, model) {
             return self.project_one(model, t, x, judged, bounded);
@@ -385,7 +402,10 @@ impl Keeper {
             // derivative, whose size is no distance from the constraints,
             // and which is worth its cost only where the state is moved.
             let motion = model.motion_dim();
-            model.project_closure(t, &mut projected[..motion])?;
+            let partition = self.partition;
+            closure::partitioned(partition, || {
+                model.project_closure(t, &mut projected[..motion])
+            })?;
             let mut worst = 0;
             for (i, (&before, &after)) in x.iter().zip(&*projected).take(motion).enumerate() {
                 let delta = (after - before).abs();
@@ -407,7 +427,7 @@ impl Keeper {
             }
             if motion < x.len() && !(bounded && closure.0 <= PROJECT_ABOVE) {
                 projected.copy_from_slice(x);
-                model.project_closure(t, projected)?;
+                closure::partitioned(partition, || model.project_closure(t, projected))?;
             }
         }
         let m = self.fixed.len();
