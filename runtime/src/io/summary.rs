@@ -223,8 +223,7 @@ fn global_error_line(g: &GlobalErrorEstimate) -> String {
             "warning: estimated global error {:.1e} passes 10·rtol = {bound:.1e}{partial}: \
              the steps' local errors add up over the run (past the bound, each step's error \
              measured and carried along the motion, which may amplify it; not counting the \
-             output between steps, nor, by the field method, an impact's jump); a tighter \
-             --rtol brings it down, \
+             output between steps); a tighter --rtol brings it down, \
              --estimate-error measures it",
             g.largest
         )

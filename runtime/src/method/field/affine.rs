@@ -341,6 +341,14 @@ impl Solver for AffineField {
         self.error.cut(model, t, x);
     }
 
+    fn carry_error_through_event(
+        &mut self,
+        jump: &mut dyn FnMut(&mut [f64]) -> Result<(), Failure>,
+    ) {
+        // The event's saltation (`FieldError::jump`).
+        self.error.jump(jump);
+    }
+
     fn retake(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         // The window from `t` is not the motion's (`FieldError::retake`).
         self.error.retake(t);

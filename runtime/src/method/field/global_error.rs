@@ -84,6 +84,7 @@
 //! errors of position go round with it and cancel) summed 22 rtol
 //! against an error of 1.0 rtol at rtol 1e-6.
 
+use crate::failure::Failure;
 use crate::method::solver::{GlobalErrorEstimate, Keeping};
 use crate::model::DynModel;
 use crate::ode::dop853::global_error::growth::{past_bound, Growth, Keep, Project, FROM_DIRECT};
@@ -382,7 +383,7 @@ impl FieldError {
             let end = self.unfed[self.unfed.len() - 1].t1;
             self.window_end = measure_window(&system, &mut self.unfed[first..]).map(|e| (end, e));
         }
-        if self.carries_constrained(first) {
+        if from_first_step(model) || self.carries_constrained(first) {
             self.measure_signed(&system, first);
         }
     }
@@ -606,8 +607,10 @@ impl FieldError {
             // A non-affine motion's errors are carried from the first
             // step (the module's comment: errors made before a threshold
             // are summed, not amplified); an affine one's from the bound.
-            let carried =
-                self.growth.started() || !model.affine() || past_bound(&self.global, self.rtol);
+            let carried = self.growth.started()
+                || !model.affine()
+                || from_first_step(model)
+                || past_bound(&self.global, self.rtol);
             // The step's error against the reference, where the sum is
             // calibrated (every `CALIBRATION_STRIDE` steps, as direct
             // integration's: see there why not at every step); a
@@ -784,6 +787,15 @@ impl FieldError {
         self.growth.cut(&ModelSystem(model), t, x);
     }
 
+    /// After an event's cut, before the restart: the carried error
+    /// through the event's time and the impact's reset (`jump`,
+    /// `run::saltation::through_event`; `Solver::carry_error_through_event`).
+    pub fn jump(&mut self, jump: &mut dyn FnMut(&mut [f64]) -> Result<(), Failure>) {
+        if self.on {
+            self.growth.jump(jump);
+        }
+    }
+
     /// Before an event at `t` inside a window whose steps were carried
     /// already (at `keep`, after the advance): the carried error goes back
     /// to where that window's carrying began, for its steps before `t` to
@@ -914,6 +926,21 @@ fn carry(growth: &mut Growth, system: &ModelSystem<'_>, step: &Unfed, keep: Opti
 /// is taken (`measure_signed`) and differenced when carried, as before.
 fn alongside(model: &dyn DynModel) -> bool {
     model.switches() == 0
+}
+
+/// Whether a model's errors are carried from its first step (and so
+/// through every event, [`FieldError::jump`]) for its impacts, as direct
+/// integration's (`method::direct::carried_from_first_step`): each
+/// bounce turns a height error into a time error and that into a
+/// velocity error, 1/v larger as the bounces shrink. A ball bouncing on
+/// an inclined floor (`examples/incline_bounce.lag`, affine: carried
+/// before only past the bound) ended where its bounces accumulate 108
+/// and 1.4e4 rtol off at rtol 1e-10 and 1e-12 (against the closed form)
+/// saying 1e-4 and 0.007: carried from the first step and through the
+/// bounces, 45.5 and 2.5e4; either change alone left them as they were
+/// (docs/BENCHMARKS.md §10w).
+fn from_first_step(model: &dyn DynModel) -> bool {
+    !model.impacts().is_empty()
 }
 
 /// A step's measured error `measured` (with its sign), scaled down to

@@ -752,6 +752,14 @@ impl Solver for QuasilinearField {
         self.error.cut(model, t, x);
     }
 
+    fn carry_error_through_event(
+        &mut self,
+        jump: &mut dyn FnMut(&mut [f64]) -> Result<(), Failure>,
+    ) {
+        // The event's saltation (`FieldError::jump`).
+        self.error.jump(jump);
+    }
+
     fn finish(&mut self, model: &dyn DynModel) {
         // The last window's steps (`FieldError::finish`).
         self.error.finish(model);
