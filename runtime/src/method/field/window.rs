@@ -669,12 +669,13 @@ impl Window {
             .step_measured(system, t_limit, budget, &mut measure)?;
         // A step the conditions decline may fit shorter (the sensitivities'
         // growth rises with the step): try it once more before ending the
-        // window, whose fresh start costs more. Declined by the rounding
-        // watch, whose ratio rises smoothly along a window, the retry is
-        // the fraction of the step where that ratio, interpolated between
-        // the last step's end and the declined trial's, reaches 0.9 of the
-        // limit — no retry where that is under a fifth of the step; any
-        // other decline retries a quarter. (A quarter, blindly, was
+        // window, whose fresh start costs more. In a quasilinear window
+        // (`FieldSystem::fits_retry`) declined by the rounding watch, whose
+        // ratio rises smoothly along a window, the retry is the fraction of
+        // the step where that ratio, interpolated between the last step's
+        // end and the declined trial's, reaches 0.9 of the limit — no
+        // retry where that is under a fifth of the step; any other decline
+        // retries a quarter. (A quarter, blindly, was
         // accepted and then declined again, or declined itself: on the
         // stiff joint at rtol 1e-10, 4,160 of 12,382 attempts were the
         // watch's declines, 3.8 a window, and 22 the error's; h-stiff3,
@@ -682,7 +683,8 @@ impl Window {
         if outcome == StepOutcome::Declined && self.steps > 0 {
             let h = self.stepper.proposed_step();
             let (before, trial) = (self.watched, measure.watch);
-            let fraction = if trial.is_finite() && trial > 1.0 && before < 1.0 {
+            let fits = system.fits_retry();
+            let fraction = if fits && trial.is_finite() && trial > 1.0 && before < 1.0 {
                 0.9 * (1.0 - before) / (trial - before)
             } else {
                 0.25
@@ -694,11 +696,11 @@ impl Window {
                 outcome = self
                     .stepper
                     .step_measured(system, t_limit, budget, &mut measure)?;
-                if outcome == StepOutcome::Declined {
+                if fits && outcome == StepOutcome::Declined {
                     // The next window starts from a quarter, as before.
                     self.stepper.propose_step(0.25 * h);
                 }
-                self.retried = true;
+                self.retried = fits;
             }
         }
         self.declined = measure.declined;
