@@ -214,32 +214,42 @@ fn a_ball_without_restitution_stays_on_the_floor_and_an_elastic_one_bounces_on()
     }
 }
 
+/// `examples/incline_bounce.lag`'s bounces along the floor's normal.
+fn incline_normal() -> Bounces {
+    let (g, e, al, h) = (9.81_f64, 0.7_f64, 0.3_f64, 0.5_f64);
+    Bounces {
+        g: g * al.cos(),
+        e,
+        h0: h,
+    }
+}
+
+/// `examples/incline_bounce.lag`'s (x, y, x', y') at `t` before its bounces
+/// accumulate: the normal coordinate w bounces in gravity g cos(al); the
+/// tangential s = g sin(al) t^2 / 2 ignores the floor.
+fn incline_exact(t: f64) -> [f64; 4] {
+    let (g, al) = (9.81_f64, 0.3_f64);
+    let [w, w_d] = incline_normal().at(t);
+    let (s, s_d) = (g * al.sin() * t * t / 2.0, g * al.sin() * t);
+    [
+        al.sin() * w + al.cos() * s,
+        al.cos() * w - al.sin() * s,
+        al.sin() * w_d + al.cos() * s_d,
+        al.cos() * w_d - al.sin() * s_d,
+    ]
+}
+
 #[test]
 fn a_ball_on_an_inclined_floor_bounces_along_it_as_the_closed_form_says() {
     // The normal coordinate w bounces in gravity g cos(al); the tangential
     // s = g sin(al) t^2 / 2 ignores the floor (examples/incline_bounce.lag).
-    let (g, e, al, h) = (9.81_f64, 0.7_f64, 0.3_f64, 0.5_f64);
-    let normal = Bounces {
-        g: g * al.cos(),
-        e,
-        h0: h,
-    };
-    let exact = |t: f64| {
-        let [w, w_d] = normal.at(t);
-        let (s, s_d) = (g * al.sin() * t * t / 2.0, g * al.sin() * t);
-        [
-            al.sin() * w + al.cos() * s,
-            al.cos() * w - al.sin() * s,
-            al.sin() * w_d + al.cos() * s_d,
-            al.cos() * w_d - al.sin() * s_d,
-        ]
-    };
+    let exact = incline_exact;
     let binary = build("incline_bounce");
     for method in METHODS {
         let run = run(&binary, &["--method", method, "--samples", "2001"]);
         assert_eq!(run.code, 0, "{method}: {}", run.stderr);
         let stop = run.stop_time().expect("a named stop");
-        let limit = normal.accumulation();
+        let limit = incline_normal().accumulation();
         assert!(
             stop <= limit && limit - stop < 1e-6,
             "{method}: stopped at {stop}, the bounces accumulate at {limit}"
@@ -372,22 +382,7 @@ fn the_field_carries_its_errors_through_the_bounces_to_where_they_accumulate() {
     // bounce's time and reset (`run::saltation`): 0.4–1.8× the error
     // (docs/BENCHMARKS.md §10w). Every row, the stop included, against the
     // closed form at the row's own time.
-    let (g, e, al, h) = (9.81_f64, 0.7_f64, 0.3_f64, 0.5_f64);
-    let normal = Bounces {
-        g: g * al.cos(),
-        e,
-        h0: h,
-    };
-    let exact = |t: f64| {
-        let [w, w_d] = normal.at(t);
-        let (s, s_d) = (g * al.sin() * t * t / 2.0, g * al.sin() * t);
-        [
-            al.sin() * w + al.cos() * s,
-            al.cos() * w - al.sin() * s,
-            al.sin() * w_d + al.cos() * s_d,
-            al.cos() * w_d - al.sin() * s_d,
-        ]
-    };
+    let exact = incline_exact;
     let binary = build("incline_bounce");
     let mut past = 0;
     for rtol in [1e-10, 1e-11, 1e-12] {
