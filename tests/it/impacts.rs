@@ -243,7 +243,6 @@ fn incline_exact(t: f64) -> [f64; 4] {
 fn a_ball_on_an_inclined_floor_bounces_along_it_as_the_closed_form_says() {
     // The normal coordinate w bounces in gravity g cos(al); the tangential
     // s = g sin(al) t^2 / 2 ignores the floor (examples/incline_bounce.lag).
-    let exact = incline_exact;
     let binary = build("incline_bounce");
     for method in METHODS {
         let run = run(&binary, &["--method", method, "--samples", "2001"]);
@@ -261,7 +260,7 @@ fn a_ball_on_an_inclined_floor_bounces_along_it_as_the_closed_form_says() {
             .iter()
             .filter(|r| r[0] < stop)
             .flat_map(|r| {
-                let x = exact(r[0]);
+                let x = incline_exact(r[0]);
                 (0..4).map(move |i| (r[i + 1] - x[i]).abs() / x[i].abs().max(1.0))
             })
             .fold(0.0, f64::max);
@@ -382,7 +381,6 @@ fn the_field_carries_its_errors_through_the_bounces_to_where_they_accumulate() {
     // bounce's time and reset (`run::saltation`): 0.4–1.8× the error
     // (docs/BENCHMARKS.md §10w). Every row, the stop included, against the
     // closed form at the row's own time.
-    let exact = incline_exact;
     let binary = build("incline_bounce");
     let mut past = 0;
     for rtol in [1e-10, 1e-11, 1e-12] {
@@ -403,7 +401,7 @@ fn the_field_carries_its_errors_through_the_bounces_to_where_they_accumulate() {
         let error = rows
             .iter()
             .flat_map(|row| {
-                let x = exact(row[0]);
+                let x = incline_exact(row[0]);
                 (0..4).map(move |i| (row[i + 1] - x[i]).abs() / x[i].abs().max(1.0))
             })
             .fold(0.0, f64::max);
