@@ -55,6 +55,9 @@ pub fn solve(z: &mut [f64], eval: ClosureFn) -> Result<usize, NoRoot> {
             || !lu.solve_in_place(&mut delta)
             || delta.iter().any(|d| !d.is_finite())
         {
+            if on_constraints_by_rounding(residual, z) {
+                return Ok(step);
+            }
             return Err(NoRoot {
                 residual,
                 singular: true,
@@ -101,6 +104,22 @@ pub fn solve(z: &mut [f64], eval: ClosureFn) -> Result<usize, NoRoot> {
         singular: false,
     })
 }
+
+/// Whether a residual where the Jacobian in the dependents is singular is
+/// the rounding of a configuration on the constraints (a double pendulum
+/// in Cartesian coordinates started with its second rod level, where
+/// `∂f/∂y2 = 2 (y2 - y1)` vanishes and `sin² + cos² - 1` leaves 1.7e-16):
+/// no Newton step is needed there, and none can be taken. The measure is
+/// the positions' squares, the size of a length constraint's terms; the
+/// keeper then holds the run on the constraints to its tolerance. The
+/// compiler's check of the model's own values takes the same rule.
+pub fn on_constraints_by_rounding(residual: f64, z: &[f64]) -> bool {
+    let magnitude = z.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+    residual <= ROUNDING_RESIDUAL * magnitude * magnitude
+}
+
+/// [`on_constraints_by_rounding`]'s relative residual.
+const ROUNDING_RESIDUAL: f64 = 1e-12;
 
 /// The initial positions: [`solve`] from the given ones at `t0`, a failure
 /// naming the constraints when there is no root near them.
@@ -377,6 +396,28 @@ mod tests {
 
     /// `x² + y² = 1` over the state `(x, y, x', y')`, and its derivative
     /// `2 (x x' + y y') = 0`.
+    #[test]
+    fn a_start_on_the_constraints_but_for_rounding_is_taken_where_the_jacobian_is_singular() {
+        // A rod level with its dependent `y` (`f = x^2 + y^2 - l^2` at
+        // y = 0): its Jacobian in `y` alone vanishes, and the residual that
+        // `sin^2 + cos^2 - 1` leaves (1.7e-16 in a double pendulum's check)
+        // is rounding: taken as it is, no step.
+        let mut eval = |z: &[f64], f: &mut [f64], jac: &mut Matrix| {
+            f[0] = 1.7e-16 + z[0] * z[0];
+            jac[(0, 0)] = 2.0 * z[0];
+        };
+        let mut z = [0.0];
+        assert_eq!(solve(&mut z, &mut eval), Ok(0));
+        assert_eq!(z, [0.0]);
+        // Off the constraints by more than rounding: refused, singular.
+        let mut eval = |z: &[f64], f: &mut [f64], jac: &mut Matrix| {
+            f[0] = 1e-6 + z[0] * z[0];
+            jac[(0, 0)] = 2.0 * z[0];
+        };
+        let mut z = [0.0];
+        assert!(solve(&mut z, &mut eval).is_err_and(|why| why.singular));
+    }
+
     fn circle(x: &mut [f64]) -> Result<(), Failure> {
         project(
             0.0,

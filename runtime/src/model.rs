@@ -371,6 +371,20 @@ where
     Ok(())
 }
 
+/// The initial value a constraint's first candidate fixes, or the value
+/// the model states where that is not finite (the candidate's pivot
+/// vanishes at the start: a pendulum in `x, y` released level with its
+/// pivot, `y' = -x x'/y` = 0/0). The run checks a state so completed
+/// against the constraints in the mode it starts in
+/// (`crate::run::regime::check_first_candidates`).
+pub fn finite_or_stated(fixed: f64, stated: f64) -> f64 {
+    if fixed.is_finite() {
+        fixed
+    } else {
+        stated
+    }
+}
+
 /// Checks a value the model states for a component the constraints fix
 /// (`name`'s `stated` value against the `required` one), after overrides.
 pub fn check_stated(t0: f64, name: &str, stated: f64, required: f64) -> Result<(), Failure> {

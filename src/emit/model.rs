@@ -123,6 +123,7 @@ fn initial_state(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     let mut known: HashMap<Symbol, TokenStream> = HashMap::new();
     let mut uses_time = false;
     let mut uses_given = false;
+    let stated: HashMap<usize, _> = kernel.initial.stated.iter().copied().collect();
     for source in &kernel.initial.sources {
         let (symbol, value, given) = match *source {
             InitialSource::Given { index: k, value } => (kernel.state[k], value, Some(k)),
@@ -141,6 +142,24 @@ fn initial_state(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
         uses_time |= code.uses_time;
         let value = code.single(quote! { self.params });
         let name = names.ident(arena, symbol);
+        // A value the model states for a component its first candidate
+        // fixes stands where that candidate's pivot vanishes (a pendulum
+        // in `x, y` released level, `y' = -x x'/y` = 0/0); the run checks
+        // it against the constraints in the mode it starts in.
+        let stated_here = match *source {
+            InitialSource::Constraint { index: k, .. } => stated.get(&k).copied(),
+            _ => None,
+        };
+        if let Some(stated) = stated_here {
+            let code = names.code(arena, &[stated], &|_| None);
+            uses_time |= code.uses_time;
+            let stated = code.single(quote! { self.params });
+            statements.push(quote! {
+                let #name = lagc_runtime::model::finite_or_stated(#value, #stated);
+            });
+            known.insert(symbol, name);
+            continue;
+        }
         statements.push(match given {
             Some(k) => {
                 uses_given = true;

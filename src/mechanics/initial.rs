@@ -202,9 +202,16 @@ pub fn initial_values(
     }
     // Pass 3: the values the constraints fix (they depend on given values only).
     let env_values = values.clone();
+    // Given values the first candidates cannot fix at the start (their
+    // pivots vanish there): taken as given when every constraint holds.
+    let mut taken_as_given = Vec::new();
     for (&symbol, value) in state.iter().zip(&initial) {
         if let InitialValue::Constraint(fixed) = value {
             let required = arena.eval(*fixed, &|s| at(symbolic, t0, &laws_at_t0, &env_values, s));
+            if !required.is_finite() && given.contains_key(&symbol) {
+                taken_as_given.push((symbol, required));
+                continue;
+            }
             // The first such value only: the ones after it are usually
             // not finite through it (a helix's `z'` through `y'`).
             if !required.is_finite() {
@@ -237,6 +244,30 @@ pub fn initial_values(
                 }
             }
             values.insert(symbol, required);
+        }
+    }
+    // A pendulum in `x, y` released level with its pivot, `x' = y' = 0`
+    // given: `y' = -x x'/y` is 0/0 there, but the values the user gives
+    // hold every constraint, and the run starts on the candidates whose
+    // pivots do not vanish (`x'` fixed from `y'`).
+    if let Some(&(symbol, required)) = taken_as_given.first() {
+        if errors.is_empty() && !constraints_hold(arena, model, symbolic, t0, &laws_at_t0, &values)
+        {
+            let name = arena.symbol_name(symbol);
+            let mut diagnostic =
+                undetermined(arena, model, symbol, required, t0, given.get(&symbol));
+            diagnostic.message = format!(
+                "the initial values violate a constraint where it does not determine `{name}`"
+            );
+            diagnostic.notes = vec![format!(
+                "at t = {t0} solving the constraint for `{name}` gives {required} (its pivot \
+                 vanishes), so the given `{name}` stands; with it the given values break the \
+                 constraint (params at their defaults)"
+            )];
+            diagnostic.help = Some(
+                "give values that hold the constraint, or leave out the one it can fix".to_string(),
+            );
+            errors.push(diagnostic);
         }
     }
     // Pass 4: the consistency stages (k ≥ 3), in order.
@@ -414,6 +445,11 @@ fn closure_newton(
             .lu()
             .solve(&DVector::from_vec(r.clone()))
         else {
+            // On the constraints but for rounding, where no step can be
+            // taken (the generated code's Newton takes the same rule).
+            if lagc_runtime::closure::on_constraints_by_rounding(norm(&r), &z) {
+                return Ok(z);
+            }
             return Err(format!(
                 "the constraints' Jacobian in the dependent coordinates is singular there \
                  (residual {:.3e})",
@@ -457,6 +493,63 @@ fn closure_newton(
         "no convergence in {NEWTON_STEPS} steps (residual {:.3e})",
         norm(&r)
     ))
+}
+
+/// Whether every constraint holds at `t0` with `values` (each of its
+/// order; a holonomic one as `f = 0` and its derivatives up to the
+/// constraints' order `k`), each residual within [`TOLERANCE`] of its
+/// terms' size `Σ |∂r/∂s| |s|` over the jets and time it holds.
+fn constraints_hold(
+    arena: &mut Arena,
+    model: &Model,
+    symbolic: &Symbolic,
+    t0: f64,
+    laws: &[f64],
+    values: &HashMap<Symbol, f64>,
+) -> bool {
+    let mut residuals = Vec::new();
+    for c in &model.constraints {
+        let Ok(rhs) = lower_checked(arena, &c.rhs, model) else {
+            return false;
+        };
+        match &c.implicit {
+            Some(implicit) => {
+                let Ok(lhs) = lower_checked(arena, &implicit.lhs, model) else {
+                    return false;
+                };
+                let f = arena.sub(lhs, rhs);
+                if implicit.holonomic {
+                    let mut level = f;
+                    residuals.push(level);
+                    for _ in 0..symbolic.k {
+                        level = arena.total_derivative(level);
+                        residuals.push(level);
+                    }
+                } else {
+                    residuals.push(f);
+                }
+            }
+            None => {
+                let dependent = arena.symbol(Symbol::Jet {
+                    coord: c.coord as u32,
+                    order: c.order,
+                });
+                residuals.push(arena.sub(dependent, rhs));
+            }
+        }
+    }
+    let env = |s: Symbol| at(symbolic, t0, laws, values, s);
+    residuals.into_iter().all(|r| {
+        let value = arena.eval(r, &env);
+        let mut size = 0.0;
+        for s in arena.free_symbols(r) {
+            if matches!(s, Symbol::Jet { .. } | Symbol::Time) {
+                let partial = arena.diff(r, s);
+                size += (arena.eval(partial, &env) * env(s)).abs();
+            }
+        }
+        value == 0.0 || value.abs() <= TOLERANCE * size
+    })
 }
 
 /// A value a constraint fixes that is not finite at the start: the
@@ -525,8 +618,9 @@ fn undetermined(
         Some(other) => {
             let primes = primes(level);
             diagnostic.with_help(format!(
-                "start where it does, or let the constraint fix `{other}{primes}` here: write \
-                 it `… for {} or {}` and give `{this}{primes}`",
+                "give `{this}{primes}` too (the constraint fixes `{other}{primes}` here, and \
+                 lagc checks the value given for it); or write it `… for {} or {}` and give \
+                 `{this}{primes}` instead of `{other}{primes}`",
                 candidate(other),
                 candidate(this),
             ))

@@ -31,6 +31,7 @@ mod parser;
 mod poor_pivots;
 mod python;
 mod readme_program;
+mod released_level;
 mod report;
 mod robustness;
 mod rolling_bodies;

@@ -618,7 +618,7 @@ pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<()
 /// table's (a crate of several modes has one for each), else those the
 /// initial values take as fixed (a single mode).
 /// Into `out` (cleared first; its storage kept from solve to solve).
-fn fixed_components(model: &dyn DynModel, mode: usize, out: &mut Vec<usize>) {
+pub(crate) fn fixed_components(model: &dyn DynModel, mode: usize, out: &mut Vec<usize>) {
     out.clear();
     if let Some(fixed) = model.fixed_components().get(mode) {
         out.extend_from_slice(fixed);

@@ -111,7 +111,7 @@ pub fn check_first_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Resu
         }
         let (best, best_pivot) = largest_pivot(slice);
         let ratio = slice[0].abs() / best_pivot;
-        if best != 0 && ratio < INITIAL_PIVOT_RATIO {
+        if best != 0 && ratio < INITIAL_PIVOT_RATIO && !completed_by_stated_values(model, t0, x0) {
             return Err(Failure::new(
                 t0,
                 FailureKind::InitialCandidateVanishes {
@@ -124,6 +124,44 @@ pub fn check_first_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Resu
         }
     }
     Ok(())
+}
+
+/// Whether the state the first candidates could not complete (their
+/// values are not finite there: the model stated the value one of them
+/// leaves free, a pendulum in `x, y` released level with `x' = y' = 0`
+/// given, where `y' = -x x'/y` is 0/0) is on the constraints as the mode
+/// the run starts in solves them: every component that mode fixes as it
+/// fixes it, to the agreement required of stated values. A first
+/// candidate whose value is finite but huge (a knife edge at heading π/2,
+/// `y' = x' tan(π/2)` = 1.6e16) is not such a state: refused as before.
+fn completed_by_stated_values(model: &dyn DynModel, t0: f64, x0: &[f64]) -> bool {
+    if x0.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    let branches = initial_branches(model, t0, x0);
+    let fixed_in = |mode: usize, kept: &mut Vec<f64>, fixed: &mut Vec<usize>| {
+        let mut model_in_mode = model.boxed_clone();
+        model_in_mode.set_regime(&Regime {
+            mode,
+            branches: branches.clone(),
+        });
+        kept.clear();
+        kept.extend_from_slice(x0);
+        crate::run::keep::fixed_components(&*model_in_mode, mode, fixed);
+        model_in_mode.constrained(t0, x0, kept).is_ok()
+    };
+    let (mut kept, mut fixed) = (Vec::new(), Vec::new());
+    let first = mode_index(model, &vec![0; model.constraints().len()]);
+    let first_completes =
+        fixed_in(first, &mut kept, &mut fixed) && fixed.iter().all(|&j| kept[j].is_finite());
+    if first_completes {
+        return false;
+    }
+    let best = best_mode(model, t0, x0).0;
+    fixed_in(best, &mut kept, &mut fixed)
+        && fixed
+            .iter()
+            .all(|&j| (kept[j] - x0[j]).abs() <= 1e-9 * x0[j].abs().max(1.0))
 }
 
 /// The mode whose candidates have the largest pivots at `(t, x)`, with
