@@ -148,13 +148,16 @@ pub type ProjectFn<'a> = &'a mut dyn FnMut(&[f64], usize, &mut [f64], &mut Matri
 /// `J` (one step, and one more for rounding). Moving the dependents alone
 /// instead made a particle circling at uniform speed 100× less accurate:
 /// where a dependent's pivot is poor, its correction is large and mostly
-/// along the motion. Inside [`partitioned`] (the keeper's choice where the
-/// independent coordinates are integrated exactly) the dependents alone
-/// are solved for. `(m, n, levels)`: the constraints, the coordinates,
-/// the derivative blocks.
+/// along the motion. Partitioned by `dependents` (the keeper's choice where
+/// the independent coordinates are integrated exactly,
+/// `run/keep/partition.rs`) the dependents alone are solved for; `None`,
+/// dependents that are not one per constraint, or a singular block of
+/// theirs in the normals: along the normals. `(m, n, levels)`: the
+/// constraints, the coordinates, the derivative blocks.
 pub fn project(
     t: f64,
     x: &mut [f64],
+    dependents: Option<Dependents>,
     sizes: (usize, usize, usize),
     constraint: &str,
     eval: ProjectFn,
@@ -166,7 +169,7 @@ pub fn project(
         lambda: Vec::new(),
         lu: Lu::empty(),
     });
-    let result = project_with(&mut workspace, t, x, sizes, constraint, eval);
+    let result = project_with(&mut workspace, t, x, dependents, sizes, constraint, eval);
     WORKSPACE.with(|w| w.set(Some(workspace)));
     result
 }
@@ -188,9 +191,6 @@ struct Workspace {
 
 thread_local! {
     static WORKSPACE: Cell<Option<Workspace>> = const { Cell::new(None) };
-    /// The dependents [`project`] solves for instead of moving along the
-    /// normals, set by [`partitioned`] for the calls inside it.
-    static DEPENDENTS: Cell<Option<Dependents>> = const { Cell::new(None) };
 }
 
 /// The most dependent coordinates a partitioned projection holds.
@@ -222,23 +222,11 @@ impl Dependents {
     }
 }
 
-/// Runs `f` with every [`project`] inside it partitioned by `dependents`
-/// (along the normals for `None`, or for dependents that are not one per
-/// constraint, or whose block of the normals is singular). The generated
-/// `Model::project_closure` calls [`project`] with the model's constraint
-/// functions, so the keeper chooses the projection around that call: no
-/// generated code changes.
-pub fn partitioned<R>(dependents: Option<Dependents>, f: impl FnOnce() -> R) -> R {
-    let before = DEPENDENTS.with(|d| d.replace(dependents));
-    let result = f();
-    DEPENDENTS.with(|d| d.set(before));
-    result
-}
-
 fn project_with(
     workspace: &mut Workspace,
     t: f64,
     x: &mut [f64],
+    dependents: Option<Dependents>,
     (m, n, levels): (usize, usize, usize),
     constraint: &str,
     eval: ProjectFn,
@@ -269,9 +257,7 @@ fn project_with(
             },
         )
     };
-    let dependents = DEPENDENTS
-        .with(Cell::get)
-        .filter(|d| d.len == m && d.as_slice().iter().all(|&j| j < n));
+    let dependents = dependents.filter(|d| d.len == m && d.as_slice().iter().all(|&j| j < n));
     // Solves (J Jᵀ) λ = f and moves block `r` of x by −Jᵀ λ; the largest
     // move, or None when J Jᵀ is singular. Partitioned: solves J_d δ = f
     // over the dependents' columns and moves them alone by −δ.
@@ -394,8 +380,6 @@ mod tests {
         assert!(why.residual >= 1.0);
     }
 
-    /// `x² + y² = 1` over the state `(x, y, x', y')`, and its derivative
-    /// `2 (x x' + y y') = 0`.
     #[test]
     fn a_start_on_the_constraints_but_for_rounding_is_taken_where_the_jacobian_is_singular() {
         // A rod level with its dependent `y` (`f = x^2 + y^2 - l^2` at
@@ -418,10 +402,13 @@ mod tests {
         assert!(solve(&mut z, &mut eval).is_err_and(|why| why.singular));
     }
 
-    fn circle(x: &mut [f64]) -> Result<(), Failure> {
+    /// `x² + y² = 1` over the state `(x, y, x', y')`, and its derivative
+    /// `2 (x x' + y y') = 0`, partitioned by `dependents`.
+    fn circle(x: &mut [f64], dependents: Option<Dependents>) -> Result<(), Failure> {
         project(
             0.0,
             x,
+            dependents,
             (1, 2, 1),
             "x^2 + y^2 = 1",
             &mut |s, level, f, normals| {
@@ -442,26 +429,31 @@ mod tests {
         // Partitioned with y dependent: x and x' kept, y and y' solved.
         let mut x = start;
         let y = Dependents::new(&[1]);
-        partitioned(y, || circle(&mut x)).unwrap();
+        circle(&mut x, y).unwrap();
         assert_eq!((x[0], x[2]), (start[0], start[2]));
         assert!((x[1] - 0.8).abs() <= 1e-15, "{x:?}");
         assert!((x[3] - (-0.6 * 0.3 / 0.8)).abs() <= 1e-15, "{x:?}");
-        // Outside `partitioned`, and with dependents that are not one per
+        // Without dependents, and with dependents that are not one per
         // constraint, along the normals (every component moved), the
         // same bits both ways.
         let mut normal = start;
-        circle(&mut normal).unwrap();
+        circle(&mut normal, None).unwrap();
         assert!(normal[0] != start[0] && normal[2] != start[2]);
         let mut two = start;
-        partitioned(Dependents::new(&[0, 1]), || circle(&mut two)).unwrap();
+        circle(&mut two, Dependents::new(&[0, 1])).unwrap();
         assert_eq!(two.map(f64::to_bits), normal.map(f64::to_bits));
         // A singular dependent block (y dependent at y = 0): along the
         // normals too.
         let level = [1.01, 0.0, 0.0, 0.5];
         let (mut a, mut b) = (level, level);
-        partitioned(y, || circle(&mut a)).unwrap();
-        circle(&mut b).unwrap();
+        circle(&mut a, y).unwrap();
+        circle(&mut b, None).unwrap();
         assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+        // The partition is the call's alone: a projection along the
+        // normals after a partitioned one is the same as before it.
+        let mut again = start;
+        circle(&mut again, None).unwrap();
+        assert_eq!(again.map(f64::to_bits), normal.map(f64::to_bits));
     }
 
     #[test]

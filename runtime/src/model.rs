@@ -9,6 +9,7 @@
 //! coefficient system emits nothing for them.
 
 use crate::choice::IntegratorChoice;
+use crate::closure::Dependents;
 use crate::failure::Failure;
 use crate::lanes::{Lanes, WIDTH};
 use crate::linalg::Matrix;
@@ -297,8 +298,16 @@ pub trait Model: Clone {
     }
 
     /// Projects the state `x` in place onto the holonomic constraints
-    /// along their normals (positions, then each derivative block).
-    fn project_closure(&self, _t: f64, _x: &mut [f64]) -> Result<(), Failure> {
+    /// (positions, then each derivative block): along their normals, or
+    /// partitioned by `partition`, the dependents solved for and the other
+    /// coordinates kept (`closure::project`; the keeper's choice,
+    /// `run/keep/partition.rs`).
+    fn project_closure(
+        &self,
+        _t: f64,
+        _x: &mut [f64],
+        _partition: Option<Dependents>,
+    ) -> Result<(), Failure> {
         Ok(())
     }
 
@@ -582,7 +591,12 @@ pub trait DynModel {
         Ok(())
     }
     /// [`Model::project_closure`].
-    fn project_closure(&self, _t: f64, _x: &mut [f64]) -> Result<(), Failure> {
+    fn project_closure(
+        &self,
+        _t: f64,
+        _x: &mut [f64],
+        _partition: Option<Dependents>,
+    ) -> Result<(), Failure> {
         Ok(())
     }
     /// [`Model::outputs`].
@@ -769,8 +783,13 @@ impl<M: Model + 'static> DynModel for M {
     fn kept_gradient(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
         Model::kept_gradient(self, t, x, jac)
     }
-    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
-        Model::project_closure(self, t, x)
+    fn project_closure(
+        &self,
+        t: f64,
+        x: &mut [f64],
+        partition: Option<Dependents>,
+    ) -> Result<(), Failure> {
+        Model::project_closure(self, t, x, partition)
     }
     fn outputs(&self, t: f64, x: &[f64], out: &mut [f64]) {
         Model::outputs(self, t, x, out);

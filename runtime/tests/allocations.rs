@@ -264,7 +264,7 @@ fn the_projection_onto_holonomic_constraints_allocates_nothing_after_its_first_c
     let project = |eval: ProjectFn<'_>, k: usize| {
         let s = 1e-3 * k as f64;
         let mut x = [0.6 + s, 0.8, 1.2, 1.6 - s, 0.8, -0.6 + s, 1.6, -1.2];
-        lagc_runtime::closure::project(0.0, &mut x, (2, 4, 1), "circles", eval).unwrap();
+        lagc_runtime::closure::project(0.0, &mut x, None, (2, 4, 1), "circles", eval).unwrap();
         x
     };
     // A first call off the constraints (one on them solves nothing).

@@ -160,9 +160,10 @@ fn kept_code(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
 /// the state projected onto them along their normals — Gauss–Newton on
 /// `f(t, q) = 0` with the smallest correction of the positions, then each
 /// derivative `q^(r)` onto `D^r f = 0` (linear in it, the same normals) —
-/// in place. The same in every mode (it does not depend on the dependents
-/// chosen); the runtime's keeper then keeps the velocities the mode's
-/// constraints fix (`constrained`).
+/// in place, or partitioned by the dependents the runtime's keeper passes
+/// (`closure::project` does either). The same code in every mode; the
+/// keeper then keeps the velocities the mode's constraints fix
+/// (`constrained`).
 fn closure_kept(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     let Some(closure) = &kernel.closure else {
         return TokenStream::new();
@@ -172,6 +173,7 @@ fn closure_kept(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     let level = names.namer.fresh("closure_level");
     let f = names.namer.fresh("closure_f");
     let normals = names.namer.fresh("closure_normals");
+    let partition = names.namer.fresh("closure_partition");
     let position: HashMap<Symbol, usize> = kernel
         .state
         .iter()
@@ -224,10 +226,16 @@ fn closure_kept(kernel: &Kernel, names: &mut SymbolNames) -> TokenStream {
     let levels = index(closure.levels.len());
     let rows = index(m);
     quote! {
-        fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+        fn project_closure(
+            &self,
+            t: f64,
+            x: &mut [f64],
+            #partition: Option<lagc_runtime::closure::Dependents>,
+        ) -> Result<(), Failure> {
             lagc_runtime::closure::project(
                 t,
                 x,
+                #partition,
                 (#rows, #coordinates, #levels),
                 #text,
                 &mut |#state: &[f64], #level: usize, #f: &mut [f64], #normals: &mut Matrix| {

@@ -629,7 +629,9 @@ impl<'m> Integration<'m> {
             });
             let mut required = x.to_vec();
             if model.keeps_positions() {
-                model.project_closure(t, &mut required)?;
+                // Along the normals: a state on the constraints is its own
+                // projection either way, and this one is only compared.
+                model.project_closure(t, &mut required, None)?;
             }
             let mut kept = required.clone();
             model.constrained(t, &required, &mut kept)?;

@@ -32,7 +32,7 @@
 mod one;
 mod partition;
 
-use crate::closure::{self, Dependents};
+use crate::closure::Dependents;
 use crate::failure::{Failure, FailureKind};
 use crate::linalg::{Lu, Matrix};
 use crate::model::{DynModel, Initial};
@@ -284,11 +284,9 @@ impl Keeper {
         probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x + s * d));
         probe.extend(x.iter().zip(d.iter()).map(|(x, d)| x - s * d));
         let (plus, minus) = probe.split_at_mut(x.len());
-        let result = closure::partitioned(self.partition, || {
-            model
-                .project_closure(t, plus)
-                .and_then(|_| model.project_closure(t, minus))
-        });
+        let result = model
+            .project_closure(t, plus, self.partition)
+            .and_then(|_| model.project_closure(t, minus, self.partition));
         if result.is_ok() {
             for ((d, p), m) in d.iter_mut().zip(&*plus).zip(&*minus) {
                 *d = (p - m) / (2.0 * s);
@@ -403,9 +401,7 @@ impl Keeper {
             // and which is worth its cost only where the state is moved.
             let motion = model.motion_dim();
             let partition = self.partition;
-            closure::partitioned(partition, || {
-                model.project_closure(t, &mut projected[..motion])
-            })?;
+            model.project_closure(t, &mut projected[..motion], partition)?;
             let mut worst = 0;
             for (i, (&before, &after)) in x.iter().zip(&*projected).take(motion).enumerate() {
                 let delta = (after - before).abs();
@@ -427,7 +423,7 @@ impl Keeper {
             }
             if motion < x.len() && !(bounded && closure.0 <= PROJECT_ABOVE) {
                 projected.copy_from_slice(x);
-                closure::partitioned(partition, || model.project_closure(t, projected))?;
+                model.project_closure(t, projected, partition)?;
             }
         }
         let m = self.fixed.len();

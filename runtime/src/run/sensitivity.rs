@@ -45,6 +45,7 @@
 use std::cell::RefCell;
 
 use crate::choice::{IntegratorChoice, Method};
+use crate::closure::Dependents;
 use crate::failure::Failure;
 use crate::linalg::Matrix;
 use crate::model::{Candidates, Domain, DynModel, Initial, Inputs, Regime};
@@ -268,7 +269,7 @@ fn tangent(
         columns.push(derivative(x0[f], 1.0, &mut |v| {
             moved.copy_from_slice(x0);
             moved[f] = v;
-            model.project_closure(t0, &mut moved)?;
+            model.project_closure(t0, &mut moved, None)?;
             Ok(moved.clone())
         })?);
     }
@@ -620,7 +621,8 @@ impl Augmented {
 
     /// The run's projection onto the holonomic constraints
     /// (`project_closure`, positions and their derivatives along the
-    /// normals) and its derivative: `x ← P(x)`, and every column of `S`
+    /// normals, or partitioned by `partition` as the keeper chose) and its
+    /// derivative: `x ← P(x)`, and every column of `S`
     /// by the chain rule through it, `S ← P_x S + P_p dp/dp`. `P_x S` is
     /// a directional derivative of `P` along the column and `P_p` one
     /// over the model with the param moved, each a refined central
@@ -629,7 +631,7 @@ impl Augmented {
     /// rounding while `P` only removes the integration's drift; the
     /// projection is what the motion's own run does, so the columns are
     /// the derivatives of that run.
-    fn project(&self, t: f64, z: &mut [f64]) -> Result<(), Failure> {
+    fn project(&self, t: f64, z: &mut [f64], partition: Option<Dependents>) -> Result<(), Failure> {
         let n = self.n;
         let (x, s) = z.split_at_mut(n);
         let before = x.to_vec();
@@ -648,7 +650,7 @@ impl Augmented {
                     for ((m, b), v) in moved.iter_mut().zip(&before).zip(&v) {
                         *m = b + sigma * v;
                     }
-                    self.inner.project_closure(t, &mut moved)?;
+                    self.inner.project_closure(t, &mut moved, partition)?;
                     Ok(moved.clone())
                 })?;
             }
@@ -657,7 +659,7 @@ impl Augmented {
         if self.columns > self.given {
             let slopes = self.param_slopes(&|model| {
                 let mut y = before.clone();
-                model.project_closure(t, &mut y)?;
+                model.project_closure(t, &mut y, partition)?;
                 Ok(y)
             })?;
             for (c, slope) in slopes.iter().enumerate() {
@@ -667,7 +669,7 @@ impl Augmented {
                 }
             }
         }
-        self.inner.project_closure(t, x)
+        self.inner.project_closure(t, x, partition)
     }
 
     /// `J S + ∂X/∂p` at `(t, x)` for the sensitivities `s`, into `out`.
@@ -826,13 +828,18 @@ impl DynModel for Augmented {
     fn fixed_components(&self) -> &'static [&'static [usize]] {
         self.unfixed
     }
-    fn project_closure(&self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
+    fn project_closure(
+        &self,
+        t: f64,
+        x: &mut [f64],
+        partition: Option<Dependents>,
+    ) -> Result<(), Failure> {
         if x.len() == self.n {
             // The motion alone (the keeper's share of a step's error).
-            return self.inner.project_closure(t, x);
+            return self.inner.project_closure(t, x, partition);
         }
         if self.inner.keeps_positions() {
-            self.project(t, x)
+            self.project(t, x, partition)
         } else {
             Ok(())
         }
