@@ -112,6 +112,7 @@ struct Stepping {
 pub struct Spare {
     keeper: Option<Keeper>,
     solver: Option<Box<Direct>>,
+    field: Option<Box<QuasilinearField>>,
     x_start: Vec<f64>,
     x: Vec<f64>,
     x_event: Vec<f64>,
@@ -122,6 +123,7 @@ pub struct Spare {
 #[derive(Default)]
 struct SpareStepping {
     solver: Option<Box<Direct>>,
+    field: Option<Box<QuasilinearField>>,
     x_event: Vec<f64>,
     g_quarters: Vec<Vec<f64>>,
 }
@@ -226,19 +228,26 @@ impl<'m> Integration<'m> {
     /// The storage this integration holds, for the next solve
     /// ([`Integration::new_reusing`]).
     pub fn into_spare(mut self) -> Spare {
-        let (solver, x_event, g_quarters) = match self.stepping.take() {
-            Some(s) => (
-                s.solver
-                    .into_reusable()
-                    .and_then(|solver| solver.downcast::<Direct>().ok()),
-                s.x_event,
-                s.g_quarters,
-            ),
-            None => (None, Vec::new(), Vec::new()),
+        let (solver, field, x_event, g_quarters) = match self.stepping.take() {
+            Some(s) => {
+                // Direct integration's solver and the quasilinear field
+                // are kept for the next solve (the field's set-up and drop
+                // were 5 % of rocket_mass's solve at rtol 1e-6, h-gt7).
+                let (solver, field) = match s.solver.into_reusable() {
+                    Some(any) => match any.downcast::<Direct>() {
+                        Ok(direct) => (Some(direct), None),
+                        Err(any) => (None, any.downcast::<QuasilinearField>().ok()),
+                    },
+                    None => (None, None),
+                };
+                (solver, field, s.x_event, s.g_quarters)
+            }
+            None => (None, None, Vec::new(), Vec::new()),
         };
         Spare {
             keeper: self.keeper.take(),
             solver,
+            field,
             x_start: std::mem::take(&mut self.x_start),
             x: std::mem::take(&mut self.x),
             x_event,
@@ -259,6 +268,7 @@ impl<'m> Integration<'m> {
         let Spare {
             keeper,
             solver,
+            field,
             x_start,
             x,
             x_event,
@@ -292,6 +302,7 @@ impl<'m> Integration<'m> {
             x0,
             SpareStepping {
                 solver,
+                field,
                 x_event,
                 g_quarters,
             },
@@ -341,10 +352,11 @@ impl<'m> Integration<'m> {
             let early_scale = regime_may_change.then(|| MassScale::at(model, t0, x0));
             let SpareStepping {
                 solver,
+                field,
                 mut x_event,
                 mut g_quarters,
             } = spare;
-            let solver = make_solver_reusing(model, &self.options, t0, x0, h_max, solver);
+            let solver = make_solver_reusing(model, &self.options, t0, x0, h_max, solver, field);
             let solver = solver.map_err(|f| {
                 let scale = early_scale.unwrap_or_else(|| MassScale::at(model, t0, x0));
                 watch.diagnose(model, diagnose(model, f, x0, &scale), t0, x0)
@@ -1133,7 +1145,7 @@ pub fn make_solver(
     x0: &[f64],
     h_max: f64,
 ) -> Result<Box<dyn Solver>, Failure> {
-    make_solver_reusing(model, options, t0, x0, h_max, None)
+    make_solver_reusing(model, options, t0, x0, h_max, None, None)
 }
 
 /// [`make_solver`], direct integration's solver made in the storage of
@@ -1145,6 +1157,7 @@ fn make_solver_reusing(
     x0: &[f64],
     h_max: f64,
     spare: Option<Box<Direct>>,
+    spare_field: Option<Box<QuasilinearField>>,
 ) -> Result<Box<dyn Solver>, Failure> {
     let choice = options.integrator_choice(model);
     Ok(match options.method {
@@ -1175,7 +1188,10 @@ fn make_solver_reusing(
             if model.affine() {
                 Box::new(AffineField::new(model, field, t0, x0, h_max)?)
             } else {
-                Box::new(QuasilinearField::new(field, t0, x0, h_max))
+                match spare_field {
+                    Some(old) => old.renewed(field, t0, x0, h_max),
+                    None => Box::new(QuasilinearField::new(field, t0, x0, h_max)),
+                }
             }
         }
     })

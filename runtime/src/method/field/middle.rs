@@ -240,6 +240,12 @@ pub(super) struct MiddleScratch {
 }
 
 impl MiddleScratch {
+    /// As [`MiddleScratch::new`] left it, for another solve (the buffers
+    /// are written before they are read).
+    pub(super) fn reset(&mut self) {
+        self.last_cut = false;
+    }
+
     pub(super) fn new(n: usize) -> MiddleScratch {
         MiddleScratch {
             values: vec![0.0; POINTS * n],
