@@ -310,10 +310,10 @@ impl<'m> Integration<'m> {
         let model = self.model.get_mut();
         let span = self.end - t0;
         let h_max = if span > 0.0 { span } else { 1.0 };
-        self.regime = Regime {
-            mode: best_mode(model, t0, x0).0,
-            branches: initial_branches(model, t0, x0),
-        };
+        let mode = best_mode(model, t0, x0).0;
+        let mut branches = initial_branches(model, t0, x0);
+        let guards = crate::run::impacts::touching_at_start(model, mode, t0, x0, &mut branches);
+        self.regime = Regime { mode, branches };
         model.set_regime(&self.regime);
         self.volumes = pivot_volumes(model, t0, x0);
         (self.t_start, self.t) = (t0, t0);
@@ -370,7 +370,7 @@ impl<'m> Integration<'m> {
                 step_ends: Vec::new(),
                 pace,
                 pivot_limit: None,
-                impacts: Impacts::new(model),
+                impacts: Impacts::starting_on_boundaries(model, guards),
             })
         })();
         match started {
