@@ -983,6 +983,13 @@ impl<'m> Integration<'m> {
                 }
                 model.set_regime(regime);
                 if ending.is_none() {
+                    // A mass law that jumps at a switch (a stage dropped,
+                    // `if z < H then … else …`) to zero or below never
+                    // crosses zero along a step, where a vanishing mass is
+                    // otherwise caught: checked, a staged rocket whose
+                    // second piece was negative flew on with M = -140 and
+                    // exit 0.
+                    check_masses(model, t_event, x_event)?;
                     let before = Regime {
                         mode: regime.mode,
                         branches: before,
