@@ -298,3 +298,35 @@ fn newtons_cradle_with_touching_balls_fires_every_impact() {
         }
     }
 }
+
+/// A ball on its floor thrown down: it bounces from t = 0 (flight n lasts
+/// `2 e^n v / g`) and the run ends where the bounces accumulate, never
+/// below the floor.
+#[test]
+fn ball_thrown_down_from_its_floor_bounces_at_once() {
+    let (e, v) = (0.8_f64, 1.0);
+    let times = samples(0.0, 0.8, 40);
+    let t_inf = 2.0 * e * v / (G * (1.0 - e));
+    let exact = |t: f64| {
+        let (mut start, mut speed) = (0.0, e * v);
+        loop {
+            let flight = 2.0 * speed / G;
+            if t < start + flight {
+                let s = t - start;
+                return vec![speed * s - G * s * s / 2.0, speed - G * s];
+            }
+            start += flight;
+            speed *= e;
+        }
+    };
+    check("ball_thrown_down_from_floor", &times, exact);
+    for method in ["direct", "field"] {
+        let (rows, stderr) = run("ball_thrown_down_from_floor", method, 1e-10, &times);
+        let stop = rows.last().unwrap()[0];
+        assert!(
+            (stop - t_inf).abs() < 1e-6,
+            "{method}: stopped at {stop}\n{stderr}"
+        );
+        assert!(stderr.contains("accumulate"), "{method}: {stderr}");
+    }
+}
