@@ -358,11 +358,21 @@ impl<'a> Checker<'a> {
             Some(declared) => match declared.name {
                 Name::Coord(index) => Some(index),
                 other => {
-                    let diagnostic = not_a_coordinate(what, &ident.name, ident.span)
+                    let mut diagnostic = not_a_coordinate(what, &ident.name, ident.span)
                         .with_secondary(
                             declared.span,
                             format!("declared here as {}", super::declarations::kind_name(other)),
                         );
+                    if matches!(other, Name::Mass(_)) && what == "a reset" {
+                        // A stage dropped by an event, as a new user first
+                        // writes it (issue 29): say where a jump of mass goes.
+                        diagnostic = diagnostic.with_help(
+                            "a mass that jumps (a stage dropped) is written in its law: \
+                             `mass M = if t < tb then M0 - mu * t else M2;`, or on the \
+                             state, `if z < H then … else …`; the part dropped leaves \
+                             with the body's velocity and gives no thrust",
+                        );
+                    }
                     self.report(diagnostic);
                     None
                 }

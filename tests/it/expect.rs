@@ -348,6 +348,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/mass_law_forms",
     "tests/data/runtime_failures",
     "tests/data/warnings",
+    "tests/data/textbook",
     "tests/data",
 ];
 

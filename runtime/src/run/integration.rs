@@ -321,10 +321,10 @@ impl<'m> Integration<'m> {
         let model = self.model.get_mut();
         let span = self.end - t0;
         let h_max = if span > 0.0 { span } else { 1.0 };
-        self.regime = Regime {
-            mode: best_mode(model, t0, x0).0,
-            branches: initial_branches(model, t0, x0),
-        };
+        let mode = best_mode(model, t0, x0).0;
+        let mut branches = initial_branches(model, t0, x0);
+        let guards = crate::run::impacts::touching_at_start(model, mode, t0, x0, &mut branches);
+        self.regime = Regime { mode, branches };
         model.set_regime(&self.regime);
         self.volumes = pivot_volumes(model, t0, x0);
         (self.t_start, self.t) = (t0, t0);
@@ -382,7 +382,7 @@ impl<'m> Integration<'m> {
                 step_ends: Vec::new(),
                 pace,
                 pivot_limit: None,
-                impacts: Impacts::new(model),
+                impacts: Impacts::starting_on_boundaries(model, guards),
             })
         })();
         match started {
@@ -997,6 +997,13 @@ impl<'m> Integration<'m> {
                 }
                 model.set_regime(regime);
                 if ending.is_none() {
+                    // A mass law that jumps at a switch (a stage dropped,
+                    // `if z < H then … else …`) to zero or below never
+                    // crosses zero along a step, where a vanishing mass is
+                    // otherwise caught: checked, a staged rocket whose
+                    // second piece was negative flew on with M = -140 and
+                    // exit 0.
+                    check_masses(model, t_event, x_event)?;
                     let before = Regime {
                         mode: regime.mode,
                         branches: before,
