@@ -153,6 +153,10 @@ const RUNTIME: &[(&str, &str)] = &[
         include_str!("../../runtime/src/ode/dop853/global_error/growth.rs"),
     ),
     (
+        "src/ode/dop853/inside.rs",
+        include_str!("../../runtime/src/ode/dop853/inside.rs"),
+    ),
+    (
         "src/ode/dop853/tableau.rs",
         include_str!("../../runtime/src/ode/dop853/tableau.rs"),
     ),

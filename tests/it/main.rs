@@ -37,6 +37,7 @@ mod robustness;
 mod rolling_bodies;
 mod runtime_failures;
 mod sensitivity;
+mod settling;
 mod source_text;
 mod stages;
 mod stiff_extreme;

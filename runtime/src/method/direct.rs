@@ -436,7 +436,12 @@ impl Solver for Direct {
     }
 
     fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure> {
-        self.stepper.dense(&ModelSystem(model), t, out)
+        // DOP853's extension judged before it is read (`dop853::inside`:
+        // a settling motion's stability-held steps); RODAS4's as it is.
+        match self.stepper.as_any_mut().downcast_mut::<Dop853>() {
+            Some(dop) => dop.dense_judged(&ModelSystem(model), t, out),
+            None => self.stepper.dense(&ModelSystem(model), t, out),
+        }
     }
 
     fn into_reusable(self: Box<Self>) -> Option<Box<dyn std::any::Any>> {

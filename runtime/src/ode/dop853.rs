@@ -16,6 +16,7 @@ use crate::ode::system::System;
 use crate::ode::tolerance::{first_non_finite, Tolerance};
 
 pub mod global_error;
+mod inside;
 pub(crate) mod tableau;
 use tableau::*;
 
@@ -117,6 +118,9 @@ pub struct Dop853 {
     /// norm, for [`Dop853::local_error`] (its square root taken there, not
     /// in every attempt).
     hairer_sums: (f64, f64),
+    /// The judge of the last accepted step's continuous extension, for
+    /// direct integration's reads inside it ([`Dop853::dense_judged`]).
+    inside: inside::Inside,
 }
 
 impl Dop853 {
@@ -146,6 +150,7 @@ impl Dop853 {
             non_stiff_tests: 0,
             stiffness_detected: None,
             hairer_sums: (0.0, 0.0),
+            inside: inside::Inside::default(),
         })
     }
 
@@ -183,6 +188,8 @@ impl Dop853 {
         y.copy_from_slice(y0);
         let mut y_old = std::mem::take(&mut self.y_old);
         y_old.copy_from_slice(y0);
+        let mut inside = std::mem::take(&mut self.inside);
+        inside.new_step();
         *self = Dop853 {
             tol,
             clock,
@@ -195,6 +202,7 @@ impl Dop853 {
             non_stiff_tests: 0,
             stiffness_detected: None,
             hairer_sums: (0.0, 0.0),
+            inside,
         };
         Ok(())
     }
@@ -321,6 +329,7 @@ impl Dop853 {
                 let (start, rest) = self.k.split_at_mut(12 * n);
                 start[..n].swap_with_slice(&mut rest[..n]);
                 self.dense_ready = false;
+                self.inside.new_step();
                 self.test_stiffness::<N>(h);
                 return Ok(StepOutcome::Accepted);
             } else {
