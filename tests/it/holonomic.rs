@@ -345,48 +345,6 @@ fn the_field_counts_a_constrained_window_by_its_error_at_its_end() {
     }
 }
 
-/// The complete elliptic integral of the first kind `K(k)`, by the
-/// arithmetic-geometric mean: `K = π / (2 AGM(1, sqrt(1 - k²)))`.
-fn elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0_f64, (1.0 - k * k).sqrt());
-    for _ in 0..40 {
-        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
-    }
-    PI / (2.0 * a)
-}
-
-#[test]
-fn a_cartesian_pendulum_released_level_with_its_pivot_reaches_the_other_side_at_its_half_period() {
-    // Amplitude π/2: the period is 4 sqrt(l/g) K(sin(π/4)).
-    let (g, l) = (9.81_f64, 1.0_f64);
-    let half_period = 2.0 * (l / g).sqrt() * elliptic_k((PI / 4.0).sin());
-    let binary = crate::generated::build_file(
-        &crate::root().join("tests/data/v2/pendulum_released_level.lag"),
-    );
-    let times = format!("{},{half_period}", half_period / 2.0);
-    for method in METHODS {
-        let args = [
-            "--method", method, "--rtol", "1e-10", "--atol", "1e-12", "--times", &times,
-        ];
-        let (rows, _) = run(&binary, &args);
-        // At the quarter period the bob hangs straight down, at its fastest.
-        let (x, y, speed) = (rows[0][1], rows[0][2], rows[0][4].hypot(rows[0][3]));
-        assert!(
-            x.abs() <= 1e-9 && (y + l).abs() <= 1e-9,
-            "{method}: ({x}, {y})"
-        );
-        assert!(
-            (speed - (2.0 * g * l).sqrt()).abs() <= 1e-9,
-            "{method}: {speed}"
-        );
-        let (x, y) = (rows[1][1], rows[1][2]);
-        assert!(
-            (x + l).abs() <= 1e-9 && y.abs() <= 1e-9,
-            "{method}: ({x}, {y})"
-        );
-    }
-}
-
 #[test]
 fn a_field_window_taken_again_across_a_pivot_is_carried_once() {
     // The constant-speed particle's field window across its apex (where

@@ -25,6 +25,27 @@ impl Default for Tolerance {
 }
 
 impl Tolerance {
+    /// How many tolerances `a` stands off `b`: the largest component's
+    /// distance, each scaled by `atol + rtol·max(|a|, |b|)`, not the RMS
+    /// norm, since a sample is read component by component (the
+    /// gravity-turn rocket's altitude near the ground was 0.27 tolerances
+    /// off in mid-step at rtol 1e-8, its RMS over the four components
+    /// 0.06). Not finite: infinitely off. The outputs' middle checks
+    /// (the field's pieces, direct DOP853's steps).
+    pub fn tolerances_off(self, a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| {
+                let off = (x - y).abs() / (self.atol + self.rtol * x.abs().max(y.abs()));
+                if off.is_nan() {
+                    f64::INFINITY
+                } else {
+                    off
+                }
+            })
+            .fold(0.0_f64, f64::max)
+    }
+
     /// The tolerance scaled by `factor` (both parts).
     pub fn scaled(self, factor: f64) -> Tolerance {
         Tolerance {

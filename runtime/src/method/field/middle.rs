@@ -14,25 +14,6 @@ use crate::ode::system::System;
 use crate::ode::tolerance::Tolerance;
 use std::sync::OnceLock;
 
-/// How many tolerances `a` stands off `b`: the largest component's
-/// distance, not the RMS norm, since a sample is read component by
-/// component (the gravity-turn rocket's altitude near the ground was 0.27
-/// tolerances off in mid-step at rtol 1e-8, its RMS over the four
-/// components 0.06). Not finite: infinitely off.
-fn tolerances_off(a: &[f64], b: &[f64], tol: Tolerance) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| {
-            let off = (x - y).abs() / (tol.atol + tol.rtol * x.abs().max(y.abs()));
-            if off.is_nan() {
-                f64::INFINITY
-            } else {
-                off
-            }
-        })
-        .fold(0.0_f64, f64::max)
-}
-
 /// How far the output's extension may stand off a half step's state at
 /// its piece's middle, in tolerances (the largest component's), before
 /// the piece is cut in two there.
@@ -134,7 +115,7 @@ fn halve<S: System + ?Sized>(
         out.push(piece);
         return;
     }
-    let off = tolerances_off(&middle, &half, tol);
+    let off = tol.tolerances_off(&middle, &half);
     if off <= MIDDLE_GATE {
         out.push(piece);
         return;
@@ -262,7 +243,7 @@ impl MiddleScratch {
     }
 }
 
-/// How many tolerances (as [`tolerances_off`]) the piece's extension `u`
+/// How many tolerances (as [`Tolerance::tolerances_off`]) the piece's extension `u`
 /// stands off the linearised motion's solution from its start at `t_mid`:
 /// from its defect `δ = u' − X(t, u)`, since the error `e = u − x` solves
 /// `e' = A e + δ` with `e(t_old) = 0`, so `e(t_mid) = ∫ Φ(t_mid, s) δ(s) ds`
@@ -341,7 +322,7 @@ fn defect_estimate<S: System + ?Sized>(
     for i in 0..n {
         next[i] = u[i] - error[i];
     }
-    Some(tolerances_off(u, next, tol))
+    Some(tol.tolerances_off(u, next))
 }
 
 #[cfg(test)]
@@ -410,7 +391,7 @@ mod tests {
                 piece.eval(t_mid, &mut middle);
                 let mut half = vec![0.0; 2];
                 one_step(&Varying, t0, &y0, 0.5 * h, &mut half).unwrap();
-                let off = tolerances_off(&middle, &half, tol);
+                let off = tol.tolerances_off(&middle, &half);
                 let estimate =
                     defect_estimate(&Varying, &piece, t_mid, tol, &mut MiddleScratch::new(2))
                         .unwrap();

@@ -31,7 +31,6 @@ use super::{plain_step, Dop853, STAGES};
 use crate::failure::Failure;
 use crate::ode::stepper::outside_last_step;
 use crate::ode::system::System;
-use crate::ode::tolerance::Tolerance;
 
 /// How far the extension may stand off the half step at the step's middle
 /// before the step's inside is read by steps, in tolerances of the largest
@@ -144,7 +143,7 @@ impl Dop853 {
         super::contd8(self.cont(), n, 0.5, work);
         let half = 0.5 * self.clock.h_old;
         self.step_inside(system, half, &mut [])?;
-        Ok(tolerances_off(work, &self.inside.state, self.tol))
+        Ok(self.tol.tolerances_off(work, &self.inside.state))
     }
 
     /// The extension `p` at the middle against the step's start plus the
@@ -184,7 +183,7 @@ impl Dop853 {
         for i in 0..n {
             inside.stage_state[i] = self.y_old[i] + inside.state[i];
         }
-        Ok(tolerances_off(work, &inside.stage_state, self.tol))
+        Ok(self.tol.tolerances_off(work, &inside.stage_state))
     }
 
     /// One DOP853 step of length `h` (inside the last accepted step) from
@@ -220,20 +219,4 @@ impl Dop853 {
         self.clock.stats.rhs_evaluations += STAGES - 1;
         Ok(())
     }
-}
-
-/// How many tolerances `a` stands off `b`, the largest component's, each
-/// scaled by `atol + rtol·max(|a|, |b|)`; not finite: infinitely off.
-fn tolerances_off(a: &[f64], b: &[f64], tol: Tolerance) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| {
-            let off = (x - y).abs() / (tol.atol + tol.rtol * x.abs().max(y.abs()));
-            if off.is_nan() {
-                f64::INFINITY
-            } else {
-                off
-            }
-        })
-        .fold(0.0_f64, f64::max)
 }
