@@ -52,6 +52,17 @@ fn scalar_sin_cos(x: f64) -> (f64, f64) {
     }
 }
 
+/// Gauss–Legendre's four nodes and weights on `[0, 1]` (exact for
+/// polynomials of degree 7), each correctly rounded: the output checks'
+/// quadratures of the right side along an extension (the field's pieces,
+/// direct DOP853's steps).
+pub const GAUSS_LEGENDRE_4: [(f64, f64); 4] = [
+    (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
+    (0.330_009_478_207_571_87, 0.326_072_577_431_273_07),
+    (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
+    (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
+];
+
 #[cfg(test)]
 mod tests {
     #[test]

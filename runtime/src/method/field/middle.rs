@@ -8,6 +8,7 @@
 //! past the gate (`defect_estimate`, 4 linearisations).
 
 use crate::linalg::Matrix;
+use crate::math::GAUSS_LEGENDRE_4;
 use crate::ode::dense::DenseStep;
 use crate::ode::dop853::{dense_step_between, one_step};
 use crate::ode::system::System;
@@ -148,13 +149,6 @@ fn halve<S: System + ?Sized>(
 /// 4 the chaotic pendulum_3's long pieces at rtol 1e-6 had none; at 16
 /// they are as close as the others.
 const MOST_SPREAD: f64 = 16.0;
-/// Gauss–Legendre's four nodes and weights on `[0, 1]`.
-const GAUSS: [(f64, f64); 4] = [
-    (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
-    (0.330_009_478_207_571_87, 0.326_072_577_431_273_07),
-    (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
-    (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
-];
 /// The extension is a polynomial of degree 7 in `θ`: its values at 8
 /// points give it, and its derivative, exactly (up to rounding).
 const POINTS: usize = 8;
@@ -186,7 +180,7 @@ fn node_weights() -> &'static NodeWeights {
             value: [[0.0; POINTS]; 4],
             slope: [[0.0; POINTS]; 4],
         };
-        for (k, &(xi, _)) in GAUSS.iter().enumerate() {
+        for (k, &(xi, _)) in GAUSS_LEGENDRE_4.iter().enumerate() {
             let theta = 0.5 * xi;
             for j in 0..POINTS {
                 let (mut basis, mut sum) = (1.0, 0.0);
@@ -275,7 +269,7 @@ fn defect_estimate<S: System + ?Sized>(
     let (term, next, sum) = (&mut sc.term[..n], &mut sc.next[..n], &mut sc.sum[..n]);
     let error = &mut sc.error[..n];
     error.fill(0.0);
-    for (k, &(xi, weight)) in GAUSS.iter().enumerate() {
+    for (k, &(xi, weight)) in GAUSS_LEGENDRE_4.iter().enumerate() {
         let s = t_old + xi * half;
         u.fill(0.0);
         slope.fill(0.0);

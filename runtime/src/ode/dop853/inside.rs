@@ -29,6 +29,7 @@
 
 use super::{plain_step, Dop853, STAGES};
 use crate::failure::Failure;
+use crate::math::GAUSS_LEGENDRE_4;
 use crate::ode::stepper::outside_last_step;
 use crate::ode::system::System;
 
@@ -53,14 +54,6 @@ pub(super) const EXTENSION_GATE: f64 = 2.0;
 /// least 0.996× on every step past the gate; the steps it kept below 0.5
 /// stood at most 0.43 tolerance off by the half step (§10x h-dense2).
 const KEEP_BELOW: f64 = 0.5;
-
-/// Gauss–Legendre's 4 points on [0, 1] and their weights (order 8).
-const GAUSS_4: [(f64, f64); 4] = [
-    (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
-    (0.330_009_478_207_571_9, 0.326_072_577_431_273_07),
-    (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
-    (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
-];
 
 /// The judge's verdict on the last accepted step and its storage, kept
 /// from step to step (a sample inside most steps: no allocation a read).
@@ -170,7 +163,7 @@ impl Dop853 {
         inside.state.fill(0.0);
         let (point, rate) = inside.k.split_at_mut(n);
         let rate = &mut rate[..n];
-        for (node, weight) in GAUSS_4 {
+        for (node, weight) in GAUSS_LEGENDRE_4 {
             let theta = 0.5 * node;
             super::contd8(cont, n, theta, point);
             system.rhs(t_old + theta * h, point, rate)?;
@@ -178,7 +171,7 @@ impl Dop853 {
                 inside.state[i] += half * weight * rate[i];
             }
         }
-        self.clock.stats.rhs_evaluations += GAUSS_4.len();
+        self.clock.stats.rhs_evaluations += GAUSS_LEGENDRE_4.len();
         super::contd8(cont, n, 0.5, work);
         for i in 0..n {
             inside.stage_state[i] = self.y_old[i] + inside.state[i];
