@@ -9,7 +9,7 @@ use crate::method::solver::{GlobalErrorEstimate, Keeping, Report, Solver};
 use crate::model::DynModel;
 use crate::ode::budget::Budget;
 use crate::ode::dop853::global_error::growth::{past, Accepted, Growth, Keep, FROM_DIRECT};
-use crate::ode::dop853::global_error::{relative, GlobalError, BOUND};
+use crate::ode::dop853::global_error::{relative, GlobalError, Swings, BOUND};
 use crate::ode::dop853::Dop853;
 use crate::ode::stepper::{Clocked, OfModel, StepperOf};
 use crate::ode::system::ModelSystem;
@@ -43,6 +43,9 @@ pub struct Direct {
     /// The estimate before the last step was added ([`Solver::retake`]
     /// drops that step's error).
     global_before_step: GlobalError,
+    /// The components' swings, for the estimate's reading where they pass
+    /// zero (`global_error::Swings`).
+    swings: Swings,
     step_error: StepError,
     /// The steps' errors carried along the motion (`global_error::growth`).
     growth: Growth,
@@ -106,7 +109,7 @@ impl StepError {
     /// (with the model, to propagate it).
     fn add_to(
         &mut self,
-        global: &mut GlobalError,
+        (global, swings): (&mut GlobalError, &mut Swings),
         rtol: f64,
         growth: Option<(&mut Growth, &dyn DynModel)>,
         keep: Option<&mut Keep<'_>>,
@@ -117,7 +120,7 @@ impl StepError {
         let propagate = growth
             .as_ref()
             .is_some_and(|(g, _)| carries(global, rtol, g, self.carried_early()));
-        let (estimated, added) = self.sum_into(global);
+        let (estimated, added) = self.sum_into(global, swings);
         // Past the bound every step's error is measured (see
         // `carry_global_error`) and carried along the motion with its
         // sign, at most Hairer's estimate (the calibration's bound) but
@@ -169,7 +172,7 @@ impl StepError {
     /// The step's error added to the sum `global` (what
     /// [`StepError::add_to`] does to it): its relative estimate, and what
     /// was added.
-    fn sum_into(&self, global: &mut GlobalError) -> (f64, f64) {
+    fn sum_into(&self, global: &mut GlobalError, swings: &mut Swings) -> (f64, f64) {
         let estimated = relative(&self.estimated, &self.x);
         // The sum is calibrated as before: a measure every
         // `CALIBRATION_STRIDE` steps scales the estimates between (one at
@@ -182,6 +185,13 @@ impl StepError {
             }
             _ => global.add(estimated, self.h),
         };
+        global.swing(
+            swings,
+            &self.estimated,
+            (&self.x0, &self.x),
+            estimated,
+            added,
+        );
         (estimated, added)
     }
 }
@@ -260,6 +270,7 @@ impl Direct {
             switched_back_at: None,
             global: GlobalError::new(),
             global_before_step: GlobalError::new(),
+            swings: Swings::default(),
             step_error: StepError {
                 estimated: vec![0.0; x0.len()],
                 from_first_step: carried_from_first_step(model),
@@ -321,6 +332,7 @@ impl Direct {
             switched_back_at,
             global,
             global_before_step,
+            swings,
             step_error,
             growth,
             keeps,
@@ -341,6 +353,7 @@ impl Direct {
         *switched_back_at = None;
         *global = GlobalError::new();
         *global_before_step = GlobalError::new();
+        swings.clear();
         let mut estimated = std::mem::take(&mut step_error.estimated);
         estimated.clear();
         estimated.resize(n, 0.0);
@@ -497,7 +510,7 @@ impl Solver for Direct {
 
     fn cut(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) {
         self.step_error.add_to(
-            &mut self.global,
+            (&mut self.global, &mut self.swings),
             self.tol.rtol,
             Some((&mut self.growth, model)),
             None,
@@ -563,7 +576,7 @@ impl Solver for Direct {
         // is projected as the state was.
         let mut keep = |t: f64, x: &[f64], d: &mut [f64]| keeping.tangent(t, x, d);
         e.add_to(
-            &mut self.global,
+            (&mut self.global, &mut self.swings),
             self.tol.rtol,
             Some((&mut self.growth, model)),
             Some(&mut keep),
@@ -577,7 +590,8 @@ impl Solver for Direct {
         // the copy of the step error's four vectors that every solve's
         // report made).
         if self.step_error.waiting {
-            self.step_error.sum_into(&mut global);
+            self.step_error
+                .sum_into(&mut global, &mut self.swings.clone());
         }
         let carried = self.growth.largest();
         let mut notes = Vec::new();
@@ -605,7 +619,7 @@ impl Solver for Direct {
             stats,
             notes,
             global_error: self.estimates.then_some(GlobalErrorEstimate {
-                largest: global.estimate().max(carried),
+                largest: global.read().max(carried),
                 rtol: self.tol.rtol,
                 complete: global.complete(),
             }),
@@ -619,7 +633,7 @@ impl Direct {
     /// the step just taken added to the estimate.
     fn restart_at(&mut self, model: &dyn DynModel, t: f64, x: &[f64]) -> Result<(), Failure> {
         self.step_error.add_to(
-            &mut self.global,
+            (&mut self.global, &mut self.swings),
             self.tol.rtol,
             Some((&mut self.growth, model)),
             None,
@@ -653,9 +667,14 @@ impl Direct {
         if !self.estimates {
             return;
         }
-        let (global, e) = (&mut self.global, &mut self.step_error);
+        let (global, e, swings) = (&mut self.global, &mut self.step_error, &mut self.swings);
         let rtol = self.tol.rtol;
-        e.add_to(global, rtol, Some((&mut self.growth, model)), None);
+        e.add_to(
+            (global, swings),
+            rtol,
+            Some((&mut self.growth, model)),
+            None,
+        );
         self.global_before_step = global.clone();
         let Some(dop) = self.stepper.as_any_mut().downcast_mut::<Dop853>() else {
             global.skip();
@@ -674,7 +693,10 @@ impl Direct {
             let (_, _, h) = dop.clock().last_step();
             let estimated = dop.local_error_relative();
             if !self.keeps || global.estimate() + estimated <= BOUND * rtol {
-                global.add(estimated, h);
+                let added = global.add(estimated, h);
+                dop.local_error(&mut e.estimated);
+                let ends = (dop.previous_state(), dop.current_state());
+                global.swing(swings, &e.estimated, ends, estimated, added);
                 return;
             }
         }
@@ -694,9 +716,7 @@ impl Direct {
         // on the same sum: no step is added between): not copied on every
         // step of a run that never carries.
         e.x0.clear();
-        if carried {
-            e.x0.extend_from_slice(dop.previous_state());
-        }
+        e.x0.extend_from_slice(dop.previous_state());
         if carried || e.calibrates {
             // A measure that fails (a stage not finite) leaves the estimate
             // unscaled: it never fails the run.
@@ -707,7 +727,12 @@ impl Direct {
         }
         e.waiting = true;
         if !self.keeps {
-            e.add_to(global, rtol, Some((&mut self.growth, model)), None);
+            e.add_to(
+                (global, swings),
+                rtol,
+                Some((&mut self.growth, model)),
+                None,
+            );
         }
     }
 

@@ -88,7 +88,7 @@ use crate::failure::Failure;
 use crate::method::solver::{GlobalErrorEstimate, Keeping};
 use crate::model::DynModel;
 use crate::ode::dop853::global_error::growth::{past_bound, Growth, Keep, Project, FROM_DIRECT};
-use crate::ode::dop853::global_error::{relative, GlobalError, CALIBRATION_STRIDE};
+use crate::ode::dop853::global_error::{relative, GlobalError, Swings, CALIBRATION_STRIDE};
 use crate::ode::dop853::step_by_halves;
 use crate::ode::system::ModelSystem;
 
@@ -138,6 +138,9 @@ pub struct FieldError {
     on: bool,
     rtol: f64,
     global: GlobalError,
+    /// The components' swings, for the estimate's reading where they pass
+    /// zero (`global_error::Swings`).
+    swings: Swings,
     /// Set at the first step from the model: whether it has constraints,
     /// whose windows are added as wholes to the sum (`feed_window`) and
     /// whose carried error is projected as the state is (`keep`).
@@ -211,6 +214,7 @@ impl FieldError {
             on: true,
             rtol,
             global: GlobalError::new(),
+            swings: Swings::default(),
             constrained: None,
             growth: Growth::new(n),
             evaluations: 0,
@@ -628,10 +632,13 @@ impl FieldError {
                     measured = Some(relative(&reference, &step.x1));
                 }
             }
-            match measured {
+            let added = match measured {
                 Some(m) => self.global.add_measured(estimated, m, h),
                 None => self.global.add(estimated, h),
             };
+            let ends = (&step.x0[..], &step.x1[..]);
+            self.global
+                .swing(&mut self.swings, local, ends, estimated, added);
             if carried {
                 // Carried by a reference stepped alongside the run from
                 // `x0 − e` (`Growth::step_alongside`, 24 evaluations): the
@@ -883,17 +890,20 @@ impl FieldError {
                 complete,
             };
         }
-        let mut global = self.global.clone();
+        let (mut global, mut swings) = (self.global.clone(), self.swings.clone());
         for step in &self.unfed {
             match &step.local {
                 Some(local) => {
-                    global.add(relative(local, &step.x1), step.t1 - step.t0);
+                    let estimated = relative(local, &step.x1);
+                    let added = global.add(estimated, step.t1 - step.t0);
+                    let ends = (&step.x0[..], &step.x1[..]);
+                    global.swing(&mut swings, local, ends, estimated, added);
                 }
                 None => global.skip(),
             }
         }
         GlobalErrorEstimate {
-            largest: global.estimate().max(self.growth.largest()),
+            largest: global.read().max(self.growth.largest()),
             rtol: self.rtol,
             complete: global.complete(),
         }

@@ -67,7 +67,7 @@
 //! errors) the carrying stops ([`Growth::saturated`]): the summary says
 //! amplification from there whatever follows.
 
-use super::relative;
+use super::relative_over_step;
 use crate::failure::Failure;
 use crate::ode::dop853::{
     step_by_halves, step_by_halves_in, step_derivative, step_derivative_from_accepted,
@@ -524,7 +524,14 @@ impl Growth {
             // (a bound on the kept part): the estimate never fails the run.
             let _ = keep(t, x, &mut self.e);
         }
-        let size = relative(&self.e, &step.x0);
+        // Read over the step, where a sample may find a component at
+        // zero (`relative_over_step`), against the end it reached.
+        let end = match (&step.accepted, &step.alongside) {
+            (Some((_, end)), _) if step.t1 <= t_end => end,
+            (_, Some(alongside)) => &alongside.x1,
+            _ => &step.x0,
+        };
+        let size = relative_over_step(&self.e, &step.x0, end);
         if size.is_finite() {
             self.largest = self.largest.max(size);
         }
