@@ -318,6 +318,10 @@ pub mod codes {
     /// exact solution, an impact, a constant (SPEC §2.3), or a default
     /// that is not a number.
     pub const INPUT_NOT_ALLOWED: &str = "E0042";
+    /// A `when` whose condition holds at the start, with the initial values
+    /// the file states (constants): the state starts inside the region the
+    /// impact forbids, where no impact fires (SPEC §2.3).
+    pub const IMPACT_HOLDS_AT_START: &str = "E0043";
     // Added by the field method (additive); notes get their own series.
     /// The reduced system is not affine in the state (or is implicit): the
     /// linear ansatz (10) is not a complete solution, and the generated

@@ -114,6 +114,10 @@ pub enum FailureKind {
     BadTimeSpan { t0: f64, t1: f64 },
     /// An initial value is not finite (after overrides).
     NonFiniteInitialValue { component: String },
+    /// The condition of a `when` holds at the start, not only within
+    /// rounding of its boundary: the state starts inside the region the
+    /// impact forbids (`values`: the components it reads, `y = -0.1`).
+    ImpactHoldsAtStart { condition: String, values: String },
     /// The anchor makes `x_1 = f_1 + Σ f_A x_A` the difference of huge
     /// numbers: `digits` more digits would be lost than the tolerance allows.
     AnchorCancels { digits: f64 },
@@ -162,6 +166,7 @@ impl Failure {
             | FailureKind::InitialCandidateVanishes { .. }
             | FailureKind::BadTimeSpan { .. }
             | FailureKind::NonFiniteInitialValue { .. }
+            | FailureKind::ImpactHoldsAtStart { .. }
             | FailureKind::OutsideSpan { .. }
             | FailureKind::AnchorCancels { .. } => USAGE_EXIT_STATUS,
             _ => FAILURE_EXIT_STATUS,
@@ -359,6 +364,13 @@ impl fmt::Display for Failure {
             FailureKind::NonFiniteInitialValue { component } => {
                 write!(f, "the initial value of `{component}` is not finite")
             }
+            FailureKind::ImpactHoldsAtStart { condition, values } => write!(
+                f,
+                "at t = {t:e}: the condition of `when {condition}` already holds at the start \
+                 ({values}): the motion starts inside the region the impact forbids, where \
+                 no impact fires (one fires only where the motion enters it); give initial \
+                 values on its other side"
+            ),
             FailureKind::AnchorCancels { digits } => write!(
                 f,
                 "at t = {t:e}: this anchor makes the field recover `x1 = f1 + Σ fA·xA` as \

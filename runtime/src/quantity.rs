@@ -24,6 +24,7 @@ impl Failure {
             | FailureKind::InitialCandidateVanishes { constraint, .. }
             | FailureKind::InitialPositionsOffConstraint { constraint, .. } => constraint.clone(),
             FailureKind::ConstraintDomainEnds { argument, .. } => argument.clone(),
+            FailureKind::ImpactHoldsAtStart { condition, .. } => format!("when {condition}"),
             FailureKind::SingularMassMatrix { .. } => "mass matrix".to_string(),
             FailureKind::StepSizeUnderflow { .. } => "step size".to_string(),
             FailureKind::SingularConditionMatrix { .. }

@@ -93,9 +93,14 @@ impl Checker<'_> {
                     return self.value(value.into_iter().nth(index)?);
                 }
                 None if name.name == "pi" => Number(std::f64::consts::PI),
+                None if name.name == "t" => Number(self.start.as_ref()?.t0),
+                Some(Name::Coord(index)) => Number(self.start.as_ref()?.value(index, 0)?),
                 _ => return None,
             },
-            ExprKind::Var { .. } => return None,
+            ExprKind::Var { name, primes } => match self.names.get(&name.name).map(|d| d.name) {
+                Some(Name::Coord(index)) => Number(self.start.as_ref()?.value(index, *primes)?),
+                _ => return None,
+            },
             ExprKind::Neg(inner) => match self.value(inner)? {
                 Number(v) => Number(-v),
                 Vector(v) => Vector(v.iter().map(|x| -x).collect()),

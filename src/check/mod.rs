@@ -11,6 +11,7 @@ mod declarations;
 mod eval;
 mod expressions;
 mod impacts;
+mod impacts_at_start;
 mod initial;
 mod linearity;
 pub mod model;
@@ -51,6 +52,9 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let outputs = checker.outputs();
     let stop = checker.stop();
     let impacts = checker.impacts(constraint_order, &constraints);
+    if let Some(time) = &time {
+        checker.impacts_at_start(&impacts, &initial, time);
+    }
     let mut params = params;
     let tunable = checker.tunable_params(params.len());
     for (param, tunable) in params.iter_mut().zip(tunable) {
@@ -121,6 +125,10 @@ struct Checker<'a> {
     /// A zero-width span just after the last statement, where "missing …"
     /// diagnostics point.
     end_of_file: Span,
+    /// The start, while a condition is evaluated there: coordinates and
+    /// their derivatives evaluate to their stated initial values
+    /// (`impacts_at_start`); `None` otherwise, where they are no constants.
+    start: Option<impacts_at_start::Start>,
 }
 
 impl<'a> Checker<'a> {
@@ -138,6 +146,7 @@ impl<'a> Checker<'a> {
             constraints_incomplete: false,
             unknown_reported: HashSet::new(),
             end_of_file: Span::new(end, end),
+            start: None,
         }
     }
 

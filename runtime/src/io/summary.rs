@@ -53,6 +53,17 @@ impl Summary {
         );
         match self.outcome.ending {
             Ending::End => {}
+            // A `stop when` that holds at the start (and not only on its
+            // boundary there) ends the run before any step: the one row is
+            // the start, and the summary says the condition held there
+            // rather than that it became true.
+            Ending::Stopped(t) if r.stats.accepted_steps == 0 && self.outcome.events == 0 => {
+                let _ = write!(
+                    s,
+                    "\nstopped at t = {t} (`stop when` already holds at the start: the run \
+                     ends there; start on the condition's other side to integrate)"
+                );
+            }
             Ending::Stopped(t) => {
                 let _ = write!(s, "\nstopped at t = {t} (`stop when` became true)");
             }

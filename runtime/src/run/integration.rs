@@ -947,7 +947,7 @@ impl<'m> Integration<'m> {
             Then::Event {
                 t_from,
                 t_event,
-                switches,
+                mut switches,
             } => {
                 let x_event = &mut s.x_event;
                 s.solver.dense(model, t_event, x_event)?;
@@ -982,7 +982,7 @@ impl<'m> Integration<'m> {
                         model,
                         regime,
                         &before,
-                        &switches,
+                        &mut switches,
                         t_event,
                         x_event,
                         self.options.tol,

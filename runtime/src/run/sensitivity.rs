@@ -196,7 +196,7 @@ pub fn initial(
             Err(failure) if refused_move(&failure) && model.keeps_positions() => {
                 tangent(model, t0, x0, &free, j)?
             }
-            Err(failure) => return Err(failure),
+            Err(failure) => return Err(not_differentiable(model, j, failure)),
         };
         s0.extend(column);
     }
@@ -238,6 +238,30 @@ pub fn initial(
 /// A completion that refuses a moved value: a value the model states
 /// for a component the constraints fix no longer agrees (the bead in a
 /// spinning tube states `y' = r0 w`, the tube's speed at `x0 = r0`).
+/// Why the start has no derivative with respect to initial value `j`:
+/// moved by a rounding's size it cannot be completed on the constraints
+/// (a pendulum in x, y released level with its pivot: moving `x` past `l`
+/// leaves `x² + y² = l²` with no `y`; the base said only that Newton
+/// found no positions, not why a sensitivity run needed them).
+fn not_differentiable(model: &dyn DynModel, j: usize, failure: Failure) -> Failure {
+    let name = model.state_names().get(j).copied().unwrap_or("?");
+    Failure::new(
+        failure.time,
+        crate::failure::FailureKind::Unsupported {
+            message: format!(
+                "--sensitivity: the start has no derivative with respect to the initial \
+                 value of `{name}`: moved by a rounding's size, it cannot be completed on \
+                 the constraints ({failure}). A start that cannot be moved is on a singular point of the \
+                 constraints, where a dependent's pivot vanishes and the dependent \
+                 moves infinitely fast with `{name}` (a pendulum in x, y released level \
+                 with its pivot: y = ±√(l² − x²) at x = l). Ask the sensitivities at a \
+                 start off the singular point (--init), or write the model in coordinates \
+                 regular there (an angle)"
+            ),
+        },
+    )
+}
+
 fn refused_move(failure: &Failure) -> bool {
     matches!(
         failure.kind,

@@ -34,6 +34,37 @@ pub fn ensemble_member(x0: &[f64], k: usize, spread: f64) -> Vec<f64> {
         .collect()
 }
 
+/// Why member `k` (the start moved by up to `spread`) cannot start: the
+/// constraints' failure, with what moved and what the user can do.
+fn member_refused(
+    model: &dyn DynModel,
+    k: usize,
+    spread: f64,
+    failure: &crate::failure::Failure,
+) -> crate::failure::Failure {
+    let member = if k == 0 {
+        "member 0 (the model's own start)".to_string()
+    } else {
+        format!(
+            "member {k} (the start with each of {} moved by up to --spread {spread} of its \
+             size)",
+            model.state_names().join(", ")
+        )
+    };
+    crate::failure::Failure::new(
+        failure.time,
+        FailureKind::Unsupported {
+            message: format!(
+                "--ensemble: {member} cannot be put on the constraints: {failure}. Where \
+                 the start is near a singular point of the constraints (a dependent's \
+                 pivot vanishing, as a pendulum in x, y released level with its pivot), \
+                 moved members may have no state on them nearby: give a smaller --spread, \
+                 or a start away from the singular point (--init)"
+            ),
+        },
+    )
+}
+
 /// `--ensemble K`: K initial states at once against K direct
 /// integrations, each timed as the smallest of `--repeat` runs.
 pub(crate) fn ensemble(
@@ -54,8 +85,14 @@ pub(crate) fn ensemble(
     for k in 0..count {
         let mut member = ensemble_member(x0, k, inv.spread);
         if let Some(keeper) = keeper.as_mut() {
-            if let Err(failure) = keeper.put_on(model, 0, t0, &mut member) {
-                return fail(inv.json, &failure);
+            // In the mode the member starts in, as a run's start is: the
+            // first candidate's (mode 0) is singular where the run starts
+            // on another (a pendulum in x, y released level with its
+            // pivot, y' = −x x'/y = 0/0), and every member, the model's
+            // own start too, was refused there naming no cause.
+            let mode = crate::run::regime::best_mode(model, t0, &member).0;
+            if let Err(failure) = keeper.put_on(model, mode, t0, &mut member) {
+                return fail(inv.json, &member_refused(model, k, inv.spread, &failure));
             }
         }
         members.push(member);
@@ -182,7 +219,12 @@ fn members_line(along: usize, own: usize, estimate: Option<f64>) -> String {
 /// The ensemble refused: a model it cannot follow, or a failure.
 fn refuse(inv: &Invocation, failure: &crate::failure::Failure) -> ExitCode {
     if failure.kind == FailureKind::NotAffine {
-        eprintln!("error: `--ensemble` needs a model without events or implicit constraints");
+        eprintln!(
+            "error: `--ensemble` needs a model without events or implicit constraints (its \
+             members share one regime, which a switch or a change of candidate would split); \
+             run the members one by one (`--init`), or write the constraint explicitly \
+             (`constraint y' = …`) where one candidate serves the whole run"
+        );
         return ExitCode::from(USAGE_EXIT_STATUS);
     }
     fail(inv.json, failure)
