@@ -248,7 +248,9 @@ impl Checker<'_> {
             else {
                 continue;
             };
-            if used.order >= k {
+            // A let's uses are its whole body's: `vel.x` of `let vel =
+            // (x', y')` does not hold `y'` (components.rs).
+            if used.order >= k && self.holds_jet_of(rhs, used.coord, k) {
                 let name = &self.coords[used.coord].name;
                 let diagnostic = Diagnostic::error(
                     codes::DEPENDENT_DERIVATIVE_IN_RHS,

@@ -201,6 +201,7 @@ impl Checker<'_> {
                 .filter(|g| g.constraints.len() > 1);
             if let Some(group) = coupled {
                 let other = group.constraints.iter().find(|&&j| j != i).copied();
+                let alone = self.holds_alone(constraints, &group.constraints, i);
                 let mut diagnostic = crate::diagnostic::Diagnostic::error(
                     crate::diagnostic::codes::BAD_CANDIDATE,
                     "a constraint that is not linear in its candidate is solved together with others",
@@ -209,8 +210,27 @@ impl Checker<'_> {
                 .with_note(
                     "the run keeps a non-linear constraint by Newton on its own candidate; \
                      constraints that share candidates are solved together",
-                )
-                .with_help("name candidates that this constraint alone holds");
+                );
+                diagnostic = if alone {
+                    diagnostic.with_help("name candidates that this constraint alone holds")
+                } else {
+                    // No candidate would do: the help above sent a user
+                    // writing a sleigh driven at constant speed (the knife
+                    // edge and `x'^2 + y'^2 = v^2`) in a circle (issue 29).
+                    diagnostic
+                        .with_note(
+                            "every derivative of its order that this constraint holds is held by \
+                             the constraints solved with it too",
+                        )
+                        .with_help(
+                            "write the constraints solved for those derivatives (a knife edge \
+                             driven at speed v: `constraint x' = v * cos(th); constraint y' = v * \
+                             sin(th);`), or each differentiated once by hand, linear in the next \
+                             derivatives and solved together (`… for x'' or y''`; the lower \
+                             derivatives then stay on the constraints as integrals of the motion, \
+                             not kept)",
+                        )
+                };
                 if let Some(j) = other {
                     diagnostic = diagnostic
                         .with_secondary(constraints[j].span, "shares candidates with this one");
@@ -231,5 +251,32 @@ impl Checker<'_> {
             }
         }
         k + 1
+    }
+}
+
+impl Checker<'_> {
+    /// Whether constraint `i` holds a derivative of its order that no other
+    /// constraint of `group` holds (naming it as `i`'s candidate would
+    /// uncouple them).
+    fn holds_alone(
+        &self,
+        constraints: &[super::model::Constraint],
+        group: &[usize],
+        i: usize,
+    ) -> bool {
+        let holds = |c: &super::model::Constraint, coord: usize| match &c.implicit {
+            Some(im) => {
+                self.holds_jet_of(&im.lhs, coord, c.order)
+                    || self.holds_jet_of(&c.rhs, coord, c.order)
+            }
+            None => c.coord == coord || self.holds_jet_of(&c.rhs, coord, c.order),
+        };
+        (0..self.coords.len()).any(|coord| {
+            holds(&constraints[i], coord)
+                && group
+                    .iter()
+                    .filter(|&&j| j != i)
+                    .all(|&j| !holds(&constraints[j], coord))
+        })
     }
 }

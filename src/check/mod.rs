@@ -6,6 +6,7 @@
 //! [`model::Model`] is returned only when there are none.
 
 pub mod atan2_cut;
+mod components;
 mod constraints;
 mod declarations;
 mod eval;

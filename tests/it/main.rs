@@ -42,6 +42,7 @@ mod source_text;
 mod stages;
 mod stiff_extreme;
 mod stiff_joint;
+mod textbook_constraints;
 mod textbook_events;
 mod textbook_mass_impacts;
 mod turning_points;
