@@ -349,6 +349,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/runtime_failures",
     "tests/data/warnings",
     "tests/data/textbook",
+    "tests/data/textbook_long",
     "tests/data",
 ];
 

@@ -42,6 +42,7 @@ mod source_text;
 mod stages;
 mod stiff_extreme;
 mod stiff_joint;
+mod textbook_long;
 mod textbook_mass_impacts;
 
 use lagc::diagnostic::{self, Diagnostic};
