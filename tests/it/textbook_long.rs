@@ -62,6 +62,20 @@ fn honest(name: &str, rtols: &[&str]) -> Vec<(String, f64, String)> {
     out
 }
 
+/// Released at 2 and 2.5 rad, over 10 s: every run here leaves 10·rtol
+/// within 2–5 s (at rtol 1e-6 it ends 7–13 off, by either method, on the
+/// base) and must warn; where the state is lost, say it amplifies.
+#[test]
+fn a_chaotic_double_pendulum_is_said_to_amplify_its_errors() {
+    for (label, error, summary) in honest("double_pendulum_released_high", &["1e-6", "1e-10"]) {
+        assert!(
+            error > 1e-3,
+            "{label}: {error:e}: the run is not chaotic enough to test"
+        );
+        assert!(summary.contains("warning"), "{label}:\n{summary}");
+    }
+}
+
 /// 1000 periods at 1 rad: the phase drifts by 1e4–2e5 rtol at the end.
 /// Direct DOP853 at rtol 1e-5 loses the state (2.2 off) and says the
 /// motion amplifies the errors: the line must name a drifting phase, which
