@@ -44,6 +44,7 @@ mod stiff_extreme;
 mod stiff_joint;
 mod textbook_constraints;
 mod textbook_events;
+mod textbook_long;
 mod textbook_mass_impacts;
 mod turning_points;
 
