@@ -1125,11 +1125,7 @@ impl QuasilinearField {
                             .flatten(),
                     );
                     kept_at = (t, budget.used());
-                    // Explicit windows only: the stiff joint's exponential
-                    // windows ended so lost accuracy (rtol 1e-6: error
-                    // 2.1e-5 -> 5.6e-5, 1.55x over nearby rtols; h-gt7,
-                    // h-gt8 in docs/BENCHMARKS.md section 0).
-                    if kind == StepperKind::Explicit && after_decline(&window, tried, rejected) {
+                    if after_decline(&window, tried, rejected) {
                         // The next window starts where this one's next
                         // step would have ended it, declined whole then
                         // in its quarter: a quarter of the step proposed.
@@ -1186,7 +1182,8 @@ impl QuasilinearField {
 /// end, a field step's work each).
 fn after_decline(window: &Window, tried: f64, rejected: usize) -> bool {
     let taken = window.time() - window.previous_time();
-    window.stats().rejected_steps > rejected && (taken - 0.25 * tried).abs() <= 1e-9 * tried.abs()
+    window.stats().rejected_steps > rejected
+        && (taken - 0.25 * tried).abs() <= 1e-9 * tried.abs()
 }
 
 /// The work budget's failure inside a window whose steps are kept up to
