@@ -43,7 +43,6 @@ mod stages;
 mod stiff_extreme;
 mod stiff_joint;
 mod textbook_mass_impacts;
-mod window_ends;
 
 use lagc::diagnostic::{self, Diagnostic};
 

@@ -1063,7 +1063,6 @@ impl QuasilinearField {
         // The last step kept: its time and the budget's draws by then.
         let mut kept_at = (self.t, budget.used());
         let mut start_failed = None;
-        let mut next_start = None;
         let end = loop {
             if window.time() >= t_limit {
                 break WindowEnd::Span;
@@ -1071,7 +1070,6 @@ impl QuasilinearField {
             if steps.len() >= MAX_WINDOW_STEPS {
                 break WindowEnd::Length;
             }
-            let (tried, rejected) = (window.proposed_step(), window.stats().rejected_steps);
             let step = match window.step(&source, &self.options, t_limit, budget) {
                 Err(failure)
                     if !steps.is_empty()
@@ -1125,19 +1123,6 @@ impl QuasilinearField {
                             .flatten(),
                     );
                     kept_at = (t, budget.used());
-                    if after_decline(&window, tried, rejected) {
-                        // The next window starts where this one's next
-                        // step would have ended it, declined whole then
-                        // in its quarter: a quarter of the step proposed.
-                        // The predictor as far as that step would have
-                        // taken it (its next window's first step is the
-                        // step it proposes there).
-                        let h = window.proposed_step();
-                        let ahead = (window.time() + h).min(t_limit);
-                        iterate.eval(ahead, &mut scratch.x0)?;
-                        next_start = Some(0.25 * h);
-                        break WindowEnd::Conditioning;
-                    }
                 }
                 WindowStep::Ended if window.steps() == 0 => {
                     shortenings += 1;
@@ -1164,26 +1149,13 @@ impl QuasilinearField {
             end,
             stats: window.stats(),
             largest_condition,
-            field_h: next_start.unwrap_or_else(|| window.proposed_step()),
+            field_h: window.proposed_step(),
             start_failed,
         };
         self.spare_window = Some(window);
         self.defect_scratch = Some(scratch);
         Ok(pass)
     }
-}
-
-/// The step just accepted is the quarter `Window::step` tries after the
-/// conditions declined the whole one (`tried`, with `rejected` rejections
-/// before the call). Such a window is near its end: the conditions' growth
-/// passed the limit within that step, and each further step's whole
-/// length is declined again before its quarter is taken (the gravity-turn
-/// rocket at rtol 1e-6 ground on through 7 declines to its first window's
-/// end, a field step's work each).
-fn after_decline(window: &Window, tried: f64, rejected: usize) -> bool {
-    let taken = window.time() - window.previous_time();
-    window.stats().rejected_steps > rejected
-        && (taken - 0.25 * tried).abs() <= 1e-9 * tried.abs()
 }
 
 /// The work budget's failure inside a window whose steps are kept up to
