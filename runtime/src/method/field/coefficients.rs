@@ -727,6 +727,32 @@ impl<'a, I: Iterate + ?Sized> ProjectiveCoefficients<'a, I> {
         self.linear.linearizations()
     }
 
+    /// The iterate `x0`, `X(t, x0)` and `A = ∂X/∂x (t, x0)` copied out
+    /// where the last linearisation evaluated was at `t` (its bits); false
+    /// where it was not. Why: a DOP853 step of a quasilinear window ends
+    /// with its stages at the step's end, where Newton's defect
+    /// (`QuasilinearField::defect`) needs that same linearisation again —
+    /// the same model, iterate and time, so the same bits, one
+    /// linearisation and one read of the predictor fewer an accepted step.
+    pub fn linearization_at(
+        &self,
+        t: f64,
+        x0: &mut [f64],
+        rate: &mut [f64],
+        a: &mut Matrix,
+    ) -> bool {
+        let sc = self.linear.scratch.borrow_mut();
+        // A frozen linearisation (an affine motion's) is stamped with the
+        // time of its one evaluation: not read here.
+        if self.linear.frozen || sc.evaluated_at != Some(t.to_bits()) {
+            return false;
+        }
+        x0.copy_from_slice(&sc.x);
+        rate.copy_from_slice(&sc.rate);
+        a.as_mut_slice().copy_from_slice(sc.a.as_slice());
+        true
+    }
+
     /// The index in `w` of coefficient `i` (0: the free term).
     fn slot(i: usize) -> usize {
         if i == 0 {

@@ -446,18 +446,22 @@ impl QuasilinearField {
         }
     }
 
-    /// The defect of `x1` at `t` in tolerance units (RMS).
+    /// The defect of `x1` at `t` in tolerance units (RMS); with
+    /// `linearized`, `X(t, x0)` and `A` at `x0` are in the scratch already.
     fn defect(
         &self,
         model: &dyn DynModel,
         t: f64,
         x0: &[f64],
         x1: &[f64],
+        linearized: bool,
         scratch: &mut DefectScratch,
     ) -> Result<f64, Failure> {
         let n = x1.len();
-        scratch.a.fill(0.0);
-        model.linearize(t, x0, &mut scratch.rate0, &mut scratch.a)?;
+        if !linearized {
+            scratch.a.fill(0.0);
+            model.linearize(t, x0, &mut scratch.rate0, &mut scratch.a)?;
+        }
         model.rhs(t, x1, &mut scratch.rate1)?;
         for i in 0..n {
             scratch.dx[i] = x1[i] - x0[i];
@@ -1079,9 +1083,15 @@ impl QuasilinearField {
             match step {
                 WindowStep::Accepted => {
                     let t = window.time();
-                    iterate.eval(t, &mut scratch.x0)?;
+                    // The step's last stage linearised at its end.
+                    let s = &mut scratch;
+                    let linearized = source.linearization_at(t, &mut s.x0, &mut s.rate0, &mut s.a);
+                    if !linearized {
+                        iterate.eval(t, &mut scratch.x0)?;
+                    }
                     let x0 = std::mem::take(&mut scratch.x0);
-                    let defect = self.defect(model, t, &x0, window.state(), &mut scratch);
+                    let state = window.state();
+                    let defect = self.defect(model, t, &x0, state, linearized, &mut scratch);
                     scratch.x0 = x0;
                     let defect = defect?;
                     let grown = bound + 0.5 * (defect + defect_last) * (t - t_last);
