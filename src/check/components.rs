@@ -26,14 +26,14 @@ impl Checker<'_> {
     /// Whether `expr` holds a derivative of `coord` of order at least
     /// `order`, components of vectors taken (see the module's note).
     pub(super) fn holds_jet_of(&self, expr: &Expr, coord: usize, order: u32) -> bool {
-        self.holds(expr, coord, order, 0)
+        self.jet_holds(expr, coord, order, 0)
     }
 
-    fn holds(&self, expr: &Expr, coord: usize, order: u32, depth: usize) -> bool {
+    fn jet_holds(&self, expr: &Expr, coord: usize, order: u32, depth: usize) -> bool {
         if depth > DEPTH {
             return true;
         }
-        let of = |e: &Expr| self.holds(e, coord, order, depth + 1);
+        let of = |e: &Expr| self.jet_holds(e, coord, order, depth + 1);
         match &expr.kind {
             ExprKind::Number(_) => false,
             ExprKind::Var { name, primes } => match self.names.get(&name.name).map(|d| d.name) {
@@ -43,7 +43,7 @@ impl Checker<'_> {
                     // A let's derivative raises the orders of its body's
                     // derivatives (and brings in the next ones): whatever
                     // of the coordinate it uses counts.
-                    Some(body) => self.holds(body, coord, 0, depth + 1),
+                    Some(body) => self.jet_holds(body, coord, 0, depth + 1),
                     None => true,
                 },
                 _ => false,
@@ -79,7 +79,7 @@ impl Checker<'_> {
         if depth > DEPTH {
             return true;
         }
-        let whole = |e: &Expr| self.holds(e, coord, order, depth + 1);
+        let whole = |e: &Expr| self.jet_holds(e, coord, order, depth + 1);
         let part = |e: &Expr| self.component_holds(e, index, coord, order, depth + 1);
         match &base.kind {
             ExprKind::Vector(items) => items.get(index).is_none_or(whole),

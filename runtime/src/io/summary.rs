@@ -234,8 +234,9 @@ fn global_error_line(g: &GlobalErrorEstimate) -> String {
         // Said here, so that the estimate is not read as the samples'.
         format!(
             "global error: within 10·rtol = {bound:.1e} (estimated {:.1e}{partial} at the \
-             steps' ends, their local errors summed; samples between steps add the continuous \
-             extension's error, up to a few rtol)",
+             steps' ends, their local errors summed, and read in each component's swing where \
+             it passes zero; samples between steps add the continuous extension's error, up to \
+             a few rtol)",
             g.largest
         )
     } else {
