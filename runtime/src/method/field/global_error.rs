@@ -141,6 +141,9 @@ pub struct FieldError {
     /// The components' swings, for the estimate's reading where they pass
     /// zero (`global_error::Swings`).
     swings: Swings,
+    /// The run carries its errors from its first step: the swing's sum is
+    /// not kept (`feed`).
+    swings_off: bool,
     /// Set at the first step from the model: whether it has constraints,
     /// whose windows are added as wholes to the sum (`feed_window`) and
     /// whose carried error is projected as the state is (`keep`).
@@ -215,6 +218,7 @@ impl FieldError {
             rtol,
             global: GlobalError::new(),
             swings: Swings::default(),
+            swings_off: false,
             constrained: None,
             growth: Growth::new(n),
             evaluations: 0,
@@ -636,9 +640,14 @@ impl FieldError {
                 Some(m) => self.global.add_measured(estimated, m, h),
                 None => self.global.add(estimated, h),
             };
+            // A run carried from its first step keeps no swing's sum
+            // (direct integration's `sum_into`: the carried error holds
+            // every step's error with its sign).
+            self.swings_off = !model.affine() || from_first_step(model);
+            let swung = if self.swings_off { 0.0 } else { added };
             let ends = (&step.x0[..], &step.x1[..]);
             self.global
-                .swing(&mut self.swings, local, ends, estimated, added);
+                .swing(&mut self.swings, local, ends, estimated, swung);
             if carried {
                 // Carried by a reference stepped alongside the run from
                 // `x0 − e` (`Growth::step_alongside`, 24 evaluations): the
@@ -897,7 +906,8 @@ impl FieldError {
                     let estimated = relative(local, &step.x1);
                     let added = global.add(estimated, step.t1 - step.t0);
                     let ends = (&step.x0[..], &step.x1[..]);
-                    global.swing(&mut swings, local, ends, estimated, added);
+                    let swung = if self.swings_off { 0.0 } else { added };
+                    global.swing(&mut swings, local, ends, estimated, swung);
                 }
                 None => global.skip(),
             }
