@@ -722,10 +722,9 @@ impl Direct {
         // estimate is the difference to a lower-order solution, whose
         // sign is not the error's: added with its own sign it made the
         // soft walls' estimate 1000× their error at rtol 1e-12).
-        // The step's start is read only where its error is carried along
-        // the motion (`StepError::add_to` decides that by the same test,
-        // on the same sum: no step is added between): not copied on every
-        // step of a run that never carries.
+        // The step's start: where its error is carried along the motion,
+        // and for the swing's reading of the sum (`GlobalError::swing`,
+        // which needs both ends of every step).
         e.x0.clear();
         e.x0.extend_from_slice(dop.previous_state());
         if carried || e.calibrates {
