@@ -80,6 +80,11 @@ pub trait Keeping {
     /// recorded): the field's reference carried alongside the run
     /// (`global_error::growth::Growth::step_alongside`).
     fn project(&mut self, t: f64, x: &mut [f64]) -> Result<(), Failure>;
+    /// Whether `x` at `t`, a state inside an advance, has drifted from the
+    /// constraints as far as the run projects a step's end
+    /// (`run::keep::Keeper::drifted`; a state the measure fails on counts
+    /// as drifted, and the run judges it at the advance's end).
+    fn drifted(&mut self, t: f64, x: &[f64]) -> bool;
 }
 
 /// A method advancing a model's motion step by step.
@@ -98,6 +103,20 @@ pub trait Solver {
         t_limit: f64,
         budget: &Budget,
     ) -> Result<(), Failure>;
+    /// [`Solver::advance`] in a run that keeps constraints: a method
+    /// whose advance takes several steps (the quasilinear field's window)
+    /// ends it after a step that `keeping` finds drifted from holonomic
+    /// constraints, so that the run projects it as it projects a step's
+    /// end (SPEC §2.3).
+    fn advance_kept(
+        &mut self,
+        model: &dyn DynModel,
+        t_limit: f64,
+        budget: &Budget,
+        _keeping: &mut dyn Keeping,
+    ) -> Result<(), Failure> {
+        self.advance(model, t_limit, budget)
+    }
     /// The state at `t` in `[previous_time, time]`.
     fn dense(&mut self, model: &dyn DynModel, t: f64, out: &mut [f64]) -> Result<(), Failure>;
     /// The ends of the integrator's own steps within the last advance, in

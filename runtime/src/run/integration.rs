@@ -749,7 +749,19 @@ impl<'m> Integration<'m> {
         if self.options.step_to_times && self.target > t_now {
             t_limit = t_limit.min(self.target);
         }
-        if let Err(mut failure) = solver.advance(model, t_limit, budget) {
+        let advanced = match self.keeper.as_mut() {
+            Some(keeper) => {
+                let mut keeping = Kept {
+                    keeper,
+                    model,
+                    mode: regime.mode,
+                    t: t_now,
+                };
+                solver.advance_kept(model, t_limit, budget, &mut keeping)
+            }
+            None => solver.advance(model, t_limit, budget),
+        };
+        if let Err(mut failure) = advanced {
             if matches!(failure.kind, FailureKind::StepBudgetExhausted { .. }) {
                 // Where the solution stands (after the last step and any
                 // event's restart), not where the field's predictor or a
@@ -1310,5 +1322,10 @@ impl Keeping for Kept<'_> {
     }
     fn project(&mut self, t: f64, x: &mut [f64]) -> Result<(), Failure> {
         self.keeper.put_on(self.model, self.mode, t, x)
+    }
+    fn drifted(&mut self, t: f64, x: &[f64]) -> bool {
+        self.keeper
+            .drifted(self.model, self.mode, t, x)
+            .unwrap_or(true)
     }
 }

@@ -196,6 +196,21 @@ impl Keeper {
         }
     }
 
+    /// Whether `x` at `t` in `mode`, a state inside a method's advance
+    /// (a step of a field window), has drifted past [`PROJECT_ABOVE`]:
+    /// where [`Keeper::after_step`] would project it. Measured, recorded
+    /// as a step's end is, not projected and not judged (the advance's end
+    /// is, by `after_step`).
+    pub fn drifted(
+        &mut self,
+        model: &dyn DynModel,
+        mode: usize,
+        t: f64,
+        x: &[f64],
+    ) -> Result<bool, Failure> {
+        Ok(self.project_from(model, mode, t, x, false, true)? > PROJECT_ABOVE)
+    }
+
     /// Projects `x` (an output, or the state at an event) onto the
     /// constraints in place.
     pub fn project(
