@@ -116,13 +116,7 @@ fn a_five_link_chain_in_cartesian_coordinates_follows_its_angles() {
 #[test]
 fn a_cartesian_double_pendulum_follows_its_angles() {
     let binary = build_file(&crate::root().join("tests/data/cartesian_double_pendulum.lag"));
-    let path = crate::root().join("tests/data/cartesian_double_pendulum_scipy.csv");
-    let reference: Vec<Vec<f64>> = std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    let reference = crate::rolling_bodies::reference_rows("cartesian_double_pendulum_scipy.csv");
     let times: Vec<String> = reference.iter().map(|r| format!("{:?}", r[0])).collect();
     let times = times.join(",");
     let tolerances: [&[&str]; 4] = [

@@ -12,13 +12,22 @@ pub(crate) fn run(binary: &std::path::Path, args: &[&str]) -> (Vec<Vec<f64>>, St
     let output = Command::new(binary).args(args).output().unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "{args:?}: {stderr}");
-    let rows = String::from_utf8(output.stdout)
-        .unwrap()
-        .lines()
+    let rows = csv_rows(&String::from_utf8(output.stdout).unwrap());
+    (rows, stderr)
+}
+
+/// A CSV's rows of numbers, its header skipped.
+pub(crate) fn csv_rows(text: &str) -> Vec<Vec<f64>> {
+    text.lines()
         .skip(1)
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (rows, stderr)
+        .collect()
+}
+
+/// The rows of the reference CSV `tests/data/{name}`.
+pub(crate) fn reference_rows(name: &str) -> Vec<Vec<f64>> {
+    let path = crate::root().join("tests/data").join(name);
+    csv_rows(&std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
 }
 
 /// The largest difference of a run's samples from `reference`'s over

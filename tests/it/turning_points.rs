@@ -76,13 +76,7 @@ fn an_oscillation_of_amplitude_ten_is_warned_where_its_samples_pass_the_bound() 
 #[test]
 fn a_ball_rolling_in_a_cylinder_is_within_at_its_turning_points_or_warned() {
     let binary = build_file(&crate::root().join("tests/data/ball_in_cylinder.lag"));
-    let path = crate::root().join("tests/data/ball_in_cylinder_scipy.csv");
-    let reference: Vec<Vec<f64>> = std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    let reference = crate::rolling_bodies::reference_rows("ball_in_cylinder_scipy.csv");
     assert_eq!(reference.len(), 201);
     let mut past_the_bound = 0;
     for method in ["direct", "field"] {
