@@ -21,9 +21,25 @@ impl Checker<'_> {
     ) -> Vec<Impact> {
         let k = order.unwrap_or(0);
         let state_order = k.max(2);
-        let several_candidates = constraints
-            .iter()
-            .any(|c| c.implicit.as_ref().is_some_and(|i| i.candidates.len() > 1));
+        // The first constraint with several candidates, and how its
+        // candidates are named: a holonomic constraint's are coordinates
+        // (`for y`), a raised one's of order k − 1.
+        let several_candidates = constraints.iter().find_map(|c| {
+            let implicit = c.implicit.as_ref().filter(|i| i.candidates.len() > 1)?;
+            let primes = if implicit.holonomic {
+                0
+            } else if implicit.raised {
+                c.order - 1
+            } else {
+                c.order
+            };
+            let candidates: Vec<String> = implicit
+                .candidates
+                .iter()
+                .map(|&j| format!("{}{}", self.coords[j].name, "'".repeat(primes as usize)))
+                .collect();
+            Some(candidates)
+        });
         let condition = Allowed {
             time: true,
             masses: true,
@@ -64,9 +80,14 @@ impl Checker<'_> {
                     self.report(diagnostic);
                     continue;
                 }
-                if let Some(diagnostic) =
-                    fixed_component(&name, coord, order, k, constraints, several_candidates)
-                {
+                if let Some(diagnostic) = fixed_component(
+                    &name,
+                    coord,
+                    order,
+                    k,
+                    constraints,
+                    several_candidates.as_deref(),
+                ) {
                     self.report(diagnostic.with_primary(reset.target.span, "reset here"));
                     continue;
                 }
@@ -108,16 +129,16 @@ impl Checker<'_> {
 /// reset, without its primary label: the constraints fix it, or the
 /// state's higher derivatives follow from the equations of motion (k ≥ 3),
 /// or which derivatives the constraints fix changes along the run (several
-/// candidates).
+/// candidates: the first such constraint's, as `for` names them).
 fn fixed_component(
     name: &str,
     coord: usize,
     order: u32,
     k: u32,
     constraints: &[Constraint],
-    several_candidates: bool,
+    several_candidates: Option<&[String]>,
 ) -> Option<Diagnostic> {
-    if several_candidates {
+    if let Some(candidates) = several_candidates {
         return Some(
             Diagnostic::error(
                 codes::RESET_OF_FIXED_COMPONENT,
@@ -127,7 +148,16 @@ fn fixed_component(
                 "which derivatives the constraints fix changes along the run; after a reset \
                  lagc recomputes the fixed ones, which it does for one candidate only",
             )
-            .with_help("name one candidate (`for y'`), or write the constraint explicitly"),
+            .with_help(format!(
+                "name one candidate, `constraint … for {};` (its candidates are {}), or write \
+                 the constraint explicitly",
+                candidates[0],
+                candidates
+                    .iter()
+                    .map(|c| format!("`{c}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )),
         );
     }
     if let Some(c) = constraints.iter().find(|c| c.coord == coord) {
