@@ -376,3 +376,33 @@ fn a_field_window_taken_again_across_a_pivot_is_carried_once() {
         );
     }
 }
+
+/// A pendulum's bob in Cartesian coordinates striking a wall
+/// (`tests/data/pendulum_striking_wall.lag`: `x'` reset, `y'` from the
+/// rod's constraint) by both methods within 10·rtol of the pendulum in its
+/// angle with `th' -> -e th'` at each strike, by SciPy
+/// (`scripts/pendulum_striking_wall_reference.py`; three strikes in 5 s).
+#[test]
+fn a_cartesian_pendulum_striking_a_wall_follows_its_angle() {
+    let binary =
+        crate::generated::build_file(&crate::root().join("tests/data/pendulum_striking_wall.lag"));
+    let reference = crate::rolling_bodies::reference_rows("pendulum_striking_wall_scipy.csv");
+    let times: Vec<String> = reference.iter().map(|r| format!("{:?}", r[0])).collect();
+    let times = times.join(",");
+    for method in METHODS {
+        for rtol in ["1e-6", "1e-9"] {
+            let (rows, stderr) = run(
+                &binary,
+                &["--method", method, "--rtol", rtol, "--times", &times],
+            );
+            assert!(stderr.contains("events: 3"), "{method} {rtol}: {stderr}");
+            let rtol: f64 = rtol.parse().unwrap();
+            let error = crate::rolling_bodies::relative_error(&rows, &reference);
+            assert!(
+                error <= 10.0 * rtol,
+                "{method} {rtol:e}: {:.1} rtol off\n{stderr}",
+                error / rtol
+            );
+        }
+    }
+}
