@@ -81,7 +81,7 @@ pub trait Keeping {
     /// (`global_error::growth::Growth::step_alongside`).
     fn project(&mut self, t: f64, x: &mut [f64]) -> Result<(), Failure>;
     /// Whether `x` at `t`, a state inside an advance, has drifted from the
-    /// constraints as far as the run projects a step's end
+    /// holonomic constraints as far as the run projects a step's end
     /// (`run::keep::Keeper::drifted`; a state the measure fails on counts
     /// as drifted, and the run judges it at the advance's end).
     fn drifted(&mut self, t: f64, x: &[f64]) -> bool;
