@@ -57,8 +57,8 @@ def kkt(L, qs, qds, F, Q):
     return f, residual
 
 
-x, y, z, th = sp.symbols("x y z th")
-xd, yd, zd, thd = sp.symbols("xd yd zd thd")
+x, y, z, th, w, a, bb = sp.symbols("x y z th w a b")
+xd, yd, zd, thd, wd, ad, bd = sp.symbols("xd yd zd thd wd ad bd")
 
 
 def models():
@@ -75,6 +75,14 @@ def models():
             Q=[0, 0, 0],
             F=[zd - x * yd, xd**2 + yd**2 + zd**2 - 1],
             y0=[0.3, 0, 0, 0.6, s0, 0.3 * s0], T=5),
+        # linear_group_beside_constant_speed.lag: a linear pair solved together,
+        # raised beside a non-linear constraint of other coordinates.
+        "linear_group_beside_constant_speed": dict(
+            qs=[x, y, z, w, a, bb], qds=[xd, yd, zd, wd, ad, bd], head="t,x,y,z,w,a,b,x',y',z',w',a',b'",
+            L=(xd**2 + yd**2 + zd**2 + wd**2 + ad**2 + bd**2) / 2 - 9.81 * bb - x**2 - w**2,
+            Q=[0] * 6,
+            F=[zd - x * yd, wd - zd - yd, ad**2 + bd**2 - 1],
+            y0=[0.3, 0, 0, 0, 0, 0, 0.5, 0.4, 0.12, 0.52, 0.6, 0.8], T=3),
         # sleigh_constant_speed.lag's motion, the two constraints as first
         # written (a check against tests/data/textbook_constraints/sleigh_constant_speed.csv,
         # made by another script).
