@@ -356,7 +356,11 @@ pub fn initial_values(
             continue;
         }
         let env_values = values.clone();
-        let start: Vec<f64> = g.unknowns.iter().map(|z| values[z]).collect();
+        let start: Vec<f64> = g
+            .unknowns
+            .iter()
+            .map(|z| values.get(z).copied().unwrap_or(f64::NAN))
+            .collect();
         let root = closure_newton(arena, g, &start, &|s| {
             at(symbolic, t0, &laws_at_t0, &env_values, s)
         });
