@@ -144,8 +144,9 @@ impl Checker<'_> {
     /// known (`k`, or `k + 1` when one is not affine in its candidates:
     /// then every implicit and holonomic constraint is differentiated once
     /// more, [`super::model::Implicit::raised`]). A non-linear constraint
-    /// beside an explicit one, or solved together with others, is refused
-    /// (E0038): the run keeps `f = 0` by Newton on one candidate.
+    /// beside an explicit one, or solved together with a holonomic one, is
+    /// refused (E0038): the run keeps `f = 0` by Newton on its candidate,
+    /// or over its group's candidates.
     pub(super) fn raise_nonlinear(
         &mut self,
         constraints: &mut [super::model::Constraint],
@@ -194,47 +195,39 @@ impl Checker<'_> {
             self.report(diagnostic);
             refused = true;
         }
+        // A group is kept by Newton over its candidates (all its members'
+        // written forms, `src/mechanics/raised.rs`); a holonomic member is
+        // kept at position level by the closure, which that Newton does not
+        // reach: refused.
         for &i in &nonlinear {
-            let coupled = groups
+            let holonomic = groups
                 .iter()
                 .find(|g| g.constraints.contains(&i))
-                .filter(|g| g.constraints.len() > 1);
-            if let Some(group) = coupled {
-                let other = group.constraints.iter().find(|&&j| j != i).copied();
-                let alone = self.holds_alone(constraints, &group.constraints, i);
-                let mut diagnostic = crate::diagnostic::Diagnostic::error(
+                .and_then(|g| {
+                    g.constraints.iter().copied().find(|&j| {
+                        constraints[j]
+                            .implicit
+                            .as_ref()
+                            .is_some_and(|im| im.holonomic)
+                    })
+                });
+            if let Some(j) = holonomic {
+                let diagnostic = crate::diagnostic::Diagnostic::error(
                     crate::diagnostic::codes::BAD_CANDIDATE,
-                    "a constraint that is not linear in its candidate is solved together with others",
+                    "a constraint that is not linear in its candidate is solved together with a \
+                     holonomic one",
                 )
                 .with_primary(constraints[i].span, "not linear in its candidate")
+                .with_secondary(constraints[j].span, "holonomic, sharing candidates with it")
                 .with_note(
-                    "the run keeps a non-linear constraint by Newton on its own candidate; \
-                     constraints that share candidates are solved together",
+                    "the run keeps a group of velocity constraints by Newton over its \
+                     candidates, and a holonomic constraint at position level: not both in one \
+                     group",
+                )
+                .with_help(
+                    "name candidates that uncouple the holonomic constraint (`for x` of its own \
+                     coordinate), or differentiate the non-linear constraint by hand",
                 );
-                diagnostic = if alone {
-                    diagnostic.with_help("name candidates that this constraint alone holds")
-                } else {
-                    // No candidate would do: the help above sent a user
-                    // writing a sleigh driven at constant speed (the knife
-                    // edge and `x'^2 + y'^2 = v^2`) in a circle (issue 29).
-                    diagnostic
-                        .with_note(
-                            "every derivative of its order that this constraint holds is held by \
-                             the constraints solved with it too",
-                        )
-                        .with_help(
-                            "write the constraints solved for those derivatives (a knife edge \
-                             driven at speed v: `constraint x' = v * cos(th); constraint y' = v * \
-                             sin(th);`), or each differentiated once by hand, linear in the next \
-                             derivatives and solved together (`… for x'' or y''`; the lower \
-                             derivatives then stay on the constraints as integrals of the motion, \
-                             not kept)",
-                        )
-                };
-                if let Some(j) = other {
-                    diagnostic = diagnostic
-                        .with_secondary(constraints[j].span, "shares candidates with this one");
-                }
                 self.report(diagnostic);
                 refused = true;
                 break;
@@ -251,32 +244,5 @@ impl Checker<'_> {
             }
         }
         k + 1
-    }
-}
-
-impl Checker<'_> {
-    /// Whether constraint `i` holds a derivative of its order that no other
-    /// constraint of `group` holds (naming it as `i`'s candidate would
-    /// uncouple them).
-    fn holds_alone(
-        &self,
-        constraints: &[super::model::Constraint],
-        group: &[usize],
-        i: usize,
-    ) -> bool {
-        let holds = |c: &super::model::Constraint, coord: usize| match &c.implicit {
-            Some(im) => {
-                self.holds_jet_of(&im.lhs, coord, c.order)
-                    || self.holds_jet_of(&c.rhs, coord, c.order)
-            }
-            None => c.coord == coord || self.holds_jet_of(&c.rhs, coord, c.order),
-        };
-        (0..self.coords.len()).any(|coord| {
-            holds(&constraints[i], coord)
-                && group
-                    .iter()
-                    .filter(|&&j| j != i)
-                    .all(|&j| !holds(&constraints[j], coord))
-        })
     }
 }

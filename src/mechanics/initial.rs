@@ -36,6 +36,7 @@ pub fn initial_values(
     closure: Option<&Closure>,
     levels: &HashMap<Symbol, ExprId>,
     raised: &[Raised],
+    raised_groups: &[Closure],
 ) -> Result<(Vec<InitialValue>, Vec<Diagnostic>), Vec<Diagnostic>> {
     let mut errors = Vec::new();
     let t0 = lower_checked(arena, &model.time.start, model)
@@ -339,6 +340,124 @@ pub fn initial_values(
                     r.text
                 ))
                 .with_help("give initial values on which the constraint can hold"),
+        });
+    }
+    // Pass 5 for a group of raised constraints (`raised.rs`): Newton over
+    // its candidates from the given values, each of which must be the
+    // root's.
+    for g in raised_groups {
+        let user_given: Vec<(usize, &crate::check::model::Initial)> = g
+            .unknowns
+            .iter()
+            .enumerate()
+            .filter_map(|(i, z)| given.get(z).map(|&(_, user)| (i, user)))
+            .collect();
+        if user_given.is_empty() {
+            continue;
+        }
+        let env_values = values.clone();
+        let start: Vec<f64> = g
+            .unknowns
+            .iter()
+            .map(|z| values.get(z).copied().unwrap_or(f64::NAN))
+            .collect();
+        let root = closure_newton(arena, g, &start, &|s| {
+            at(symbolic, t0, &laws_at_t0, &env_values, s)
+        });
+        // On the constraints, but where they do not determine this
+        // choice's candidates (`J` singular): the kept values are 0/0 there.
+        if let Ok(root) = &root {
+            let lookup = |s: Symbol| match g.unknowns.iter().position(|&u| u == s) {
+                Some(i) => root[i],
+                None => at(symbolic, t0, &laws_at_t0, &env_values, s),
+            };
+            let m = g.unknowns.len();
+            let entries: Vec<ExprId> = g.jacobian.iter().flatten().copied().collect();
+            let j = DMatrix::from_row_slice(m, m, &arena.eval_many(&entries, &lookup));
+            let scale: f64 = j
+                .row_iter()
+                .map(|r| r.iter().fold(0.0_f64, |a, v| a.max(v.abs())))
+                .product();
+            let det = j.determinant();
+            // NaN is not determined either.
+            let determined = det.abs() > 1e-12 * scale;
+            if !determined {
+                let names: Vec<String> = g
+                    .unknowns
+                    .iter()
+                    .map(|&z| format!("`{}`", arena.symbol_name(z)))
+                    .collect();
+                let (_, user) = user_given[0];
+                errors.push(
+                    Diagnostic::error(
+                        codes::INCONSISTENT_INITIAL,
+                        format!(
+                            "at the initial values the constraints solved together do not \
+                             determine {}",
+                            names.join(", ")
+                        ),
+                    )
+                    .with_primary(user.span, "the initial values given here")
+                    .with_note(format!(
+                        "at t = {t0}, the Jacobian of `{}` in {} is singular (determinant \
+                         {det:.3e}, params at their defaults): the motion would start at the \
+                         end of a branch",
+                        g.text,
+                        names.join(", ")
+                    ))
+                    .with_help(
+                        "name first after `for` the candidates the constraints determine at \
+                         the start, or start elsewhere",
+                    ),
+                );
+                continue;
+            }
+        }
+        let off = match &root {
+            Ok(root) => user_given
+                .iter()
+                .find(|&&(i, _)| !close(start[i], root[i]))
+                .copied(),
+            Err(_) => user_given.first().copied(),
+        };
+        let Some((i, user)) = off else {
+            continue;
+        };
+        let name = arena.symbol_name(g.unknowns[i]);
+        let got = start[i];
+        let diagnostic = Diagnostic::error(
+            codes::INCONSISTENT_INITIAL,
+            format!("the initial value of `{name}` violates a constraint"),
+        )
+        .with_primary(user.span, format!("`{name}` = {got} here"));
+        errors.push(match root {
+            Ok(root) => {
+                // Every candidate the root moves, in one help: each alone
+                // would be refused again for the next.
+                let moved: Vec<String> = g
+                    .unknowns
+                    .iter()
+                    .zip(&root)
+                    .zip(&start)
+                    .filter(|((_, r), s)| !close(**s, **r))
+                    .map(|((&z, r), _)| format!("`{}` = {r}", arena.symbol_name(z)))
+                    .collect();
+                diagnostic
+                    .with_note(format!(
+                        "at t = {t0}, `{}` hold at {} near the given values \
+                         (Newton over the constraints' candidates, params at their defaults)",
+                        g.text,
+                        moved.join(", ")
+                    ))
+                    .with_help(format!("give {}", moved.join(", ")))
+            }
+            Err(why) => diagnostic
+                .with_note(format!(
+                    "at t = {t0}, Newton on `{}` from the given values finds no root \
+                     (params at their defaults): {why}",
+                    g.text
+                ))
+                .with_help("give initial values on which the constraints can hold"),
         });
     }
     if errors.is_empty() {

@@ -5,6 +5,7 @@
 //! |---|---|
 //! | `symbols.rs` | the model lowered: L, mass laws, constraints φ |
 //! | `coupled.rs` | implicit and holonomic constraints solved together (Cramer) |
+//! | `raised.rs` | a group of raised constraints kept by Newton over its candidates |
 //! | `star.rs` | the order-matched star; eliminating dependent derivatives |
 //! | `reactive_forces.rs` | `R_j` of the variable-mass points |
 //! | `generalized_forces.rs` | the declared `Q_j` |
@@ -26,6 +27,7 @@ mod initial;
 mod jet_coefficients;
 mod mass_factor;
 mod multiplier_route;
+mod raised;
 mod reactive_forces;
 mod reduce;
 pub mod reduced;
@@ -225,7 +227,14 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
     let mut raised = Vec::new();
     let mut directions: Vec<(String, ExprId)> = Vec::new();
     let mut shown_raised = Vec::new();
-    for c in model.constraints.iter().filter(|c| c.is_raised()) {
+    let raised_groups = raised::coupled_groups(model);
+    let grouped = |i: usize| raised_groups.iter().any(|g| g.constraints.contains(&i));
+    for (_, c) in model
+        .constraints
+        .iter()
+        .enumerate()
+        .filter(|&(i, c)| c.is_raised() && !grouped(i))
+    {
         let f = coupled::written_residual(&mut arena, model, c, &laws).map_err(|d| vec![d])?;
         let v = Symbol::Jet {
             coord: c.coord as u32,
@@ -287,6 +296,16 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             text,
         });
     }
+    // Raised constraints solved together: Newton over the group.
+    let mut newton_groups = Vec::new();
+    for group in raised_groups {
+        let kept = raised::kept_group(&mut arena, model, &symbolic, group, &laws, &state)
+            .map_err(|d| vec![d])?;
+        fixed.extend(kept.fixed);
+        directions.extend(kept.directions);
+        shown_raised.extend(kept.shown);
+        newton_groups.push(kept.newton);
+    }
     let closure = coupled::closure(&mut arena, model, &laws).map_err(|d| vec![d])?;
     let levels = match &closure {
         Some(closure) if symbolic.k >= 2 => {
@@ -307,6 +326,7 @@ fn derive_with(model: &Model, with_initial: bool) -> Result<Derivation, Vec<Diag
             closure.as_ref(),
             &levels,
             &raised,
+            &newton_groups,
         )?
     } else {
         (Vec::new(), Vec::new())

@@ -350,6 +350,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/warnings",
     "tests/data/textbook",
     "tests/data/textbook_constraints",
+    "tests/data/coupled_nonlinear",
     "tests/data/textbook_long",
     "tests/data",
 ];

@@ -7,6 +7,7 @@ mod chains;
 mod check_build;
 mod cli;
 mod collisions;
+mod coupled_nonlinear;
 mod depth;
 mod early_errors;
 mod ensemble;
