@@ -147,8 +147,10 @@ impl Checker<'_> {
             // constraint fixes. A motion that starts where the other one
             // must be fixed (a knife edge heading along y, where
             // `for y' or x'` cannot give y' from x') names it first.
+            // A raised constraint's candidates are all given (their values
+            // choose its root, below), so none of them is "later".
             let later_candidate = constraints.iter().find_map(|c| {
-                let implicit = c.implicit.as_ref()?;
+                let implicit = c.implicit.as_ref().filter(|i| !i.raised)?;
                 let first = *implicit.candidates.first()?;
                 let missing_order = !initial
                     .iter()
@@ -165,9 +167,11 @@ impl Checker<'_> {
                 let candidate = format!("{}{}", coordinate.name, "'".repeat(c.order as usize - 1));
                 if missing.contains(&format!("`{candidate}`")) {
                     diagnostic = diagnostic.with_note(format!(
-                        "the constraint is not linear in `{candidate}`: it may hold at several \
-                         values, and the initial value chooses the one the motion starts on \
-                         (lagc checks it against the constraint)"
+                        "the constraint fixing `{candidate}` is kept as written and solved \
+                         through its derivative (it, or one solved with it, is not linear in \
+                         its candidates): it may hold at several values of `{candidate}`, and \
+                         the initial value chooses the one the motion starts on (lagc checks \
+                         it against the constraint)"
                     ));
                 }
             }
