@@ -348,6 +348,23 @@ impl fmt::Display for Failure {
                     "no convergence"
                 }
             ),
+            // A required value that is not a number: the kept value is
+            // Newton's `v − f/f_v` of a constraint kept as written, and
+            // `f_v` vanishes at the start (`x'^2 + y'^2 = 1 for y'` with
+            // `y' = 0`): the start sits where the constraint's branches
+            // meet, and "which require y' = NaN" said nothing of that.
+            FailureKind::InconsistentInitialValue {
+                component,
+                stated,
+                required,
+            } if !required.is_finite() => write!(
+                f,
+                "at t = {t:e}: the constraints do not determine `{component}` at the start \
+                 (`{component} = {stated}`): the constraint that fixes it does not vary \
+                 with it there (its derivative in `{component}` vanishes: the end of a \
+                 branch, where two roots meet); start the motion off that point, or let \
+                 the constraint fix another candidate"
+            ),
             FailureKind::InconsistentInitialValue {
                 component,
                 stated,

@@ -270,3 +270,48 @@ fn within_1e_9_of_its_exact_lines(file: &std::path::Path) {
         assert!(error < 1e-9, "{method}: {error:e}");
     }
 }
+
+/// A particle at constant speed thrown level (`--init x'=1 --init y'=0`,
+/// `x'^2 + y'^2 = c^2 for y' or x'`): the first candidate, `y'`, has no
+/// pivot there (`2 y' = 0`), and its Newton value was 0/0 — the start was
+/// refused ("which require y' = NaN") though the constraint allows it; it
+/// is checked in the mode the run starts in (`x'` fixed) and follows the
+/// closed form `x' = c / cosh(g t / c)`, `y' = −c tanh(g t / c)`.
+#[test]
+fn a_constant_speed_particle_thrown_level_starts_on_its_other_candidate() {
+    let binary = build("constant_speed_implicit");
+    let g = 9.81;
+    for method in METHODS {
+        let (rows, stderr) = run(
+            &binary,
+            &[
+                "--method",
+                method,
+                "--rtol",
+                "1e-9",
+                "--init",
+                "x'=1",
+                "--init",
+                "y'=0",
+                "--samples",
+                "11",
+            ],
+        );
+        for r in &rows {
+            let gt = g * r[0];
+            let want = [
+                gt.sinh().atan() / g,
+                -gt.cosh().ln() / g,
+                1.0 / gt.cosh(),
+                -gt.tanh(),
+            ];
+            for (got, want) in r[1..5].iter().zip(want) {
+                assert!(
+                    (got - want).abs() <= 1e-8,
+                    "{method} at t = {}: {got} against {want}\n{stderr}",
+                    r[0]
+                );
+            }
+        }
+    }
+}

@@ -629,9 +629,50 @@ fn left(model: &dyn DynModel, fixed: &[usize], t: f64, residual: &[f64], distanc
 /// `v − f/f_v`) from it. A value off the constraint is the user's
 /// (`--init`, `--param`), and a run from it would start off the
 /// constraint: it stops before the run, naming the root near it.
+///
+/// Where mode 0's candidate cannot be solved for at the start (its pivot
+/// vanishes: a particle at constant speed, `x'^2 + y'^2 = c^2 for y' or
+/// x'`, thrown level, `y' = 0`), the check is made in the mode the run
+/// starts in, its candidates' pivots the largest: a level throw is a
+/// start the constraint allows, refused before ("which require y' = NaN").
 pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
-    let Some(fixed) = model.fixed_components().first() else {
+    let roots = given_roots(model, 0, t0, x0)?;
+    let roots = match roots {
+        Some((_, x)) if x.iter().any(|v| !v.is_finite()) && model.fixed_components().len() > 1 => {
+            let mode = crate::run::regime::best_mode(model, t0, x0).0;
+            let mut in_mode = model.boxed_clone();
+            in_mode.set_regime(&crate::model::Regime {
+                mode,
+                branches: crate::run::regime::initial_branches(model, t0, x0),
+            });
+            given_roots(&*in_mode, mode, t0, x0)?
+        }
+        roots => roots,
+    };
+    let Some((given, x)) = roots else {
         return Ok(());
+    };
+    for &j in &given {
+        crate::model::check_stated(t0, model.state_names()[j], x0[j], x[j])?;
+    }
+    Ok(())
+}
+
+/// The components a mode fixes that the initial values give, and the
+/// state with each moved onto its root near the given value.
+type GivenRoots = (Vec<usize>, Vec<f64>);
+
+/// The components `mode` fixes that the initial values give, and the
+/// state with each moved onto its root near the given value (Newton's
+/// kept value iterated); `None` where it fixes none of them.
+fn given_roots(
+    model: &dyn DynModel,
+    mode: usize,
+    t0: f64,
+    x0: &[f64],
+) -> Result<Option<GivenRoots>, Failure> {
+    let Some(fixed) = model.fixed_components().get(mode) else {
+        return Ok(None);
     };
     let given: Vec<usize> = fixed
         .iter()
@@ -639,7 +680,7 @@ pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<()
         .filter(|&j| model.initial_kinds().get(j) == Some(&Initial::Given))
         .collect();
     if given.is_empty() {
-        return Ok(());
+        return Ok(None);
     }
     let mut x = x0.to_vec();
     let mut kept = x0.to_vec();
@@ -654,10 +695,7 @@ pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<()
             break;
         }
     }
-    for &j in &given {
-        crate::model::check_stated(t0, model.state_names()[j], x0[j], x[j])?;
-    }
-    Ok(())
+    Ok(Some((given, x)))
 }
 
 /// The state components the constraints fix in `mode`: the generated
