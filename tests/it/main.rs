@@ -14,6 +14,7 @@ mod ensemble;
 mod errors;
 mod examples;
 mod expect;
+mod failure_rows;
 mod field;
 mod fmu;
 mod generated;

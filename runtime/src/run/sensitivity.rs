@@ -344,6 +344,40 @@ pub fn sample(
     x0: &[f64],
     times: &[f64],
 ) -> Result<(Vec<Vec<f64>>, String), Failure> {
+    let (rows, note) = sample_until_failure(start, model, options, t0, t1, x0, times);
+    note.map(|note| (rows, note))
+}
+
+/// [`sample`], keeping the rows made before a failure: the rows at the
+/// times the augmented run reached (all of them when it did not fail), and
+/// the note or the failure. A run that stops on a failure writes the rows
+/// before it, with their sensitivities, as a run without them does.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_until_failure(
+    start: &Start,
+    model: &dyn DynModel,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+) -> (Vec<Vec<f64>>, Result<String, Failure>) {
+    let mut rows = Vec::with_capacity(times.len());
+    let note = augmented_run(start, model, options, t0, t1, x0, times, &mut rows);
+    (rows, note)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn augmented_run(
+    start: &Start,
+    model: &dyn DynModel,
+    options: &Options,
+    t0: f64,
+    t1: f64,
+    x0: &[f64],
+    times: &[f64],
+    rows: &mut Vec<Vec<f64>>,
+) -> Result<String, Failure> {
     let (chain, s0) = initial(model, start, t0, x0)?;
     let mut augmented = Augmented::new(model.boxed_clone(), chain);
     let mut z0 = x0.to_vec();
@@ -358,7 +392,6 @@ pub fn sample(
         ..options.clone()
     };
     let n = model.dim();
-    let mut rows = Vec::with_capacity(times.len());
     let mut last = t0;
     let outcome = run(&mut augmented, &options, t0, t1, &z0, times, |_, t, z| {
         rows.push(z[n..].to_vec());
@@ -383,7 +416,7 @@ pub fn sample(
         outcome.report.stats.accepted_steps,
         outcome.report.stats.rejected_steps
     );
-    Ok((rows, note))
+    Ok(note)
 }
 
 /// The motion with its sensitivities: state `[x; S e_1; …; S e_m]`.

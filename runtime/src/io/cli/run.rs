@@ -142,10 +142,19 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     eprintln!("{}", plan(&*model, &inv.options));
     // The sensitivities first, kept per sample: the CSV then streams the
     // state from the run as it is without them, with them beside it.
+    // A failure of the sensitivities' run ends the run where it failed:
+    // the rows before it are written (with their sensitivities), as a run
+    // without them writes its rows up to a failure, and the failure is the
+    // run's.
+    let mut sensitivity_failure: Option<Failure> = None;
     let found = if inv.sensitivity {
-        match sensitivities(prototype, inv, &*model, t0, t1, &x0, &times) {
-            Ok(found) => Some(found),
-            Err(failure) => return fail(inv.json, &failure),
+        let (rows, note) = sensitivities(prototype, inv, &*model, t0, t1, &x0, &times);
+        match note {
+            Ok(note) => Some((rows, note)),
+            Err(failure) => {
+                sensitivity_failure = Some(failure);
+                Some((rows, String::new()))
+            }
         }
     } else {
         None
@@ -201,6 +210,11 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
         &x0,
         &times,
         |model: &dyn DynModel, t, x| {
+            if let (Some(failure), Some((rows, _))) = (&sensitivity_failure, &found) {
+                if sample_index >= rows.len() {
+                    return Err(failure.clone());
+                }
+            }
             model.outputs(t, x, &mut outputs);
             if written.is_ok() && writes_csv {
                 extra.clear();
@@ -236,9 +250,9 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
             return ExitCode::FAILURE;
         }
     }
-    let mut outcome = match first {
-        Ok(outcome) => outcome,
-        Err(failure) => return fail(inv.json, &failure),
+    let mut outcome = match (first, sensitivity_failure) {
+        (Err(failure), _) | (Ok(_), Some(failure)) => return fail(inv.json, &failure),
+        (Ok(outcome), None) => outcome,
     };
     if let Some((_, note)) = &found {
         outcome.report.notes.push(note.clone());
@@ -274,7 +288,9 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
             // With `--sensitivity` a solve is both runs: the time is what
             // the columns cost.
             if inv.sensitivity {
-                if let Err(failure) = sensitivities(prototype, inv, &*model, t0, t1, &x0, &times) {
+                if let (_, Err(failure)) =
+                    sensitivities(prototype, inv, &*model, t0, t1, &x0, &times)
+                {
                     return fail(inv.json, &failure);
                 }
             }
@@ -334,8 +350,8 @@ fn sensitivities(
     t1: f64,
     x0: &[f64],
     times: &[f64],
-) -> Result<(Vec<Vec<f64>>, String), Failure> {
-    use crate::run::sensitivity::{sample, Start};
+) -> (Vec<Vec<f64>>, Result<String, Failure>) {
+    use crate::run::sensitivity::{sample_until_failure, Start};
     let mut overrides = vec![None; prototype.param_names().len()];
     for &(i, v) in &inv.params {
         overrides[i] = Some(v);
@@ -351,7 +367,7 @@ fn sensitivities(
         overrides: &overrides,
         given: &given,
     };
-    sample(&start, model, &inv.options, t0, t1, x0, times)
+    sample_until_failure(&start, model, &inv.options, t0, t1, x0, times)
 }
 
 /// The largest difference (relative to `max(|x|, 1)`) between the samples
