@@ -351,6 +351,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/textbook",
     "tests/data/textbook_constraints",
     "tests/data/textbook_long",
+    "tests/data/textbook_rolling",
     "tests/data",
 ];
 
