@@ -3,7 +3,8 @@
 //! an incline, two coordinates and the rolling condition x' = R phi'.
 //! Both methods at rtol 1e-6, 1e-9 and 1e-12, every state column at every
 //! sample within 10·rtol of the closed form x'' = (2/3) g sin(alpha)
-//! (`scripts/textbook_rolling_reference.py`, the CSV beside the model).
+//! (`scripts/textbook_rolling_reference.py`, the CSV beside the model);
+//! a rope sliding off a smooth table, x = x0 cosh(sqrt(g/L) t).
 
 use crate::generated::build_file;
 use std::process::{Command, Output};
@@ -112,4 +113,17 @@ fn check_reference(name: &str, csv: &str) {
 #[test]
 fn disk_rolling_down_an_incline_follows_the_closed_form() {
     check_reference("disk_on_incline", "disk_on_incline");
+}
+
+#[test]
+fn rope_sliding_off_a_table_follows_the_closed_form() {
+    let k = (9.81_f64 / 2.0).sqrt();
+    let head: Vec<String> = ["t", "x", "x'"].iter().map(|s| s.to_string()).collect();
+    let want: Vec<Vec<f64>> = (0..=10)
+        .map(|i| {
+            let t = f64::from(i) / 10.0;
+            vec![t, 0.2 * (k * t).cosh(), 0.2 * k * (k * t).sinh()]
+        })
+        .collect();
+    check("rope_off_table", &head, &want);
 }
