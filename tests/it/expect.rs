@@ -352,6 +352,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/textbook_constraints",
     "tests/data/coupled_nonlinear",
     "tests/data/textbook_long",
+    "tests/data/textbook_rolling",
     "tests/data",
 ];
 

@@ -48,6 +48,7 @@ mod textbook_constraints;
 mod textbook_events;
 mod textbook_long;
 mod textbook_mass_impacts;
+mod textbook_rolling;
 mod turning_points;
 
 use lagc::diagnostic::{self, Diagnostic};
