@@ -11,8 +11,8 @@
 //! at every sample. With one candidate each, the group's Jacobian vanishes
 //! along the contact's motion: the run stops there, exit 3.
 
-use crate::generated::build_file;
-use std::process::{Command, Output};
+use crate::reference_runs::{assert_within, read, scales};
+use std::process::Output;
 
 const RTOLS: [f64; 3] = [1e-6, 1e-8, 1e-10];
 
@@ -23,34 +23,7 @@ fn model(name: &str) -> std::path::PathBuf {
 /// The model's binary run with `method` at `rtol` (atol = rtol/100) at
 /// `times`.
 fn output(name: &str, method: &str, rtol: f64, times: &[f64]) -> Output {
-    let binary = build_file(&model(name));
-    let list: Vec<String> = times.iter().map(|t| format!("{t:?}")).collect();
-    Command::new(binary)
-        .args(["--method", method])
-        .args([
-            "--rtol",
-            &format!("{rtol:e}"),
-            "--atol",
-            &format!("{:e}", rtol * 1e-2),
-        ])
-        .args(["--times", &list.join(",")])
-        .output()
-        .unwrap()
-}
-
-/// A CSV's header and rows.
-fn parse(text: &str) -> (Vec<String>, Vec<Vec<f64>>) {
-    let mut lines = text.lines();
-    let head = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (head, rows)
+    crate::reference_runs::output(&model(name), method, rtol, times)
 }
 
 /// Every sample of both methods at [`RTOLS`] within `10·rtol` of the
@@ -58,46 +31,28 @@ fn parse(text: &str) -> (Vec<String>, Vec<Vec<f64>>) {
 /// 1), and the outputs, `speed2` at 1 and the others (the written
 /// constraints' residuals) at 0, within `10·rtol`.
 fn check(name: &str, csv: &str) {
-    let path = crate::root().join(csv);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let (head, want) = parse(&text);
+    let (head, want) = read(csv);
     let times: Vec<f64> = want.iter().map(|w| w[0]).collect();
-    let scale: Vec<f64> = (0..head.len())
-        .map(|j| want.iter().fold(1.0_f64, |m, w| m.max(w[j].abs())))
-        .collect();
+    let scale = scales(&head, &want);
     for method in ["direct", "field"] {
         for rtol in RTOLS {
-            let out = output(name, method, rtol, &times);
-            let stderr = String::from_utf8_lossy(&out.stderr);
-            assert!(out.status.success(), "{name} {method}: {stderr}");
-            let (got_head, rows) = parse(&String::from_utf8(out.stdout).unwrap());
+            let (got_head, rows, stderr) =
+                crate::reference_runs::run(&model(name), method, rtol, &times);
             assert_eq!(&got_head[..head.len()], head, "{name}: columns");
             assert!(got_head.len() >= head.len() + 2, "{name}: the outputs");
-            assert_eq!(rows.len(), times.len(), "{name} {method} {rtol:e}");
-            for (row, want) in rows.iter().zip(&want) {
-                assert_eq!(row[0], want[0], "{name} {method} {rtol:e}");
-                for j in 1..head.len() {
-                    let error = (row[j] - want[j]).abs() / scale[j];
-                    assert!(
-                        error <= 10.0 * rtol,
-                        "{name} {method} rtol {rtol:e}: {} at t = {}: {} against {} ({:.1} rtol)\n{stderr}",
-                        head[j],
-                        row[0],
-                        row[j],
-                        want[j],
-                        error / rtol
-                    );
-                }
+            let label = format!("{name} {method} rtol {rtol:e}");
+            assert_within(&label, rtol, (&head, &scale), &rows, &want, &stderr);
+            for row in &rows {
                 let speed2 = row[head.len()];
                 assert!(
                     (speed2 - 1.0).abs() <= 10.0 * rtol,
-                    "{name} {method} rtol {rtol:e}: off the speed at t = {}: speed² {speed2}",
+                    "{label}: off the speed at t = {}: speed² {speed2}",
                     row[0]
                 );
                 for (j, residual) in row.iter().enumerate().skip(head.len() + 1) {
                     assert!(
                         residual.abs() <= 10.0 * rtol,
-                        "{name} {method} rtol {rtol:e}: off the constraints at t = {}: {} {residual}",
+                        "{label}: off the constraints at t = {}: {} {residual}",
                         row[0],
                         got_head[j]
                     );

@@ -33,6 +33,7 @@ mod parser;
 mod poor_pivots;
 mod python;
 mod readme_program;
+mod reference_runs;
 mod released_level;
 mod report;
 mod robustness;

@@ -12,8 +12,8 @@
 //! `scripts/textbook_constraints_reference.py`, the CSVs beside the
 //! models).
 
-use crate::generated::build_file;
-use std::process::{Command, Output};
+use crate::reference_runs::{assert_within, scales};
+use std::process::Output;
 
 const G: f64 = 9.81;
 const RTOLS: [f64; 2] = [1e-6, 1e-10];
@@ -25,38 +25,7 @@ fn model(name: &str) -> std::path::PathBuf {
 /// The model's binary run with `method` at `rtol` (atol = rtol/100) at
 /// `times`.
 fn output(name: &str, method: &str, rtol: f64, times: &[f64]) -> Output {
-    let binary = build_file(&model(name));
-    let list: Vec<String> = times.iter().map(|t| format!("{t:?}")).collect();
-    Command::new(binary)
-        .args(["--method", method])
-        .args([
-            "--rtol",
-            &format!("{rtol:e}"),
-            "--atol",
-            &format!("{:e}", rtol * 1e-2),
-        ])
-        .args(["--times", &list.join(",")])
-        .output()
-        .unwrap()
-}
-
-/// [`output`]'s header and rows (t first) and stderr, asserting exit 0.
-fn run(name: &str, method: &str, rtol: f64, times: &[f64]) -> (Vec<String>, Vec<Vec<f64>>, String) {
-    let out = output(name, method, rtol, times);
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "{name} {method}: {stderr}");
-    let stdout = String::from_utf8(out.stdout).unwrap();
-    let mut lines = stdout.lines();
-    let head = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (head, rows, stderr)
+    crate::reference_runs::output(&model(name), method, rtol, times)
 }
 
 /// Every sample of both methods at [`RTOLS`] within `10·rtol` of `want`
@@ -64,52 +33,21 @@ fn run(name: &str, method: &str, rtol: f64, times: &[f64]) -> (Vec<String>, Vec<
 /// largest magnitude (at least 1).
 fn check(name: &str, head: &[String], want: &[Vec<f64>]) {
     let times: Vec<f64> = want.iter().map(|w| w[0]).collect();
-    let scale: Vec<f64> = (0..head.len())
-        .map(|j| want.iter().fold(1.0_f64, |m, w| m.max(w[j].abs())))
-        .collect();
+    let scale = scales(head, want);
     for method in ["direct", "field"] {
         for rtol in RTOLS {
-            let (got_head, rows, stderr) = run(name, method, rtol, &times);
+            let (got_head, rows, stderr) =
+                crate::reference_runs::run(&model(name), method, rtol, &times);
             assert_eq!(&got_head[..head.len()], head, "{name}: columns");
-            assert_eq!(
-                rows.len(),
-                times.len(),
-                "{name} {method} {rtol:e}: {stderr}"
-            );
-            for (row, want) in rows.iter().zip(want) {
-                assert_eq!(row[0], want[0], "{name} {method} {rtol:e}");
-                for j in 1..head.len() {
-                    let error = (row[j] - want[j]).abs() / scale[j];
-                    assert!(
-                        error <= 10.0 * rtol,
-                        "{name} {method} rtol {rtol:e}: {} at t = {}: {} against {} ({:.1} rtol)\n{stderr}",
-                        head[j],
-                        row[0],
-                        row[j],
-                        want[j],
-                        error / rtol
-                    );
-                }
-            }
+            let label = format!("{name} {method} rtol {rtol:e}");
+            assert_within(&label, rtol, (head, &scale), &rows, want, &stderr);
         }
     }
 }
 
 /// The reference `tests/data/textbook_constraints/{csv}.csv`: header and rows.
 fn reference(csv: &str) -> (Vec<String>, Vec<Vec<f64>>) {
-    let path = crate::root().join(format!("tests/data/textbook_constraints/{csv}.csv"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut lines = text.lines();
-    let head = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (head, rows)
+    crate::reference_runs::read(&format!("tests/data/textbook_constraints/{csv}.csv"))
 }
 
 fn check_reference(name: &str, csv: &str) {
