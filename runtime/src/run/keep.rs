@@ -622,7 +622,7 @@ fn left(model: &dyn DynModel, fixed: &[usize], t: f64, residual: &[f64], distanc
     )
 }
 
-/// Checks the components that mode 0 fixes but the initial values give
+/// Checks the components that `mode` fixes but the initial values give
 /// (the candidate of a non-linear constraint, kept as written: its value
 /// chooses the root the motion starts on): each must be the root of its
 /// constraint near it, found by iterating the kept value (Newton's
@@ -630,32 +630,27 @@ fn left(model: &dyn DynModel, fixed: &[usize], t: f64, residual: &[f64], distanc
 /// (`--init`, `--param`), and a run from it would start off the
 /// constraint: it stops before the run, naming the root near it.
 ///
-/// Where mode 0's candidate cannot be solved for at the start (its pivot
-/// vanishes: a particle at constant speed, `x'^2 + y'^2 = c^2 for y' or
-/// x'`, thrown level, `y' = 0`), the check is made in the mode the run
-/// starts in, its candidates' pivots the largest: a level throw is a
-/// start the constraint allows, refused before ("which require y' = NaN").
-pub fn check_given_fixed(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
-    let roots = given_roots(model, 0, t0, x0)?;
-    let roots = match roots {
-        Some((_, x)) if x.iter().any(|v| !v.is_finite()) && model.fixed_components().len() > 1 => {
-            let mode = crate::run::regime::best_mode(model, t0, x0).0;
-            let mut in_mode = model.boxed_clone();
-            in_mode.set_regime(&crate::model::Regime {
-                mode,
-                branches: crate::run::regime::initial_branches(model, t0, x0),
-            });
-            given_roots(&*in_mode, mode, t0, x0)?
-        }
-        roots => roots,
+/// `Ok(false)`, unless `strict`, where the mode's roots are not numbers
+/// (its candidate has no pivot at the start: a particle at constant speed,
+/// `x'^2 + y'^2 = c^2 for y' or x'`, thrown level, `y' = 0`): the caller
+/// checks in the mode the run starts in (`regime::check_initial_candidates`).
+pub fn check_given_fixed(
+    model: &dyn DynModel,
+    mode: usize,
+    t0: f64,
+    x0: &[f64],
+    strict: bool,
+) -> Result<bool, Failure> {
+    let Some((given, x)) = given_roots(model, mode, t0, x0)? else {
+        return Ok(true);
     };
-    let Some((given, x)) = roots else {
-        return Ok(());
-    };
+    if !strict && given.iter().any(|&j| !x[j].is_finite()) {
+        return Ok(false);
+    }
     for &j in &given {
         crate::model::check_stated(t0, model.state_names()[j], x0[j], x[j])?;
     }
-    Ok(())
+    Ok(true)
 }
 
 /// The components a mode fixes that the initial values give, and the

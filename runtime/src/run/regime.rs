@@ -79,7 +79,21 @@ const INITIAL_PIVOT_RATIO: f64 = 1e-8;
 /// computed y' = x' tan(π/2) = 1.6e16 and stopped at t = 5e-14 naming the
 /// pivot).
 pub fn check_initial_candidates(model: &dyn DynModel, t0: f64, x0: &[f64]) -> Result<(), Failure> {
-    crate::run::keep::check_given_fixed(model, t0, x0)?;
+    use crate::run::keep::check_given_fixed;
+    // Mode 0's candidate without a pivot at the start (a constant-speed
+    // particle thrown level, `y' = 0` for `x'^2 + y'^2 = c^2 for y' or
+    // x'`): checked in the mode the run starts in, where the constraint
+    // allows the start; refused before, "which require y' = NaN".
+    let several = model.fixed_components().len() > 1;
+    if !check_given_fixed(model, 0, t0, x0, !several)? {
+        let mode = best_mode(model, t0, x0).0;
+        let mut in_mode = model.boxed_clone();
+        in_mode.set_regime(&Regime {
+            mode,
+            branches: initial_branches(model, t0, x0),
+        });
+        check_given_fixed(&*in_mode, mode, t0, x0, true)?;
+    }
     check_first_candidates(model, t0, x0)
 }
 
