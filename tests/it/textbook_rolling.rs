@@ -4,7 +4,8 @@
 //! Both methods at rtol 1e-6, 1e-9 and 1e-12, every state column at every
 //! sample within 10·rtol of the closed form x'' = (2/3) g sin(alpha)
 //! (`scripts/textbook_rolling_reference.py`, the CSV beside the model);
-//! a rope sliding off a smooth table, x = x0 cosh(sqrt(g/L) t).
+//! a rope sliding off a smooth table, x = x0 cosh(sqrt(g/L) t); a 2-link
+//! arm with PD joint torques against a SymPy/SciPy reference.
 
 use crate::generated::build_file;
 use std::process::{Command, Output};
@@ -126,4 +127,12 @@ fn rope_sliding_off_a_table_follows_the_closed_form() {
         })
         .collect();
     check("rope_off_table", &head, &want);
+}
+
+/// A 2-link planar arm with its own link inertias and PD joint torques,
+/// written with vectors; the reference is Lagrange in joint angles by SymPy
+/// (checked against the textbook mass matrix) under SciPy DOP853 at 1e-13.
+#[test]
+fn two_link_arm_with_pd_torques_follows_the_sympy_reference() {
+    check_reference("two_link_arm_pd", "two_link_arm_pd");
 }
