@@ -136,3 +136,12 @@ fn rope_sliding_off_a_table_follows_the_closed_form() {
 fn two_link_arm_with_pd_torques_follows_the_sympy_reference() {
     check_reference("two_link_arm_pd", "two_link_arm_pd");
 }
+
+/// A coin rolling without slipping on a table in Euler angles, the rolling
+/// written as the contact point at rest, `G' + w x (P - G) = 0`; the
+/// reference is Lagrange's equations with multipliers (SymPy, SciPy DOP853
+/// at 1e-13), energy and slip checked along it.
+#[test]
+fn coin_rolling_in_euler_angles_follows_the_multiplier_reference() {
+    check_reference("coin_euler_angles", "coin_euler_angles");
+}
