@@ -145,3 +145,34 @@ fn two_link_arm_with_pd_torques_follows_the_sympy_reference() {
 fn coin_rolling_in_euler_angles_follows_the_multiplier_reference() {
     check_reference("coin_euler_angles", "coin_euler_angles");
 }
+
+/// The same coin upright, rolling straight: x = R s t, psi = -s t, the
+/// lean, heading and y staying 0 (s = 20, R = 0.02).
+#[test]
+fn upright_coin_rolls_straight_at_constant_speed() {
+    let head: Vec<String> = [
+        "t", "x", "y", "phi", "th", "psi", "x'", "y'", "phi'", "th'", "psi'",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let want: Vec<Vec<f64>> = (0..=10)
+        .map(|i| {
+            let t = f64::from(i) / 10.0;
+            vec![
+                t,
+                0.4 * t,
+                0.0,
+                0.0,
+                0.0,
+                -20.0 * t,
+                0.4,
+                0.0,
+                0.0,
+                0.0,
+                -20.0,
+            ]
+        })
+        .collect();
+    check("coin_upright", &head, &want);
+}
