@@ -23,15 +23,13 @@ impl Checker<'_> {
         let of = |e: &Expr| self.let_derivative_at(e, depth + 1);
         match &expr.kind {
             ExprKind::Number(_) => None,
-            ExprKind::Var { name, primes } => {
-                match self.names.get(&name.name).map(|d| d.name) {
-                    Some(Name::Let(_)) if *primes > 0 => {
-                        Some(format!("{}{}", name.name, "'".repeat(*primes as usize)))
-                    }
-                    Some(Name::Let(_)) => self.let_body(&name.name).and_then(of),
-                    _ => None,
+            ExprKind::Var { name, primes } => match self.names.get(&name.name).map(|d| d.name) {
+                Some(Name::Let(_)) if *primes > 0 => {
+                    Some(format!("{}{}", name.name, "'".repeat(*primes as usize)))
                 }
-            }
+                Some(Name::Let(_)) => self.let_body(&name.name).and_then(of),
+                _ => None,
+            },
             ExprKind::Neg(e) | ExprKind::Not(e) | ExprKind::Component { base: e, .. } => of(e),
             ExprKind::Vector(items) => items.iter().find_map(of),
             ExprKind::Call { args, .. } => args.iter().find_map(of),
