@@ -176,3 +176,44 @@ fn upright_coin_rolls_straight_at_constant_speed() {
         .collect();
     check("coin_upright", &head, &want);
 }
+
+/// The coin circling steadily at lean 0.3 and precession 3, its spin from
+/// the lean equation th'' = 0: th, phi' and psi' stay, the centre runs on
+/// a circle of radius v/3.
+/// Ignored: direct at rtol 1e-9 is 15·rtol off in th' (1.5e-8 at t = 1.2)
+/// while the summary says "within 10·rtol" (estimated 2.5e-10);
+/// `--estimate-error` measures 1.502e-8. A known silent wrong answer for
+/// the lead, not a loosened check: un-ignore once the estimate sees it.
+#[test]
+#[ignore = "direct 1e-9: 15 rtol in th' while the summary says within"]
+fn coin_circling_at_a_constant_lean_keeps_its_steady_precession() {
+    let (lean, precession, spin) = (0.3_f64, 3.0_f64, -34.45645172410229_f64);
+    let v = -0.02 * (spin + precession * lean.sin());
+    let radius = v / precession;
+    let head: Vec<String> = [
+        "t", "x", "y", "phi", "th", "psi", "x'", "y'", "phi'", "th'", "psi'",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let want: Vec<Vec<f64>> = (0..=20)
+        .map(|i| {
+            let t = f64::from(i) / 10.0;
+            let phi = precession * t;
+            vec![
+                t,
+                radius * phi.sin(),
+                radius * (1.0 - phi.cos()),
+                phi,
+                lean,
+                spin * t,
+                v * phi.cos(),
+                v * phi.sin(),
+                precession,
+                0.0,
+                spin,
+            ]
+        })
+        .collect();
+    check("coin_circling", &head, &want);
+}
