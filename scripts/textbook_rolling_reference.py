@@ -103,6 +103,42 @@ def coin_euler_angles(out):
         fo.write("t,x,y,phi,th,psi,x',y',phi',th',psi'\n")
         for i,tt in enumerate(ts): fo.write(",".join(repr(float(v)) for v in (tt,*sol.y[:,i]))+"\n")
 
+def coin_circling_spin(th0=0.3, om=3.0, m=0.01, R=0.02, g=9.81):
+    """The spin psi' of the coin circling steadily at lean th0 and precession
+    om (tests/data/textbook_rolling/coin_circling.lag): th' = 0, phi' = om,
+    x', y' from the rolling constraints, and th'' = 0 in Lagrange's equations
+    with multipliers (the same equations as coin_euler_angles), solved by
+    Brent's method."""
+    import numpy as np
+    import sympy as sp
+    from scipy.optimize import brentq
+    q = sp.symbols('x y phi th psi'); qd = sp.symbols('xd yd phid thd psid')
+    x, y, phi, th, psi = q; xd, yd, phid, thd, psid = qd
+    et = sp.Matrix([sp.cos(phi), sp.sin(phi), 0]); en = sp.Matrix([-sp.sin(phi), sp.cos(phi), 0])
+    ez = sp.Matrix([0, 0, 1])
+    G = sp.Matrix([x, y, R * sp.cos(th)]); r = -R * (sp.sin(th) * en + sp.cos(th) * ez)
+    axle = -sp.cos(th) * en + sp.sin(th) * ez
+    w = phid * ez - thd * et + psid * axle
+    Gd = G.jacobian(q) * sp.Matrix(qd)
+    T = m / 2 * Gd.dot(Gd) + m * R**2 / 8 * w.dot(w) + m * R**2 / 8 * (w.dot(axle))**2
+    L = T - m * g * R * sp.cos(th)
+    slip = Gd + w.cross(r)
+    A = sp.Matrix([[sp.diff(slip[k], v) for v in qd] for k in range(2)])
+    Mm = sp.hessian(L, qd)
+    h = sp.Matrix([sum(sp.diff(L, qd[i], q[j]) * qd[j] for j in range(5)) - sp.diff(L, q[i]) for i in range(5)])
+    Adq = (A * sp.Matrix(qd)).jacobian(q) * sp.Matrix(qd)
+    f = sp.lambdify(q + qd, (Mm, h, A, Adq), 'numpy')
+
+    def lean_acceleration(spin):
+        st = np.array([0, 0, 0, th0, 0, 0, 0, om, 0, spin], float)
+        M, hh, AA, ad = [np.array(v, float) for v in f(*st)]
+        st[5:7] = -np.linalg.solve(AA[:, :2], AA[:, 2:] @ st[7:])
+        M, hh, AA, ad = [np.array(v, float) for v in f(*st)]
+        K = np.zeros((7, 7)); K[:5, :5] = M; K[:5, 5:] = -AA.T; K[5:, :5] = AA
+        return np.linalg.solve(K, np.concatenate([-hh.ravel(), -ad.ravel()]))[3]
+
+    return brentq(lean_acceleration, -100, -1, xtol=1e-15, rtol=1e-15)
+
 def main():
     out = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else "tests/data/textbook_rolling")
     with open(out / "disk_on_incline.csv", "w") as f:
@@ -113,6 +149,7 @@ def main():
 
     two_link_arm_pd(out)
     coin_euler_angles(out)
+    print('coin_circling spin', repr(coin_circling_spin()))
 
 if __name__ == "__main__":
     main()
