@@ -102,7 +102,7 @@ impl Checker<'_> {
     }
 
     /// The body of the let named `name`.
-    fn let_body(&self, name: &str) -> Option<&Expr> {
+    pub(super) fn let_body(&self, name: &str) -> Option<&Expr> {
         self.ast.items.iter().find_map(|item| match &item.kind {
             ItemKind::Let { name: n, value } if n.name == name => Some(value),
             _ => None,
