@@ -1,6 +1,7 @@
 //! Runs of a model's binary against a reference CSV, shared by the test
 //! files of models written as a user first writes them
-//! (`textbook_constraints.rs`, `coupled_nonlinear.rs`): the binary run at
+//! (`textbook_constraints.rs`, `coupled_nonlinear.rs`, `textbook_rolling.rs`):
+//! the binary run at
 //! given times with `atol = rtol/100`, the CSV's header and rows, and every
 //! state column at every sample within `10·rtol` of the reference,
 //! relative to the column's largest magnitude (at least 1).
@@ -98,6 +99,23 @@ pub(crate) fn assert_within(
                 want[j],
                 error / rtol
             );
+        }
+    }
+}
+
+/// Every sample of both methods at each of `rtols` within `10·rtol` of
+/// `want` (rows of t and the columns named in `head`), relative to each
+/// column's largest magnitude (at least 1).
+pub(crate) fn check_both_methods(model: &Path, rtols: &[f64], head: &[String], want: &[Vec<f64>]) {
+    let times: Vec<f64> = want.iter().map(|w| w[0]).collect();
+    let scale = scales(head, want);
+    let name = model.file_stem().unwrap().to_string_lossy();
+    for method in ["direct", "field"] {
+        for &rtol in rtols {
+            let (got_head, rows, stderr) = run(model, method, rtol, &times);
+            assert_eq!(&got_head[..head.len()], head, "{name}: columns");
+            let label = format!("{name} {method} rtol {rtol:e}");
+            assert_within(&label, rtol, (head, &scale), &rows, want, &stderr);
         }
     }
 }

@@ -12,7 +12,6 @@
 //! `scripts/textbook_constraints_reference.py`, the CSVs beside the
 //! models).
 
-use crate::reference_runs::{assert_within, scales};
 use std::process::Output;
 
 const G: f64 = 9.81;
@@ -29,20 +28,9 @@ fn output(name: &str, method: &str, rtol: f64, times: &[f64]) -> Output {
 }
 
 /// Every sample of both methods at [`RTOLS`] within `10·rtol` of `want`
-/// (rows of t and the columns named in `head`), relative to each column's
-/// largest magnitude (at least 1).
+/// (rows of t and the columns named in `head`).
 fn check(name: &str, head: &[String], want: &[Vec<f64>]) {
-    let times: Vec<f64> = want.iter().map(|w| w[0]).collect();
-    let scale = scales(head, want);
-    for method in ["direct", "field"] {
-        for rtol in RTOLS {
-            let (got_head, rows, stderr) =
-                crate::reference_runs::run(&model(name), method, rtol, &times);
-            assert_eq!(&got_head[..head.len()], head, "{name}: columns");
-            let label = format!("{name} {method} rtol {rtol:e}");
-            assert_within(&label, rtol, (head, &scale), &rows, want, &stderr);
-        }
-    }
+    crate::reference_runs::check_both_methods(&model(name), &RTOLS, head, want);
 }
 
 /// The reference `tests/data/textbook_constraints/{csv}.csv`: header and rows.

@@ -7,103 +7,21 @@
 //! a rope sliding off a smooth table, x = x0 cosh(sqrt(g/L) t); a 2-link
 //! arm with PD joint torques against a SymPy/SciPy reference.
 
-use crate::generated::build_file;
-use std::process::{Command, Output};
-
 const RTOLS: [f64; 3] = [1e-6, 1e-9, 1e-12];
 
 fn model(name: &str) -> std::path::PathBuf {
     crate::root().join(format!("tests/data/textbook_rolling/{name}.lag"))
 }
 
-/// The model's binary run with `method` at `rtol` (atol = rtol/100) at
-/// `times`.
-fn output(name: &str, method: &str, rtol: f64, times: &[f64]) -> Output {
-    let binary = build_file(&model(name));
-    let list: Vec<String> = times.iter().map(|t| format!("{t:?}")).collect();
-    Command::new(binary)
-        .args(["--method", method])
-        .args([
-            "--rtol",
-            &format!("{rtol:e}"),
-            "--atol",
-            &format!("{:e}", rtol * 1e-2),
-        ])
-        .args(["--times", &list.join(",")])
-        .output()
-        .unwrap()
-}
-
-/// [`output`]'s header and rows (t first) and stderr, asserting exit 0.
-fn run(name: &str, method: &str, rtol: f64, times: &[f64]) -> (Vec<String>, Vec<Vec<f64>>, String) {
-    let out = output(name, method, rtol, times);
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(out.status.success(), "{name} {method}: {stderr}");
-    let stdout = String::from_utf8(out.stdout).unwrap();
-    let mut lines = stdout.lines();
-    let head = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (head, rows, stderr)
-}
-
 /// Every sample of both methods at [`RTOLS`] within `10·rtol` of `want`
-/// (rows of t and the columns named in `head`), relative to each column's
-/// largest magnitude (at least 1).
+/// (rows of t and the columns named in `head`).
 fn check(name: &str, head: &[String], want: &[Vec<f64>]) {
-    let times: Vec<f64> = want.iter().map(|w| w[0]).collect();
-    let scale: Vec<f64> = (0..head.len())
-        .map(|j| want.iter().fold(1.0_f64, |m, w| m.max(w[j].abs())))
-        .collect();
-    for method in ["direct", "field"] {
-        for rtol in RTOLS {
-            let (got_head, rows, stderr) = run(name, method, rtol, &times);
-            assert_eq!(&got_head[..head.len()], head, "{name}: columns");
-            assert_eq!(
-                rows.len(),
-                times.len(),
-                "{name} {method} {rtol:e}: {stderr}"
-            );
-            for (row, want) in rows.iter().zip(want) {
-                assert_eq!(row[0], want[0], "{name} {method} {rtol:e}");
-                for j in 1..head.len() {
-                    let error = (row[j] - want[j]).abs() / scale[j];
-                    assert!(
-                        error <= 10.0 * rtol,
-                        "{name} {method} rtol {rtol:e}: {} at t = {}: {} against {} ({:.1} rtol)\n{stderr}",
-                        head[j],
-                        row[0],
-                        row[j],
-                        want[j],
-                        error / rtol
-                    );
-                }
-            }
-        }
-    }
+    crate::reference_runs::check_both_methods(&model(name), &RTOLS, head, want);
 }
 
 /// The reference `tests/data/textbook_rolling/{csv}.csv`: header and rows.
 fn reference(csv: &str) -> (Vec<String>, Vec<Vec<f64>>) {
-    let path = crate::root().join(format!("tests/data/textbook_rolling/{csv}.csv"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut lines = text.lines();
-    let head = lines
-        .next()
-        .unwrap()
-        .split(',')
-        .map(str::to_string)
-        .collect();
-    let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    (head, rows)
+    crate::reference_runs::read(&format!("tests/data/textbook_rolling/{csv}.csv"))
 }
 
 fn check_reference(name: &str, csv: &str) {
