@@ -173,21 +173,6 @@ impl Checker<'_> {
                          the initial value chooses the one the motion starts on (lagc checks \
                          it against the constraint)"
                     ));
-                    // A let's derivative is read as not linear: a linear
-                    // constraint written through one lands here too.
-                    let written = c.implicit.as_ref().and_then(|i| {
-                        self.let_derivative(&i.lhs)
-                            .or_else(|| self.let_derivative(&c.rhs))
-                    });
-                    if let Some(derivative) = written {
-                        diagnostic = diagnostic.with_note(format!(
-                            "lagc reads the let derivative `{derivative}` in the constraint as \
-                             not linear in its candidates; if the constraint is linear in \
-                             `{candidate}`, writing it with the coordinates' derivatives \
-                             instead of `{derivative}` has it solved directly, with no initial \
-                             value for `{candidate}` needed"
-                        ));
-                    }
                 }
             }
             // A constraint's dependent given in its place: the user took

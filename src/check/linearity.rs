@@ -41,6 +41,42 @@ impl Checker<'_> {
         self.degree(expr, jets, 0) == Degree::Switch
     }
 
+    /// The highest order of `coord`'s derivatives in `expr`, through lets
+    /// and their derivatives (`None` where it does not appear; the
+    /// conservative `u32::MAX` past the depth guard).
+    fn highest_order(&self, expr: &Expr, coord: usize, depth: usize) -> Option<u32> {
+        if depth > 64 {
+            return Some(u32::MAX / 2);
+        }
+        let of = |e: &Expr| self.highest_order(e, coord, depth + 1);
+        match &expr.kind {
+            ExprKind::Number(_) => None,
+            ExprKind::Var { name, primes } => match self.names.get(&name.name).map(|d| d.name) {
+                Some(Name::Coord(c)) if c == coord => Some(*primes),
+                Some(Name::Let(_)) => {
+                    let body = self.ast.items.iter().find_map(|item| match &item.kind {
+                        ItemKind::Let { name: n, value } if n.name == name.name => Some(value),
+                        _ => None,
+                    })?;
+                    of(body).map(|m| m + primes)
+                }
+                _ => None,
+            },
+            ExprKind::Neg(e) | ExprKind::Not(e) | ExprKind::Component { base: e, .. } => of(e),
+            ExprKind::Vector(items) | ExprKind::Call { args: items, .. } => {
+                items.iter().filter_map(of).max()
+            }
+            ExprKind::Binary { lhs, rhs, .. }
+            | ExprKind::Compare { lhs, rhs, .. }
+            | ExprKind::Logic { lhs, rhs, .. } => of(lhs).max(of(rhs)),
+            ExprKind::If {
+                cond,
+                then,
+                otherwise,
+            } => of(cond).max(of(then)).max(of(otherwise)),
+        }
+    }
+
     fn degree(&self, expr: &Expr, jets: &[(usize, u32)], depth: usize) -> Degree {
         // Lets refer only to earlier lets; the bound is a guard, and past
         // it the answer is the conservative one.
@@ -68,9 +104,27 @@ impl Checker<'_> {
                     match body {
                         _ if !holds_coordinates => Degree::Free,
                         Some(body) if *primes == 0 => of(body),
-                        // The derivative of a let: its body's degree in
-                        // lower derivatives is not read here.
-                        _ => Degree::Other,
+                        // The derivative of a let, `D^p b`: affine in a
+                        // candidate's derivative of order k where b holds
+                        // that coordinate to order k − p at most (a total
+                        // derivative is affine in its top order, `∂b/∂q^(k−p)
+                        // q^(k)`), free of it below. A rolling coin's
+                        // `G' + cross(w, P - G) = 0` was read as not linear
+                        // and solved through its derivative, asking for
+                        // initial values of its dependents.
+                        Some(body) => jets
+                            .iter()
+                            .map(
+                                |&(coord, k)| match self.highest_order(body, coord, depth + 1) {
+                                    None => Degree::Free,
+                                    Some(m) if m + primes < k => Degree::Free,
+                                    Some(m) if m + primes == k => Degree::Affine,
+                                    Some(_) => Degree::Other,
+                                },
+                            )
+                            .max()
+                            .unwrap_or(Degree::Free),
+                        None => Degree::Other,
                     }
                 }
                 _ => Degree::Free,

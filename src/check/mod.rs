@@ -14,7 +14,6 @@ mod expressions;
 mod impacts;
 mod impacts_at_start;
 mod initial;
-mod let_derivative;
 mod linearity;
 pub mod model;
 mod points;
