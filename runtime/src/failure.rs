@@ -182,7 +182,10 @@ impl fmt::Display for Failure {
                 f,
                 "at t = {t:e}: the mass matrix of the highest derivatives is singular \
                  (condition number {condition:.3e}): the equations of motion do not \
-                 determine the accelerations here"
+                 determine the accelerations here: the coordinates may be singular here \
+                 (Euler angles with two rotation axes aligned, a polar angle at its pole) \
+                 or an inertia vanishes; start away from there, or choose coordinates \
+                 regular along the motion"
             ),
             FailureKind::MassVanishes { mass, value } => write!(
                 f,

@@ -434,7 +434,13 @@ impl<'m> Integration<'m> {
     /// of its span), stepping only as far as needed: the state at `t` is
     /// read from the continuous extension of the step that covers it.
     pub fn advance_to(&mut self, t: f64) -> Result<Advance, Failure> {
-        if t == self.t && !matches!(self.done, Some(Err(_))) {
+        // A failure stands before any question of where `t` lies: a run that
+        // could not start (a singular mass matrix at t0) reports why, not
+        // that t0 is "outside" its span.
+        if let Some(Err(failure)) = &self.done {
+            return Err(failure.clone());
+        }
+        if t == self.t {
             return Ok(Advance::Reached(t));
         }
         if !(t > self.t && t <= self.end) {
