@@ -120,7 +120,9 @@ pub enum FailureKind {
     ImpactHoldsAtStart { condition: String, values: String },
     /// The anchor makes `x_1 = f_1 + Σ f_A x_A` the difference of huge
     /// numbers: `digits` more digits would be lost than the tolerance allows.
-    AnchorCancels { digits: f64 },
+    /// From the zero anchor (the default) the coefficients are as small as
+    /// they can be, and the cause is a tolerance below f64's rounding.
+    AnchorCancels { digits: f64, at_zero_anchor: bool },
     /// The field method proper was asked of a model that is not affine.
     NotAffine,
     /// An `Integration` was asked to advance to a
@@ -391,7 +393,17 @@ impl fmt::Display for Failure {
                  no impact fires (one fires only where the motion enters it); give initial \
                  values on its other side"
             ),
-            FailureKind::AnchorCancels { digits } => write!(
+            FailureKind::AnchorCancels {
+                at_zero_anchor: true,
+                ..
+            } => write!(
+                f,
+                "at t = {t:e}: the field's recovery `x1 = f1 + Σ fA·xA` rounds past the \
+                 tolerance even from the zero anchor: the tolerance is below what f64 \
+                 keeps there (the field reaches about rtol 1e-14); loosen --rtol, or use \
+                 --method direct"
+            ),
+            FailureKind::AnchorCancels { digits, .. } => write!(
                 f,
                 "at t = {t:e}: this anchor makes the field recover `x1 = f1 + Σ fA·xA` as \
                  the difference of huge numbers, losing {digits:.1} more digits than the \

@@ -19,6 +19,7 @@ mod field;
 mod fmu;
 mod generated;
 mod holonomic;
+mod honest_summaries;
 mod impacts;
 mod inputs;
 mod ir;

@@ -134,7 +134,7 @@ pub enum Decline {
     Conditions,
     /// `x_1 = f_1 + Σ f_A x_A` would cancel (`digits` lost beyond the
     /// tolerance): huge coefficients, from the anchor.
-    Cancellation { digits: f64 },
+    Cancellation { digits: f64, at_zero_anchor: bool },
 }
 
 impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
@@ -180,6 +180,7 @@ impl<F: FieldSystem + ?Sized> ErrorMeasure for StateMeasure<'_, F> {
             self.declined = Some(if cancelled > 0.1 {
                 Decline::Cancellation {
                     digits: (cancelled / 0.1).log10(),
+                    at_zero_anchor: self.options.anchor == Anchor::Zero,
                 }
             } else {
                 Decline::Conditions
@@ -404,6 +405,7 @@ impl Window {
                 t,
                 FailureKind::AnchorCancels {
                     digits: (lost / 0.1).log10().max(0.0),
+                    at_zero_anchor: options.anchor == Anchor::Zero,
                 },
             ));
         }
@@ -517,6 +519,7 @@ impl Window {
                 t,
                 FailureKind::AnchorCancels {
                     digits: (lost / 0.1).log10().max(0.0),
+                    at_zero_anchor: options.anchor == Anchor::Zero,
                 },
             ));
         }
@@ -603,9 +606,16 @@ impl Window {
     pub fn degraded(&self) -> Failure {
         let t = self.time();
         match self.declined {
-            Some(Decline::Cancellation { digits }) => {
-                Failure::new(t, FailureKind::AnchorCancels { digits })
-            }
+            Some(Decline::Cancellation {
+                digits,
+                at_zero_anchor,
+            }) => Failure::new(
+                t,
+                FailureKind::AnchorCancels {
+                    digits,
+                    at_zero_anchor,
+                },
+            ),
             _ => Failure::new(
                 t,
                 FailureKind::SingularConditionMatrix {
