@@ -15,7 +15,12 @@ impacts located by SciPy's events).
 - ball_against_step: y bounces as a 1-D ball; x is linear, reversed (times e)
   where it reaches the riser at x = s.
 - ball_in_circular_bowl: free fall between impacts, each impact where
-  x^2 + y^2 = R^2 (SciPy's events, then Newton on the parabola, exact).
+  x^2 + y^2 = R^2 on the exact parabola (a scan, then bisection).
+- ball_in_bowl_with_drag: the same with quadratic drag, each impact by
+  SciPy's events (steps of at most 1 ms, so that no late short flight is
+  stepped over).
+- ball_in_hoop_elastic_long: the same without drag and with e = 1 for 20 s,
+  chaotic: exact flights, each impact by mpmath's root at 40 digits.
 - kepler_hundred_periods: Kepler's equation E - ecc sin E = n t by Newton.
 - elastic_pendulum_chaotic: r'' = r th'^2 - k/m (r - l0) + g cos(th),
   th'' = -(2 r' th' + g sin(th))/r; the run at rtol 1e-13 and one at 3e-14
@@ -306,6 +311,47 @@ def ball_in_bowl_drag():
     return ["x", "y"], rows
 
 
+def ball_in_hoop_elastic():
+    """Exact flights and impacts at 40 digits (mpmath's root on each parabola):
+    the motion is chaotic, an error at 1e-14 grows to 1e-6 in 20 s, past what
+    an f64 run can follow."""
+    mp.mp.dps = 40
+    g, R, e, T = mp.mpf("9.81"), mp.mpf(1), mp.mpf(1), mp.mpf(20)
+
+    def flight(t0, s0, tt):
+        x, y, vx, vy = s0
+        d = tt - t0
+        return [x + vx * d, y + vy * d - g * d * d / 2, vx, vy - g * d]
+
+    def wall(t0, s0):
+        f = lambda tt: (lambda p: p[0] ** 2 + p[1] ** 2 - R * R)(flight(t0, s0, tt))
+        dt, a = mp.mpf("1e-4"), t0 + mp.mpf("1e-30")
+        while f(a + dt) < 0:
+            a += dt
+        return mp.findroot(f, (a, a + dt), solver="anderson")
+
+    start = (mp.mpf(0), [mp.mpf("0.3"), mp.mpf(0), mp.mpf("1.5"), mp.mpf(0)])
+    bounces, (t0, s0) = [], start
+    while True:
+        th = wall(t0, s0)
+        if th > T:
+            break
+        x, y, vx, vy = flight(t0, s0, th)
+        vr = (x * vx + y * vy) / R
+        t0, s0 = th, [x, y, vx - (1 + e) * vr * x / R, vy - (1 + e) * vr * y / R]
+        bounces.append((t0, s0))
+    print(f"ball_in_hoop_elastic_long: {len(bounces)} impacts")
+    rows = []
+    for i in range(41):
+        tt = T * i / 40
+        at = start
+        for b in bounces:
+            if b[0] <= tt:
+                at = b
+        rows.append([float(tt), *[float(v) for v in flight(at[0], at[1], tt)]])
+    return ["x", "y"], rows
+
+
 MODELS = {
     "rocket_three_stage_gravity_turn": rocket_three_stage,
     "rocket_fuel_coordinate": rocket_fuel,
@@ -317,6 +363,7 @@ MODELS = {
     "rocket_fuel_runs_out": rocket_fuel_runs_out,
     "chain_off_heap_from_rest": chain_off_heap,
     "ball_in_bowl_with_drag": ball_in_bowl_drag,
+    "ball_in_hoop_elastic_long": ball_in_hoop_elastic,
 }
 
 
