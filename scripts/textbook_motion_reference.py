@@ -10,6 +10,10 @@ impacts located by SciPy's events).
   v/|v| - (0, g); after the third burnout, free flight.
 - rocket_fuel_coordinate: z' = w ln(M(0)/M(t)) - g t with
   M = Md + m0 exp(-k t), z its integral (mpmath's quadrature at 30 digits).
+- rocket_stage_dropped_at_altitude: each burn by SciPy, the drop where
+  z = H by SciPy's event.
+- rocket_sled_on_ramp: along the ramp s' = w ln(M0/M) - g sin(a) t and its
+  integral in closed form.
 - ball_on_incline: the normal coordinate n = sin(a) x + cos(a) y bounces as a
   1-D ball under g cos(a); the tangential one falls at g sin(a), untouched.
 - ball_against_step: y bounces as a 1-D ball; x is linear, reversed (times e)
@@ -21,6 +25,8 @@ impacts located by SciPy's events).
   stepped over).
 - ball_in_hoop_elastic_long: the same without drag and with e = 1 for 20 s,
   chaotic: exact flights, each impact by mpmath's root at 40 digits.
+- ball_thrown_up_quadratic_drag: closed forms rising (tan) and falling
+  (tanh), impacts where the fall reaches the floor, at 30 digits.
 - kepler_hundred_periods: Kepler's equation E - ecc sin E = n t by Newton.
 - elastic_pendulum_chaotic: r'' = r th'^2 - k/m (r - l0) + g cos(th),
   th'' = -(2 r' th' + g sin(th))/r; the run at rtol 1e-13 and one at 3e-14
@@ -352,6 +358,86 @@ def ball_in_hoop_elastic():
     return ["x", "y"], rows
 
 
+def ball_thrown_up_drag():
+    """Closed forms at 30 digits: rising from (y0, v0 > 0),
+    y = y0 + ln(cos(a - g s/vt)/cos(a))/k with a = atan(v0/vt), to the apex
+    at s = a vt/g; falling from the apex height ya, y = ya - ln(cosh(g s/vt))/k,
+    to the floor at s = vt acosh(exp(k ya))/g; there v -> -e v."""
+    mp.mp.dps = 30
+    g, k, e = mp.mpf("9.81"), mp.mpf("0.1"), mp.mpf("0.8")
+    vt = mp.sqrt(g / k)
+    phases, t0, y0, v0 = [], mp.mpf(0), mp.mpf("0.5"), mp.mpf(10)
+    while t0 < 5:
+        a = mp.atan(v0 / vt)
+        up = a * vt / g
+        ya = y0 - mp.log(mp.cos(a)) / k
+        down = vt * mp.acosh(mp.exp(k * ya)) / g
+        phases.append((t0, y0, a, up, ya, down))
+        t0 = t0 + up + down
+        y0, v0 = mp.mpf(0), e * vt * mp.tanh(g * down / vt)
+    rows = []
+    for i in range(41):
+        tt = mp.mpf(5) * i / 40
+        t0, y0, a, up, ya, down = [p for p in phases if p[0] <= tt][-1]
+        s = tt - t0
+        if s <= up:
+            y = y0 + mp.log(mp.cos(a - g * s / vt) / mp.cos(a)) / k
+            v = vt * mp.tan(a - g * s / vt)
+        else:
+            u = s - up
+            y, v = ya - mp.log(mp.cosh(g * u / vt)) / k, -vt * mp.tanh(g * u / vt)
+        rows.append([float(tt), float(y), float(v)])
+    print(f"ball_thrown_up_quadratic_drag: {len(phases) - 1} impacts before t = 5")
+    return ["y"], rows
+
+
+def rocket_sled_on_ramp():
+    """Along the ramp, s' = w ln(M0/M) - g sin(a) t, s its integral: with
+    u = M/M0, integral of ln(1/u) dt is (M0/mu)(u ln u - u + 1)."""
+    mp.mp.dps = 30
+    M0, mu, w, g, a = mp.mpf(500), mp.mpf(4), mp.mpf(1500), mp.mpf("9.81"), mp.mpf("0.5")
+    rows = []
+    for i in range(41):
+        tt = mp.mpf(60) * i / 40
+        u = (M0 - mu * tt) / M0
+        v = -w * mp.log(u) - g * mp.sin(a) * tt
+        s = w * M0 / mu * (u * mp.log(u) - u + 1) - g * mp.sin(a) * tt**2 / 2
+        c, n = mp.cos(a), mp.sin(a)
+        rows.append([float(tt), float(s * c), float(s * n), float(v * c), float(v * n)])
+    return ["x", "y"], rows
+
+
+def rocket_stage_at_altitude():
+    """Burn 1 below H, z'' = mu1 w1/(M0 - mu1 t) - g; the drop where z = H
+    (SciPy's event); then z'' = mu2 w2/(M2 - mu2 t) - g."""
+    M0, mu1, w1, M2, mu2, w2, H = 1000, 10, 2000, 250, 2, 2500, 3000
+
+    def below(tt, s):
+        return [s[1], mu1 * w1 / (M0 - mu1 * tt) - G]
+
+    def above(tt, s, mid=None):
+        return [s[1], mu2 * w2 / (M2 - mu2 * tt) - G]
+
+    def height(tt, s):
+        return s[0] - H
+
+    height.terminal, height.direction = True, 1
+    sol = solve_ivp(below, (0, 60), [0, 0], method="DOP853", rtol=RTOL, atol=RTOL * 1e-3,
+                    events=height)
+    tH, sH = sol.t_events[0][0], sol.y_events[0][0]
+    print(f"rocket_stage_dropped_at_altitude: the drop at t = {tH!r}")
+    rows = []
+    for i in range(41):
+        tt = 60 * i / 40
+        if tt <= tH:
+            y = sol.y[:, 0] if tt == 0 else solve_ivp(below, (0, tt), [0, 0], method="DOP853",
+                                                     rtol=RTOL, atol=RTOL * 1e-3).y[:, -1]
+        else:
+            y = step(above, tH, tt, sH)
+        rows.append([tt, *y])
+    return ["z"], rows
+
+
 MODELS = {
     "rocket_three_stage_gravity_turn": rocket_three_stage,
     "rocket_fuel_coordinate": rocket_fuel,
@@ -364,6 +450,9 @@ MODELS = {
     "chain_off_heap_from_rest": chain_off_heap,
     "ball_in_bowl_with_drag": ball_in_bowl_drag,
     "ball_in_hoop_elastic_long": ball_in_hoop_elastic,
+    "ball_thrown_up_quadratic_drag": ball_thrown_up_drag,
+    "rocket_sled_on_ramp": rocket_sled_on_ramp,
+    "rocket_stage_dropped_at_altitude": rocket_stage_at_altitude,
 }
 
 

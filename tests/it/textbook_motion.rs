@@ -1,6 +1,7 @@
 //! Rockets, impacts in the plane and long runs written as a new user first
 //! writes them (`tests/data/textbook_motion/`, issue 29): a three-stage
-//! rocket in a gravity turn, rockets whose fuel is a coordinate (a mass
+//! rocket in a gravity turn, one dropping a stage at an altitude, a
+//! rocket sled on a ramp, rockets whose fuel is a coordinate (a mass
 //! law of the state), Cayley's chain off a heap from rest, a ball bouncing
 //! on an incline, against a step, inside a circular hoop (with and
 //! without drag; elastic, chaotic, for 20 s), a Kepler orbit for 100
@@ -89,6 +90,20 @@ fn a_three_stage_rocket_in_a_gravity_turn() {
     within("rocket_three_stage_gravity_turn");
 }
 
+/// The first stage dropped where the rocket reaches an altitude: a mass
+/// law switched on the state.
+#[test]
+fn a_rocket_dropping_its_first_stage_at_an_altitude() {
+    within("rocket_stage_dropped_at_altitude");
+}
+
+/// A rocket sled on a ramp, the ramp a velocity constraint in Cartesian
+/// coordinates: the reactive force through the dependent coordinate.
+#[test]
+fn a_rocket_sled_on_a_ramp() {
+    within("rocket_sled_on_ramp");
+}
+
 /// The fuel mass a coordinate, `m' = -k m`, the rocket's mass `Md + m`.
 #[test]
 fn a_rocket_whose_fuel_is_a_coordinate() {
@@ -123,6 +138,13 @@ fn a_ball_bouncing_on_an_incline_against_a_step_and_in_a_hoop() {
     within("ball_on_incline");
     within("ball_against_step");
     within("ball_in_circular_bowl");
+}
+
+/// Thrown up with drag `k y' |y'|` (a kink at every apex) and five
+/// bounces, against the closed forms.
+#[test]
+fn a_ball_thrown_up_with_quadratic_drag_bounces() {
+    within("ball_thrown_up_quadratic_drag");
 }
 
 /// With quadratic drag, 38 impacts on the hoop crowding toward t = 4:
