@@ -8,6 +8,8 @@ impacts located by SciPy's events).
 
 - rocket_three_stage_gravity_turn: in burn i, (x, y)'' = mu_i w_i / M(t)
   v/|v| - (0, g); after the third burnout, free flight.
+- rocket_gravity_turn_from_pad: the thrust up, tilted, then along the
+  velocity (phases on t), then a coast.
 - rocket_fuel_coordinate: z' = w ln(M(0)/M(t)) - g t with
   M = Md + m0 exp(-k t), z its integral (mpmath's quadrature at 30 digits).
 - rocket_stage_dropped_at_altitude: each burn by SciPy, the drop where
@@ -438,6 +440,27 @@ def rocket_stage_at_altitude():
     return ["z"], rows
 
 
+def rocket_from_pad():
+    """Phases on t: thrust up until t1, tilted by kick until t2, along the
+    velocity until tb, none after; each a fresh DOP853 solve."""
+    M0, mu, w, t1, t2, kick, tb = 2000, 12, 2400, 8, 12, 0.05, 120
+
+    def rate(tt, s, mid):
+        x, y, vx, vy = s
+        if mid < t1:
+            ex, ey = 0.0, 1.0
+        elif mid < t2:
+            ex, ey = math.sin(kick), math.cos(kick)
+        else:
+            v = math.hypot(vx, vy)
+            ex, ey = vx / v, vy / v
+        thrust = mu * w / (M0 - mu * tt) if mid < tb else 0.0
+        return [vx, vy, thrust * ex, thrust * ey - G]
+
+    ts = [200 * i / 40 for i in range(41)]
+    return ["x", "y"], sampled(rate, ts, [0, 0, 0, 0], breaks=(t1, t2, tb))
+
+
 MODELS = {
     "rocket_three_stage_gravity_turn": rocket_three_stage,
     "rocket_fuel_coordinate": rocket_fuel,
@@ -453,6 +476,7 @@ MODELS = {
     "ball_thrown_up_quadratic_drag": ball_thrown_up_drag,
     "rocket_sled_on_ramp": rocket_sled_on_ramp,
     "rocket_stage_dropped_at_altitude": rocket_stage_at_altitude,
+    "rocket_gravity_turn_from_pad": rocket_from_pad,
 }
 
 

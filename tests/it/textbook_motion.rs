@@ -1,6 +1,6 @@
 //! Rockets, impacts in the plane and long runs written as a new user first
 //! writes them (`tests/data/textbook_motion/`, issue 29): a three-stage
-//! rocket in a gravity turn, one dropping a stage at an altitude, a
+//! rocket in a gravity turn, a gravity turn from the pad, one dropping a stage at an altitude, a
 //! rocket sled on a ramp, rockets whose fuel is a coordinate (a mass
 //! law of the state), Cayley's chain off a heap from rest, a ball bouncing
 //! on an incline, against a step, inside a circular hoop (with and
@@ -88,6 +88,14 @@ fn within_or_warned(name: &str) -> Vec<(String, Run)> {
 #[test]
 fn a_three_stage_rocket_in_a_gravity_turn() {
     within("rocket_three_stage_gravity_turn");
+}
+
+/// A gravity turn from rest on the pad: the thrust straight up, tilted by
+/// a kick, then along the velocity (phases on `t`; from rest the velocity
+/// gives no direction), burnout and a coast to 200 s.
+#[test]
+fn a_gravity_turn_from_the_pad() {
+    within("rocket_gravity_turn_from_pad");
 }
 
 /// The first stage dropped where the rocket reaches an altitude: a mass
