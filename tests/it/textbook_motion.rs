@@ -172,12 +172,22 @@ fn a_kepler_orbit_over_a_hundred_periods_warns_of_its_drift() {
     let energy = -0.5;
     let momentum = 0.75_f64.sqrt();
     for (label, run) in within_or_warned("kepler_hundred_periods") {
-        assert!(run.in_rtol > 10.0, "{label}: {:.3e}: no drift to test", run.in_rtol);
+        assert!(
+            run.in_rtol > 10.0,
+            "{label}: {:.3e}: no drift to test",
+            run.in_rtol
+        );
         assert!(run.summary.contains("warning"), "{label}:\n{}", run.summary);
         // t, r, th, r', th', E, h
         for row in &run.rows {
             let (e, h) = ((row[5] - energy).abs(), (row[6] - momentum).abs());
-            assert!(e < 1e-3 && h < 1e-3, "{label} at t = {}: E {} h {}", row[0], row[5], row[6]);
+            assert!(
+                e < 1e-3 && h < 1e-3,
+                "{label} at t = {}: E {} h {}",
+                row[0],
+                row[5],
+                row[6]
+            );
         }
     }
 }
@@ -188,7 +198,11 @@ fn a_kepler_orbit_over_a_hundred_periods_warns_of_its_drift() {
 #[test]
 fn a_chaotic_spring_pendulum_warns() {
     for (label, run) in within_or_warned("elastic_pendulum_chaotic") {
-        assert!(run.in_rtol > 100.0, "{label}: {:.3e}: not chaotic enough", run.in_rtol);
+        assert!(
+            run.in_rtol > 100.0,
+            "{label}: {:.3e}: not chaotic enough",
+            run.in_rtol
+        );
         assert!(run.summary.contains("warning"), "{label}:\n{}", run.summary);
     }
 }
@@ -200,7 +214,11 @@ fn a_chaotic_spring_pendulum_warns() {
 fn an_elastic_ball_in_a_hoop_for_twenty_seconds_warns() {
     for (label, run) in within_or_warned("ball_in_hoop_elastic_long") {
         if label.ends_with("rtol 1e-9") {
-            assert!(run.in_rtol > 100.0, "{label}: {:.3e}: not chaotic enough", run.in_rtol);
+            assert!(
+                run.in_rtol > 100.0,
+                "{label}: {:.3e}: not chaotic enough",
+                run.in_rtol
+            );
             assert!(run.summary.contains("warning"), "{label}:\n{}", run.summary);
         }
     }
