@@ -16,6 +16,7 @@ impacts located by SciPy's events).
   z = H by SciPy's event.
 - rocket_sled_on_ramp: along the ramp s' = w ln(M0/M) - g sin(a) t and its
   integral in closed form.
+- folded_chain_free_end: x'' = g + x'^2/(L - x), by SciPy.
 - ball_on_incline: the normal coordinate n = sin(a) x + cos(a) y bounces as a
   1-D ball under g cos(a); the tangential one falls at g sin(a), untouched.
 - ball_against_step: y bounces as a 1-D ball; x is linear, reversed (times e)
@@ -461,6 +462,17 @@ def rocket_from_pad():
     return ["x", "y"], sampled(rate, ts, [0, 0, 0, 0], breaks=(t1, t2, tb))
 
 
+def folded_chain():
+    Lc = 2.0
+
+    def rate(tt, s, mid):
+        x, xd = s
+        return [xd, G + xd * xd / (Lc - x)]
+
+    ts = [0.45 * i / 40 for i in range(41)]
+    return ["x"], sampled(rate, ts, [0.0, 0.0])
+
+
 MODELS = {
     "rocket_three_stage_gravity_turn": rocket_three_stage,
     "rocket_fuel_coordinate": rocket_fuel,
@@ -477,6 +489,7 @@ MODELS = {
     "rocket_sled_on_ramp": rocket_sled_on_ramp,
     "rocket_stage_dropped_at_altitude": rocket_stage_at_altitude,
     "rocket_gravity_turn_from_pad": rocket_from_pad,
+    "folded_chain_free_end": folded_chain,
 }
 
 

@@ -2,7 +2,8 @@
 //! writes them (`tests/data/textbook_motion/`, issue 29): a three-stage
 //! rocket in a gravity turn, a gravity turn from the pad, one dropping a stage at an altitude, a
 //! rocket sled on a ramp, rockets whose fuel is a coordinate (a mass
-//! law of the state), Cayley's chain off a heap from rest, a ball bouncing
+//! law of the state), Cayley's chain off a heap from rest, a folded chain
+//! falling by its free end, a ball bouncing
 //! on an incline, against a step, inside a circular hoop (with and
 //! without drag; elastic, chaotic, for 20 s), a Kepler orbit for 100
 //! periods and a chaotic spring
@@ -137,6 +138,13 @@ fn a_rocket_whose_fuel_runs_out() {
 #[test]
 fn cayleys_chain_off_a_heap_from_rest() {
     within("chain_off_heap_from_rest");
+}
+
+/// A folded chain whose free end falls: the moving part shrinks, a mass
+/// law of the state, `x'' = g + x'^2/(L - x)`.
+#[test]
+fn a_folded_chain_falling_by_its_free_end() {
+    within("folded_chain_free_end");
 }
 
 /// Impacts whose normal is not along an axis (an incline, a circular
