@@ -1,19 +1,18 @@
-//! Rockets, impacts in the plane and long runs written as a new user first
-//! writes them (`tests/data/textbook_motion/`, issue 29): a three-stage
-//! rocket in a gravity turn, a gravity turn from the pad, one dropping a stage at an altitude, a
-//! rocket sled on a ramp, rockets whose fuel is a coordinate (a mass
-//! law of the state), Cayley's chain off a heap from rest, a folded chain
-//! falling by its free end, a ball bouncing
-//! on an incline, against a step, inside a circular hoop (with and
-//! without drag; elastic, chaotic, for 20 s), a Kepler orbit for 100
-//! periods and a chaotic spring
-//! pendulum. References independent of lagc: closed forms, or equations
-//! written out by hand and integrated by SciPy
-//! (`scripts/textbook_motion_reference.py`, the CSVs beside the models).
-//! Both methods at rtol 1e-6 and 1e-9 (atol = rtol/100), every state
-//! column at every sample relative to the column's largest magnitude (at
-//! least 1): within 10·rtol, or — where the motion amplifies its errors —
-//! the summary warns.
+//! Rockets, chains, impacts in the plane and long runs written as a new
+//! user first writes them (`tests/data/textbook_motion/`, issue 29): a
+//! three-stage rocket in a gravity turn, a gravity turn from the pad, a
+//! stage dropped at an altitude, a rocket sled on a ramp, rockets whose
+//! fuel is a coordinate (a mass law of the state), Cayley's chain off a
+//! heap from rest, a folded chain falling by its free end; a ball thrown up
+//! with quadratic drag, bouncing on an incline, against a step, inside a
+//! circular hoop (with drag; elastic and chaotic for 20 s); a Kepler orbit
+//! for 100 periods and a chaotic spring pendulum. References independent
+//! of lagc: closed forms, or equations written out by hand and integrated
+//! by SciPy (`scripts/textbook_motion_reference.py`, the CSVs beside the
+//! models). Both methods at rtol 1e-6 and 1e-9 (atol = rtol/100), every
+//! state column at every sample relative to the column's largest
+//! magnitude (at least 1): within 10·rtol, or — where the motion amplifies
+//! its errors — the summary warns.
 
 use crate::reference_runs::{check_both_methods, parse, read, scales};
 use std::path::PathBuf;
