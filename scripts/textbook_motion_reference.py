@@ -10,6 +10,8 @@ impacts located by SciPy's events).
   v/|v| - (0, g); after the third burnout, free flight.
 - rocket_gravity_turn_from_pad: the thrust up, tilted, then along the
   velocity (phases on t), then a coast.
+- rocket_raising_orbit: the same motion in Cartesian coordinates, burn then
+  coast, the polar columns computed from it (th unwrapped).
 - rocket_fuel_coordinate: z' = w ln(M(0)/M(t)) - g t with
   M = Md + m0 exp(-k t), z its integral (mpmath's quadrature at 30 digits).
 - rocket_stage_dropped_at_altitude: each burn by SciPy, the drop where
@@ -473,6 +475,31 @@ def folded_chain():
     return ["x"], sampled(rate, ts, [0.0, 0.0])
 
 
+def rocket_raising_orbit():
+    """In Cartesian coordinates: r'' = -k r/|r|^3 + mu w/M v/|v| while t < tb;
+    then the polar columns r, th (unwrapped), r', th' from the state."""
+    k, M0, mu, w, tb = 1.0, 1.0, 0.01, 2.0, 20.0
+
+    def rate(tt, s, mid):
+        x, y, vx, vy = s
+        d3 = math.hypot(x, y) ** 3
+        v = math.hypot(vx, vy)
+        thrust = mu * w / (M0 - mu * tt) if mid < tb else 0.0
+        return [vx, vy, -k * x / d3 + thrust * vx / v, -k * y / d3 + thrust * vy / v]
+
+    ts = [40 * i / 40 for i in range(41)]
+    rows, turns, last = [], 0.0, 0.0
+    for tt, x, y, vx, vy in sampled(rate, ts, [1, 0, 0, 1], breaks=(tb,)):
+        r = math.hypot(x, y)
+        th = math.atan2(y, x)
+        while th + turns < last - math.pi:
+            turns += 2 * math.pi
+        th += turns
+        last = th
+        rows.append([tt, r, th, (x * vx + y * vy) / r, (x * vy - y * vx) / (r * r)])
+    return ["r", "th"], rows
+
+
 MODELS = {
     "rocket_three_stage_gravity_turn": rocket_three_stage,
     "rocket_fuel_coordinate": rocket_fuel,
@@ -490,6 +517,7 @@ MODELS = {
     "rocket_stage_dropped_at_altitude": rocket_stage_at_altitude,
     "rocket_gravity_turn_from_pad": rocket_from_pad,
     "folded_chain_free_end": folded_chain,
+    "rocket_raising_orbit": rocket_raising_orbit,
 }
 
 

@@ -1,7 +1,8 @@
 //! Rockets, chains, impacts in the plane and long runs written as a new
 //! user first writes them (`tests/data/textbook_motion/`, issue 29): a
 //! three-stage rocket in a gravity turn, a gravity turn from the pad, a
-//! stage dropped at an altitude, a rocket sled on a ramp, rockets whose
+//! stage dropped at an altitude, a rocket sled on a ramp, a spacecraft
+//! raising its orbit, rockets whose
 //! fuel is a coordinate (a mass law of the state), Cayley's chain off a
 //! heap from rest, a folded chain falling by its free end; a ball thrown up
 //! with quadratic drag, bouncing on an incline, against a step, inside a
@@ -96,6 +97,13 @@ fn a_three_stage_rocket_in_a_gravity_turn() {
 #[test]
 fn a_gravity_turn_from_the_pad() {
     within("rocket_gravity_turn_from_pad");
+}
+
+/// A spacecraft raising its orbit, thrust along its velocity written as a
+/// vector let's derivative in polar coordinates (`-w * p' / norm(p')`).
+#[test]
+fn a_spacecraft_raising_its_orbit() {
+    within("rocket_raising_orbit");
 }
 
 /// The first stage dropped where the rocket reaches an altitude: a mass
