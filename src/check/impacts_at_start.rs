@@ -23,6 +23,10 @@ pub(super) struct Start {
 }
 
 impl Start {
+    pub fn new(t0: f64, values: Vec<((usize, u32), f64)>) -> Self {
+        Start { t0, values }
+    }
+
     pub fn value(&self, coord: usize, order: u32) -> Option<f64> {
         self.values
             .iter()

@@ -55,6 +55,7 @@ pub fn check(ast: &ast::Model) -> Result<model::Model, Vec<Diagnostic>> {
     let impacts = checker.impacts(constraint_order, &constraints);
     if let Some(time) = &time {
         checker.impacts_at_start(&impacts, &initial, time);
+        checker.points_at_start(&points, &initial, time);
     }
     let mut params = params;
     let tunable = checker.tunable_params(params.len());

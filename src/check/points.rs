@@ -2,7 +2,8 @@
 //! mass, a position r(t, q) and the velocity of its separated particles.
 
 use super::expressions::Allowed;
-use super::model::{EjectaVelocity, Point};
+use super::impacts_at_start::Start;
+use super::model::{EjectaVelocity, Initial, Name, Point, TimeSpan};
 use super::types::{type_mismatch, Ty, Uses};
 use super::Checker;
 use crate::diagnostic::{codes, Diagnostic};
@@ -123,6 +124,112 @@ impl Checker<'_> {
             position,
             velocity,
         })
+    }
+
+    /// Reports every point whose velocity has no value at the start the
+    /// file states, where every value it reads is a constant there: a
+    /// thrust along the velocity, `-w * (x', y') / speed`, of a rocket
+    /// launched from rest is 0/0, and the run stopped at t = 0 blaming "a
+    /// force, the Lagrangian or a mass law" (issue 29). A start set at run
+    /// time (`--init`) meets the run's own check.
+    pub(super) fn points_at_start(
+        &mut self,
+        points: &[Point],
+        initial: &[Initial],
+        time: &TimeSpan,
+    ) {
+        if points.is_empty() {
+            return;
+        }
+        let Some(t0) = self.evaluate(&time.start) else {
+            return;
+        };
+        let values = initial
+            .iter()
+            .filter_map(|i| Some(((i.coord, i.order), self.evaluate(&i.value)?)))
+            .filter(|(_, v)| v.is_finite())
+            .collect();
+        self.start = Some(Start::new(t0, values));
+        let undefined: Vec<(&Point, &str, Span, Vec<f64>)> = points
+            .iter()
+            .filter_map(|point| {
+                // A constant mass gives no reactive force: its velocity is
+                // never used (a run of it at 0/0 goes on).
+                if self.constant(&point.mass) {
+                    return None;
+                }
+                let (kind, parts) = match &point.velocity {
+                    EjectaVelocity::Absolute(parts) => ("absolute", parts),
+                    EjectaVelocity::Relative(parts) => ("relative", parts),
+                };
+                let values: Vec<f64> = parts
+                    .iter()
+                    .map(|p| self.evaluate(p))
+                    .collect::<Option<_>>()?;
+                let span = parts.first()?.span.to(parts.last()?.span);
+                (!values.iter().all(|v| v.is_finite())).then_some((point, kind, span, values))
+            })
+            .collect();
+        self.start = None;
+        for (point, kind, span, values) in undefined {
+            let shown: Vec<String> = values.iter().map(|v| format!("{v}")).collect();
+            let diagnostic = Diagnostic::error(
+                codes::NON_FINITE_VALUE,
+                format!(
+                    "the {kind} velocity of point `{}` has no value at the start",
+                    point.name
+                ),
+            )
+            .with_primary(span, format!("this is ({}) at t = {t0}", shown.join(", ")))
+            .with_note("evaluated at the initial values and params the file states")
+            .with_help(
+                "a direction taken from the velocity (`(x', y') / speed`) has none at \
+                 rest: start with a speed along it, or give the direction until the \
+                 body moves (`if t < t1 then (0, 1) else (x', y') / speed`)",
+            );
+            self.report(diagnostic);
+        }
+    }
+
+    /// Whether `expr` reads only numbers and params, through lets and mass
+    /// laws: neither `t`, a coordinate nor an input.
+    fn constant(&self, expr: &Expr) -> bool {
+        let body = |index: usize, mass: bool| {
+            self.ast
+                .items
+                .iter()
+                .filter_map(|item| match &item.kind {
+                    ItemKind::Let { value, .. } if !mass => Some(value),
+                    ItemKind::Mass { law, .. } if mass => Some(law),
+                    _ => None,
+                })
+                .nth(index)
+        };
+        match &expr.kind {
+            ExprKind::Number(_) => true,
+            ExprKind::Var { name, primes: 0 } => match self.names.get(&name.name).map(|d| d.name) {
+                Some(Name::Param(_)) => true,
+                Some(Name::Let(index)) => body(index, false).is_some_and(|e| self.constant(e)),
+                Some(Name::Mass(index)) => body(index, true).is_some_and(|e| self.constant(e)),
+                None => name.name == "pi",
+                _ => false,
+            },
+            ExprKind::Var { .. } => false,
+            ExprKind::Neg(e) | ExprKind::Not(e) | ExprKind::Component { base: e, .. } => {
+                self.constant(e)
+            }
+            ExprKind::Binary { lhs, rhs, .. }
+            | ExprKind::Compare { lhs, rhs, .. }
+            | ExprKind::Logic { lhs, rhs, .. } => self.constant(lhs) && self.constant(rhs),
+            ExprKind::Call { args, .. } | ExprKind::Vector(args) => {
+                args.iter().all(|a| self.constant(a))
+            }
+            ExprKind::If {
+                cond,
+                then,
+                otherwise,
+            } => self.constant(cond) && self.constant(then) && self.constant(otherwise),
+        }
     }
 
     /// A point's vector, as its components: a vector literal's elements,

@@ -393,7 +393,7 @@ impl<'a> Checker<'a> {
                 format!("the target of {what} must be a coordinate or its derivative"),
             )
             .with_primary(target.span, "not a coordinate")
-            .with_help("write a coordinate with primes for a derivative, like `q1` or `q1'`");
+            .with_help(target_help(target, what));
             self.report(diagnostic);
             return None;
         };
@@ -411,6 +411,49 @@ impl<'a> Checker<'a> {
             return None;
         }
         Some((coord, *primes))
+    }
+}
+
+/// The help for a target that is no coordinate: a vector of them (a
+/// velocity reflected at a curved wall, `(x', y') = …`, as a new user
+/// first writes an impact) is given component by component.
+fn target_help(target: &Expr, what: &str) -> String {
+    let ExprKind::Vector(parts) = &target.kind else {
+        return "write a coordinate with primes for a derivative, like `q1` or `q1'`".to_string();
+    };
+    let names: Vec<String> = parts
+        .iter()
+        .filter_map(|p| match &p.kind {
+            ExprKind::Var { name, primes } => {
+                Some(format!("{}{}", name.name, "'".repeat(*primes as usize)))
+            }
+            _ => None,
+        })
+        .collect();
+    if names.len() != parts.len() {
+        return "write a coordinate with primes for a derivative, like `q1` or `q1'`".to_string();
+    }
+    let axes = ["x", "y", "z"];
+    let each: Vec<String> = names
+        .iter()
+        .zip(axes)
+        .map(|(n, axis)| format!("{n} = v.{axis}"))
+        .collect();
+    if what == "a reset" {
+        format!(
+            "a vector is reset component by component, each read from the state before \
+             the impact: with `let v = …;` the new velocity, write `then {}`",
+            each.join(", ")
+        )
+    } else {
+        format!(
+            "give each component on its own: {}",
+            names
+                .iter()
+                .map(|n| format!("`{n} = …`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
     }
 }
 

@@ -50,6 +50,7 @@ mod textbook_constraints;
 mod textbook_events;
 mod textbook_long;
 mod textbook_mass_impacts;
+mod textbook_motion;
 mod textbook_rolling;
 mod turning_points;
 
