@@ -372,6 +372,45 @@ def pendulum_pulled_through_hole():
     write("pendulum_pulled_through_hole", ["x", "y", "x'", "y'"], times, other)
 
 
+def ladder_sliding_down_wall():
+    m, l, g = 1, 2, sp.Rational(981, 100)
+    qs, qds = symbols("xa yb")
+    xa, yb = qs
+    T = m / 2 * (qds[0]**2 + qds[1]**2) / 4 + m * l**2 / 24 * (qds[0]**2 + qds[1]**2) / l**2
+    cons = [xa**2 + yb**2 - l**2]
+    y0 = lagc_start(cons, qs, qds, {"xa": 0.2, "yb": 1.99}, [yb], {"xa_d": 0})
+    f, residual = multiplier_route(T, m * g * yb / 2, cons, qs, qds)
+    times, cart = integrate(f, y0, (0, 2))
+    # Minimal: the angle th from the wall, th'' = 3 g/(2 l) sin(th).
+    th0 = np.arctan2(y0[0], y0[1])
+    _, mm = integrate(lambda tt, s: [s[1], 3 * 9.81 / 4 * np.sin(s[0])], [th0, 0.0], (0, 2))
+    Th, Thd = mm.T
+    other = np.column_stack([2 * np.sin(Th), 2 * np.cos(Th), 2 * np.cos(Th) * Thd, -2 * np.sin(Th) * Thd])
+    report("ladder_sliding_down_wall", None, times, cart, other, residual, qs)
+    write("ladder_sliding_down_wall", ["xa", "yb", "xa'", "yb'"], times, other)
+
+
+def block_on_sliding_wedge():
+    M, m, a, g = 3, 1, sp.Rational(1, 2), sp.Rational(981, 100)
+    qs, qds = symbols("X x y")
+    X, x, y = qs
+    T = M / 2 * qds[0]**2 + m / 2 * (qds[1]**2 + qds[2]**2)
+    cons = [y - (X - x) * sp.tan(a)]
+    y0 = lagc_start(cons, qs, qds, {"X": 0, "x": -1, "y": 0}, [y], {})
+    f, residual = multiplier_route(T, m * g * y, cons, qs, qds)
+    times, cart = integrate(f, y0, (0, 1))
+    # Closed form: constant accelerations.
+    s, c, tn = np.sin(0.5), np.cos(0.5), np.tan(0.5)
+    AX = -9.81 * s * c / (3 + s**2)
+    Ax = -AX * 3  # momentum: M X'' + m x'' = 0
+    Ay = (AX - Ax) * tn
+    acc = np.array([AX, Ax, Ay])
+    pos = y0[:3] + np.outer(times**2 / 2, acc)
+    exact = np.column_stack([pos, np.outer(times, acc)])
+    report("block_on_sliding_wedge", None, times, cart, exact, residual, qs)
+    write("block_on_sliding_wedge", ["X", "x", "y", "X'", "x'", "y'"], times, exact)
+
+
 def scan(lagc, rtols):
     """Each model by both methods at `rtols` (atol = rtol/100) against its CSV:
     the largest error over the state columns relative to max(|x|, 1), in rtol,
@@ -408,11 +447,12 @@ MODELS = [double_atwood, bead_rotating_parabola, bead_on_ellipse, four_bar_coupl
           lambda: bead_on_ellipse("bead_around_ellipse", given=(0, -1), xd0=9.0),
           lambda: pendulum_on_sliding_support("pendulum_on_sliding_support_level", bob=(1, 0)),
           lambda: hanging_chain_3("hanging_chain_3_level", given=(0.5, 0, 1, 0, 1.5, 0)),
-          pendulum_pulled_through_hole]
+          pendulum_pulled_through_hole, ladder_sliding_down_wall, block_on_sliding_wedge]
 NAMES = ["double_atwood", "bead_rotating_parabola", "bead_on_ellipse", "four_bar_coupler_mass",
          "pendulum_on_sliding_support", "cylinder_on_plank", "yoyo_moving_hand", "hanging_chain_3",
          "bead_rotating_parabola_fast", "bead_around_ellipse", "pendulum_on_sliding_support_level",
-         "hanging_chain_3_level", "pendulum_pulled_through_hole"]
+         "hanging_chain_3_level", "pendulum_pulled_through_hole", "ladder_sliding_down_wall",
+         "block_on_sliding_wedge"]
 
 if __name__ == "__main__":
     import sys

@@ -205,3 +205,15 @@ fn bead_around_an_elliptic_hoop_as_stated() {
 fn pendulum_on_a_sliding_support_released_level_as_stated() {
     check_as_stated("pendulum_on_sliding_support_level");
 }
+
+/// Through the floor line, where the constraint's pivot in `yb` vanishes.
+#[test]
+fn ladder_sliding_down_a_wall() {
+    check("ladder_sliding_down_wall", "ladder_sliding_down_wall");
+}
+
+/// X'' = -m g sin(a) cos(a)/(M + m sin(a)^2), every acceleration constant.
+#[test]
+fn block_on_a_sliding_wedge() {
+    check("block_on_sliding_wedge", "block_on_sliding_wedge");
+}
