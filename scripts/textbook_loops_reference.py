@@ -411,6 +411,29 @@ def block_on_sliding_wedge():
     write("block_on_sliding_wedge", ["X", "x", "y", "X'", "x'", "y'"], times, exact)
 
 
+def bead_rotating_hoop():
+    R, w, g = sp.Rational(1, 2), 6, sp.Rational(981, 100)
+    qs, qds = symbols("x y z")
+    x, y, z = qs
+    T = sum(v**2 for v in qds) / 2
+    cons = [x**2 + y**2 + z**2 - R**2, y * sp.cos(w * t) - x * sp.sin(w * t)]
+    y0 = lagc_start(cons, qs, qds, {"x": 0.1, "y": 0, "z": -0.49}, [z, y], {"x_d": 0})
+    f, residual = multiplier_route(T, g * z, cons, qs, qds)
+    times, cart = integrate(f, y0, (0, 10))
+    # Minimal: the angle th from the downward vertical, in the hoop's plane.
+    th, thd = sp.symbols("th th_d")
+    Tm = R**2 * (thd**2 + w**2 * sp.sin(th)**2) / 2
+    fm = minimal_route(Tm, -g * R * sp.cos(th), [th], [thd])
+    _, mm = integrate(fm, [np.arctan2(y0[0], -y0[2]), 0.0], (0, 10))
+    Th, Thd = mm.T
+    r, rd = 0.5 * np.sin(Th), 0.5 * np.cos(Th) * Thd
+    c, s_ = np.cos(6 * times), np.sin(6 * times)
+    other = np.column_stack([r * c, r * s_, -0.5 * np.cos(Th), rd * c - 6 * r * s_, rd * s_ + 6 * r * c,
+                             0.5 * np.sin(Th) * Thd])
+    report("bead_rotating_hoop", None, times, cart, other, residual, qs)
+    write("bead_rotating_hoop", ["x", "y", "z", "x'", "y'", "z'"], times, other)
+
+
 def scan(lagc, rtols):
     """Each model by both methods at `rtols` (atol = rtol/100) against its CSV:
     the largest error over the state columns relative to max(|x|, 1), in rtol,
@@ -447,12 +470,13 @@ MODELS = [double_atwood, bead_rotating_parabola, bead_on_ellipse, four_bar_coupl
           lambda: bead_on_ellipse("bead_around_ellipse", given=(0, -1), xd0=9.0),
           lambda: pendulum_on_sliding_support("pendulum_on_sliding_support_level", bob=(1, 0)),
           lambda: hanging_chain_3("hanging_chain_3_level", given=(0.5, 0, 1, 0, 1.5, 0)),
-          pendulum_pulled_through_hole, ladder_sliding_down_wall, block_on_sliding_wedge]
+          pendulum_pulled_through_hole, ladder_sliding_down_wall, block_on_sliding_wedge,
+          bead_rotating_hoop]
 NAMES = ["double_atwood", "bead_rotating_parabola", "bead_on_ellipse", "four_bar_coupler_mass",
          "pendulum_on_sliding_support", "cylinder_on_plank", "yoyo_moving_hand", "hanging_chain_3",
          "bead_rotating_parabola_fast", "bead_around_ellipse", "pendulum_on_sliding_support_level",
          "hanging_chain_3_level", "pendulum_pulled_through_hole", "ladder_sliding_down_wall",
-         "block_on_sliding_wedge"]
+         "block_on_sliding_wedge", "bead_rotating_hoop"]
 
 if __name__ == "__main__":
     import sys
