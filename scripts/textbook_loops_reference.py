@@ -20,7 +20,11 @@ Newton over them alone from the values the file gives, the dependent
 velocities from the constraints' derivative (the dependents are those
 lagc picks: a coordinate on the left side, else the last declared).
 
-Run: /work/scratch/refvenv/bin/python scripts/textbook_loops_reference.py"""
+Run: /work/scratch/refvenv/bin/python scripts/textbook_loops_reference.py
+Scan: ... scripts/textbook_loops_reference.py --scan target/release/lagc [RTOL ...]
+  (each model by both methods at rtol 1e-6, 1e-9, 1e-12, atol = rtol/100, at
+  the CSV's times: the largest state-column error relative to max(|x|, 1) in
+  rtol, whether the summary said "within" or warned, its largest residual)."""
 import os
 
 import numpy as np
