@@ -156,7 +156,7 @@ impl Checker<'_> {
                     .iter()
                     .any(|i| (i.coord, i.order) == (coord, c.order));
                 (implicit.candidates.iter().skip(1).any(|&q| q == coord) && missing_order)
-                    .then_some((first, c.order))
+                    .then_some((first, c.order, c.is_holonomic()))
             });
             // A non-linear constraint's candidate: which root of the
             // constraint the motion starts on is the user's to say.
@@ -196,6 +196,7 @@ impl Checker<'_> {
                     format!("{}{primes}", coordinate.name),
                     format!("{}{primes}", self.coords[c.coord].name),
                 );
+                let named = named_after_for(&coordinate.name, &primes, c.is_holonomic());
                 diagnostic = diagnostic
                     .with_secondary(
                         c.span,
@@ -207,19 +208,28 @@ impl Checker<'_> {
                     ))
                     .with_help(format!(
                         "give `{this} = …` instead, or make the constraint fix `{this}` \
-                         by naming it: `constraint … for {this};`"
+                         by naming {naming}: `constraint … for {named};`",
+                        naming = if named == this {
+                            "it".to_string()
+                        } else {
+                            format!("`{named}`")
+                        },
                     ));
             }
-            if let Some((first, order)) = later_candidate {
+            if let Some((first, order, holonomic)) = later_candidate {
                 let primes = "'".repeat(order as usize);
                 let (this, other) = (
                     format!("{}{primes}", coordinate.name),
                     format!("{}{primes}", self.coords[first].name),
                 );
+                let (this_named, other_named) = (
+                    named_after_for(&coordinate.name, &primes, holonomic),
+                    named_after_for(&self.coords[first].name, &primes, holonomic),
+                );
                 diagnostic = diagnostic.with_help(format!(
                     "the initial values take the first candidate, `{other}`, as the \
                      derivative the constraint fixes; to give `{other}` and have `{this}` \
-                     fixed instead, name `{this}` first: `for {this} or {other}`"
+                     fixed instead, name `{this_named}` first: `for {this_named} or {other_named}`"
                 ));
             }
             self.report(diagnostic);
@@ -231,5 +241,17 @@ impl Checker<'_> {
         let errors_before = self.diagnostics.len();
         self.check_expr(value, Allowed::constants("an initial value"));
         self.diagnostics.len() == errors_before
+    }
+}
+
+/// How a candidate is named after `for`: a derivative for a velocity (or
+/// higher) constraint, the coordinate itself for a holonomic one, which is
+/// solved for coordinates (`for y1` where the constraint fixes `y1'`;
+/// `for y1'` there is E0038).
+fn named_after_for(coordinate: &str, primes: &str, holonomic: bool) -> String {
+    if holonomic {
+        coordinate.to_string()
+    } else {
+        format!("{coordinate}{primes}")
     }
 }

@@ -354,6 +354,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/textbook_long",
     "tests/data/textbook_rolling",
     "tests/data/textbook_motion",
+    "tests/data/textbook_loops",
     "tests/data",
 ];
 

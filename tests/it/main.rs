@@ -49,6 +49,7 @@ mod stiff_joint;
 mod textbook_constraints;
 mod textbook_events;
 mod textbook_long;
+mod textbook_loops;
 mod textbook_mass_impacts;
 mod textbook_motion;
 mod textbook_rolling;
