@@ -247,7 +247,7 @@ def elastic_pendulum():
 
 def rocket_fuel_runs_out():
     mp.mp.dps = 30
-    Md, mu, w, m0 = mp.mpf(300), mp.mpf(10), mp.mpf(2500), mp.mpf(600)
+    Md, mu, w, m0 = mp.mpf(300), mp.mpf(10), mp.mpf(2500), mp.mpf(590)
     g = mp.mpf("9.81")
     tb = m0 / mu
     M = lambda tt: Md + m0 - mu * min(tt, tb)

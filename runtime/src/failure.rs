@@ -76,6 +76,15 @@ pub enum FailureKind {
     /// `component` by `residual`, far beyond any drift the tolerance lets
     /// a step carry.
     ConstraintLeft { component: String, residual: f64 },
+    /// A position constraint changes branch at a switch with a kink (`abs`,
+    /// `if`): `component`, a velocity it fixes, would jump from `before` to
+    /// `after`, an impulse the model does not say how to take.
+    ConstraintKink {
+        component: String,
+        constraint: String,
+        before: f64,
+        after: f64,
+    },
     /// A constraint as written reaches an end of its domain: the argument
     /// of a square root, logarithm, arcsine or arccosine reaches 0 (its
     /// branch ends) or passes it (not defined), or a failure happened at
@@ -308,6 +317,19 @@ impl fmt::Display for Failure {
                  constraint's branch ends here or the motion passes a singular point of \
                  it. An explicit root (`y' = sqrt(…)`) holds one branch only: write the \
                  constraint implicitly (`… for {component} or …`) to pass onto the other"
+            ),
+            FailureKind::ConstraintKink {
+                component,
+                constraint,
+                before,
+                after,
+            } => write!(
+                f,
+                "at t = {t:e}: `{constraint}` changes branch with a kink here: the velocity \
+                 `{component}` it fixes would jump from {before:.6e} to {after:.6e}, an impulse \
+                 the model does not say how to take (which velocities change, and whether \
+                 energy is lost); write the impact as a `when` with its resets, or a \
+                 constraint without the kink"
             ),
             FailureKind::ConstraintDomainEnds {
                 constraint,

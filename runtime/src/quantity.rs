@@ -16,6 +16,7 @@ impl Failure {
             | FailureKind::NonFiniteRate { component }
             | FailureKind::ConstraintUndefined { component }
             | FailureKind::ConstraintLeft { component, .. }
+            | FailureKind::ConstraintKink { component, .. }
             | FailureKind::InconsistentInitialValue { component, .. }
             | FailureKind::NonFiniteInitialValue { component } => component.clone(),
             FailureKind::ConstraintPivotVanishes { constraint, .. }

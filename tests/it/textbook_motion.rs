@@ -127,14 +127,12 @@ fn a_rocket_whose_fuel_is_a_coordinate() {
 }
 
 /// The fuel burnt at a constant rate until the tank is empty: `m' = if m >
-/// 0 then -mu else 0`. At the switch (t = 60) the constraint's right side
-/// jumps from -mu to 0, and the run stops with exit 3, "the motion left
-/// the constraint that fixes `m'`" (its residual 10): the component a
-/// constraint fixes is not recomputed at a switch of its right side (as it
-/// is at an input's change). Minimal: `constraint y' = if y < 1 then 1
-/// else 0;` stops at t = 1.
+/// 0 then -mu else 0`. At the switch (t = 59) the constraint's right side
+/// jumps from -mu to 0: the run puts the state on the new branch there
+/// (before, it stopped with exit 3, "the motion left the constraint that
+/// fixes `m'`", its residual 10). Burnout between two samples: at the
+/// switch itself the state has two values, m' = -mu and 0.
 #[test]
-#[ignore = "runtime: a switch in a constraint's right side leaves the fixed component stale (exit 3 at the burnout)"]
 fn a_rocket_whose_fuel_runs_out() {
     within("rocket_fuel_runs_out");
 }

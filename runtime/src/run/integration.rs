@@ -34,6 +34,7 @@ use crate::method::field::FieldOptions;
 use crate::method::solver::{Keeping, Report, Solver};
 use crate::model::{DynModel, Regime};
 use crate::ode::budget::Budget;
+use crate::ode::tolerance::Tolerance;
 use crate::run::diagnosis::{check_masses, diagnose, near_singular_configuration, MassScale};
 use crate::run::events::{locate, SwitchPace};
 use crate::run::impacts::{AtEvent, Impacts};
@@ -1014,6 +1015,18 @@ impl<'m> Integration<'m> {
                     };
                 }
                 model.set_regime(regime);
+                if ending.is_none() && !switches.is_empty() {
+                    if let Some(keeper) = self.keeper.as_mut() {
+                        jump_onto_new_branch(
+                            keeper,
+                            model,
+                            regime.mode,
+                            t_event,
+                            x_event,
+                            self.options.tol,
+                        )?;
+                    }
+                }
                 if ending.is_none() {
                     // A mass law that jumps at a switch (a stage dropped,
                     // `if z < H then … else …`) to zero or below never
@@ -1334,4 +1347,55 @@ impl Keeping for Kept<'_> {
             .drifted(self.model, self.mode, t, x)
             .unwrap_or(true)
     }
+}
+
+/// A constraint whose right side switches (`y' = if y < 1 then 1 else 0`,
+/// a fuel tank that empties: `m' = if m > 0 then -mu else 0`) fixes
+/// another value on the new branch: the state is put on the new regime's
+/// constraints at the event, as after a reset (lagc recomputes the
+/// components the constraints fix, the others kept). Before, the next
+/// step found the constraint left by the whole jump and the run stopped
+/// (exit 3), naming a root's branch. A position constraint with a kink
+/// (a yo-yo's string `y = -L + r*abs(psi)` at its end) would make its
+/// velocity jump too, an impulse the model does not say how to take (kept
+/// the independent velocities, a wire bent at unequal slopes would gain
+/// energy): that stops the run at the event, named. A switch that changes
+/// no constraint's value leaves the state exactly as it was (a
+/// projection's rounding would otherwise cost the step sizes kept across a
+/// smooth event).
+fn jump_onto_new_branch(
+    keeper: &mut Keeper,
+    model: &dyn DynModel,
+    mode: usize,
+    t: f64,
+    x: &mut [f64],
+    tol: Tolerance,
+) -> Result<(), Failure> {
+    let mut onto = x.to_vec();
+    keeper.put_on(model, mode, t, &mut onto)?;
+    let jumped = |i: usize| (onto[i] - x[i]).abs() > 0.01 * (tol.atol + tol.rtol * x[i].abs());
+    if !(0..x.len()).any(jumped) {
+        return Ok(());
+    }
+    for i in (0..x.len()).filter(|&i| jumped(i)) {
+        let name = model.state_names()[i];
+        let coordinate = name.trim_end_matches('\'');
+        let kinked = model
+            .constraints()
+            .iter()
+            .find(|c| c.names.contains(&coordinate));
+        if let Some(constraint) = kinked {
+            return Err(Failure::new(
+                t,
+                FailureKind::ConstraintKink {
+                    component: name.to_string(),
+                    constraint: constraint.text.to_string(),
+                    before: x[i],
+                    after: onto[i],
+                },
+            ));
+        }
+    }
+    x.copy_from_slice(&onto);
+    Ok(())
 }
