@@ -17,7 +17,8 @@ impl Failure {
             | FailureKind::ConstraintUndefined { component }
             | FailureKind::ConstraintLeft { component, .. }
             | FailureKind::InconsistentInitialValue { component, .. }
-            | FailureKind::NonFiniteInitialValue { component } => component.clone(),
+            | FailureKind::NonFiniteInitialValue { component }
+            | FailureKind::ResetOfFixedComponent { component, .. } => component.clone(),
             FailureKind::ConstraintPivotVanishes { constraint, .. }
             | FailureKind::PositionsLeftConstraint { constraint, .. }
             | FailureKind::SingularConfiguration { constraint, .. }
