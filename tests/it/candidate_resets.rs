@@ -9,7 +9,7 @@
 //! both with `th' -> -e th'` at each strike.
 
 use crate::rolling_bodies::{reference_rows, relative_error, run};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 const METHODS: [&str; 2] = ["direct", "field"];
 const RTOLS: [&str; 2] = ["1e-6", "1e-9"];
@@ -36,7 +36,7 @@ fn largest_residual(stderr: &str) -> f64 {
 /// it (`strict`: within, no warning accepted), and the constraint kept
 /// within 100·rtol (a reset that left it, or undid itself, is off by the
 /// velocity's size).
-fn check(binary: &PathBuf, params: &[&str], reference: &str, events: usize, strict: bool) {
+fn check(binary: &Path, params: &[&str], reference: &str, events: usize, strict: bool) {
     let reference = reference_rows(reference);
     let times: Vec<String> = reference.iter().map(|r| format!("{:?}", r[0])).collect();
     let times = times.join(",");
