@@ -127,6 +127,15 @@ pub enum FailureKind {
     /// rounding of its boundary: the state starts inside the region the
     /// impact forbids (`values`: the components it reads, `y = -0.1`).
     ImpactHoldsAtStart { condition: String, values: String },
+    /// An impact resets `component`, which every mode whose pivots are
+    /// good at the impact fixes through `constraint`: the reset would
+    /// contradict the constraint (or the mode that leaves it free hardly
+    /// determines the others).
+    ResetOfFixedComponent {
+        condition: String,
+        component: String,
+        constraint: String,
+    },
     /// The anchor makes `x_1 = f_1 + Σ f_A x_A` the difference of huge
     /// numbers: `digits` more digits would be lost than the tolerance allows.
     /// From the zero anchor (the default) the coefficients are as small as
@@ -414,6 +423,18 @@ impl fmt::Display for Failure {
                  ({values}): the motion starts inside the region the impact forbids, where \
                  no impact fires (one fires only where the motion enters it); give initial \
                  values on its other side"
+            ),
+            FailureKind::ResetOfFixedComponent {
+                condition,
+                component,
+                constraint,
+            } => write!(
+                f,
+                "at t = {t:e}: `when {condition}` resets `{component}`, which the constraint \
+                 `{constraint}` fixes here: every choice of its dependent that leaves \
+                 `{component}` free has a poor pivot at this state, so the reset would \
+                 contradict the constraint (or leave the other components undetermined); \
+                 reset a component the constraint leaves free here"
             ),
             FailureKind::AnchorCancels {
                 at_zero_anchor: true,

@@ -189,6 +189,12 @@ pub trait Model: Clone {
     const FIXED: &'static [&'static [usize]] = &[];
     /// [`Model::param_jacobian`] is given (forward sensitivities).
     const PARAM_JACOBIAN: bool = false;
+    /// For each `when` ([`Model::IMPACTS`]), the state components it
+    /// resets: given by a model of several modes, whose
+    /// [`Model::impact_reset`] writes the resets only (the run chooses the
+    /// mode the state goes on in and recomputes what that mode fixes,
+    /// `run::impacts`); empty otherwise.
+    const IMPACT_TARGETS: &'static [&'static [usize]] = &[];
 
     /// Every param's value: param `i` is `overrides[i]` when given, else
     /// its expression evaluated with the values before it (so an override
@@ -330,8 +336,9 @@ pub trait Model: Clone {
 
     /// Impact `w`'s resets: `out` holds the state `x` before the impact on
     /// entry; the reset components are written with their new values (all
-    /// read from `x`), then every component the constraints fix is
-    /// recomputed from the new state.
+    /// read from `x`), then, in a model of one mode, every component the
+    /// constraints fix is recomputed from the new state (a model of
+    /// several modes leaves that to the run, [`Model::IMPACT_TARGETS`]).
     fn impact_reset(&self, _w: usize, _t: f64, _x: &[f64], _out: &mut [f64]) {}
 
     /// The pivots `∂h/∂dep` of every candidate of every implicit
@@ -515,6 +522,10 @@ pub trait DynModel {
     /// [`Model::PARAM_JACOBIAN`].
     fn has_param_jacobian(&self) -> bool {
         false
+    }
+    /// [`Model::IMPACT_TARGETS`].
+    fn impact_targets(&self) -> &'static [&'static [usize]] {
+        &[]
     }
     /// [`Model::param_jacobian`].
     fn param_jacobian(&self, _t: f64, _x: &[f64], _jac: &mut Matrix) -> Result<(), Failure> {
@@ -711,6 +722,9 @@ impl<M: Model + 'static> DynModel for M {
     }
     fn has_param_jacobian(&self) -> bool {
         M::PARAM_JACOBIAN
+    }
+    fn impact_targets(&self) -> &'static [&'static [usize]] {
+        M::IMPACT_TARGETS
     }
     fn param_jacobian(&self, t: f64, x: &[f64], jac: &mut Matrix) -> Result<(), Failure> {
         Model::param_jacobian(self, t, x, jac)

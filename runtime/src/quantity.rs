@@ -18,7 +18,8 @@ impl Failure {
             | FailureKind::ConstraintLeft { component, .. }
             | FailureKind::ConstraintKink { component, .. }
             | FailureKind::InconsistentInitialValue { component, .. }
-            | FailureKind::NonFiniteInitialValue { component } => component.clone(),
+            | FailureKind::NonFiniteInitialValue { component }
+            | FailureKind::ResetOfFixedComponent { component, .. } => component.clone(),
             FailureKind::ConstraintPivotVanishes { constraint, .. }
             | FailureKind::PositionsLeftConstraint { constraint, .. }
             | FailureKind::SingularConfiguration { constraint, .. }

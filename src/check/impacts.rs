@@ -3,7 +3,9 @@
 //! of the state (a coordinate or one of its derivatives below the state's
 //! order `u = max(2, k)`) that the run integrates freely: a dependent
 //! derivative the constraints fix follows from them after the reset (lagc
-//! recomputes it) and cannot be reset itself.
+//! recomputes it) and cannot be reset itself. With implicit constraints of
+//! several candidates, a derivative some candidates fix is accepted: the
+//! run resets it in a mode that leaves it free (or stops naming it).
 
 use super::expressions::Allowed;
 use super::model::{Constraint, Impact, ImpactReset};
@@ -21,25 +23,6 @@ impl Checker<'_> {
     ) -> Vec<Impact> {
         let k = order.unwrap_or(0);
         let state_order = k.max(2);
-        // The first constraint with several candidates, and how its
-        // candidates are named: a holonomic constraint's are coordinates
-        // (`for y`), a raised one's of order k − 1.
-        let several_candidates = constraints.iter().find_map(|c| {
-            let implicit = c.implicit.as_ref().filter(|i| i.candidates.len() > 1)?;
-            let primes = if implicit.holonomic {
-                0
-            } else if implicit.raised {
-                c.order - 1
-            } else {
-                c.order
-            };
-            let candidates: Vec<String> = implicit
-                .candidates
-                .iter()
-                .map(|&j| format!("{}{}", self.coords[j].name, "'".repeat(primes as usize)))
-                .collect();
-            Some(candidates)
-        });
         let condition = Allowed {
             time: true,
             masses: true,
@@ -80,14 +63,9 @@ impl Checker<'_> {
                     self.report(diagnostic);
                     continue;
                 }
-                if let Some(diagnostic) = fixed_component(
-                    &name,
-                    coord,
-                    order,
-                    k,
-                    constraints,
-                    several_candidates.as_deref(),
-                ) {
+                if let Some(diagnostic) =
+                    fixed_component(&name, coord, order, k, constraints, &self.coords)
+                {
                     self.report(diagnostic.with_primary(reset.target.span, "reset here"));
                     continue;
                 }
@@ -126,41 +104,22 @@ impl Checker<'_> {
 }
 
 /// Why `name` (coordinate `coord`'s derivative of order `order`) cannot be
-/// reset, without its primary label: the constraints fix it, or the
-/// state's higher derivatives follow from the equations of motion (k ≥ 3),
-/// or which derivatives the constraints fix changes along the run (several
-/// candidates: the first such constraint's, as `for` names them).
+/// reset, without its primary label: the constraints fix it in every mode
+/// (a constraint of one candidate, or constraints of several whose
+/// choices all take it), or the state's higher derivatives follow from
+/// the equations of motion (k ≥ 3). A component only some candidates fix
+/// is accepted: at the impact the run keeps or chooses a mode that leaves
+/// it free, or stops naming it (`run::regime::mode_after_resets`).
 fn fixed_component(
     name: &str,
     coord: usize,
     order: u32,
     k: u32,
     constraints: &[Constraint],
-    several_candidates: Option<&[String]>,
+    coords: &[super::model::Coord],
 ) -> Option<Diagnostic> {
-    if let Some(candidates) = several_candidates {
-        return Some(
-            Diagnostic::error(
-                codes::RESET_OF_FIXED_COMPONENT,
-                format!("`{name}` cannot be reset in a model whose implicit constraints have several candidates"),
-            )
-            .with_note(
-                "which derivatives the constraints fix changes along the run; after a reset \
-                 lagc recomputes the fixed ones, which it does for one candidate only",
-            )
-            .with_help(format!(
-                "name one candidate, `constraint … for {};` (its candidates are {}), or write \
-                 the constraint explicitly",
-                candidates[0],
-                candidates
-                    .iter()
-                    .map(|c| format!("`{c}`"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )),
-        );
-    }
-    if let Some(c) = constraints.iter().find(|c| c.coord == coord) {
+    let several = |c: &Constraint| c.implicit.as_ref().is_some_and(|i| i.candidates.len() > 1);
+    if let Some(c) = constraints.iter().find(|c| !several(c) && c.coord == coord) {
         if order >= k {
             return Some(
                 Diagnostic::error(
@@ -174,6 +133,63 @@ fn fixed_component(
                 )
                 .with_help("reset the independent coordinates' derivatives"),
             );
+        }
+    }
+    // The constraints of several candidates that would fix it where they
+    // choose its coordinate (a raised one fixes its candidates from order
+    // k − 1, the others from k): it is free in some mode unless they
+    // cannot all choose another (coupled constraints take distinct
+    // dependents).
+    let taking: Vec<&Constraint> = constraints
+        .iter()
+        .filter(|c| {
+            c.implicit.as_ref().is_some_and(|i| {
+                let from = if i.raised { k.saturating_sub(1) } else { k };
+                i.candidates.len() > 1 && i.candidates.contains(&coord) && order >= from
+            })
+        })
+        .collect();
+    if !taking.is_empty() {
+        let mut others: Vec<usize> = taking
+            .iter()
+            .flat_map(|c| {
+                c.implicit
+                    .as_ref()
+                    .map(|i| i.candidates.clone())
+                    .unwrap_or_default()
+            })
+            .filter(|&j| j != coord)
+            .collect();
+        others.sort_unstable();
+        others.dedup();
+        if others.len() < taking.len() {
+            let primes = "'".repeat(order as usize);
+            let candidates = taking[0]
+                .implicit
+                .as_ref()
+                .map(|i| {
+                    i.candidates
+                        .iter()
+                        .map(|&j| format!("`{}{primes}`", coords[j].name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                })
+                .unwrap_or_default();
+            let mut diagnostic = Diagnostic::error(
+                codes::RESET_OF_FIXED_COMPONENT,
+                format!("`{name}` is fixed by the constraints whichever candidates they take: it cannot be reset"),
+            )
+            .with_note(format!(
+                "these {} constraints solve for {} dependents among {candidates}; every choice \
+                 takes `{name}`",
+                taking.len(),
+                taking.len()
+            ))
+            .with_help("reset a derivative that some choice of candidates leaves free");
+            for c in &taking {
+                diagnostic = diagnostic.with_secondary(c.span, "this constraint may fix it");
+            }
+            return Some(diagnostic);
         }
     }
     if k >= 3 {

@@ -94,7 +94,21 @@ pub fn consts(kernel: &Kernel) -> TokenStream {
         TokenStream::new()
     } else {
         let texts = kernel.impacts.iter().map(|i| i.text.as_str());
-        quote! { const IMPACTS: &'static [&'static str] = &[#(#texts),*]; }
+        // A model of several modes names each impact's targets: the run
+        // chooses the mode after the resets and recomputes what it fixes.
+        let targets = if kernel.modes.is_empty() {
+            TokenStream::new()
+        } else {
+            let tables = kernel.impacts.iter().map(|i| {
+                let slots = i.resets.iter().map(|&(k, _)| Literal::usize_unsuffixed(k));
+                quote! { &[#(#slots),*] }
+            });
+            quote! { const IMPACT_TARGETS: &'static [&'static [usize]] = &[#(#tables),*]; }
+        };
+        quote! {
+            const IMPACTS: &'static [&'static str] = &[#(#texts),*];
+            #targets
+        }
     };
 
     let domains = if kernel.domains.is_empty() {
@@ -201,8 +215,9 @@ pub fn items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenS
 
 /// `impact_holds` and `impact_reset`: each `when`'s condition on the
 /// branches, and its resets (read from `x`, the state before the impact)
-/// followed by the components the constraints fix (read from `out`, the
-/// state after it).
+/// followed, in a model of one mode, by the components the constraints
+/// fix (read from `out`, the state after it; a model of several modes
+/// leaves them to the run, which chooses the mode first).
 fn impact_items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> TokenStream {
     let numbers: Vec<Literal> = (0..kernel.impacts.len())
         .map(Literal::usize_unsuffixed)
@@ -228,7 +243,7 @@ fn impact_items(kernel: &Kernel, names: &mut SymbolNames, from_x: Source) -> Tok
             }
         });
     }
-    let constrained = if kernel.constrained.is_empty() {
+    let constrained = if kernel.constrained.is_empty() || !kernel.modes.is_empty() {
         TokenStream::new()
     } else {
         let position: std::collections::HashMap<_, _> = kernel

@@ -3,7 +3,10 @@
 //! like `stop when`'s) and the new values of the components it resets, as
 //! expressions of `t`, params, masses and the state before the impact.
 //! After the resets the derivatives the constraints fix are recomputed
-//! from the new state (the same expressions that fix them at `t0`).
+//! from the new state (the same expressions that fix them at `t0`), in a
+//! model of one mode; a model of several modes recomputes them at run
+//! time in the mode the run goes on in (`run::impacts` of the runtime),
+//! since which derivatives are fixed changes with the mode.
 
 use super::motion::Motion;
 use super::switches::{BranchCond, Switches};

@@ -355,6 +355,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/textbook_rolling",
     "tests/data/textbook_motion",
     "tests/data/textbook_loops",
+    "tests/data/candidate_resets",
     "tests/data",
 ];
 

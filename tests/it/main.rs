@@ -3,6 +3,7 @@
 mod between_steps;
 mod bit_identity;
 mod cache;
+mod candidate_resets;
 mod chains;
 mod check_build;
 mod cli;

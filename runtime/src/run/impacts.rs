@@ -194,6 +194,7 @@ impl Impacts {
         for &w in &fired {
             model.impact_reset(w, t, &x_before, &mut out);
         }
+        fixed_after_resets(model, regime, &fired, t, &mut out)?;
         if let Some(i) = out.iter().position(|v| !v.is_finite()) {
             return Err(Failure::non_finite(t, model.state_names()[i]));
         }
@@ -343,15 +344,80 @@ pub fn touching_at_start(
 }
 
 /// `state` with the resets of the impacts `fired` applied at `t`, each
-/// reading `state` (as [`Impacts::at_event`] applies them): for the
-/// derivatives of the resets (the sensitivities' jump, the carried
-/// error's saltation).
-pub fn reset(model: &dyn DynModel, fired: &[usize], t: f64, state: &[f64]) -> Vec<f64> {
+/// reading `state` (as [`Impacts::at_event`] applies them), and in a
+/// model of several modes the components `after.mode` (the mode the
+/// impact chose) fixes recomputed: for the derivatives of the resets (the
+/// sensitivities' jump, the carried error's saltation). Where that mode
+/// cannot complete the state, not finite.
+pub fn reset(
+    model: &dyn DynModel,
+    after: &Regime,
+    fired: &[usize],
+    t: f64,
+    state: &[f64],
+) -> Vec<f64> {
     let mut out = state.to_vec();
     for &w in fired {
         model.impact_reset(w, t, state, &mut out);
     }
+    if !fired.is_empty() && !model.impact_targets().is_empty() {
+        let mut in_mode = model.boxed_clone();
+        in_mode.set_regime(after);
+        if recompute_fixed(&*in_mode, after.mode, t, &mut out).is_err() {
+            out.fill(f64::NAN);
+        }
+    }
     out
+}
+
+/// In a model of several modes, whose `impact_reset` writes the resets
+/// only (`Model::IMPACT_TARGETS`): the mode the run goes on in after the
+/// impacts `fired` (`regime::mode_after_resets`), set in `regime` and
+/// `model`, and the components it fixes recomputed in `out` (the state
+/// with the resets applied) from the new state. Why not in the generated
+/// code, as a model of one mode does: which components are fixed depends
+/// on the mode, and a target the current mode fixes must be freed by
+/// another mode, or refused; recomputed in mode 0's formulas, a reset of
+/// `y'` in the mode that fixes `x'` was undone (`y'` from the old `x'`).
+fn fixed_after_resets(
+    model: &mut dyn DynModel,
+    regime: &mut Regime,
+    fired: &[usize],
+    t: f64,
+    out: &mut [f64],
+) -> Result<(), Failure> {
+    let all = model.impact_targets();
+    if all.is_empty() || fired.is_empty() {
+        return Ok(());
+    }
+    let targets: Vec<usize> = fired
+        .iter()
+        .flat_map(|&w| all.get(w).copied().unwrap_or(&[]).iter().copied())
+        .collect();
+    let condition = model.impacts()[fired[0]];
+    regime.mode =
+        crate::run::regime::mode_after_resets(&*model, regime.mode, &targets, condition, t, out)?;
+    model.set_regime(regime);
+    recompute_fixed(&*model, regime.mode, t, out)
+}
+
+/// The components `mode` (the model's current mode) fixes, recomputed in
+/// `out` from the rest of it.
+fn recompute_fixed(
+    model: &dyn DynModel,
+    mode: usize,
+    t: f64,
+    out: &mut [f64],
+) -> Result<(), Failure> {
+    let Some(fixed) = model.fixed_components().get(mode) else {
+        return Ok(());
+    };
+    let mut kept = out.to_vec();
+    model.constrained(t, out, &mut kept)?;
+    for &j in *fixed {
+        out[j] = kept[j];
+    }
+    Ok(())
 }
 
 /// What the resets left of the functions that fired.

@@ -507,3 +507,93 @@ fn singular_configuration(
     }
     Ok(())
 }
+
+/// The mode a model of several modes goes on in after an impact whose
+/// resets set the components `targets` (`x`: the state with the resets
+/// applied, the fixed components not yet recomputed): the mode the run
+/// is in (`current`) where it leaves every target free and its pivots
+/// are not poor (as [`switch_candidates`] judges them), else the free
+/// mode with the best pivots, chosen afresh for the new state as at the
+/// start ([`best_mode`]). A target the current mode fixes is a component
+/// the user meant to set (a bead on a hoop in `x, y` near its side, in
+/// the mode solving for `x'`, with `x'` reset): in the mode that solves
+/// for the other candidate the reset holds and the constraint moves the
+/// rest. Where every mode with good pivots fixes a target, the reset
+/// contradicts the constraint: the run stops, naming the `when`
+/// (`condition`), the component and the constraint, instead of undoing
+/// the reset or dividing by a vanishing pivot.
+pub fn mode_after_resets(
+    model: &dyn DynModel,
+    current: usize,
+    targets: &[usize],
+    condition: &str,
+    t: f64,
+    x: &[f64],
+) -> Result<usize, Failure> {
+    let fixed = model.fixed_components();
+    let constraints = model.constraints();
+    if fixed.len() <= 1 || constraints.is_empty() {
+        return Ok(current);
+    }
+    let total: usize = constraints.iter().map(|c| c.names.len()).sum();
+    let mut pivots = vec![0.0; total];
+    model.pivots(t, x, &mut pivots);
+    // A mode's worst ratio of a chosen pivot to its constraint's best.
+    let score = |mode: usize| -> f64 {
+        let mut at = 0;
+        let mut worst = f64::INFINITY;
+        for (c, digit) in constraints.iter().zip(mode_digits(model, mode)) {
+            let slice = &pivots[at..at + c.names.len()];
+            let (_, best) = largest_pivot(slice);
+            let ratio = slice[digit].abs() / best;
+            worst = worst.min(if ratio.is_finite() { ratio } else { 0.0 });
+            at += c.names.len();
+        }
+        worst
+    };
+    let free = |mode: usize| targets.iter().all(|j| !fixed[mode].contains(j));
+    if free(current) && score(current) >= POOR_PIVOT {
+        return Ok(current);
+    }
+    let chosen = (0..fixed.len())
+        .filter(|&m| free(m))
+        .map(|m| (m, score(m)))
+        .filter(|&(_, s)| s >= POOR_PIVOT)
+        .fold(None, |best: Option<(usize, f64)>, c| match best {
+            Some(b) if b.1 >= c.1 => Some(b),
+            _ => Some(c),
+        });
+    if let Some((mode, _)) = chosen {
+        return Ok(mode);
+    }
+    // The target the modes with good pivots fix, and its constraint (the
+    // one naming its coordinate among the candidates).
+    let names = model.state_names();
+    let good: Vec<usize> = (0..fixed.len())
+        .filter(|&m| score(m) >= POOR_PIVOT)
+        .collect();
+    let target = targets
+        .iter()
+        .copied()
+        .find(|j| good.iter().any(|&m| fixed[m].contains(j)))
+        .or_else(|| targets.first().copied())
+        .unwrap_or(0);
+    let component = names.get(target).copied().unwrap_or("?");
+    let coordinate = component.trim_end_matches('\'');
+    let constraint = constraints
+        .iter()
+        .find(|c| {
+            c.names
+                .iter()
+                .any(|n| n.trim_end_matches('\'') == coordinate)
+        })
+        .unwrap_or(&constraints[0]);
+    Err(Failure::new(
+        t,
+        FailureKind::ResetOfFixedComponent {
+            condition: condition.to_string(),
+            component: component.to_string(),
+            constraint: constraint.text.to_string(),
+        },
+    ))
+}

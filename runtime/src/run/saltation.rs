@@ -66,8 +66,10 @@ pub fn through_event(
     let shift = -g_e / rate;
     // The impacts that fired, their resets applied in order, as
     // `Impacts::at_event` applies them (the model in the regime before).
+    // `before.mode` is the mode the run goes on in: the one the impact
+    // chose, whose fixed components the resets recompute.
     let fired = crate::run::impacts::fired(old, &before.branches, switched);
-    let reset = |state: &[f64]| crate::run::impacts::reset(old, &fired, t, state);
+    let reset = |state: &[f64]| crate::run::impacts::reset(old, before, &fired, t, state);
     // R_x applied to a direction: the identity where nothing fired.
     let r_x = |d: &[f64]| -> Vec<f64> {
         if fired.is_empty() {

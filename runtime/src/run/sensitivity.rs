@@ -605,8 +605,20 @@ impl Augmented {
         let g_t = derivative(t, 1.0, &mut |v| Ok(vec![g_of(old, v, xm)]))?[0];
         // The impacts that fired: the resets `R`, applied in order.
         let fired = crate::run::impacts::fired(old, &before.branches, switched);
+        if !fired.is_empty() && !self.inner.impact_targets().is_empty() {
+            // The run recomputes what the mode after such an impact fixes
+            // (`run::impacts`), which the augmented system does not carry.
+            return Err(Failure::new(
+                t,
+                crate::failure::FailureKind::Unsupported {
+                    message: "--sensitivity through an impact of a model whose implicit \
+                              constraints have several candidates is not computed"
+                        .to_string(),
+                },
+            ));
+        }
         let reset = |model: &dyn DynModel, state: &[f64]| -> Vec<f64> {
-            crate::run::impacts::reset(model, &fired, t, state)
+            crate::run::impacts::reset(model, before, &fired, t, state)
         };
         // `∂g/∂p` and `∂R/∂p` in one pass over the models with a param
         // moved (making each is most of an event's cost on a small model).
