@@ -994,6 +994,7 @@ impl<'m> Integration<'m> {
                 let mut ending = model
                     .stop(&regime.branches)
                     .then_some(Ending::Stopped(t_event));
+                let mut reset = false;
                 if ending.is_none() && !model.impacts().is_empty() {
                     // A `when` whose condition became true resets the
                     // state; after it `stop when` may hold.
@@ -1006,6 +1007,7 @@ impl<'m> Integration<'m> {
                         x_event,
                         self.options.tol,
                     )?;
+                    reset = matches!(at, AtEvent::Reset);
                     ending = match at {
                         AtEvent::Stop(end) => Some(end),
                         AtEvent::Reset if model.stop(&regime.branches) => {
@@ -1015,7 +1017,9 @@ impl<'m> Integration<'m> {
                     };
                 }
                 model.set_regime(regime);
-                if ending.is_none() && !switches.is_empty() {
+                // An impact's resets recompute what the constraints fix by
+                // their own rules (`run::impacts`).
+                if ending.is_none() && !reset && !switches.is_empty() {
                     if let Some(keeper) = self.keeper.as_mut() {
                         jump_onto_new_branch(
                             keeper,
