@@ -353,6 +353,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/coupled_nonlinear",
     "tests/data/textbook_long",
     "tests/data/textbook_rolling",
+    "tests/data/raised_estimates",
     "tests/data",
 ];
 
