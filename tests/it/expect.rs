@@ -356,6 +356,7 @@ pub const ACCEPTED: &[&str] = &[
     "tests/data/textbook_motion",
     "tests/data/textbook_loops",
     "tests/data/candidate_resets",
+    "tests/data/raised_estimates",
     "tests/data",
 ];
 

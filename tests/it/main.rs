@@ -34,6 +34,7 @@ mod nonlinear;
 mod parser;
 mod poor_pivots;
 mod python;
+mod raised_estimates;
 mod readme_program;
 mod reference_runs;
 mod released_level;
