@@ -121,6 +121,11 @@ pub struct Dop853 {
     /// The judge of the last accepted step's continuous extension, for
     /// direct integration's reads inside it ([`Dop853::dense_judged`]).
     inside: inside::Inside,
+    /// Scratch of [`Dop853::local_error_by_halves`] (the stages, a stage
+    /// state and the middle state), kept from measure to measure: direct
+    /// integration measures every step longer than any before (a run
+    /// allocates nothing per step, `tests/allocations.rs`).
+    halves: Vec<f64>,
 }
 
 impl Dop853 {
@@ -151,6 +156,7 @@ impl Dop853 {
             stiffness_detected: None,
             hairer_sums: (0.0, 0.0),
             inside: inside::Inside::default(),
+            halves: Vec::new(),
         })
     }
 
@@ -190,6 +196,7 @@ impl Dop853 {
         y_old.copy_from_slice(y0);
         let mut inside = std::mem::take(&mut self.inside);
         inside.new_step();
+        let halves = std::mem::take(&mut self.halves);
         *self = Dop853 {
             tol,
             clock,
@@ -203,6 +210,7 @@ impl Dop853 {
             stiffness_detected: None,
             hairer_sums: (0.0, 0.0),
             inside,
+            halves,
         };
         Ok(())
     }
@@ -396,30 +404,14 @@ impl Dop853 {
         let n = self.y.len();
         let (t_old, _, h) = self.clock.last_step();
         let half = 0.5 * h;
-        let mut k = vec![0.0; STAGES * n];
-        let mut stage_state = vec![0.0; n];
-        let mut mid = vec![0.0; n];
+        self.halves.resize((STAGES + 2) * n, 0.0);
+        let (k, rest) = self.halves.split_at_mut(STAGES * n);
+        let (stage_state, mid) = rest.split_at_mut(n);
         // The first stage of the first half is the step's start rate, k[12].
         k[..n].copy_from_slice(&self.k[12 * n..13 * n]);
-        plain_step(
-            system,
-            t_old,
-            &self.y_old,
-            half,
-            &mut k,
-            &mut stage_state,
-            &mut mid,
-        )?;
-        system.rhs(t_old + half, &mid, &mut k[..n])?;
-        plain_step(
-            system,
-            t_old + half,
-            &mid,
-            half,
-            &mut k,
-            &mut stage_state,
-            out,
-        )?;
+        plain_step(system, t_old, &self.y_old, half, k, stage_state, mid)?;
+        system.rhs(t_old + half, mid, &mut k[..n])?;
+        plain_step(system, t_old + half, mid, half, k, stage_state, out)?;
         self.clock.stats.rhs_evaluations += 2 * (STAGES - 1) + 1;
         for (o, y) in out[..n].iter_mut().zip(&self.y) {
             *o = (y - *o) * (256.0 / 255.0);
