@@ -23,10 +23,6 @@ pub(super) struct Start {
 }
 
 impl Start {
-    pub fn new(t0: f64, values: Vec<((usize, u32), f64)>) -> Self {
-        Start { t0, values }
-    }
-
     pub fn value(&self, coord: usize, order: u32) -> Option<f64> {
         self.values
             .iter()
@@ -40,6 +36,20 @@ impl Start {
 const MARGIN: f64 = 1e-6;
 
 impl Checker<'_> {
+    /// Sets the start the file states (its time and the initial values that
+    /// read constants only) as what expressions are evaluated at, and
+    /// returns its time; `None` where that time is not a constant.
+    pub(super) fn state_the_start(&mut self, initial: &[Initial], time: &TimeSpan) -> Option<f64> {
+        let t0 = self.evaluate(&time.start)?;
+        let values = initial
+            .iter()
+            .filter_map(|i| Some(((i.coord, i.order), self.evaluate(&i.value)?)))
+            .filter(|(_, v)| v.is_finite())
+            .collect();
+        self.start = Some(Start { t0, values });
+        Some(t0)
+    }
+
     /// Reports every `when` whose condition holds, clear of its boundary,
     /// at the start the file states.
     pub(super) fn impacts_at_start(
@@ -48,18 +58,9 @@ impl Checker<'_> {
         initial: &[Initial],
         time: &TimeSpan,
     ) {
-        if impacts.is_empty() {
+        if impacts.is_empty() || self.state_the_start(initial, time).is_none() {
             return;
         }
-        let Some(t0) = self.evaluate(&time.start) else {
-            return;
-        };
-        let values = initial
-            .iter()
-            .filter_map(|i| Some(((i.coord, i.order), self.evaluate(&i.value)?)))
-            .filter(|(_, v)| v.is_finite())
-            .collect();
-        self.start = Some(Start { t0, values });
         let holding: Vec<(&Impact, Vec<&Initial>)> = impacts
             .iter()
             .filter(|impact| self.holds(&impact.cond) == Some(true))

@@ -2,7 +2,6 @@
 //! mass, a position r(t, q) and the velocity of its separated particles.
 
 use super::expressions::Allowed;
-use super::impacts_at_start::Start;
 use super::model::{EjectaVelocity, Initial, Name, Point, TimeSpan};
 use super::types::{type_mismatch, Ty, Uses};
 use super::Checker;
@@ -141,15 +140,9 @@ impl Checker<'_> {
         if points.is_empty() {
             return;
         }
-        let Some(t0) = self.evaluate(&time.start) else {
+        let Some(t0) = self.state_the_start(initial, time) else {
             return;
         };
-        let values = initial
-            .iter()
-            .filter_map(|i| Some(((i.coord, i.order), self.evaluate(&i.value)?)))
-            .filter(|(_, v)| v.is_finite())
-            .collect();
-        self.start = Some(Start::new(t0, values));
         let undefined: Vec<(&Point, &str, Span, Vec<f64>)> = points
             .iter()
             .filter_map(|point| {
