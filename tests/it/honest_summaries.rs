@@ -73,3 +73,29 @@ fn a_tolerance_below_the_fields_rounding_is_named() {
     assert!(stderr.contains("below what f64 keeps"), "{stderr}");
     assert!(!stderr.contains("smaller --anchor"), "{stderr}");
 }
+
+/// `--init y=-0.5` on a pendulum in `x, y` (the rod fixes `y`): the run
+/// starts from the root Newton finds from it, y = -0.8, and says so (it
+/// said nothing).
+#[test]
+fn an_init_value_moved_onto_the_constraints_is_named() {
+    let (status, stderr) = run(
+        "examples/cartesian_pendulum.lag",
+        &[
+            "--method",
+            "direct",
+            "--init",
+            "y=-0.5",
+            "--samples",
+            "2",
+            "--rtol",
+            "1e-6",
+        ],
+    );
+    assert_eq!(status, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("note: --init y=-0.5 is off the constraints")
+            && stderr.contains("starts from y = -0.8"),
+        "{stderr}"
+    );
+}

@@ -89,6 +89,25 @@ pub fn plan(model: &dyn DynModel, options: &Options) -> String {
     }
 }
 
+/// Says where an `--init` value of a component the constraints fix was
+/// moved onto them: a dependent position stated in a file is where Newton
+/// starts (the compiler's N0003 names the completed value), and `--init y=…`
+/// is the same, but the run took `y = -0.5` of a pendulum in `x, y` for
+/// `y = -0.8` without a word (h-user20).
+fn moved_onto_constraints(model: &dyn DynModel, inv: &Invocation, x0: &[f64]) {
+    for &(i, stated) in &inv.inits {
+        let started = x0[i];
+        if (stated - started).abs() > 1e-9 * started.abs().max(1.0) {
+            let name = model.state_names()[i];
+            eprintln!(
+                "note: --init {name}={stated} is off the constraints, which fix `{name}`: the \
+                 run starts from {name} = {started}, the root Newton finds from it (move it by the \
+                 values the constraints leave free)"
+            );
+        }
+    }
+}
+
 pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
     for warning in &inv.warnings {
         eprintln!("warning: {warning}");
@@ -110,6 +129,7 @@ pub(crate) fn execute(prototype: &dyn DynModel, inv: &Invocation) -> ExitCode {
         Ok(prepared) => prepared,
         Err(failure) => return fail(inv.json, &failure),
     };
+    moved_onto_constraints(&*model, inv, &x0);
     let times = match &inv.times {
         Some(times) => {
             if let Some(t) = times.iter().find(|&&t| t < t0 || t > t1) {
