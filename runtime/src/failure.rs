@@ -77,8 +77,9 @@ pub enum FailureKind {
     /// a step carry.
     ConstraintLeft { component: String, residual: f64 },
     /// A position constraint changes branch at a switch with a kink (`abs`,
-    /// `if`): `component`, a velocity it fixes, would jump from `before` to
-    /// `after`, an impulse the model does not say how to take.
+    /// `if`): `component`, which it fixes (its velocity, or the position
+    /// itself where the branch jumps), would jump from `before` to `after`,
+    /// an impulse the model does not say how to take.
     ConstraintKink {
         component: String,
         constraint: String,
@@ -334,8 +335,8 @@ impl fmt::Display for Failure {
                 after,
             } => write!(
                 f,
-                "at t = {t:e}: `{constraint}` changes branch with a kink here: the velocity \
-                 `{component}` it fixes would jump from {before:.6e} to {after:.6e}, an impulse \
+                "at t = {t:e}: `{constraint}` changes branch with a kink here: `{component}`, \
+                 which it fixes, would jump from {before:.6e} to {after:.6e}, an impulse \
                  the model does not say how to take (which velocities change, and whether \
                  energy is lost); write the impact as a `when` with its resets, or a \
                  constraint without the kink"
