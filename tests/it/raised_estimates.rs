@@ -13,6 +13,7 @@
 //! constant, the centre on a circle of radius v/3.
 
 use crate::generated::build_file;
+use crate::textbook_rolling::steady_circling;
 use std::process::Command;
 
 /// The runs' tolerances: three rtols, each with atol = rtol/100 scaled
@@ -26,26 +27,6 @@ fn tolerances() -> Vec<(f64, f64)> {
         }
     }
     out
-}
-
-/// The closed form at `t`: x, y, phi, th, psi, x', y', phi', th', psi'.
-fn steady_circling(t: f64) -> [f64; 10] {
-    let (lean, precession, spin) = (0.3_f64, 3.0_f64, -34.45645172410229_f64);
-    let v = -0.02 * (spin + precession * lean.sin());
-    let radius = v / precession;
-    let phi = precession * t;
-    [
-        radius * phi.sin(),
-        radius * (1.0 - phi.cos()),
-        phi,
-        lean,
-        spin * t,
-        v * phi.cos(),
-        v * phi.sin(),
-        precession,
-        0.0,
-        spin,
-    ]
 }
 
 /// A run's largest error against the closed form (each column relative
